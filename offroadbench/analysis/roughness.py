@@ -1,0 +1,167 @@
+"""Roughness classes from the Moore-neighbourhood gradient map, Majhor & Bos Sec. 2.3, Eq. (3)-(4).
+
+Eq. (4): ``Q_grad = (Z_P - Z_Qi) / dist(P, Qi)`` for the 8 Moore neighbours Qi of pixel P, with
+dist = cell (edge neighbours) or cell * sqrt(2) (corner neighbours); Eq. (3): the gradient map
+is ``P_grad = max |Q_grad|``. Pixels are then ``low`` (P_grad <= t_low), ``semi``
+(t_low < P_grad <= t_high) or ``high`` (P_grad > t_high).
+
+Units. The paper's thresholds 50 and 140 are in 16-bit DEM units per centimetre, as its
+5 / 7.07 cm distances say. Its Unreal import used Z scale 0.75 %: at Z scale 100 a 16-bit map
+spans 512 m (128 DEM units per cm of height at scale 1), so one DEM unit is 0.75/128 cm and the
+thresholds in rise/run are 50 * 0.75/128 = 0.293 and 140 * 0.75/128 = 0.820. The one function
+that converts is :func:`paper_gradient_to_slope`; here everything is metres and rise/run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench.config import check_range
+from offroadbench.heightmap import Heightmap
+
+__all__ = [
+    "LOW",
+    "SEMI",
+    "HIGH",
+    "CLASS_NAMES",
+    "UE_Z_RANGE_M_AT_SCALE_100",
+    "paper_gradient_to_slope",
+    "RoughnessConfig",
+    "gradient_map",
+    "classify",
+    "close_rough",
+    "class_fractions",
+    "border_mask",
+    "disk",
+]
+
+LOW, SEMI, HIGH = 0, 1, 2
+CLASS_NAMES = ("low", "semi", "high")
+
+#: Unreal Engine landscapes map the 16-bit range to 512 m at Z scale 100 (-256 .. +256 m).
+UE_Z_RANGE_M_AT_SCALE_100 = 512.0
+#: The paper's Unreal Z scale, percent (Sec. 2.2).
+PAPER_UE_Z_SCALE = 0.75
+
+
+def paper_gradient_to_slope(grad_units_per_cm: float, ue_z_scale: float = PAPER_UE_Z_SCALE) -> float:
+    """Convert a Majhor & Bos gradient threshold (16-bit DEM units per cm) to rise/run.
+
+    One 16-bit unit is ``ue_z_scale / 100 * 512 m / 65536`` of height = ``ue_z_scale / 128`` cm,
+    so a gradient g units/cm is ``g * ue_z_scale / 128`` cm/cm. 50 -> 0.293, 140 -> 0.820.
+    """
+    cm_per_unit = ue_z_scale / 100.0 * UE_Z_RANGE_M_AT_SCALE_100 * 100.0 / 65536.0
+    return grad_units_per_cm * cm_per_unit
+
+
+@dataclass(frozen=True, kw_only=True)
+class RoughnessConfig:
+    """Thresholds and filters of the roughness classification (paper Sec. 2.3-2.4)."""
+
+    low_max_slope: float = paper_gradient_to_slope(50.0)
+    """Largest Moore gradient (rise/run) of a low-roughness pixel; paper 50 units/cm = 0.293."""
+    semi_max_slope: float = paper_gradient_to_slope(140.0)
+    """Largest Moore gradient (rise/run) of a semi-rough pixel; paper 140 units/cm = 0.820."""
+    border_m: float = 5.0
+    """Width of the map edge excluded from area fractions and mission ends, metres (paper: 5 m)."""
+    closing_radius_m: float = 0.25
+    """Radius of the disk used to morphologically close the rough areas, metres.
+
+    The paper does not give it. 0.25 m (5 px at 5 cm) is about half the Husky's track and a
+    wheel-and-a-half of radius: gaps between rough patches narrower than ~0.5 m are closed,
+    because a 0.57 m-wide vehicle cannot start or stop inside them without touching both.
+    """
+
+    def __post_init__(self) -> None:
+        check_range(self, "low_max_slope", self.low_max_slope, lo=0, lo_open=True)
+        check_range(self, "semi_max_slope", self.semi_max_slope, lo=self.low_max_slope)
+        check_range(self, "border_m", self.border_m, lo=0)
+        check_range(self, "closing_radius_m", self.closing_radius_m, lo=0)
+
+
+def gradient_map(hm: Heightmap) -> np.ndarray:
+    """Eq. (3)-(4): max |Moore gradient| per pixel, rise/run (dimensionless).
+
+    Edge pixels use only the neighbours that exist. Vectorised: 8 shifted differences.
+    """
+    z = hm.z
+    h = hm.cell_size_m
+    d = h * np.sqrt(2.0)
+    g = np.zeros_like(z)
+    # each neighbour pair is visited once and its |difference| applied to both pixels
+    pairs = (
+        ((slice(None), slice(1, None)), (slice(None), slice(None, -1)), h),  # left/right
+        ((slice(1, None), slice(None)), (slice(None, -1), slice(None)), h),  # up/down
+        ((slice(1, None), slice(1, None)), (slice(None, -1), slice(None, -1)), d),  # diagonal
+        ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None)), d),  # anti-diagonal
+    )
+    for a, b, dist in pairs:
+        diff = np.abs(z[a] - z[b]) / dist
+        np.maximum(g[a], diff, out=g[a])
+        np.maximum(g[b], diff, out=g[b])
+    return g
+
+
+def classify(hm: Heightmap, cfg: RoughnessConfig = RoughnessConfig()) -> np.ndarray:
+    """Class map (uint8: LOW=0, SEMI=1, HIGH=2) from the gradient map and the thresholds."""
+    g = gradient_map(hm)
+    classes = np.full(g.shape, LOW, dtype=np.uint8)
+    classes[g > cfg.low_max_slope] = SEMI
+    classes[g > cfg.semi_max_slope] = HIGH
+    return classes
+
+
+def disk(radius_px: float) -> np.ndarray:
+    """Boolean disk structuring element of the given radius in pixels (at least 1 pixel)."""
+    r = int(np.floor(radius_px))
+    yy, xx = np.mgrid[-r : r + 1, -r : r + 1]
+    return (xx * xx + yy * yy) <= radius_px * radius_px + 1e-9
+
+
+def close_rough(classes: np.ndarray, radius_m: float, cell_size_m: float) -> np.ndarray:
+    """Morphological closing of the rough areas with a disk (paper Fig. 4b).
+
+    Applied per level: the semi-or-high set and the high set are each closed, so rough areas
+    grow into the thin low gaps between them and the class order is kept. Returns a new map.
+    """
+    from scipy.ndimage import binary_closing
+
+    radius_px = radius_m / cell_size_m
+    if radius_px < 1:
+        return classes.copy()
+    se = disk(radius_px)
+    pad = int(np.ceil(radius_px))
+    out = np.full(classes.shape, LOW, dtype=np.uint8)
+    for level in (SEMI, HIGH):
+        # pad with 'not rough' so closing does not invent rough pixels at the map edge
+        mask = np.pad(classes >= level, pad, mode="constant", constant_values=False)
+        closed = binary_closing(mask, structure=se)[pad:-pad, pad:-pad]
+        out[closed] = level
+    return out
+
+
+def border_mask(shape: tuple[int, int], border_m: float, cell_size_m: float) -> np.ndarray:
+    """True for pixels at least ``border_m`` from every map edge (x, y measured from sample 0)."""
+    rows, cols = shape
+    y = np.arange(rows) * cell_size_m
+    x = np.arange(cols) * cell_size_m
+    ok_y = (y >= border_m - 1e-9) & (y <= y[-1] - border_m + 1e-9)
+    ok_x = (x >= border_m - 1e-9) & (x <= x[-1] - border_m + 1e-9)
+    return ok_y[:, None] & ok_x[None, :]
+
+
+def class_fractions(classes: np.ndarray, cell_size_m: float, border_m: float = 5.0) -> dict[str, float]:
+    """Area fraction (0..1) of each class inside the border, before any closing (paper Sec. 2.4)."""
+    inside = border_mask(classes.shape, border_m, cell_size_m)
+    total = int(inside.sum())
+    if total == 0:
+        from offroadbench.errors import InputError
+
+        raise InputError(
+            f"border_m = {border_m} m leaves no area on a {classes.shape[0]}x{classes.shape[1]} map "
+            f"at {cell_size_m} m per cell"
+        )
+    vals = classes[inside]
+    return {name: float(np.count_nonzero(vals == k)) / total for k, name in enumerate(CLASS_NAMES)}

@@ -1,0 +1,55 @@
+"""The ``offroadbench`` command line. Each command group lives in its own module with a
+``register(subparsers)`` function; ``main`` turns every InputError into one line on stderr
+and exit status 2."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from offroadbench.errors import InputError
+
+#: command modules under offroadbench.cli, each with register(subparsers)
+COMMAND_MODULES = ("terrain",)
+
+EXIT_BAD_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that exits with status 2 and one line (its default prints usage too)."""
+
+    def error(self, message: str) -> None:  # noqa: D401
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        raise SystemExit(EXIT_BAD_INPUT)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from offroadbench import __version__
+
+    parser = _Parser(prog="offroadbench", description="Benchmark off-road ground vehicles on synthetic terrain.")
+    parser.add_argument("--version", action="version", version=f"offroadbench {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"offroadbench.cli.{name}").register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return int(args.func(args) or 0)
+    except InputError as exc:
+        sys.stderr.write(f"offroadbench: error: {exc}\n")
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        sys.stderr.write("offroadbench: interrupted\n")
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

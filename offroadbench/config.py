@@ -1,0 +1,187 @@
+"""Helpers shared by every frozen config: validation, loading from dicts/TOML, stable ids.
+
+Configs are ``@dataclass(frozen=True, kw_only=True)`` classes whose fields carry SI units and
+a docstring-style comment. They validate in ``__post_init__`` with the helpers below, so every
+error names the field, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import tomllib
+import types
+import typing
+from pathlib import Path
+from typing import Any, TypeVar
+
+from offroadbench.errors import InputError
+
+T = TypeVar("T")
+
+__all__ = [
+    "check_range",
+    "check_int",
+    "check_choice",
+    "from_dict",
+    "to_dict",
+    "config_id",
+    "load_toml",
+    "set_dotted",
+    "parse_set_value",
+]
+
+
+# --------------------------------------------------------------------------- validation
+def _label(owner: object, field: str) -> str:
+    return f"{type(owner).__name__}.{field}" if owner is not None else field
+
+
+def check_range(
+    owner: object,
+    field: str,
+    value: float,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+) -> None:
+    """Raise InputError unless ``value`` is a finite number within the interval.
+
+    ``lo_open``/``hi_open`` exclude the end points, e.g. D in (2, 3).
+    """
+    name = _label(owner, field)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(f"{name} must be a finite number, got {value!r}")
+    bad_lo = lo is not None and (value <= lo if lo_open else value < lo)
+    bad_hi = hi is not None and (value >= hi if hi_open else value > hi)
+    if bad_lo or bad_hi:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        raise InputError(f"{name} = {value!r} is out of range; allowed: {left}{lo_s}, {hi_s}{right}")
+
+
+def check_int(owner: object, field: str, value: int, lo: int | None = None, hi: int | None = None) -> None:
+    """Raise InputError unless ``value`` is an integer within [lo, hi]."""
+    name = _label(owner, field)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise InputError(f"{name} must be an integer, got {value!r}")
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise InputError(
+            f"{name} = {value} is out of range; allowed: "
+            f"{'-inf' if lo is None else lo} .. {'inf' if hi is None else hi}"
+        )
+
+
+def check_choice(owner: object, field: str, value: str, allowed) -> None:
+    """Raise InputError unless ``value`` is one of ``allowed``."""
+    if value not in allowed:
+        raise InputError(f"{_label(owner, field)} = {value!r} is not known; allowed: {', '.join(map(str, allowed))}")
+
+
+# --------------------------------------------------------------------------- dict / TOML
+def _coerce(value: Any, annotation: Any, name: str) -> Any:
+    """Light coercion from TOML types to the field's annotation (ints to floats, lists to tuples)."""
+    origin = typing.get_origin(annotation)
+    if annotation is float and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    if origin is tuple and isinstance(value, list):
+        args = typing.get_args(annotation)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_coerce(v, args[0], name) for v in value)
+        if args and len(args) == len(value):
+            return tuple(_coerce(v, a, name) for v, a in zip(args, value))
+        return tuple(value)
+    if origin in (types.UnionType, typing.Union):
+        for arg in typing.get_args(annotation):
+            if arg is float and isinstance(value, int) and not isinstance(value, bool):
+                return float(value)
+    return value
+
+
+def from_dict(cls: type[T], data: dict[str, Any], where: str | None = None) -> T:
+    """Build a frozen config from a plain dict, refusing unknown keys with the known ones listed.
+
+    ``where`` names the place the dict came from (a file or TOML table) for the error message.
+    """
+    if not isinstance(data, dict):
+        raise InputError(f"{where or cls.__name__}: expected a table of settings, got {type(data).__name__}")
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        raise InputError(
+            f"{where or cls.__name__}: unknown key(s) {', '.join(unknown)}; known keys: {', '.join(sorted(fields))}"
+        )
+    hints = typing.get_type_hints(cls)
+    kwargs = {k: _coerce(v, hints.get(k, Any), k) for k, v in data.items()}
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:  # e.g. a missing required field
+        raise InputError(f"{where or cls.__name__}: {exc}") from None
+
+
+def to_dict(cfg: Any) -> dict[str, Any]:
+    """A JSON/TOML-friendly dict of a config (tuples become lists)."""
+
+    def plain(v: Any) -> Any:
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
+        if isinstance(v, (tuple, list)):
+            return [plain(x) for x in v]
+        if isinstance(v, dict):
+            return {k: plain(x) for k, x in v.items()}
+        return v
+
+    return plain(cfg)
+
+
+def config_id(obj: Any, seed: int | None = None, length: int = 12) -> str:
+    """A stable short hash of a config (or any plain data) plus a seed: same input, same id."""
+    payload = json.dumps({"cfg": to_dict(obj), "seed": seed}, sort_keys=True, default=repr)
+    return hashlib.sha256(payload.encode()).hexdigest()[:length]
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file; a missing file or a syntax error becomes an InputError naming the file."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"{p}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{p}: not valid TOML ({exc})") from None
+
+
+def parse_set_value(text: str) -> Any:
+    """Parse the value part of ``--set key=value`` as a TOML value, falling back to a string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def set_dotted(data: dict[str, Any], dotted_key: str, value: Any) -> dict[str, Any]:
+    """Return a deep copy of ``data`` with ``a.b.c`` set to ``value``.
+
+    Every table on the path must already exist, so a typo is an error that lists the
+    keys that do exist there; the leaf key itself may be new (the config loader then checks it).
+    """
+    import copy
+
+    out = copy.deepcopy(data)
+    parts = dotted_key.split(".")
+    node = out
+    for i, part in enumerate(parts[:-1]):
+        if not isinstance(node, dict) or part not in node or not isinstance(node[part], dict):
+            here = ".".join(parts[:i]) or "the top level"
+            known = ", ".join(sorted(k for k, v in node.items() if isinstance(v, dict))) if isinstance(node, dict) else ""
+            raise InputError(f"--set {dotted_key}: no table {part!r} at {here}; tables there: {known or 'none'}")
+        node = node[part]
+    node[parts[-1]] = value
+    return out

@@ -1,0 +1,6 @@
+"""Error types. Every error caused by bad user input is an ``InputError`` (a ValueError):
+the CLI turns it into one line on stderr and exit status 2."""
+
+
+class InputError(ValueError):
+    """Bad input that the user can fix: the message names the input and what is allowed."""
