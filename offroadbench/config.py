@@ -59,8 +59,8 @@ def check_range(
     bad_lo = lo is not None and (value <= lo if lo_open else value < lo)
     bad_hi = hi is not None and (value >= hi if hi_open else value > hi)
     if bad_lo or bad_hi:
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
+        left = "(" if lo_open or lo is None else "["
+        right = ")" if hi_open or hi is None else "]"
         lo_s = "-inf" if lo is None else f"{lo:g}"
         hi_s = "inf" if hi is None else f"{hi:g}"
         raise InputError(f"{name} = {value!r} is out of range; allowed: {left}{lo_s}, {hi_s}{right}")
@@ -95,7 +95,7 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(_coerce(v, args[0], name) for v in value)
         if args and len(args) == len(value):
-            return tuple(_coerce(v, a, name) for v, a in zip(args, value))
+            return tuple(_coerce(v, a, name) for a, v in zip(args, value))
         return tuple(value)
     if origin in (types.UnionType, typing.Union):
         for arg in typing.get_args(annotation):
@@ -123,6 +123,10 @@ def from_dict(cls: type[T], data: dict[str, Any], where: str | None = None) -> T
         return cls(**kwargs)
     except TypeError as exc:  # e.g. a missing required field
         raise InputError(f"{where or cls.__name__}: {exc}") from None
+    except InputError as exc:
+        if where is None:
+            raise
+        raise InputError(f"{where}: {exc}") from None
 
 
 def to_dict(cfg: Any) -> dict[str, Any]:

@@ -232,12 +232,16 @@ def wm_surface_direct(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
 
 
 def gaussian_smooth(z: np.ndarray, sigma_px: float) -> np.ndarray:
-    """Gaussian low-pass with sigma in pixels (reflecting edges); sigma 0 returns z."""
+    """Gaussian low-pass with sigma in pixels; sigma 0 returns z unchanged.
+
+    The kernel is (2 ceil(2 sigma) + 1) pixels wide and edges are replicated, as MATLAB's
+    ``imgaussfilt`` does (the paper gives no filter size; see MultifractalConfig).
+    """
     if sigma_px <= 0:
         return z
     from scipy.ndimage import gaussian_filter
 
-    return gaussian_filter(z, sigma=sigma_px, mode="reflect", truncate=4.0)
+    return gaussian_filter(z, sigma=sigma_px, mode="nearest", radius=int(math.ceil(2.0 * sigma_px)))
 
 
 @register("wm", WMConfig, summary="3D Weierstrass-Mandelbrot surface (Majhor & Bos Eq. 1-2)")
