@@ -1,0 +1,26 @@
+"""Monte Carlo studies (issue 4): study configs, seeds, executors, result store, reports.
+
+Typical use::
+
+    from offroadbench.study import load_study, run_study, load
+    study, cells = load_study("experiments/smoke.toml")
+    run_study(study, cells, "runs/smoke", workers=2)
+    df = load("runs/smoke")          # one tidy row per trial
+"""
+
+from offroadbench.study.config import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
+from offroadbench.study.results import load, load_meta, load_terrains
+from offroadbench.study.runner import RunSummary, run_study
+
+__all__ = [
+    "StudyConfig",
+    "GridAxis",
+    "CellPlan",
+    "load_study",
+    "study_from_dict",
+    "run_study",
+    "RunSummary",
+    "load",
+    "load_terrains",
+    "load_meta",
+]

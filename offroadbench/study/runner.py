@@ -1,0 +1,150 @@
+"""Run a study into a run directory: plan the pending work, execute it, commit every trial.
+
+:func:`run_study` is resumable by construction: it reads which trials the store already holds
+and only hands out the rest, grouped by terrain (each worker builds a terrain once and runs all
+its pending missions). Tasks are ordered terrain-major (terrain 0 of every cell, then terrain
+1, ...), so a partial study covers every grid cell evenly.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+from offroadbench.config import to_dict
+from offroadbench.progress import ProgressFn, report
+from offroadbench.study import seeds
+from offroadbench.study.config import CellPlan, StudyConfig, study_id
+from offroadbench.study.executors import get_executor
+from offroadbench.study.store import Store
+from offroadbench.study.trial import TerrainTask, TrialFn
+
+log = logging.getLogger(__name__)
+
+__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta"]
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What one ``run_study`` call did."""
+
+    run_dir: Path
+    total: int
+    """Trials in the whole study."""
+    done: int
+    """Trials stored after this call."""
+    ran: int
+    """Trials run by this call."""
+    successes: int
+    """Successful trials stored after this call."""
+    wall_s: float
+    """Wall time of this call, seconds."""
+
+
+def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, int, int]]) -> list[TerrainTask]:
+    """The terrain tasks that still have missions to run, terrain-major."""
+    tasks = []
+    for j in range(study.terrains_per_cell):
+        for plan in plans:
+            pending = tuple(
+                (k, seeds.mission_seed(study.root_seed, plan.key, j, k))
+                for k in range(study.missions_per_terrain)
+                if (plan.index, j, k) not in done
+            )
+            if pending:
+                tseed = seeds.terrain_seed(study.root_seed, plan.key, j)
+                tasks.append(TerrainTask(cell=plan, terrain=j, terrain_seed=tseed, missions=pending))
+    return tasks
+
+
+def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "") -> dict[str, Any]:
+    """What the store records about the study (config, cells, seeds' root, version)."""
+    from offroadbench import __version__
+
+    return {
+        "study_id": study_id(study, plans),
+        "study": to_dict(study),
+        "study_toml": source_text,
+        "columns": study.column_names(),
+        "cells": [
+            {
+                "index": p.index,
+                "values": dict(p.values),
+                "seed_key": p.key,
+                "recipe": dict(p.recipe_data),
+                "settings": {k: dict(v) for k, v in p.settings.items()},
+            }
+            for p in plans
+        ],
+        "n_trials": study.n_trials,
+        "version": __version__,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+def run_study(
+    study: StudyConfig,
+    plans: list[CellPlan],
+    run_dir: str | Path,
+    *,
+    executor: str = "local",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    trial_fn: TrialFn | None = None,
+    source_text: str = "",
+    progress: ProgressFn | None = None,
+    on_trial: Callable[[Mapping[str, Any]], None] | None = None,
+) -> RunSummary:
+    """Run (or resume) ``study`` into ``run_dir``; every finished trial is committed at once.
+
+    ``progress(done, total)`` counts stored trials of the whole study; ``on_trial(row)`` sees
+    every new trial's row (e.g. for a success-rate display). Ctrl-C stops the workers and
+    re-raises KeyboardInterrupt; what was committed stays.
+    """
+    from offroadbench import __version__
+
+    ex = get_executor(executor, workers, scheduler)
+    t0 = time.perf_counter()
+    with Store(run_dir, create=True) as store:
+        store.init_meta(study_meta(study, plans, source_text))
+        tasks = plan_tasks(study, plans, store.done_trials())
+        total = study.n_trials
+        done, _ = store.counts()
+        report(progress, done, total)
+        run_id = store.start_run(executor, ex.workers, __version__)
+        ran = 0
+        log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
+
+        def handle(msg: tuple) -> None:
+            nonlocal ran, done
+            if msg[0] == "terrain":
+                _, cell, terrain, tseed, stats = msg
+                store.add_terrain(cell, terrain, tseed, stats)
+                return
+            _, cell, terrain, mission, tseed, mseed, row = msg
+            if store.add_trial(cell, terrain, mission, tseed, mseed, row):
+                ran += 1
+                done += 1
+                store.note_progress(run_id, ran)
+                if on_trial is not None:
+                    on_trial(row)
+                report(progress, done, total)
+
+        status = "interrupted"
+        try:
+            ex.run(tasks, trial_fn, handle)
+            status = "finished"
+        except KeyboardInterrupt:
+            raise
+        except BaseException:
+            status = "failed"
+            raise
+        finally:
+            store.finish_run(run_id, ran, status)
+        done, successes = store.counts()
+    return RunSummary(
+        run_dir=Path(run_dir), total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
+    )

@@ -1,0 +1,184 @@
+"""Crash-safe, resumable result store of a study: one SQLite file in the run directory.
+
+Tables (``study.sqlite``):
+
+* ``meta(key, value)``: the study config (JSON and the TOML text it came from), the study id,
+  the resolved grid cells (recipe data, settings, seed keys), the package version that created
+  the store.
+* ``terrains(cell, terrain, terrain_seed, stats)``: one row per built terrain; ``stats`` is JSON
+  (class area fractions of Sec. 2.4, missions sampled, build time).
+* ``trials(cell, terrain, mission, terrain_seed, mission_seed, success, row)``: one row per
+  finished trial; ``row`` is the JSON of ``TrialResult.as_row()``.
+* ``runs``: one row per ``study run`` session (start, end, executor, workers, trials run, host,
+  version): the wall time of the study is read from here.
+
+Safety. Only the coordinating process writes. Every trial is its own transaction, committed
+the moment its result arrives; the primary key (cell, terrain, mission) makes a second copy
+impossible. WAL journal with ``synchronous=NORMAL``: a killed process (SIGKILL included)
+loses no committed row and leaves a consistent database; only a power cut may lose the last
+few commits. A trial that was in flight when the process died has no row, so the next run
+does it again.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import platform
+import sqlite3
+import time
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from offroadbench.errors import InputError
+
+log = logging.getLogger(__name__)
+
+__all__ = ["STORE_NAME", "Store", "store_path"]
+
+STORE_NAME = "study.sqlite"
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS terrains (
+    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, terrain_seed INTEGER NOT NULL,
+    stats TEXT NOT NULL, PRIMARY KEY (cell, terrain));
+CREATE TABLE IF NOT EXISTS trials (
+    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, mission INTEGER NOT NULL,
+    terrain_seed INTEGER NOT NULL, mission_seed INTEGER NOT NULL, success INTEGER NOT NULL,
+    row TEXT NOT NULL, PRIMARY KEY (cell, terrain, mission));
+CREATE TABLE IF NOT EXISTS runs (
+    id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
+    executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
+    host TEXT, version TEXT);
+"""
+
+
+def store_path(run_dir: str | Path) -> Path:
+    return Path(run_dir) / STORE_NAME
+
+
+class Store:
+    """The SQLite store of one run directory. Use as a context manager."""
+
+    def __init__(self, run_dir: str | Path, *, create: bool = False) -> None:
+        self.run_dir = Path(run_dir)
+        path = store_path(self.run_dir)
+        if not path.exists():
+            if not create:
+                raise InputError(f"{self.run_dir}: no study results here (no {STORE_NAME})")
+            if self.run_dir.exists() and not self.run_dir.is_dir():
+                raise InputError(f"--out {self.run_dir} is a file; give a directory")
+            self.run_dir.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+        self.con.execute("PRAGMA journal_mode=WAL")
+        self.con.execute("PRAGMA synchronous=NORMAL")
+        self.con.executescript(_SCHEMA)
+
+    def __enter__(self) -> "Store":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.con.close()
+
+    # ------------------------------------------------------------------ meta
+    def meta(self) -> dict[str, Any]:
+        return {k: json.loads(v) for k, v in self.con.execute("SELECT key, value FROM meta")}
+
+    def init_meta(self, values: Mapping[str, Any]) -> None:
+        """Write the study's metadata once; a store of another study refuses to be reused."""
+        old = self.meta()
+        if old and old.get("study_id") != values["study_id"]:
+            raise InputError(
+                f"{self.run_dir} holds another study (id {old.get('study_id')}, this one is {values['study_id']}); "
+                "use another --out directory"
+            )
+        if old:
+            if old.get("version") != values.get("version"):
+                log.warning(
+                    "%s was started with offroadbench %s, resuming with %s",
+                    self.run_dir,
+                    old.get("version"),
+                    values.get("version"),
+                )
+            return
+        with self.con:
+            self.con.execute("BEGIN")
+            self.con.executemany(
+                "INSERT INTO meta (key, value) VALUES (?, ?)",
+                [(k, json.dumps(v, sort_keys=True)) for k, v in values.items()],
+            )
+
+    # ------------------------------------------------------------------ results
+    def add_terrain(self, cell: int, terrain: int, terrain_seed: int, stats: Mapping[str, Any]) -> None:
+        self.con.execute(
+            "INSERT OR IGNORE INTO terrains (cell, terrain, terrain_seed, stats) VALUES (?, ?, ?, ?)",
+            (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)),
+        )
+
+    def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping) -> bool:
+        """Commit one trial at once. Returns False (and stores nothing) if it was already there."""
+        text = json.dumps(dict(row))
+        cur = self.con.execute(
+            "INSERT OR IGNORE INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?)",
+            (cell, terrain, mission, terrain_seed, mission_seed, int(bool(row["success"])), text),
+        )
+        if cur.rowcount == 0:
+            (old,) = self.con.execute(
+                "SELECT row FROM trials WHERE cell=? AND terrain=? AND mission=?", (cell, terrain, mission)
+            ).fetchone()
+            if old != text:
+                log.warning("trial (%d, %d, %d) ran twice with different results", cell, terrain, mission)
+            return False
+        return True
+
+    def done_trials(self) -> set[tuple[int, int, int]]:
+        return {tuple(r) for r in self.con.execute("SELECT cell, terrain, mission FROM trials")}
+
+    def trial_rows(self) -> list[tuple]:
+        return self.con.execute(
+            "SELECT cell, terrain, mission, terrain_seed, mission_seed, row FROM trials ORDER BY cell, terrain, mission"
+        ).fetchall()
+
+    def terrain_rows(self) -> list[tuple]:
+        return self.con.execute(
+            "SELECT cell, terrain, terrain_seed, stats FROM terrains ORDER BY cell, terrain"
+        ).fetchall()
+
+    def counts(self) -> tuple[int, int]:
+        """(trials stored, successes among them)."""
+        n, s = self.con.execute("SELECT COUNT(*), COALESCE(SUM(success), 0) FROM trials").fetchone()
+        return int(n), int(s)
+
+    # ------------------------------------------------------------------ run sessions
+    def start_run(self, executor: str, workers: int, version: str) -> int:
+        cur = self.con.execute(
+            "INSERT INTO runs (started, executor, workers, status, host, version) VALUES (?, ?, ?, 'running', ?, ?)",
+            (time.time(), executor, workers, platform.node(), version),
+        )
+        return int(cur.lastrowid)
+
+    def finish_run(self, run_id: int, trials_run: int, status: str) -> None:
+        self.con.execute(
+            "UPDATE runs SET finished=?, trials_run=?, status=? WHERE id=?", (time.time(), trials_run, status, run_id)
+        )
+
+    def note_progress(self, run_id: int, trials_run: int) -> None:
+        """Keep the session row current, so a killed session still shows its work and end time."""
+        self.con.execute("UPDATE runs SET finished=?, trials_run=? WHERE id=?", (time.time(), trials_run, run_id))
+
+    def runs(self) -> list[dict[str, Any]]:
+        cur = self.con.execute("SELECT * FROM runs ORDER BY id")
+        names = [d[0] for d in cur.description]
+        return [dict(zip(names, r)) for r in cur.fetchall()]
+
+
+def iter_json(rows: Iterable[tuple], index: int) -> Iterable[tuple]:
+    """Rows with column ``index`` parsed from JSON."""
+    for r in rows:
+        yield (*r[:index], json.loads(r[index]), *r[index + 1 :])
