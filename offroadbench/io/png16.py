@@ -1,0 +1,189 @@
+"""16-bit grayscale PNG heightmaps with a JSON sidecar, the exchange format for other simulators.
+
+Encoding: pixel (row r, col c) is ``z[r, c]`` (no flips); the full 0..65535 range maps linearly to
+``z_min_m .. z_max_m``, so the round-trip error is at most half a quantisation step
+``(z_max_m - z_min_m) / 65535 / 2``.
+
+Metadata is written twice: a sidecar ``NAME.json`` beside ``NAME.png`` (flat keys, read back
+exactly) and PNG ``tEXt`` chunks with the same keys (so the PNG alone still says what it is).
+Both carry the Unreal Engine import scales that reproduce the metres: X/Y scale = cell size in
+cm, Z scale = relief in cm / 512 (a 16-bit landscape spans 512 m at Z scale 100).
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.io.atomic import atomic_path, check_writable
+
+__all__ = ["FORMAT", "encode_png16", "decode_png16", "sidecar_path", "png_metadata", "write_png16", "read_png16"]
+
+FORMAT = "offroadbench-png16/1"
+LEVELS = 65535
+UE_RANGE_M_AT_Z_SCALE_100 = 512.0  # a 16-bit Unreal landscape spans 512 m at Z scale 100
+
+
+def sidecar_path(png_path: str | Path) -> Path:
+    """``NAME.json`` beside ``NAME.png``."""
+    return Path(png_path).with_suffix(".json")
+
+
+def encode_png16(hm: Heightmap) -> np.ndarray:
+    """Quantise heights to uint16 over the full range (a flat map becomes all zeros)."""
+    span = hm.relief_m
+    if span == 0:
+        return np.zeros(hm.shape, dtype=np.uint16)
+    q = np.rint((hm.z - hm.z_min_m) / span * LEVELS)
+    return np.clip(q, 0, LEVELS).astype(np.uint16)
+
+
+def decode_png16(q: np.ndarray, cell_size_m: float, z_min_m: float, z_max_m: float) -> Heightmap:
+    """Heights in metres from uint16 levels and the range they span."""
+    if not z_max_m >= z_min_m:
+        raise InputError(f"z_max_m ({z_max_m}) must be >= z_min_m ({z_min_m})")
+    z = z_min_m + q.astype(np.float64) * ((z_max_m - z_min_m) / LEVELS)
+    return Heightmap(z=z, cell_size_m=cell_size_m)
+
+
+def png_metadata(hm: Heightmap, extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The flat metadata dict written to the sidecar and the PNG text chunks."""
+    from offroadbench import __version__
+
+    relief = hm.relief_m
+    meta: dict[str, Any] = {
+        "format": FORMAT,
+        "rows": hm.rows,
+        "cols": hm.cols,
+        "cell_size_m": hm.cell_size_m,
+        "z_min_m": hm.z_min_m,
+        "z_max_m": hm.z_max_m,
+        "relief_m": relief,
+        "quantisation_step_m": relief / LEVELS,
+        "ue_scale_x": hm.cell_size_m * 100.0,
+        "ue_scale_y": hm.cell_size_m * 100.0,
+        "ue_scale_z": relief * 100.0 / UE_RANGE_M_AT_Z_SCALE_100,
+        "offroadbench_version": __version__,
+    }
+    for k, v in (extra or {}).items():
+        meta[k] = v
+    return meta
+
+
+def _read_ihdr(path: Path) -> tuple[int, int, int, int]:
+    """(width, height, bit depth, colour type) from a PNG header, or InputError if not a PNG."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(33)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    if len(head) < 33 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        raise InputError(f"{path}: not a PNG file")
+    width, height, depth, ctype = struct.unpack(">IIBB", head[16:26])
+    return width, height, depth, ctype
+
+
+_COLOUR_TYPES = {0: "grayscale", 2: "RGB colour", 3: "palette colour", 4: "grayscale+alpha", 6: "RGBA colour"}
+
+
+def write_png16(hm: Heightmap, path: str | Path, meta: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Write ``path`` (16-bit grayscale PNG) and its JSON sidecar atomically; return the metadata.
+
+    ``meta`` adds keys (e.g. ``recipe``, ``seed``); values that are not strings are stored as JSON.
+    Nothing is left behind under the final names if anything fails.
+    """
+    from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
+
+    png = Path(path)
+    if png.suffix.lower() != ".png":
+        raise InputError(f"output path {png}: must end in .png")
+    check_writable(png)
+    data = png_metadata(hm, meta)
+    info = PngInfo()
+    for k, v in data.items():
+        info.add_text(k, v if isinstance(v, str) else json.dumps(v))
+    q = encode_png16(hm)
+    img = Image.fromarray(q)  # uint16 -> mode "I;16": one 16-bit grayscale channel
+    side = sidecar_path(png)
+    with atomic_path(png) as tmp_png, atomic_path(side) as tmp_json:
+        img.save(tmp_png, format="PNG", pnginfo=info)
+        tmp_json.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
+    return data
+
+
+def read_png16(
+    path: str | Path,
+    *,
+    cell_size_m: float | None = None,
+    relief_m: float | None = None,
+    z_min_m: float = 0.0,
+) -> Heightmap:
+    """Read a 16-bit grayscale PNG heightmap.
+
+    Metadata comes from the sidecar if it exists, else from offroadbench's PNG text chunks, else
+    from ``cell_size_m`` and ``relief_m`` (with ``z_min_m``, default 0) given by the caller. An
+    8-bit or colour image is refused: it cannot hold the 65536 height levels.
+    """
+    from PIL import Image
+
+    p = Path(path)
+    width, height, depth, ctype = _read_ihdr(p)
+    if ctype != 0:
+        raise InputError(
+            f"{p}: is a {_COLOUR_TYPES.get(ctype, 'colour')} PNG, not a heightmap; a heightmap must be a single-channel "
+            "16-bit grayscale PNG"
+        )
+    if depth != 16:
+        raise InputError(
+            f"{p}: is {'an' if depth == 8 else 'a'} {depth}-bit grayscale PNG; a heightmap must be 16-bit "
+            f"({2 ** depth} levels cannot resolve terrain heights)"
+        )
+    with Image.open(p) as img:
+        q = np.asarray(img, dtype=np.uint16) if img.mode != "I" else np.asarray(img).astype(np.uint16)
+        text = dict(getattr(img, "text", {}) or {})
+    if q.shape != (height, width):
+        raise InputError(f"{p}: decoded shape {q.shape} does not match the PNG header {height}x{width}")
+    meta = _metadata_for(p, text)
+    if meta is not None:
+        return decode_png16(q, float(meta["cell_size_m"]), float(meta["z_min_m"]), float(meta["z_max_m"]))
+    if cell_size_m is None or relief_m is None:
+        raise InputError(
+            f"{p}: has no sidecar {sidecar_path(p).name} and no offroadbench metadata; "
+            "give the cell size (m) and the relief (m) it spans"
+        )
+    if not relief_m >= 0:
+        raise InputError(f"relief_m must be >= 0, got {relief_m}")
+    return decode_png16(q, cell_size_m, z_min_m, z_min_m + relief_m)
+
+
+def _metadata_for(png: Path, text: Mapping[str, str]) -> dict[str, Any] | None:
+    side = sidecar_path(png)
+    if side.is_file():
+        try:
+            meta = json.loads(side.read_text())
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{side}: not valid JSON ({exc})") from None
+        source = str(side)
+    elif text.get("format") == FORMAT:
+        meta = {k: _maybe_json(v) for k, v in text.items()}
+        source = f"{png} text chunks"
+    else:
+        return None
+    missing = [k for k in ("cell_size_m", "z_min_m", "z_max_m") if k not in meta]
+    if missing:
+        raise InputError(f"{source}: missing {', '.join(missing)}")
+    return meta
+
+
+def _maybe_json(v: str) -> Any:
+    try:
+        return json.loads(v)
+    except json.JSONDecodeError:
+        return v
