@@ -1,0 +1,103 @@
+"""Trial metrics as pure functions of telemetry arrays, as Majhor & Bos compute them (Sec. 2.4).
+
+- Vertical acceleration: the vehicle's z position differentiated twice (second central
+  difference of the 20 Hz samples), then its RMS.
+- Pitch and roll rates: the unwrapped pitch (about the transverse axis) and roll (about the
+  longitudinal axis), both from a level reference, differentiated once; then their RMS.
+- Success rate, Eq. (5): ``100 * N_success / N_trials``.
+
+Angles: roll and pitch are the Z-Y-X (yaw-pitch-roll) Tait-Bryan angles of the body, so for a
+vehicle with yaw only they are zero, pitch is the nose-up angle of the longitudinal axis above
+the horizontal (positive nose *down* is negative), and roll is the rotation about that axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "roll_pitch_yaw_from_quat",
+    "rms",
+    "vertical_acceleration",
+    "angle_rate",
+    "rms_vertical_acceleration",
+    "rms_angle_rate_deg_s",
+    "path_length",
+    "success_rate",
+    "stuck_index",
+]
+
+
+def roll_pitch_yaw_from_quat(quat_xyzw: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Z-Y-X Euler angles (roll, pitch, yaw) in radians of quaternions (..., 4) in x, y, z, w order.
+
+    Pitch is measured so that nose-up is positive (rotation about the body's transverse axis y,
+    with x forward and z up, is nose-down positive in the right-hand rule; we flip it so a
+    climbing vehicle has positive pitch).
+    """
+    q = np.asarray(quat_xyzw, dtype=float)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    # rotation-matrix entries R[2,0], R[2,1], R[2,2], R[1,0], R[0,0]
+    r20 = 2.0 * (x * z - w * y)
+    r21 = 2.0 * (y * z + w * x)
+    r22 = 1.0 - 2.0 * (x * x + y * y)
+    r10 = 2.0 * (x * y + w * z)
+    r00 = 1.0 - 2.0 * (y * y + z * z)
+    roll = np.arctan2(r21, r22)
+    pitch = np.arcsin(np.clip(r20, -1.0, 1.0))  # = -(ZYX pitch): nose-up positive
+    yaw = np.arctan2(r10, r00)
+    return roll, pitch, yaw
+
+
+def rms(x: np.ndarray) -> float:
+    """Root mean square of a 1-D array; NaN for an empty one."""
+    a = np.asarray(x, dtype=float)
+    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
+
+
+def vertical_acceleration(z_m: np.ndarray, dt_s: float) -> np.ndarray:
+    """z differentiated twice: ``(z[i+1] - 2 z[i] + z[i-1]) / dt^2``, length n - 2 (m/s^2)."""
+    return np.diff(np.asarray(z_m, dtype=float), 2) / (dt_s * dt_s)
+
+
+def angle_rate(angle_rad: np.ndarray, dt_s: float) -> np.ndarray:
+    """Unwrapped angle differentiated once: ``(a[i+1] - a[i]) / dt``, length n - 1 (rad/s)."""
+    return np.diff(np.unwrap(np.asarray(angle_rad, dtype=float))) / dt_s
+
+
+def rms_vertical_acceleration(z_m: np.ndarray, dt_s: float) -> float:
+    """RMS vertical acceleration (m/s^2) of a uniformly sampled z series."""
+    return rms(vertical_acceleration(z_m, dt_s))
+
+
+def rms_angle_rate_deg_s(angle_rad: np.ndarray, dt_s: float) -> float:
+    """RMS rate (deg/s) of a uniformly sampled angle series in radians (pitch or roll)."""
+    return float(np.degrees(rms(angle_rate(angle_rad, dt_s))))
+
+
+def path_length(xyz_m: np.ndarray) -> float:
+    """Length of the polyline through the points (n, 2 or 3), metres."""
+    p = np.asarray(xyz_m, dtype=float)
+    if len(p) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+
+def success_rate(successes) -> float:
+    """Eq. (5): percentage of successful trials; NaN for no trials."""
+    s = np.asarray(successes, dtype=bool)
+    return float(100.0 * s.sum() / s.size) if s.size else float("nan")
+
+
+def stuck_index(xy_m: np.ndarray, window: int, distance_m: float) -> int | None:
+    """First sample index at which the vehicle has stayed within ``distance_m`` of the position
+    ``window`` samples earlier for the whole window, or None.
+
+    Paper Sec. 2.4: stuck if it fails to move more than 0.2 m within 30 s.
+    """
+    p = np.asarray(xy_m, dtype=float)
+    for end in range(window, len(p)):
+        seg = p[end - window : end + 1]
+        if np.max(np.linalg.norm(seg - seg[0], axis=1)) < distance_m:
+            return end
+    return None

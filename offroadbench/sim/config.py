@@ -1,0 +1,92 @@
+"""Frozen settings of a traversal trial: physics, controller and failure rules.
+
+Each loads from a TOML table with :func:`offroadbench.config.from_dict`, so a study file can
+carry ``[sim]``, ``[controller]`` and ``[rules]`` tables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from offroadbench.config import check_int, check_range
+from offroadbench.errors import InputError
+
+__all__ = ["SimConfig", "ControllerConfig", "FailureRules"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimConfig:
+    """Physics and recording settings."""
+
+    physics_rate_hz: int = 60
+    """Bullet steps per simulated second. 60 Hz is the fastest rate that passes the physics
+    sanity tests with sphere wheels (benchmarks/RESULTS.md, 'Traversal trials')."""
+    telemetry_rate_hz: int = 20
+    """Telemetry samples per second; the paper records at 20 Hz (Sec. 2.4)."""
+    solver_iterations: int = 50
+    """Bullet solver iterations per step: 10 let a parked vehicle creep, 100 buy nothing over 50."""
+    settle_time_s: float = 1.0
+    """Time the vehicle rests with braked wheels after spawning, before the clock starts, s."""
+    spawn_clearance_m: float = 0.02
+    """Gap between the lowest point of the vehicle and the highest terrain under it at spawn, m."""
+    gravity_m_s2: float = 9.81
+    """Magnitude of gravity, m/s^2."""
+    terrain_friction: float = 1.0
+    """Friction coefficient of the terrain; Bullet multiplies it with the vehicle's."""
+
+    def __post_init__(self) -> None:
+        check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
+        check_int(self, "telemetry_rate_hz", self.telemetry_rate_hz, lo=1, hi=self.physics_rate_hz)
+        if self.physics_rate_hz % self.telemetry_rate_hz:
+            raise InputError(
+                f"SimConfig.telemetry_rate_hz = {self.telemetry_rate_hz} must divide "
+                f"physics_rate_hz = {self.physics_rate_hz}"
+            )
+        check_int(self, "solver_iterations", self.solver_iterations, lo=1, hi=1000)
+        check_range(self, "settle_time_s", self.settle_time_s, lo=0)
+        check_range(self, "spawn_clearance_m", self.spawn_clearance_m, lo=0)
+        check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)
+        check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ControllerConfig:
+    """Pure pursuit on the start-goal line, with a jerk-limited (ruckig) speed profile."""
+
+    lookahead_m: float = 1.5
+    """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
+    control_rate_hz: int = 20
+    """Controller updates per second; must divide SimConfig.physics_rate_hz."""
+    cruise_speed_m_s: float = 1.0
+    """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
+
+    def __post_init__(self) -> None:
+        check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
+        check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
+        check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FailureRules:
+    """When a trial ends, paper Sec. 2.4 (tip-over 75 deg; stuck = under 0.2 m in 30 s)."""
+
+    tip_angle_deg: float = 75.0
+    """A trial fails as ``tipped`` once |roll| or |pitch| exceeds this, degrees."""
+    stuck_distance_m: float = 0.2
+    """A trial fails as ``stuck`` if the vehicle stays within this distance of where it was ..."""
+    stuck_window_s: float = 30.0
+    """... for this long, seconds."""
+    timeout_factor: float = 3.0
+    """A trial fails as ``timeout`` after this many times the nominal time (length / cruise speed)."""
+    goal_tolerance_m: float = 0.5
+    """The mission succeeds when the vehicle's centre is this close to the goal (horizontal), m."""
+    fall_depth_m: float = 1.0
+    """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
+
+    def __post_init__(self) -> None:
+        check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
+        check_range(self, "stuck_distance_m", self.stuck_distance_m, lo=0, lo_open=True)
+        check_range(self, "stuck_window_s", self.stuck_window_s, lo=0, lo_open=True)
+        check_range(self, "timeout_factor", self.timeout_factor, lo=1.0)
+        check_range(self, "goal_tolerance_m", self.goal_tolerance_m, lo=0, lo_open=True)
+        check_range(self, "fall_depth_m", self.fall_depth_m, lo=0, lo_open=True)

@@ -1,0 +1,103 @@
+"""Path tracking on a straight start-goal line: pure pursuit for steering, ruckig for speed.
+
+Steering (pure pursuit, Coulter 1992): the goal point lies ``lookahead`` ahead of the vehicle's
+projection on the line (clamped to the goal); with ``alpha`` the bearing of that point in the
+vehicle frame and ``l`` its distance, the arc through it has curvature ``kappa = 2 sin(alpha) / l``
+and the yaw-rate command is ``omega = v * kappa``.
+
+Speed: every control tick, a one-dimensional ruckig problem runs from the *measured* progress
+along the line and the *measured* speed along it (with the previous commanded acceleration, so
+the command stays jerk-limited) to the goal at rest. The command is ruckig's velocity one tick
+ahead. Starting from the measurement each tick makes the profile react to slip and bumps; a
+vehicle that stalls is commanded to re-accelerate within the jerk limit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from ruckig import InputParameter, OutputParameter, Result, Ruckig
+
+from offroadbench.sim.config import ControllerConfig
+from offroadbench.sim.vehicle import VehicleSpec
+
+__all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker"]
+
+
+def pure_pursuit_omega(
+    pos_xy: np.ndarray, yaw_rad: float, target_xy: np.ndarray, v_m_s: float, max_yaw_rate_rad_s: float
+) -> float:
+    """Yaw-rate command (rad/s, CCW +) to follow the arc to ``target_xy`` at speed ``v_m_s``."""
+    d = np.asarray(target_xy, dtype=float) - np.asarray(pos_xy, dtype=float)
+    dist = math.hypot(d[0], d[1])
+    if dist < 1e-9:
+        return 0.0
+    alpha = math.atan2(d[1], d[0]) - yaw_rad
+    kappa = 2.0 * math.sin(alpha) / dist
+    return max(-max_yaw_rate_rad_s, min(max_yaw_rate_rad_s, v_m_s * kappa))
+
+
+class SpeedProfile:
+    """Jerk-limited speed along a path of given length, re-planned from measurements each tick."""
+
+    def __init__(self, length_m: float, dt_s: float, v_max: float, a_max: float, j_max: float) -> None:
+        self.length_m = float(length_m)
+        self._otg = Ruckig(1, dt_s)
+        self._inp = InputParameter(1)
+        self._out = OutputParameter(1)
+        self._inp.max_velocity = [v_max]
+        self._inp.max_acceleration = [a_max]
+        self._inp.max_jerk = [j_max]
+        self._inp.target_position = [self.length_m]
+        self._inp.target_velocity = [0.0]
+        self._inp.target_acceleration = [0.0]
+        self._v_max = v_max
+        self._a_max = a_max
+        self._accel = 0.0
+
+    def command(self, progress_m: float, speed_m_s: float) -> float:
+        """Speed command (m/s, >= 0) for the next tick, from measured progress and speed."""
+        if progress_m >= self.length_m:
+            self._accel = 0.0
+            return 0.0
+        self._inp.current_position = [progress_m]
+        self._inp.current_velocity = [max(-self._v_max, min(self._v_max, speed_m_s))]
+        self._inp.current_acceleration = [self._accel]
+        result = self._otg.update(self._inp, self._out)
+        if result not in (Result.Working, Result.Finished):
+            raise RuntimeError(f"ruckig failed with {result} at progress {progress_m:.3f} m, speed {speed_m_s:.3f} m/s")
+        self._accel = max(-self._a_max, min(self._a_max, self._out.new_acceleration[0]))
+        return max(0.0, float(self._out.new_velocity[0]))
+
+
+class LineTracker:
+    """Follows the straight line from ``start`` to ``goal``: returns (v, omega) commands."""
+
+    def __init__(self, start_xy, goal_xy, spec: VehicleSpec, cfg: ControllerConfig) -> None:
+        self.start = np.asarray(start_xy, dtype=float)
+        self.goal = np.asarray(goal_xy, dtype=float)
+        delta = self.goal - self.start
+        self.length_m = float(math.hypot(delta[0], delta[1]))
+        self.unit = delta / self.length_m
+        self.cfg = cfg
+        self.spec = spec
+        self.speed = SpeedProfile(
+            self.length_m,
+            1.0 / cfg.control_rate_hz,
+            min(cfg.cruise_speed_m_s, spec.max_speed_m_s),
+            spec.max_accel_m_s2,
+            spec.max_jerk_m_s3,
+        )
+
+    def progress(self, pos_xy: np.ndarray) -> float:
+        """Distance along the line of the projection of ``pos_xy``, metres."""
+        return float(np.dot(np.asarray(pos_xy, dtype=float) - self.start, self.unit))
+
+    def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
+        """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
+        s = self.progress(pos_xy)
+        v = self.speed.command(s, float(np.dot(vel_xy, self.unit)))
+        target = self.start + self.unit * min(max(s, 0.0) + self.cfg.lookahead_m, self.length_m)
+        omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
+        return v, omega, s

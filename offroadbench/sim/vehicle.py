@@ -1,0 +1,110 @@
+"""Vehicle descriptions: a URDF plus a TOML table of limits, chosen by name or by path.
+
+``load_vehicle("husky")`` reads ``vehicles/husky/vehicle.toml`` of the repository; any other
+``vehicle.toml`` path works too, so new vehicles are added as files. The TOML's ``[vehicle]``
+table maps one-to-one onto :class:`VehicleSpec`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+from offroadbench.config import check_range, from_dict, load_toml
+from offroadbench.errors import InputError
+
+__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "VEHICLES_DIR"]
+
+#: the repository's vehicle folder: one sub-folder per vehicle holding vehicle.toml + URDF
+VEHICLES_DIR = Path(__file__).resolve().parents[2] / "vehicles"
+
+
+@dataclass(frozen=True, kw_only=True)
+class VehicleSpec:
+    """A skid-steer vehicle: its URDF, geometry the drive needs, limits and contact friction."""
+
+    name: str
+    """Short name, e.g. ``husky``."""
+    urdf: str
+    """Path of the URDF; relative paths are resolved against the TOML's folder by load_vehicle."""
+    left_wheel_joints: tuple[str, ...]
+    """Names of the left-side wheel joints (axis +y, positive spin drives forward)."""
+    right_wheel_joints: tuple[str, ...]
+    """Names of the right-side wheel joints."""
+    wheel_radius_m: float
+    """Rolling radius of the wheels, metres."""
+    track_m: float
+    """Lateral distance between left and right wheel centres, metres."""
+    max_speed_m_s: float
+    """Top forward speed, m/s."""
+    max_accel_m_s2: float
+    """Longitudinal acceleration limit used by the speed profile, m/s^2."""
+    max_jerk_m_s3: float
+    """Longitudinal jerk limit used by the speed profile, m/s^3."""
+    max_yaw_rate_rad_s: float
+    """Largest commanded yaw rate, rad/s."""
+    skid_track_factor: float = 1.0
+    """Effective skid-steer track divided by the geometric track (> 1: wheels slip when turning)."""
+    wheel_torque_limit_nm: float
+    """Largest torque each wheel motor applies, N m."""
+    wheel_friction: float
+    """Lateral (Coulomb) friction coefficient of the tyres; Bullet multiplies it by the terrain's."""
+    chassis_friction: float = 0.5
+    """Friction coefficient of the chassis body when it touches the ground."""
+    tyre_stiffness_n_m: float | None = None
+    """Vertical contact stiffness of each tyre, N/m (None: Bullet's rigid contact)."""
+    tyre_damping_n_s_m: float | None = None
+    """Vertical contact damping of each tyre, N s/m (needed with tyre_stiffness_n_m)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "left_wheel_joints", tuple(self.left_wheel_joints))
+        object.__setattr__(self, "right_wheel_joints", tuple(self.right_wheel_joints))
+        if not self.left_wheel_joints or not self.right_wheel_joints:
+            raise InputError(f"vehicle {self.name!r}: left_wheel_joints and right_wheel_joints must not be empty")
+        for name in ("wheel_radius_m", "track_m", "max_speed_m_s", "max_accel_m_s2", "max_jerk_m_s3",
+                     "max_yaw_rate_rad_s", "wheel_torque_limit_nm"):
+            check_range(self, name, getattr(self, name), lo=0, lo_open=True)
+        check_range(self, "skid_track_factor", self.skid_track_factor, lo=1.0)
+        check_range(self, "wheel_friction", self.wheel_friction, lo=0, lo_open=True)
+        check_range(self, "chassis_friction", self.chassis_friction, lo=0)
+        if (self.tyre_stiffness_n_m is None) != (self.tyre_damping_n_s_m is None):
+            raise InputError("vehicle: give both tyre_stiffness_n_m and tyre_damping_n_s_m, or neither")
+        if self.tyre_stiffness_n_m is not None:
+            check_range(self, "tyre_stiffness_n_m", self.tyre_stiffness_n_m, lo=0, lo_open=True)
+            check_range(self, "tyre_damping_n_s_m", self.tyre_damping_n_s_m, lo=0)
+
+    @property
+    def wheel_joints(self) -> tuple[str, ...]:
+        return self.left_wheel_joints + self.right_wheel_joints
+
+
+def list_vehicles() -> list[str]:
+    """Names of the vehicles shipped in the repository's ``vehicles/`` folder."""
+    return sorted(p.parent.name for p in VEHICLES_DIR.glob("*/vehicle.toml"))
+
+
+def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
+    """Load a vehicle by name (``husky``) or by the path of its ``vehicle.toml``.
+
+    The URDF path is resolved against the TOML's folder and must exist.
+    """
+    text = str(name_or_path)
+    path = Path(text)
+    if not (path.suffix == ".toml" or path.is_file()):
+        path = VEHICLES_DIR / text / "vehicle.toml"
+        if not path.is_file():
+            raise InputError(
+                f"vehicle {text!r} is not known; known vehicles: {', '.join(list_vehicles()) or 'none'} "
+                "(or give the path of a vehicle.toml)"
+            )
+    data = load_toml(path)
+    if "vehicle" not in data:
+        raise InputError(f"{path}: no [vehicle] table")
+    spec = from_dict(VehicleSpec, data["vehicle"], where=f"{path} [vehicle]")
+    urdf = Path(spec.urdf)
+    if not urdf.is_absolute():
+        urdf = path.parent / urdf
+    if not urdf.is_file():
+        raise InputError(f"{path}: urdf {spec.urdf!r} not found at {urdf}")
+    return dataclasses.replace(spec, urdf=str(urdf.resolve()))

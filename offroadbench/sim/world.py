@@ -1,0 +1,208 @@
+"""A PyBullet DIRECT world holding one terrain heightfield and one vehicle.
+
+The terrain is built once per World and reused for all its missions; the vehicle is reset
+(pose, velocities, wheel joints) before each mission, so a mission's result does not depend on
+what ran before it. Facts this relies on (measured, shared/DESIGN.md):
+
+- Bullet centres a heightfield on the middle of its x/y grid and at (min + max) / 2 in z, so
+  the body is placed at (width/2, height/2, (z_min + z_max)/2) to put sample (r, c) at
+  (c * cell, r * cell, z[r, c]). ``numHeightfieldRows`` is the number of x samples (cols) and
+  the data is ``z.ravel()`` (index c + r * cols).
+- ``createMultiBody`` gets a tiny dummy visual shape; without one PyBullet builds a render mesh
+  (seconds and hundreds of MB per 1009^2 terrain).
+- Heightfields are never removed and recreated (that leaks ~600 MB per terrain): one World, one
+  terrain; closing the World disconnects the client, which frees everything.
+- URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import pybullet as pb
+
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.sim.config import SimConfig
+from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+
+__all__ = ["World"]
+
+log = logging.getLogger(__name__)
+
+
+class World:
+    """One terrain and one vehicle in a private PyBullet DIRECT client. Use as a context manager."""
+
+    def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig()) -> None:
+        self.hm = hm
+        self.sim = sim
+        self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+        self.dt_s = 1.0 / sim.physics_rate_hz
+        self._cid = pb.connect(pb.DIRECT)
+        if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
+            raise RuntimeError("could not start a PyBullet DIRECT client")
+        try:
+            self._configure_engine()
+            self.terrain_id = self._build_terrain()
+            self.vehicle_id = self._load_vehicle()
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ lifetime
+    def close(self) -> None:
+        """Disconnect the client (frees the heightfield). Safe to call twice."""
+        if self._cid >= 0:
+            pb.disconnect(physicsClientId=self._cid)
+            self._cid = -1
+
+    def __enter__(self) -> "World":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @property
+    def client_id(self) -> int:
+        return self._cid
+
+    # ------------------------------------------------------------------ building
+    def _configure_engine(self) -> None:
+        pb.setGravity(0, 0, -self.sim.gravity_m_s2, physicsClientId=self._cid)
+        pb.setPhysicsEngineParameter(
+            fixedTimeStep=self.dt_s,
+            numSubSteps=0,
+            numSolverIterations=self.sim.solver_iterations,
+            deterministicOverlappingPairs=1,
+            physicsClientId=self._cid,
+        )
+
+    def _build_terrain(self) -> int:
+        hm = self.hm
+        shape = pb.createCollisionShape(
+            pb.GEOM_HEIGHTFIELD,
+            meshScale=[hm.cell_size_m, hm.cell_size_m, 1.0],
+            heightfieldData=hm.z.ravel(),
+            numHeightfieldRows=hm.cols,
+            numHeightfieldColumns=hm.rows,
+            physicsClientId=self._cid,
+        )
+        dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=self._cid)
+        centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
+        body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=self._cid)
+        pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=self._cid)
+        return body
+
+    def _load_vehicle(self) -> int:
+        spec = self.spec
+        body = pb.loadURDF(
+            spec.urdf,
+            basePosition=[0, 0, self.hm.z_max_m + 10.0],
+            flags=pb.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=self._cid,
+        )
+        names = {
+            pb.getJointInfo(body, j, physicsClientId=self._cid)[1].decode(): j
+            for j in range(pb.getNumJoints(body, physicsClientId=self._cid))
+        }
+        missing = [n for n in spec.wheel_joints if n not in names]
+        if missing:
+            raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
+        self.left_joints = [names[n] for n in spec.left_wheel_joints]
+        self.right_joints = [names[n] for n in spec.right_wheel_joints]
+        self.wheel_joints = self.left_joints + self.right_joints
+        pb.changeDynamics(body, -1, lateralFriction=spec.chassis_friction, physicsClientId=self._cid)
+        tyre = {}
+        if spec.tyre_stiffness_n_m is not None:
+            tyre = {"contactStiffness": spec.tyre_stiffness_n_m, "contactDamping": spec.tyre_damping_n_s_m}
+        for j in self.wheel_joints:
+            pb.changeDynamics(body, j, lateralFriction=spec.wheel_friction, **tyre, physicsClientId=self._cid)
+        return body
+
+    # ------------------------------------------------------------------ vehicle state
+    def _bottom_offset(self) -> float:
+        """Height of the base origin above the lowest point of the vehicle in its current pose."""
+        body = self.vehicle_id
+        z_base = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)[0][2]
+        lows = [pb.getAABB(body, link, physicsClientId=self._cid)[0][2]
+                for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid))]
+        return z_base - min(lows)
+
+    def spawn(self, x_m: float, y_m: float, heading_rad: float, roll_rad: float = 0.0) -> None:
+        """Put the vehicle at rest above (x, y) facing ``heading_rad``, clear of the terrain, then
+        let it settle for ``sim.settle_time_s`` with its wheels braked.
+
+        Every piece of vehicle state is reset, so what ran before does not matter.
+        """
+        cid = self._cid
+        body = self.vehicle_id
+        orn = pb.getQuaternionFromEuler([roll_rad, 0.0, heading_rad])
+        pb.resetBasePositionAndOrientation(body, [x_m, y_m, self.hm.z_max_m + 10.0], orn, physicsClientId=cid)
+        pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+        for j in self.wheel_joints:
+            pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
+        aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
+        reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1]) + self.spec.wheel_radius_m
+        ground = self.max_height_near(x_m, y_m, reach)
+        z = ground + self._bottom_offset() + self.sim.spawn_clearance_m
+        pb.resetBasePositionAndOrientation(body, [x_m, y_m, z], orn, physicsClientId=cid)
+        self.command_wheels(0.0, 0.0)
+        for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
+            pb.stepSimulation(physicsClientId=cid)
+
+    def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
+        """Highest terrain sample within ``radius_m`` of (x, y) (clipped to the map), metres."""
+        hm = self.hm
+        c0 = max(0, int(math.floor((x_m - radius_m) / hm.cell_size_m)))
+        c1 = min(hm.cols - 1, int(math.ceil((x_m + radius_m) / hm.cell_size_m)))
+        r0 = max(0, int(math.floor((y_m - radius_m) / hm.cell_size_m)))
+        r1 = min(hm.rows - 1, int(math.ceil((y_m + radius_m) / hm.cell_size_m)))
+        if c0 > c1 or r0 > r1:
+            return hm.z_max_m
+        return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
+
+    def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:
+        """Velocity commands for the left and right wheels, torque-limited by the vehicle spec."""
+        n_l, n_r = len(self.left_joints), len(self.right_joints)
+        pb.setJointMotorControlArray(
+            self.vehicle_id,
+            self.wheel_joints,
+            pb.VELOCITY_CONTROL,
+            targetVelocities=[left_rad_s] * n_l + [right_rad_s] * n_r,
+            forces=[self.spec.wheel_torque_limit_nm] * (n_l + n_r),
+            physicsClientId=self._cid,
+        )
+
+    def step(self) -> None:
+        pb.stepSimulation(physicsClientId=self._cid)
+
+    def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
+        """(position, quaternion xyzw, linear velocity, angular velocity), world frame."""
+        pos, orn = pb.getBasePositionAndOrientation(self.vehicle_id, physicsClientId=self._cid)
+        lin, ang = pb.getBaseVelocity(self.vehicle_id, physicsClientId=self._cid)
+        return pos, orn, lin, ang
+
+    def rotation_matrix(self, quat: tuple) -> tuple:
+        """Row-major 3x3 rotation matrix (body -> world) of a quaternion (x, y, z, w)."""
+        return pb.getMatrixFromQuaternion(quat, physicsClientId=self._cid)
+
+    def wheel_penetration_m(self) -> float:
+        """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres."""
+        worst = 0.0
+        wheels = self.wheel_joints
+        for c in pb.getContactPoints(bodyA=self.vehicle_id, bodyB=self.terrain_id, physicsClientId=self._cid):
+            if c[3] in wheels and -c[8] > worst:
+                worst = -c[8]
+        return worst
+
+    def ray_height(self, x_m: float, y_m: float) -> float:
+        """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN if missed)."""
+        top = self.hm.z_max_m + 1.0
+        bottom = self.hm.z_min_m - 1.0
+        hit = pb.rayTest([x_m, y_m, top], [x_m, y_m, bottom], physicsClientId=self._cid)[0]
+        if hit[0] != self.terrain_id:
+            return float("nan")
+        return float(hit[3][2])
