@@ -3,9 +3,150 @@
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
+
+from offroadbench.errors import InputError
+from offroadbench.io.atomic import atomic_path
+
+EXPORT_FORMATS = ("parquet", "csv")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
+    from offroadbench.study.executors import EXECUTORS
+
     p = subparsers.add_parser("study", help="run, export and report Monte Carlo studies")
-    p.add_subparsers(dest="study_command", required=True)
+    sub = p.add_subparsers(dest="study_command", required=True)
+
+    run = sub.add_parser("run", help="run (or resume) a study TOML; finished trials are skipped")
+    run.add_argument("study", help="study TOML, e.g. experiments/smoke.toml")
+    run.add_argument("--out", help="run directory (default: runs/<study name>)")
+    run.add_argument("--workers", type=int, default=None, help="worker processes (default: the core count)")
+    run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
+    run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
+    run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
+    run.set_defaults(func=cmd_run)
+
+    exp = sub.add_parser("export", help="write the trial and terrain tables of a run directory")
+    exp.add_argument("run_dir", help="run directory of a study")
+    exp.add_argument("--format", default="parquet", choices=EXPORT_FORMATS)
+    exp.add_argument("--out", help="output folder (default: the run directory)")
+    exp.set_defaults(func=cmd_export)
+
+    rep = sub.add_parser("report", help="write the Markdown report with figures of a run directory")
+    rep.add_argument("run_dir", help="run directory of a study")
+    rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
+    rep.set_defaults(func=cmd_report)
+
+
+def _run_dir(path: str) -> Path:
+    p = Path(path)
+    if not (p / "study.sqlite").is_file():
+        raise InputError(f"{p}: not a study run directory (no study.sqlite)")
+    return p
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from offroadbench.study import load_study, run_study
+
+    study, plans = load_study(args.study)
+    out = Path(args.out) if args.out else Path("runs") / study.name
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers = {args.workers}; must be >= 1")
+    if args.scheduler and args.executor != "dask":
+        raise InputError("--scheduler needs --executor dask")
+    text = Path(args.study).read_text()
+    counts = {"new": 0, "ok": 0}
+    bar = None
+
+    def progress(done: int, total: int) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = tqdm(total=total, initial=done, desc=study.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
+            return
+        if counts["new"]:
+            bar.set_postfix(success=f"{100.0 * counts['ok'] / counts['new']:.0f}%", refresh=False)
+        bar.update(done - bar.n)
+
+    def on_trial(row) -> None:
+        counts["new"] += 1
+        counts["ok"] += bool(row["success"])
+
+    try:
+        summary = run_study(study, plans, out, executor=args.executor, workers=args.workers,
+                            scheduler=args.scheduler, source_text=text, progress=progress, on_trial=on_trial)
+    finally:
+        if bar is not None:
+            bar.close()
+    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
+          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
+    if summary.done == summary.total and not args.no_report:
+        path = write_report(out, out / "report")
+        print(f"report: {path}")
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from offroadbench.study import load, load_terrains
+
+    run_dir = _run_dir(args.run_dir)
+    out = Path(args.out) if args.out else run_dir
+    if not out.is_dir():
+        raise InputError(f"--out {out}: not a directory")
+    for name, df in (("trials", load(run_dir)), ("terrains", load_terrains(run_dir))):
+        path = out / f"{name}.{args.format}"
+        with atomic_path(path) as tmp:
+            if args.format == "csv":
+                df.to_csv(tmp, index=False)
+            else:
+                df.to_parquet(tmp, index=False)
+        print(f"{path} ({len(df)} rows)")
+    return 0
+
+
+def _parse_fig4(text: str | None) -> tuple[int, int] | None:
+    if text is None:
+        return None
+    try:
+        cell, terrain = (int(x) for x in text.split(":"))
+    except ValueError:
+        raise InputError(f"--fig4 {text!r}: expected CELL:TERRAIN, e.g. 1:0") from None
+    return cell, terrain
+
+
+def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
+    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
+    import matplotlib.pyplot as plt
+
+    from offroadbench.study.report import build_report
+    from offroadbench.study.results import load_meta
+
+    report = build_report(run_dir, fig4=fig4)
+    out.mkdir(parents=True, exist_ok=True)
+    for name, fig in report.figures.items():
+        with atomic_path(out / name) as tmp:
+            fig.savefig(tmp, format="png", dpi=110)
+        plt.close(fig)
+    for name, df in report.tables.items():
+        with atomic_path(out / name) as tmp:
+            df.to_csv(tmp, index=False)
+    toml = load_meta(run_dir).get("study_toml")
+    if toml:
+        with atomic_path(out / "study.toml") as tmp:
+            tmp.write_text(toml)
+    path = out / "report.md"
+    with atomic_path(path) as tmp:
+        tmp.write_text(report.markdown)
+    return path
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    run_dir = _run_dir(args.run_dir)
+    out = Path(args.out) if args.out else run_dir / "report"
+    path = write_report(run_dir, out, _parse_fig4(args.fig4))
+    print(f"report: {path}")
+    return 0

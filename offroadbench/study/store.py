@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import platform
 import sqlite3
 import time
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Mapping
 
 from offroadbench.errors import InputError
 
@@ -50,7 +51,7 @@ CREATE TABLE IF NOT EXISTS trials (
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
     executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
-    host TEXT, version TEXT);
+    host TEXT, machine TEXT, version TEXT);
 """
 
 
@@ -158,8 +159,9 @@ class Store:
     # ------------------------------------------------------------------ run sessions
     def start_run(self, executor: str, workers: int, version: str) -> int:
         cur = self.con.execute(
-            "INSERT INTO runs (started, executor, workers, status, host, version) VALUES (?, ?, ?, 'running', ?, ?)",
-            (time.time(), executor, workers, platform.node(), version),
+            "INSERT INTO runs (started, executor, workers, status, host, machine, version) "
+            "VALUES (?, ?, ?, 'running', ?, ?, ?)",
+            (time.time(), executor, workers, platform.node(), machine_description(), version),
         )
         return int(cur.lastrowid)
 
@@ -178,7 +180,15 @@ class Store:
         return [dict(zip(names, r)) for r in cur.fetchall()]
 
 
-def iter_json(rows: Iterable[tuple], index: int) -> Iterable[tuple]:
-    """Rows with column ``index`` parsed from JSON."""
-    for r in rows:
-        yield (*r[:index], json.loads(r[index]), *r[index + 1 :])
+def machine_description() -> str:
+    """CPU model, core count and OS of this machine, e.g. ``AMD EPYC, 2 cores, Linux 6.1``."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}"
+

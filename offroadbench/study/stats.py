@@ -1,0 +1,135 @@
+"""The paper's statistics (Majhor & Bos Sec. 2.4, 3): medians, IQR (Eq. 6), 1.5 IQR outliers
+(Eq. 7-8), per-terrain success rate (Eq. 5), and the group tables of a study.
+
+Quartiles use the ``hazen`` definition (the p-th percentile sits at rank n p / 100 + 1/2),
+which is MATLAB's ``prctile``, the tool the paper's box plots come from (red medians, red "+"
+outliers, whiskers to the furthest point inside the fences). The figures are drawn from these
+same numbers (``Axes.bxp``), so tables and plots agree exactly.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+import pandas as pd
+
+__all__ = [
+    "QUANTILE_METHOD",
+    "WHISKER_IQR",
+    "METRICS",
+    "CLASSES",
+    "box_stats",
+    "terrain_success",
+    "group_summary",
+    "failure_table",
+    "median_changes",
+    "group_labels",
+]
+
+QUANTILE_METHOD = "hazen"
+#: whisker reach in IQRs: points beyond Q3 + 1.5 IQR or below Q1 - 1.5 IQR are outliers (Eq. 7-8)
+WHISKER_IQR = 1.5
+
+#: Fig. 7 metrics (successful trials only): column -> (title, unit)
+METRICS: dict[str, tuple[str, str]] = {
+    "rms_vertical_accel_m_s2": ("RMS vertical acceleration", "m/s²"),
+    "rms_pitch_rate_deg_s": ("RMS pitch rate", "deg/s"),
+    "rms_roll_rate_deg_s": ("RMS roll rate", "deg/s"),
+    "traversal_time_s": ("Traversal time", "s"),
+}
+CLASSES = ("low", "semi", "high")
+
+
+def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, Any]:
+    """Median, quartiles, IQR (Eq. 6), fences (Eq. 7-8), whisker ends and outliers of ``values``.
+
+    NaNs are ignored. An empty input gives n = 0 and NaN statistics.
+    """
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        nan = float("nan")
+        return dict(n=0, median=nan, q1=nan, q3=nan, iqr=nan, lower_fence=nan, upper_fence=nan,
+                    whislo=nan, whishi=nan, fliers=np.array([]), n_outliers=0)
+    q1, med, q3 = np.percentile(x, [25, 50, 75], method=QUANTILE_METHOD)
+    iqr = q3 - q1
+    lo, hi = q1 - whis * iqr, q3 + whis * iqr
+    inside = x[(x >= lo) & (x <= hi)]
+    fliers = x[(x < lo) | (x > hi)]
+    return dict(n=int(x.size), median=float(med), q1=float(q1), q3=float(q3), iqr=float(iqr),
+                lower_fence=float(lo), upper_fence=float(hi), whislo=float(inside.min()),
+                whishi=float(inside.max()), fliers=fliers, n_outliers=int(fliers.size))
+
+
+def group_labels(meta: dict[str, Any]) -> dict[int, str]:
+    """Short label of each cell from its grid values, e.g. ``D_high = 2.3``."""
+    columns = meta["columns"]
+    out = {}
+    for c in meta["cells"]:
+        parts = [f"{columns[k]} = {v}" for k, v in c["values"].items()]
+        out[c["index"]] = ", ".join(parts) or "all"
+    return out
+
+
+def terrain_success(trials: pd.DataFrame) -> pd.DataFrame:
+    """Per terrain: trials, successes and success rate in percent (Eq. 5)."""
+    g = trials.groupby(["cell", "terrain"], sort=True)["success"]
+    out = pd.DataFrame({"trials": g.size(), "successes": g.sum().astype(int)}).reset_index()
+    out["success_rate_pct"] = 100.0 * out["successes"] / out["trials"]
+    return out
+
+
+def group_summary(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:
+    """One row per grid cell: counts, per-terrain success rate, class areas and Fig. 7 metrics.
+
+    Metrics are over successful trials only (Sec. 2.4). Columns ``<stat>_<name>`` with stat in
+    median, q1, q3, iqr, n, outliers.
+    """
+    per_terrain = terrain_success(trials)
+    rows = []
+    for cell in sorted(labels):
+        t = trials[trials["cell"] == cell]
+        ok = t[t["success"].astype(bool)]
+        row: dict[str, Any] = {"cell": cell, "group": labels[cell], "terrains": int(t["terrain"].nunique()),
+                               "trials": int(len(t)), "successes": int(ok.shape[0])}
+        series = {"success_rate_pct": per_terrain.loc[per_terrain["cell"] == cell, "success_rate_pct"]}
+        ter = terrains[terrains["cell"] == cell]
+        for cls in CLASSES:
+            col = f"area_{cls}"
+            if col in ter:
+                series[f"{col}_pct"] = 100.0 * ter[col]
+        for metric in METRICS:
+            if metric in ok:
+                series[metric] = ok[metric]
+        for name, values in series.items():
+            s = box_stats(values)
+            for stat in ("median", "q1", "q3", "iqr", "n"):
+                row[f"{stat}_{name}"] = s[stat]
+            row[f"outliers_{name}"] = s["n_outliers"]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def failure_table(trials: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:
+    """Trials per cell and failure reason (``success`` for successful trials)."""
+    reason = trials["failure_reason"].where(~trials["success"].astype(bool), "success").replace("", "unknown")
+    table = pd.crosstab(trials["cell"].map(labels), reason).reindex([labels[c] for c in sorted(labels)], fill_value=0)
+    table.index.name = "group"
+    table.columns.name = None
+    cols = ["success"] + sorted(c for c in table.columns if c != "success")
+    return table.reindex(columns=[c for c in cols if c in table.columns])
+
+
+def median_changes(summary: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
+    """Change of each group median from one cell to the next: absolute and percent of the first."""
+    rows = []
+    groups = list(summary["group"])
+    for name in names:
+        med = summary[f"median_{name}"].to_numpy(dtype=float)
+        for i in range(len(med) - 1):
+            change = med[i + 1] - med[i]
+            pct = 100.0 * change / med[i] if med[i] != 0 else float("nan")
+            rows.append({"quantity": name, "from": groups[i], "to": groups[i + 1], "median_from": med[i],
+                         "median_to": med[i + 1], "change": change, "change_pct": pct})
+    return pd.DataFrame(rows)
