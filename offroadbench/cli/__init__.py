@@ -12,7 +12,7 @@ import sys
 from offroadbench.errors import InputError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
-COMMAND_MODULES = ("terrain", "study")
+COMMAND_MODULES = ("terrain", "study", "drive")
 
 EXIT_BAD_INPUT = 2
 
