@@ -84,12 +84,13 @@ def plot_roughness_study(summary: pd.DataFrame, paper_changes: dict[str, tuple[f
         bars = ax.bar(labels, vals, color=colour, edgecolor="k")
         ax.bar_label(bars, fmt="%.1f", fontsize=8)
         ax.set_title(f"median {name}-roughness area")
-        ax.set_xlabel("D of the high-frequency DEM")
-        ax.set_ylabel("area (%)")
+        xlabel = "D of the high-frequency DEM"
         if paper_changes and len(vals) == len(paper_changes[name]) + 1:
             ours = ", ".join(f"{c:+.2f}" for c in np.diff(vals))
             paper = ", ".join(f"{c:+.2f}" for c in paper_changes[name])
-            ax.text(0.02, 0.98, f"change (pp)\nours:  {ours}\npaper: {paper}", transform=ax.transAxes,
-                    va="top", fontsize=8, family="monospace", bbox=dict(facecolor="white", alpha=0.8))
+            xlabel += f"\nchange (pp) ours: {ours}\npaper: {paper}"
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("area (%)")
+        ax.set_ylim(0, max(vals.max(), 1e-9) * 1.12)
     fig.suptitle(f"Terrain roughness vs D ({int(summary['terrains'].iloc[0])} terrains per D)")
     return fig

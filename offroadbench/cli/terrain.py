@@ -163,6 +163,7 @@ def _inside_cells(hm, border_m: float) -> int:
 
 def cmd_roughness_study(args: argparse.Namespace) -> int:
     from offroadbench.analysis.plots import plot_roughness_study
+    from offroadbench.analysis.roughness import RoughnessConfig
     from offroadbench.analysis.roughness_study import (
         PAPER_FIG5_CHANGES_PP,
         roughness_study,
@@ -177,9 +178,12 @@ def cmd_roughness_study(args: argparse.Namespace) -> int:
     recipe = load_recipe_with_sets(args.recipe, args.set)
     t0 = time.perf_counter()
     with bar("terrains", unit="terrain") as progress:
-        table = roughness_study(recipe, args.dims, args.terrains, args.seed, dim_key=args.dim_key, progress=progress)
+        table = roughness_study(
+            recipe, args.dims, args.terrains, args.seed, dim_key=args.dim_key,
+            roughness=RoughnessConfig(border_m=args.border_m), progress=progress,
+        )
     summary = summarise_roughness_study(table)
-    print(f"Median class areas inside the 5 m border, {args.terrains} terrains per D ({time.perf_counter() - t0:.1f} s):")
+    print(f"Median class areas inside the {args.border_m:g} m border, {args.terrains} terrains per D ({time.perf_counter() - t0:.1f} s):")
     print(format_table(summary))
     paper = pd.DataFrame(
         {"class": list(PAPER_FIG5_CHANGES_PP), "paper_2.3_to_2.45_pp": [v[0] for v in PAPER_FIG5_CHANGES_PP.values()],
@@ -248,6 +252,7 @@ def register(sub) -> None:
     p.add_argument("--terrains", type=_positive_int, default=20, help="terrains per D (default 20, as the paper)")
     p.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
     p.add_argument("--recipe", default="paper-d2.45", help="base recipe (default paper-d2.45)")
+    p.add_argument("--border-m", type=float, default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--dim-key", default="layers.base.D_high", help="dotted recipe key that --dims sets")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key")
     p.add_argument("--out", default="runs/roughness-study", help="output directory (default runs/roughness-study)")
