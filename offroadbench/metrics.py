@@ -6,9 +6,10 @@
   longitudinal axis), both from a level reference, differentiated once; then their RMS.
 - Success rate, Eq. (5): ``100 * N_success / N_trials``.
 
-Angles: roll and pitch are the Z-Y-X (yaw-pitch-roll) Tait-Bryan angles of the body, so for a
-vehicle with yaw only they are zero, pitch is the nose-up angle of the longitudinal axis above
-the horizontal (positive nose *down* is negative), and roll is the rotation about that axis.
+Angles: yaw, pitch and roll are Z-Y-X Tait-Bryan angles of the body (x forward, y left, z up),
+so a level vehicle has zero roll and pitch whatever its heading. Pitch is the angle of the
+longitudinal axis above the horizontal (nose up positive); roll is the rotation about the
+longitudinal axis (left side up positive).
 """
 
 from __future__ import annotations
@@ -31,9 +32,8 @@ __all__ = [
 def roll_pitch_yaw_from_quat(quat_xyzw: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Z-Y-X Euler angles (roll, pitch, yaw) in radians of quaternions (..., 4) in x, y, z, w order.
 
-    Pitch is measured so that nose-up is positive (rotation about the body's transverse axis y,
-    with x forward and z up, is nose-down positive in the right-hand rule; we flip it so a
-    climbing vehicle has positive pitch).
+    Pitch is nose-up positive: the right-hand rotation about the body's y axis is nose-down
+    positive, so the sign is flipped to make a climbing vehicle's pitch positive.
     """
     q = np.asarray(quat_xyzw, dtype=float)
     x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
