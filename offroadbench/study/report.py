@@ -158,7 +158,7 @@ def fig_missions(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain:
     classes = classify(hm, rcfg)
     closed = close_rough(classes, rcfg.closing_radius_m, hm.cell_size_m)
     cmap = ListedColormap(CLASS_COLOURS)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.6), constrained_layout=True)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 5.0), constrained_layout=True)
     titles = ("(a) roughness classes", "(b) closed, with the border", "(c) missions")
     for ax, data, title in zip(axes, (classes, closed, closed), titles):
         ax.imshow(data, origin="lower", extent=hm.extent_m, cmap=cmap, vmin=-0.5, vmax=2.5, interpolation="nearest")
