@@ -102,3 +102,24 @@ def test_generator_contract():
     assert np.array_equal(a.z, b.z)
     assert not np.array_equal(a.z, c.z)
     assert dataclasses.asdict(cfg) == before
+
+
+def test_bits_do_not_depend_on_blas_threads():
+    """Studies run terrains in 1 or many workers: the same seed must give the same bits."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, hashlib;"
+        "from offroadbench.terrain.wm import WMConfig, draw_phases, wm_surface;"
+        "c = WMConfig(rows=300, cols=290, M=32, D=2.6);"
+        "print(hashlib.sha256(wm_surface(c, draw_phases(c, np.random.default_rng(3))).tobytes()).hexdigest())"
+    )
+    import os
+
+    digests = set()
+    for threads in ("1", "2", "3"):
+        env = dict(os.environ, OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads)
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+        digests.add(out.stdout.strip())
+    assert len(digests) == 1

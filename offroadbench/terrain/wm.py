@@ -28,8 +28,11 @@ Coordinate convention (what x and y are measured in) is the ``coordinates`` fiel
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +65,7 @@ COORDINATES = ("pixels", "metres", "span_L")
 
 _BLOCK = 32  # size of the short exponential tables (c = _BLOCK * q + s)
 _CHUNK_TERMS = 2048  # terms per matrix product, to bound memory
+_ROW_BLOCK = 128  # fixed row partition of the product: the bits do not depend on the thread count
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -199,17 +203,38 @@ def wm_surface(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
     step = grid_step(cfg)
     z = np.zeros((cfg.rows, cfg.cols))
     const = 0.0
-    for lo in range(0, u.size, _CHUNK_TERMS):
-        sl = slice(lo, lo + _CHUNK_TERMS)
-        w = amp[sl] * np.exp(1j * phi[sl])
-        ex = _exp_table(u[sl], cfg.cols, step) * w  # (cols, j)
-        ey = _exp_table(v[sl], cfg.rows, step)  # (rows, j)
-        left = np.concatenate([ey.real, -ey.imag], axis=1)
-        right = np.concatenate([ex.real, ex.imag], axis=1)
-        z -= left @ right.T
-        const += float(np.sum(amp[sl] * np.cos(phi[sl])))
+    blocks = [slice(r, r + _ROW_BLOCK) for r in range(0, cfg.rows, _ROW_BLOCK)]
+    with _single_threaded_blas(), ThreadPoolExecutor(max_workers=_threads()) as pool:
+        for lo in range(0, u.size, _CHUNK_TERMS):
+            sl = slice(lo, lo + _CHUNK_TERMS)
+            w = amp[sl] * np.exp(1j * phi[sl])
+            ex = _exp_table(u[sl], cfg.cols, step) * w  # (cols, j)
+            ey = _exp_table(v[sl], cfg.rows, step)  # (rows, j)
+            left = np.concatenate([ey.real, -ey.imag], axis=1)
+            right_t = np.ascontiguousarray(np.concatenate([ex.real, ex.imag], axis=1).T)
+
+            def block_product(rows: slice) -> None:
+                z[rows] -= left[rows] @ right_t
+
+            list(pool.map(block_product, blocks))
+            const += float(np.sum(amp[sl] * np.cos(phi[sl])))
     z += const
     return wm_amplitude(cfg) * z
+
+
+def _threads() -> int:
+    return max(1, min(8, os.cpu_count() or 1))
+
+
+@contextlib.contextmanager
+def _single_threaded_blas():
+    """Run BLAS single-threaded: a multi-threaded GEMM sums in an order that depends on the
+    thread count, which would make the same seed give other bits on another worker count.
+    Parallelism comes instead from a fixed partition of the rows over Python threads."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
 
 
 def wm_surface_direct(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
