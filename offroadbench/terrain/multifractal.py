@@ -93,6 +93,10 @@ class MultifractalConfig:
         # the remaining fields are checked by WMConfig for each layer
         layer_configs(self)
 
+    def describe(self) -> str:
+        """The evaluated terms of each W-M layer, on one line."""
+        return "; ".join(f"{name}: {c.describe()}" for name, c in zip(LAYER_NAMES, layer_configs(self)))
+
 
 def layer_configs(cfg: MultifractalConfig) -> tuple[WMConfig, WMConfig, WMConfig]:
     """The three W-M configs (low, mid, high frequency) of Table 1."""

@@ -123,6 +123,12 @@ class WMConfig:
         check_range(self, "amplitude_tol", self.amplitude_tol, lo=0, hi=1, hi_open=True)
         check_range(self, "smoothing_sigma_px", self.smoothing_sigma_px, lo=0)
 
+    def describe(self) -> str:
+        """One line on the evaluated terms, e.g. for the CLI."""
+        n = kept_harmonics(self)
+        total = self.n_max_effective - self.n_min + 1
+        return f"W-M D={self.D:g}: {n.size} of {total} harmonics x M={self.M} = {n.size * self.M} terms kept"
+
     @property
     def n_max_effective(self) -> int:
         """n_max, or the grid length in pixels when n_max is None (paper Sec. 2.1)."""
@@ -276,7 +282,6 @@ def generate_wm(cfg: WMConfig, rng: np.random.Generator) -> Heightmap:
     Eq. (1) gives heights in the units of L; a recipe usually rescales to a relief.
     """
     phases = draw_phases(cfg, rng)
-    n = kept_harmonics(cfg)
-    log.info("W-M: kept %d of %d harmonics x M=%d = %d terms", n.size, cfg.n_max_effective - cfg.n_min + 1, cfg.M, n.size * cfg.M)
+    log.info(cfg.describe())
     z = gaussian_smooth(wm_surface(cfg, phases), cfg.smoothing_sigma_px)
     return Heightmap(z=z, cell_size_m=cfg.cell_size_m)
