@@ -1,0 +1,121 @@
+"""World: terrain placement, vehicle loading, spawn, clean-up and memory."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.sim import SimConfig, VehicleSpec, World, list_vehicles, load_vehicle
+
+CELL = 0.05
+
+
+def _smooth_map(rows=121, cols=161):
+    """Smooth, asymmetric terrain: z from 0.2 to ~1.4 m, so Bullet's (min+max)/2 centring matters."""
+    y, x = np.mgrid[0:rows, 0:cols] * CELL
+    z = 0.8 + 0.35 * np.sin(2 * np.pi * x / 4.0) + 0.25 * np.cos(2 * np.pi * y / 3.0) + 0.02 * x
+    return Heightmap(z, CELL)
+
+
+def test_terrain_sits_where_the_heightmap_says():
+    hm = _smooth_map()
+    rng = np.random.default_rng(0)
+    with World(hm) as world:
+        # grid nodes: exact
+        for r, c in [(1, 1), (5, 150), (119, 3), (60, 80), (118, 158)]:
+            assert world.ray_height(c * CELL, r * CELL) == pytest.approx(hm.z[r, c], abs=1e-5)
+        # between nodes: the triangulated surface is within a few mm of the bilinear lookup
+        x = rng.uniform(0.1, hm.width_m - 0.1, 200)
+        y = rng.uniform(0.1, hm.height_m - 0.1, 200)
+        ray = np.array([world.ray_height(a, b) for a, b in zip(x, y)])
+        assert np.abs(ray - hm.height_at(x, y)).max() < 3e-3
+
+
+def test_settled_vehicle_rests_on_the_heightmap_surface():
+    import pybullet as pb
+
+    hm = _smooth_map()
+    with World(hm) as world:
+        world.spawn(4.0, 3.0, math.radians(30))
+        contacts = pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_id, physicsClientId=world.client_id)
+        wheel_contacts = [c for c in contacts if c[3] in world.wheel_joints]
+        assert len({c[3] for c in wheel_contacts}) >= 3  # a rigid 4-wheeler on a curved surface
+        for c in wheel_contacts:
+            px, py, pz = c[6]  # contact point on the terrain
+            assert pz == pytest.approx(hm.height_at(px, py), abs=5e-3)
+        # the chassis is level with the slope, not buried: base above the terrain under it
+        (bx, by, bz), _, _, _ = world.base_state()
+        assert 0.15 < bz - hm.height_at(bx, by) < 0.35
+
+
+def test_vehicle_by_name_or_path_and_errors(tmp_path):
+    assert "husky" in list_vehicles()
+    spec = load_vehicle("husky")
+    assert isinstance(spec, VehicleSpec) and Path(spec.urdf).is_file()
+    assert spec.max_speed_m_s == 1.0 and spec.wheel_radius_m == 0.165
+    by_path = load_vehicle(Path(spec.urdf).parent / "vehicle.toml")
+    assert by_path == spec
+    with pytest.raises(InputError, match="known vehicles: .*husky"):
+        load_vehicle("tank")
+    bad = tmp_path / "vehicle.toml"
+    bad.write_text('[vehicle]\nname = "x"\nurdf = "missing.urdf"\n' + "\n".join(
+        f"{k} = {v}" for k, v in {"left_wheel_joints": '["a"]', "right_wheel_joints": '["b"]', "wheel_radius_m": 0.1,
+                                  "track_m": 0.5, "max_speed_m_s": 1, "max_accel_m_s2": 1, "max_jerk_m_s3": 1,
+                                  "max_yaw_rate_rad_s": 1, "wheel_torque_limit_nm": 5, "wheel_friction": 0.8}.items()))
+    with pytest.raises(InputError, match="not found"):
+        load_vehicle(bad)
+
+
+def test_urdf_has_real_masses_and_inertias():
+    import pybullet as pb
+
+    with World(Heightmap.flat(41, 41, CELL)) as world:
+        cid, body = world.client_id, world.vehicle_id
+        base = pb.getDynamicsInfo(body, -1, physicsClientId=cid)
+        assert base[0] == pytest.approx(46.0)
+        assert base[2] == pytest.approx((1.48369, 3.96818, 4.98414), rel=1e-4)  # box, not recomputed
+        for j in world.wheel_joints:
+            info = pb.getDynamicsInfo(body, j, physicsClientId=cid)
+            assert info[0] == pytest.approx(2.6)
+            assert info[2][1] == pytest.approx(0.5 * 2.6 * 0.165**2, rel=1e-4)  # spin axis: m r^2 / 2
+
+
+def test_close_is_clean_and_idempotent():
+    import pybullet as pb
+
+    world = World(Heightmap.flat(41, 41, CELL))
+    cid = world.client_id
+    with world:
+        assert pb.isConnected(physicsClientId=cid)
+    assert not pb.isConnected(physicsClientId=cid)
+    world.close()  # second close is a no-op
+
+
+def _rss_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    pytest.skip("no /proc/self/status")
+
+
+def test_many_worlds_in_a_row_do_not_leak():
+    hm = Heightmap(np.random.default_rng(0).uniform(0, 0.3, (301, 301)), CELL)
+    with World(hm):
+        pass
+    before = _rss_mb()
+    for _ in range(8):
+        with World(hm) as world:
+            world.spawn(7.0, 7.0, 0.0)
+    grown = _rss_mb() - before
+    # a leaked 301^2 heightfield costs ~50 MB (600 MB per 1009^2, shared/DESIGN.md); 8 would be ~400 MB
+    assert grown < 40, f"RSS grew by {grown:.0f} MB over 8 worlds"
+
+
+def test_sim_config_validation():
+    with pytest.raises(InputError, match="telemetry_rate_hz"):
+        SimConfig(physics_rate_hz=50, telemetry_rate_hz=20)
+    with pytest.raises(InputError, match="physics_rate_hz"):
+        SimConfig(physics_rate_hz=10)
