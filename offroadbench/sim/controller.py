@@ -8,7 +8,8 @@ and the yaw-rate command is ``omega = v * kappa``.
 Speed: every control tick, a one-dimensional ruckig problem runs from the *measured* progress
 along the line and the *measured* speed along it (with the previous commanded acceleration, so
 the command stays jerk-limited) to the goal at rest. The command is ruckig's velocity one tick
-ahead. Starting from the measurement each tick makes the profile react to slip and bumps; a
+ahead, clipped to [0, max speed] (a vehicle measured slightly over the limit would otherwise be
+commanded a small overshoot by the jerk-limited brake profile). Starting from the measurement each tick makes the profile react to slip and bumps; a
 vehicle that stalls is commanded to re-accelerate within the jerk limit.
 """
 
@@ -68,7 +69,7 @@ class SpeedProfile:
         if result not in (Result.Working, Result.Finished):
             raise RuntimeError(f"ruckig failed with {result} at progress {progress_m:.3f} m, speed {speed_m_s:.3f} m/s")
         self._accel = max(-self._a_max, min(self._a_max, self._out.new_acceleration[0]))
-        return max(0.0, float(self._out.new_velocity[0]))
+        return max(0.0, min(self._v_max, self._out.new_velocity[0]))
 
 
 class LineTracker:

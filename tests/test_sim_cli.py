@@ -1,0 +1,37 @@
+"""``offroadbench drive``: table, summary, CSV and figures; bad input exits 2 with no output."""
+
+import pandas as pd
+
+from offroadbench.cli import main
+
+SMALL = ["--set", "grid.rows=301", "--set", "grid.cols=301", "--length-m", "4", "--seed", "2"]
+
+
+def test_drive_writes_csv_figures_and_prints_summary(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["drive", "paper-d2.3", *SMALL, "--missions", "2", "--out", str(out), "--plot"]) == 0
+    text = capsys.readouterr().out
+    assert "success rate" in text and "rms_pitch_rate" in text
+    df = pd.read_csv(out / "trials.csv")
+    assert list(df["mission_index"]) == [0, 1]
+    assert {"success", "failure_reason", "traversal_time_s", "rms_vertical_accel_m_s2"} <= set(df.columns)
+    for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.npz"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_drive_same_seed_same_table(tmp_path):
+    for name in ("a", "b"):
+        assert main(["drive", "paper-d2.3", *SMALL, "--missions", "2", "--out", str(tmp_path / name)]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "a/trials.csv"), pd.read_csv(tmp_path / "b/trials.csv"))
+
+
+def test_drive_bad_input_exits_2_without_output(tmp_path, capsys):
+    out = tmp_path / "run"
+    # 35 m missions cannot fit a 10 m map
+    assert main(["drive", "paper-d2.3", "--set", "grid.rows=201", "--set", "grid.cols=201", "--out", str(out)]) == 2
+    assert "too small" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["drive", "paper-d2.3", *SMALL, "--plot"]) == 2
+    assert main(["drive", "paper-d2.3", *SMALL, "--vehicle", "tank", "--out", str(out)]) == 2
+    assert "known vehicles" in capsys.readouterr().err
+    assert not out.exists()
