@@ -96,7 +96,7 @@ _TOP_KEYS = ("study", "grid", "recipe_overrides", "reference", *SECTIONS)
 
 #: columns of the trial table that a grid axis may not be named after
 RESERVED_COLUMNS = frozenset(
-    {"cell", "terrain", "mission", "terrain_seed", "mission_seed", "success", "failure_reason", "recipe_name"}
+    {"cell", "terrain", "mission", "terrain_seed", "mission_seed", "success", "failure_reason"}
 )
 
 
