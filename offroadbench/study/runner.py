@@ -60,10 +60,27 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
     return tasks
 
 
-def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "") -> dict[str, Any]:
-    """What the store records about the study (config, cells, seeds' root, version)."""
+def code_version() -> str:
+    """The package version, plus the git commit (and ``-dirty``) when run from a git checkout."""
+    import subprocess
+
     from offroadbench import __version__
 
+    src = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(["git", "-C", str(src), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, timeout=10)
+        if head.returncode != 0:
+            return __version__
+        dirty = subprocess.run(["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no", "--", "offroadbench"],
+                               capture_output=True, text=True, timeout=10)
+        return f"{__version__}+git.{head.stdout.strip()}{'-dirty' if dirty.stdout.strip() else ''}"
+    except (OSError, subprocess.SubprocessError):
+        return __version__
+
+
+def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "", version: str = "") -> dict[str, Any]:
+    """What the store records about the study (config, cells, seeds' root, version)."""
     return {
         "study_id": study_id(study, plans),
         "study": to_dict(study),
@@ -80,7 +97,7 @@ def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "")
             for p in plans
         ],
         "n_trials": study.n_trials,
-        "version": __version__,
+        "version": version or code_version(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
 
@@ -104,17 +121,16 @@ def run_study(
     every new trial's row (e.g. for a success-rate display). Ctrl-C stops the workers and
     re-raises KeyboardInterrupt; what was committed stays.
     """
-    from offroadbench import __version__
-
     ex = get_executor(executor, workers, scheduler)
+    version = code_version()
     t0 = time.perf_counter()
     with Store(run_dir, create=True) as store:
-        store.init_meta(study_meta(study, plans, source_text))
+        store.init_meta(study_meta(study, plans, source_text, version))
         tasks = plan_tasks(study, plans, store.done_trials())
         total = study.n_trials
         done, _ = store.counts()
         report(progress, done, total)
-        run_id = store.start_run(executor, ex.workers, __version__)
+        run_id = store.start_run(executor, ex.workers, version)
         ran = 0
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
