@@ -1,0 +1,140 @@
+"""Diamond-square random midpoint displacement (RMD), Martin et al. 2014 Sec. IV.A.
+
+A square grid of side ``W = 2^(M+1)`` (+1 samples here, 000 Eq. 13) is refined level by level:
+the *square* phase sets each cell centre to the mean of its four corners, the *diamond* phase
+each edge midpoint to the mean of its (up to) four neighbours, and every new value is displaced
+by a Gaussian of scale S. After each phase the scale is multiplied by
+``S_f = 2^(-(3 - F)/2)`` (000 Eq. 14), F the fractal dimension, so after one level (two
+phases) it has shrunk by ``2^-(3-F) = 2^-H`` as fBm requires (Peitgen & Saupe). The initial scale
+is 000 Eq. (15): ``S = S_f H_s D_r W sqrt(1 - 2^(2(3-F) - 2))`` with H_s the height-range factor
+and D_r the horizontal resolution. Border diamonds have three neighbours and use their mean.
+
+The phases are also used by :mod:`offroadbench.terrain.enhance` for the fractal expansion of a DEM.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench.config import check_int, check_range
+from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.registry import register
+
+__all__ = [
+    "DiamondSquareConfig",
+    "scale_factor",
+    "initial_scale",
+    "square_phase",
+    "diamond_phase",
+    "diamond_square",
+    "generate_diamond_square",
+]
+
+
+def scale_factor(dimension: float) -> float:
+    """000 Eq. (14): S_f = 1 / 2^((3 - F) / 2)."""
+    return 1.0 / 2.0 ** ((3.0 - dimension) / 2.0)
+
+
+def initial_scale(dimension: float, height_scale: float, resolution_m: float, width_px: int) -> float:
+    """000 Eq. (15): S = S_f H D_r W sqrt(1 - 2^(2(3-F) - 2))."""
+    return (
+        scale_factor(dimension) * height_scale * resolution_m * width_px
+        * math.sqrt(1.0 - 2.0 ** (2.0 * (3.0 - dimension) - 2.0))
+    )
+
+
+def square_phase(z: np.ndarray, step: int, sigma: float, rng: np.random.Generator) -> None:
+    """Set every cell centre (spacing ``step``) to the mean of its 4 corners + N(0, sigma^2), in place."""
+    h = step // 2
+    rows, cols = z.shape
+    rs = np.arange(0, rows - 1, step)
+    cs = np.arange(0, cols - 1, step)
+    mean = 0.25 * (
+        z[np.ix_(rs, cs)] + z[np.ix_(rs, cs + step)] + z[np.ix_(rs + step, cs)] + z[np.ix_(rs + step, cs + step)]
+    )
+    z[np.ix_(rs + h, cs + h)] = mean + sigma * rng.standard_normal(mean.shape)
+
+
+def _diamond_set(z: np.ndarray, rs: np.ndarray, cs: np.ndarray, h: int, sigma: float, rng) -> None:
+    rows, cols = z.shape
+    total = np.zeros((rs.size, cs.size))
+    count = np.zeros((rs.size, cs.size))
+    for dr, dc in ((-h, 0), (h, 0), (0, -h), (0, h)):
+        rr, cc = rs + dr, cs + dc
+        okr = (rr >= 0) & (rr < rows)
+        okc = (cc >= 0) & (cc < cols)
+        vals = np.zeros((rs.size, cs.size))
+        vals[np.ix_(okr, okc)] = z[np.ix_(rr[okr], cc[okc])]
+        mask = okr[:, None] & okc[None, :]
+        total += vals
+        count += mask
+    z[np.ix_(rs, cs)] = total / count + sigma * rng.standard_normal(total.shape)
+
+
+def diamond_phase(z: np.ndarray, step: int, sigma: float, rng: np.random.Generator) -> None:
+    """Set every edge midpoint (spacing ``step``) to the mean of its 3-4 neighbours + N(0, sigma^2)."""
+    h = step // 2
+    rows, cols = z.shape
+    _diamond_set(z, np.arange(0, rows, step), np.arange(h, cols, step), h, sigma, rng)
+    _diamond_set(z, np.arange(h, rows, step), np.arange(0, cols, step), h, sigma, rng)
+
+
+def diamond_square(size_px: int, dimension: float, sigma0: float, rng: np.random.Generator) -> np.ndarray:
+    """A (size, size) RMD surface; size must be 2^n + 1. Corners are N(0, sigma0^2)."""
+    n = size_px - 1
+    if n < 2 or n & (n - 1):
+        raise ValueError(f"diamond-square size must be 2^n + 1, got {size_px}")
+    sf = scale_factor(dimension)
+    z = np.zeros((size_px, size_px))
+    z[np.ix_([0, n], [0, n])] = sigma0 * rng.standard_normal((2, 2))
+    sigma = sigma0
+    step = n
+    while step > 1:
+        square_phase(z, step, sigma, rng)
+        sigma *= sf
+        diamond_phase(z, step, sigma, rng)
+        sigma *= sf
+        step //= 2
+    return z
+
+
+@dataclass(frozen=True, kw_only=True)
+class DiamondSquareConfig:
+    """A diamond-square RMD surface (000 Sec. IV.A), cropped from the next 2^n + 1 square."""
+
+    rows: int = 1009
+    """Grid rows (y samples)."""
+    cols: int = 1009
+    """Grid columns (x samples)."""
+    cell_size_m: float = 0.05
+    """Grid spacing, metres (D_r of Eq. 15)."""
+    D: float = 2.2
+    """Fractal dimension F in (2, 3) (000 uses 2.2 for lunar terrain)."""
+    height_scale: float = 0.05
+    """H of 000 Eq. (15), the height-range factor relative to the DEM width."""
+    relief_m: float | None = None
+    """If set, rescale to min 0 .. relief_m; otherwise heights are Eq. (15)'s metres."""
+
+    def __post_init__(self) -> None:
+        check_int(self, "rows", self.rows, lo=3)
+        check_int(self, "cols", self.cols, lo=3)
+        check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
+        check_range(self, "D", self.D, lo=2, hi=3, lo_open=True, hi_open=True)
+        check_range(self, "height_scale", self.height_scale, lo=0, lo_open=True)
+        if self.relief_m is not None:
+            check_range(self, "relief_m", self.relief_m, lo=0, lo_open=True)
+
+
+@register("diamond_square", DiamondSquareConfig, summary="Diamond-square random midpoint displacement (Martin et al. 2014 Sec. IV.A)")
+def generate_diamond_square(cfg: DiamondSquareConfig, rng: np.random.Generator) -> Heightmap:
+    """RMD surface of the grid's size (the top-left corner of the enclosing 2^n + 1 square)."""
+    side = max(cfg.rows, cfg.cols) - 1
+    size = 2 ** max(1, math.ceil(math.log2(side))) + 1
+    sigma0 = initial_scale(cfg.D, cfg.height_scale, cfg.cell_size_m, size - 1)
+    z = diamond_square(size, cfg.D, sigma0, rng)[: cfg.rows, : cfg.cols]
+    hm = Heightmap(z=z, cell_size_m=cfg.cell_size_m)
+    return hm.rescaled(cfg.relief_m) if cfg.relief_m is not None else hm
