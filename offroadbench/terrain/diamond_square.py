@@ -2,12 +2,12 @@
 
 A square grid of side ``W = 2^(M+1)`` (+1 samples here, 000 Eq. 13) is refined level by level:
 the *square* phase sets each cell centre to the mean of its four corners, the *diamond* phase
-each edge midpoint to the mean of its (up to) four neighbours, and every new value is displaced
+each edge midpoint to the mean of its four neighbours, and every new value is displaced
 by a Gaussian of scale S. After each phase the scale is multiplied by
 ``S_f = 2^(-(3 - F)/2)`` (000 Eq. 14), F the fractal dimension, so after one level (two
 phases) it has shrunk by ``2^-(3-F) = 2^-H`` as fBm requires (Peitgen & Saupe). The initial scale
 is 000 Eq. (15): ``S = S_f H_s D_r W sqrt(1 - 2^(2(3-F) - 2))`` with H_s the height-range factor
-and D_r the horizontal resolution. Border diamonds have three neighbours and use their mean.
+and D_r the horizontal resolution. Border midpoints use their two parents along the border.
 
 The phases are also used by :mod:`offroadbench.terrain.enhance` for the fractal expansion of a DEM.
 """
@@ -59,28 +59,37 @@ def square_phase(z: np.ndarray, step: int, sigma: float, rng: np.random.Generato
     z[np.ix_(rs + h, cs + h)] = mean + sigma * rng.standard_normal(mean.shape)
 
 
-def _diamond_set(z: np.ndarray, rs: np.ndarray, cs: np.ndarray, h: int, sigma: float, rng) -> None:
+def _diamond_set(z: np.ndarray, rs: np.ndarray, cs: np.ndarray, h: int, sigma: float, rng, along_rows: bool) -> None:
+    """Diamond values at (rs x cs). ``along_rows``: the pair (r, c -+ h) always exists (else (r -+ h, c))."""
     rows, cols = z.shape
-    total = np.zeros((rs.size, cs.size))
-    count = np.zeros((rs.size, cs.size))
-    for dr, dc in ((-h, 0), (h, 0), (0, -h), (0, h)):
-        rr, cc = rs + dr, cs + dc
-        okr = (rr >= 0) & (rr < rows)
-        okc = (cc >= 0) & (cc < cols)
-        vals = np.zeros((rs.size, cs.size))
-        vals[np.ix_(okr, okc)] = z[np.ix_(rr[okr], cc[okc])]
-        mask = okr[:, None] & okc[None, :]
-        total += vals
-        count += mask
-    z[np.ix_(rs, cs)] = total / count + sigma * rng.standard_normal(total.shape)
+    if along_rows:
+        pair = z[np.ix_(rs, cs - h)] + z[np.ix_(rs, cs + h)]
+        cross_lo, cross_hi = rs - h, rs + h
+        ok = (cross_lo >= 0) & (cross_hi < rows)
+        cross = np.zeros_like(pair)
+        cross[ok, :] = z[np.ix_(cross_lo[ok], cs)] + z[np.ix_(cross_hi[ok], cs)]
+        full = np.broadcast_to(ok[:, None], pair.shape)
+    else:
+        pair = z[np.ix_(rs - h, cs)] + z[np.ix_(rs + h, cs)]
+        cross_lo, cross_hi = cs - h, cs + h
+        ok = (cross_lo >= 0) & (cross_hi < cols)
+        cross = np.zeros_like(pair)
+        cross[:, ok] = z[np.ix_(rs, cross_lo[ok])] + z[np.ix_(rs, cross_hi[ok])]
+        full = np.broadcast_to(ok[None, :], pair.shape)
+    mean = np.where(full, 0.25 * (pair + cross), 0.5 * pair)
+    z[np.ix_(rs, cs)] = mean + sigma * rng.standard_normal(mean.shape)
 
 
 def diamond_phase(z: np.ndarray, step: int, sigma: float, rng: np.random.Generator) -> None:
-    """Set every edge midpoint (spacing ``step``) to the mean of its 3-4 neighbours + N(0, sigma^2)."""
+    """Set every edge midpoint (spacing ``step``) to the mean of its 4 neighbours + N(0, sigma^2).
+
+    A midpoint on the grid's border has no outer neighbour; it uses the mean of its two parents
+    along the border instead (000 Sec. IV.A: border pixels use the nearest known pixels).
+    """
     h = step // 2
     rows, cols = z.shape
-    _diamond_set(z, np.arange(0, rows, step), np.arange(h, cols, step), h, sigma, rng)
-    _diamond_set(z, np.arange(h, rows, step), np.arange(0, cols, step), h, sigma, rng)
+    _diamond_set(z, np.arange(0, rows, step), np.arange(h, cols, step), h, sigma, rng, along_rows=True)
+    _diamond_set(z, np.arange(h, rows, step), np.arange(0, cols, step), h, sigma, rng, along_rows=False)
 
 
 def diamond_square(size_px: int, dimension: float, sigma0: float, rng: np.random.Generator) -> np.ndarray:
