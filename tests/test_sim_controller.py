@@ -1,6 +1,5 @@
 """Pure pursuit, the ruckig speed profile and the skid-steer map, without physics."""
 
-import math
 
 import numpy as np
 import pytest

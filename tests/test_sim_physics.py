@@ -9,7 +9,7 @@ from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rou
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.telemetry import load_telemetry
 from offroadbench.missions import Mission, MissionConfig, sample_missions
-from offroadbench.sim import TELEMETRY_COLUMNS, ControllerConfig, FailureRules, World, run_mission, run_missions
+from offroadbench.sim import FAILURE_REASONS, TELEMETRY_COLUMNS, ControllerConfig, FailureRules, World, run_mission, run_missions
 
 CELL = 0.05
 
@@ -97,6 +97,7 @@ def test_wheel_penetration_stays_under_3_cm_on_rough_terrain(rough):
     hm, missions = rough
     results = run_missions(hm, missions)
     assert max(r.max_penetration_m for r in results) < 0.03
+    assert all(r.failure_reason in ("", *FAILURE_REASONS) and r.success == (r.failure_reason == "") for r in results)
     # the terrain is rough for the vehicle: it shakes far more than on flat ground
     assert np.median([r.rms_pitch_rate_deg_s for r in results]) > 5.0
 

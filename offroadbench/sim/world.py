@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 
-import numpy as np
 import pybullet as pb
 
 from offroadbench.errors import InputError
@@ -46,7 +46,9 @@ class World:
             raise RuntimeError("could not start a PyBullet DIRECT client")
         try:
             self._configure_engine()
+            t0 = time.perf_counter()
             self.terrain_id = self._build_terrain()
+            log.info("heightfield %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
             self.vehicle_id = self._load_vehicle()
         except BaseException:
             self.close()
