@@ -156,7 +156,8 @@ class World:
             pb.stepSimulation(physicsClientId=cid)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
-        """Highest terrain sample within ``radius_m`` of (x, y) (clipped to the map), metres."""
+        """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), clipped to
+        the map, metres."""
         hm = self.hm
         c0 = max(0, int(math.floor((x_m - radius_m) / hm.cell_size_m)))
         c1 = min(hm.cols - 1, int(math.ceil((x_m + radius_m) / hm.cell_size_m)))
