@@ -178,40 +178,50 @@ def known_neighbour_count(known: np.ndarray) -> np.ndarray:
     return total
 
 
-def _idw_eight_directions(z: np.ndarray, known: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
-    """Inverse-distance weighted mean of the nearest known pixel in each of the 8 directions."""
+def _counts_at(known_padded: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
+    """Known 8-neighbour counts at pixels (rr, cc) of a 1-padded known mask."""
+    total = np.zeros(rr.size, dtype=np.int16)
+    for dr, dc in _DIRECTIONS:
+        total += known_padded[rr + 1 + dr, cc + 1 + dc]
+    return total
+
+
+def _idw_eight_directions(z: np.ndarray, known: np.ndarray, rr: np.ndarray, cc: np.ndarray, reach: int) -> np.ndarray:
+    """Inverse-distance weighted mean of the nearest known pixel in each of the 8 directions,
+    looking at most ``reach`` pixels along each."""
     rows, cols = z.shape
+    t = np.arange(1, reach + 1)
     wsum = np.zeros(rr.size)
     vsum = np.zeros(rr.size)
     for dr, dc in _DIRECTIONS:
-        step = math.hypot(dr, dc)
-        found = np.zeros(rr.size, dtype=bool)
-        t = 1
-        while True:
-            r = rr + t * dr
-            c = cc + t * dc
-            inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols) & ~found
-            if not inside.any():
-                break
-            hit = np.zeros(rr.size, dtype=bool)
-            hit[inside] = known[r[inside], c[inside]]
-            w = 1.0 / (t * step)
-            vsum[hit] += w * z[r[hit], c[hit]]
-            wsum[hit] += w
-            found |= hit
-            t += 1
+        r = rr[:, None] + dr * t[None, :]
+        c = cc[:, None] + dc * t[None, :]
+        inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        hit = np.zeros(r.shape, dtype=bool)
+        hit[inside] = known[r[inside], c[inside]]
+        any_hit = hit.any(axis=1)
+        first = np.argmax(hit, axis=1)
+        idx = np.flatnonzero(any_hit)
+        if idx.size == 0:
+            continue
+        tt = first[idx]
+        w = 1.0 / ((tt + 1) * math.hypot(dr, dc))
+        vsum[idx] += w * z[r[idx, tt], c[idx, tt]]
+        wsum[idx] += w
     return vsum / wsum
 
 
-def fill_gaps(z: np.ndarray, cell_size_m: float, roughness: float, rng: np.random.Generator) -> np.ndarray:
+def fill_gaps(
+    z: np.ndarray, cell_size_m: float, roughness: float, rng: np.random.Generator, reach_px: int = 64
+) -> np.ndarray:
     """Fill NaN pixels from the outside in (000 Sec. IV.B); known pixels are never changed.
 
     Unknown pixels with the most known neighbours are filled first; the counts are then
     recomputed and the next batch filled, until none is left. (000 fills one pixel at a time and
     re-sorts; we fill all pixels sharing the current highest count at once, which keeps the
     outside-in order and is much faster.) A pixel's value is the inverse-distance weighted mean of
-    the nearest known pixel in each of the 8 directions plus ``roughness * cell_size_m`` times a
-    unit Gaussian.
+    the nearest known pixel in each of the 8 directions (looking up to ``reach_px`` pixels) plus
+    ``roughness * cell_size_m`` times a unit Gaussian.
     """
     out = np.array(z, dtype=np.float64, copy=True)
     unknown = np.isnan(out)
@@ -219,14 +229,16 @@ def fill_gaps(z: np.ndarray, cell_size_m: float, roughness: float, rng: np.rando
         raise InputError("fill_gaps: every pixel is unknown (NaN); nothing to fill from")
     if np.isinf(out).any():
         raise InputError("fill_gaps: heights contain inf; only NaN marks a gap")
-    while unknown.any():
-        counts = known_neighbour_count(~unknown)
-        counts[~unknown] = -1
-        best = counts.max()
-        rr, cc = np.nonzero(counts == best)
-        vals = _idw_eight_directions(out, ~unknown, rr, cc)
+    known_padded = np.pad(~unknown, 1)
+    ur, uc = np.nonzero(unknown)
+    while ur.size:
+        counts = _counts_at(known_padded, ur, uc)
+        pick = counts == counts.max()
+        rr, cc = ur[pick], uc[pick]
+        vals = _idw_eight_directions(out, known_padded[1:-1, 1:-1], rr, cc, reach_px)
         out[rr, cc] = vals + roughness * cell_size_m * rng.standard_normal(rr.size)
-        unknown[rr, cc] = False
+        known_padded[rr + 1, cc + 1] = True
+        ur, uc = ur[~pick], uc[~pick]
     return out
 
 

@@ -179,14 +179,17 @@ def stamp_one(
         bowl = rho <= 1.0
         p0, a, b = _fit_plane(sub, dx, dy, bowl)
         plane = p0 + a * dx[None, :] + b * dy[:, None]
-        safe = np.where(r > 0, r, 1.0)
-        ux = np.where(r > 0, dx[None, :] / safe, 1.0)
-        uy = np.where(r > 0, dy[:, None] / safe, 0.0)
-        rim_x = x_m + rad * ux
-        rim_y = y_m + rad * uy
-        t_rim = _bilinear(sub, rim_y / cell_size_m - r0, rim_x / cell_size_m - c0)
-        p_rim = p0 + a * (rim_x - x_m) + b * (rim_y - y_m)
-        h = prof.height(rho, diameter_m, degradation, t_rim - p_rim)
+        # T_r - P_r only matters inside the rim: sample the rim point of each bowl pixel's direction
+        delta = np.zeros_like(rho)
+        rb = r[bowl]
+        safe = np.where(rb > 0, rb, 1.0)
+        ux = np.where(rb > 0, np.broadcast_to(dx[None, :], r.shape)[bowl] / safe, 1.0)
+        uy = np.where(rb > 0, np.broadcast_to(dy[:, None], r.shape)[bowl] / safe, 0.0)
+        rad_b = rad[bowl] if rim is not None else rad
+        t_rim = _bilinear(sub, (y_m + rad_b * uy) / cell_size_m - r0, (x_m + rad_b * ux) / cell_size_m - c0)
+        p_rim = p0 + rad_b * (a * ux + b * uy)
+        delta[bowl] = t_rim - p_rim
+        h = prof.height(rho, diameter_m, degradation, delta)
         new = np.where(bowl, plane + h, sub + h)
     else:
         new = sub + prof.height(rho, diameter_m, degradation, 0.0)
