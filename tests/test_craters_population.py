@@ -155,3 +155,20 @@ def test_more_density_means_more_crater_area_in_a_recipe():
 
     steep = [float((horn_slope_deg(generate_terrain(recipe(c), 7)) > 15).mean()) for c in (0.0, 0.05, 0.3)]
     assert steep[0] < steep[1] < steep[2]
+
+
+def test_recipe_craters_are_the_craters_in_the_generated_terrain():
+    from offroadbench.recipe import apply_overrides, load_recipe
+    from offroadbench.terrain.craters import recipe_craters, stamp_craters
+
+    full = apply_overrides(
+        load_recipe("lunar-mare"),
+        {"grid.rows": 161, "grid.cols": 161, "layers.craters.rim_irregularity": 0.0, "layers.craters.roughness": 0.0},
+    )
+    data = dict(full.data)
+    data["layers"] = {"base": data["layers"]["base"]}
+    base_only = recipe_from_dict(data)
+    tables = recipe_craters(full, 11)
+    assert list(tables) == ["craters"] and len(tables["craters"]) > 10
+    expect = stamp_craters(generate_terrain(base_only, 11), tables["craters"], np.random.default_rng(0))
+    np.testing.assert_array_equal(generate_terrain(full, 11).z, expect.z)

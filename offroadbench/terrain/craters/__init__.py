@@ -3,7 +3,7 @@
 Importing the package registers the ``craters`` terrain modifier.
 """
 
-from offroadbench.terrain.craters.modifier import CraterConfig, apply_craters, crater_table_for
+from offroadbench.terrain.craters.modifier import CraterConfig, apply_craters, crater_table_for, recipe_craters
 from offroadbench.terrain.craters.population import (
     PopulationConfig,
     cumulative_density,
@@ -44,6 +44,7 @@ __all__ = [
     "melosh_depth_m",
     "melosh_rim_height_m",
     "profile_height",
+    "recipe_craters",
     "sample_diameters_inversion",
     "sample_population",
     "stamp_craters",

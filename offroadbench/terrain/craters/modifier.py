@@ -15,7 +15,7 @@ from offroadbench.terrain.craters.stamp import StampOptions, stamp_craters
 from offroadbench.terrain.craters.table import CraterTable
 from offroadbench.terrain.registry import register
 
-__all__ = ["CraterConfig", "crater_table_for", "apply_craters"]
+__all__ = ["CraterConfig", "crater_table_for", "apply_craters", "recipe_craters"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -87,8 +87,9 @@ class CraterConfig:
         return StampOptions(**{n: getattr(self, n) for n in names})
 
 
-def crater_table_for(cfg: CraterConfig, hm: Heightmap, rng: np.random.Generator) -> CraterTable:
-    """The craters the layer places, oldest first: read from ``crater_file`` or sampled on ``hm``.
+def crater_table_for(cfg: CraterConfig, width_m: float, height_m: float, rng: np.random.Generator) -> CraterTable:
+    """The craters the layer places, oldest first: read from ``crater_file`` or sampled on a
+    width x height map.
 
     Craters from a file with an empty degradation get it from their age (000 Eq. 11).
     """
@@ -102,7 +103,7 @@ def crater_table_for(cfg: CraterConfig, hm: Heightmap, rng: np.random.Generator)
             derived = degradation_from_age(pop, np.nan_to_num(table.age), table.diameter_m)
             table = table.with_degradation(np.where(missing, derived, table.degradation))
     else:
-        table = sample_population(pop, hm.width_m, hm.height_m, rng)
+        table = sample_population(pop, width_m, height_m, rng)
     if cfg.degradation is not None:
         table = table.with_degradation(np.full(len(table), cfg.degradation))
     return table
@@ -116,5 +117,26 @@ def crater_table_for(cfg: CraterConfig, hm: Heightmap, rng: np.random.Generator)
 )
 def apply_craters(cfg: CraterConfig, hm: Heightmap, rng: np.random.Generator) -> Heightmap:
     """Sample (or read) the craters and stamp them onto ``hm``, oldest first."""
-    table = crater_table_for(cfg, hm, rng)
+    table = crater_table_for(cfg, hm.width_m, hm.height_m, rng)
     return stamp_craters(hm, table, rng, cfg.stamp_options())
+
+
+def recipe_craters(recipe, seed) -> dict[str, CraterTable]:
+    """{layer name: the craters it places} for every ``craters`` layer of a recipe and seed.
+
+    Same random streams as :func:`offroadbench.recipe.generate_terrain`, so the tables are the
+    craters in the generated terrain (e.g. to write a crater file or check the size-frequency
+    distribution). Craters are sampled over the recipe's grid extent, as in generation (every
+    registered generator and modifier keeps that extent in metres).
+    """
+    from offroadbench.recipe import _layer_rng, seed_sequence
+
+    root = seed_sequence(seed)
+    grid = recipe.grid
+    width = (grid["cols"] - 1) * grid["cell_size_m"]
+    height = (grid["rows"] - 1) * grid["cell_size_m"]
+    return {
+        layer.name: crater_table_for(layer.config, width, height, _layer_rng(root, layer.name))
+        for layer in recipe.layers
+        if layer.generator == "craters"
+    }
