@@ -147,9 +147,9 @@ def fractal_dimension(hm: Heightmap) -> float:
 def fit_sfd_slope(diameters_m, d_min_m: float | None = None, d_max_m: float | None = None) -> float:
     """Maximum-likelihood slope k of N_cum(D) ~ D^-k for diameters in [d_min, d_max].
 
-    The pdf is k D^-(k+1) / (d_min^-k - d_max^-k); the likelihood equation
-    ``1/k + mean(ln(d_min/D)) ... `` is solved by bisection. Without d_max (or d_max = inf) this is
-    the Hill estimator k = n / sum ln(D / d_min).
+    The pdf is k D^-(k+1) / (d_min^-k - d_max^-k). With r = d_max / d_min the likelihood equation
+    ``1/k - mean(ln(D / d_min)) - ln(r) r^-k / (1 - r^-k) = 0`` is solved by bisection. With
+    d_max = inf it is the Hill estimator k = n / sum ln(D / d_min).
     """
     d = np.asarray(diameters_m, dtype=float)
     lo = float(d.min()) if d_min_m is None else float(d_min_m)
@@ -184,7 +184,11 @@ def cumulative_counts(diameters_m) -> tuple[np.ndarray, np.ndarray]:
 
 
 def surface_summary(hm: Heightmap) -> dict:
-    """Slope percentiles (Horn), the spectral slope beta and the estimated fractal dimension."""
+    """Slope percentiles (Horn), the spectral slope beta and the estimated fractal dimension.
+
+    D = 4 - beta/2 assumes an fBm-like surface; a cratered map, whose spectrum is dominated by
+    the crater shapes, can give values outside (2, 3): read it as a spectral-slope summary.
+    """
     slope = horn_slope_deg(hm)
     out = {f"slope_p{q}_deg": float(np.percentile(slope, q)) for q in SLOPE_PERCENTILES}
     out["slope_mean_deg"] = float(slope.mean())

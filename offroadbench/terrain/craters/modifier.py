@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from offroadbench.config import check_choice, check_int, check_range
+from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.craters.population import SAMPLINGS, PopulationConfig, degradation_from_age, sample_population
 from offroadbench.terrain.craters.profiles import get_profile
@@ -49,7 +50,9 @@ class CraterConfig:
     degradation: float | None = None
     """If set, every crater gets this degradation (0 fresh .. 1) instead of one derived from age."""
     crater_file: str | None = None
-    """A crater CSV (x_m, y_m, diameter_m, age, degradation, profile) used instead of sampling."""
+    """A crater CSV (x_m, y_m, diameter_m, age, degradation, profile) used instead of sampling;
+    a relative path is relative to the working directory. The population fields then only serve
+    Eq. (11) for craters without a degradation."""
     rim_irregularity: float = 0.0
     """Std of the fractal rim radius perturbation, fraction of the radius (0 = circular)."""
     rim_fractal_dimension: float = 1.5
@@ -70,8 +73,6 @@ class CraterConfig:
         if self.degradation is not None:
             check_range(self, "degradation", self.degradation, lo=0, hi=1)
         if self.crater_file is not None and not isinstance(self.crater_file, str):
-            from offroadbench.errors import InputError
-
             raise InputError(f"CraterConfig.crater_file must be a path string, got {self.crater_file!r}")
         self.population()
         self.stamp_options()

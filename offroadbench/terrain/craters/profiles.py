@@ -132,6 +132,18 @@ def _mcgetchin_m(x: np.ndarray, radius_m: float) -> np.ndarray:
     return 0.14 * radius_m**0.74 * np.power(x + 1.0, -3.0)
 
 
+def _mcgetchin_scale(radius_m: float, rim_m: float) -> float:
+    """Factor lambda on McGetchin's thickness that keeps the blanket falling monotonically.
+
+    With F_c joining h4(0) = Hr and h4(1) = 0, the blanket rises near its edge unless
+    lambda M0 <= Hr / (11/16), M0 = 0.14 R^0.74 (see :func:`_martin_ejecta`).
+    """
+    m0 = 0.14 * radius_m**0.74
+    if m0 <= 0.0 or rim_m <= 0.0:
+        return 0.0
+    return min(1.0, rim_m / (11.0 / 16.0 * m0))
+
+
 def _martin_ejecta(x: np.ndarray, radius_m: float, rim_m: float) -> np.ndarray:
     """000 Eq. (9)-(10): h4 = McGetchin + F_c on 0 <= x <= 1, relative to the terrain.
 
@@ -140,21 +152,20 @@ def _martin_ejecta(x: np.ndarray, radius_m: float, rim_m: float) -> np.ndarray:
     coefficients do not meet both ends in a frame where the ejecta lies on the terrain, so we
     solve them. McGetchin's law (fitted for kilometre craters, R in metres) exceeds Melosh's
     rim height for craters below ~6 m; its amplitude is then scaled down just enough that the
-    blanket still falls monotonically from the rim (no moat): lambda = min(1, Hr / (11/16 M0)).
+    blanket still falls monotonically from the rim (no moat): :func:`_mcgetchin_scale`.
+    A fully degraded crater (Hr = 0) has no blanket.
     """
-    m0 = 0.14 * radius_m**0.74
-    lam = 0.0 if m0 <= 0 else min(1.0, rim_m / (11.0 / 16.0 * m0)) if rim_m > 0 else 0.0
+    lam = _mcgetchin_scale(radius_m, rim_m)
+    m0 = lam * 0.14 * radius_m**0.74
     mc = lam * _mcgetchin_m(x, radius_m)
-    m_rim, m_edge = lam * m0, lam * m0 / 8.0
-    fc = (rim_m - m_rim) * (1.0 - x) - m_edge * x
+    fc = (rim_m - m0) * (1.0 - x) - (m0 / 8.0) * x
     return mc + fc
 
 
 def _martin_ejecta_slope(x: float, radius_m: float, rim_m: float) -> float:
     """d h4 / dx of :func:`_martin_ejecta`."""
-    m0 = 0.14 * radius_m**0.74
-    lam = 0.0 if m0 <= 0 else min(1.0, rim_m / (11.0 / 16.0 * m0)) if rim_m > 0 else 0.0
-    return -3.0 * lam * m0 * (x + 1.0) ** -4 - (rim_m - lam * m0) - lam * m0 / 8.0
+    m0 = _mcgetchin_scale(radius_m, rim_m) * 0.14 * radius_m**0.74
+    return -3.0 * m0 * (x + 1.0) ** -4 - (rim_m - m0) - m0 / 8.0
 
 
 @register_profile(

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from offroadbench.config import check_range
+from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.terrain.craters.profiles import get_profile, melosh_depth_m
@@ -218,8 +219,6 @@ def stamp_craters(
     irregular rims and roughness overlays only.
     """
     if len(craters) and np.isnan(craters.degradation).any():
-        from offroadbench.errors import InputError
-
         i = int(np.flatnonzero(np.isnan(craters.degradation))[0])
         raise InputError(f"stamp_craters: crater {i} has no degradation; derive it from age first")
     z = np.array(hm.z, dtype=np.float64, copy=True)
