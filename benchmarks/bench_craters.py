@@ -15,7 +15,6 @@ import time
 
 import numpy as np
 
-from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.craters import CraterTable, StampOptions, inverse_cdf_diameters, stamp_craters
 from offroadbench.terrain.diamond_square import DiamondSquareConfig, generate_diamond_square
 from offroadbench.terrain.enhance import RMDExpandConfig, SpectralRestoreConfig, fill_gaps, rmd_expand, spectral_restore
