@@ -14,7 +14,6 @@ from offroadbench.cli.terrain import (
     _seed,
     format_table,
     load_heightmap_arg,
-    load_recipe_with_sets,
     save_figure,
 )
 from offroadbench.errors import InputError
@@ -41,14 +40,8 @@ def mission_rng(seed: int) -> np.random.Generator:
 
 
 def _load_terrain(args):
-    if args.terrain.lower().endswith(".png"):
-        if args.set:
-            raise InputError("--set applies to presets and recipes, not to a PNG terrain")
-        return load_heightmap_arg(args.terrain, args.seed)
-    from offroadbench.recipe import generate_terrain
-
-    recipe = load_recipe_with_sets(args.terrain, args.set)
-    return generate_terrain(recipe, args.seed), f"{recipe.name} seed {args.seed}"
+    hm, label, _ = load_heightmap_arg(args.terrain, args.seed, sets=args.set)
+    return hm, label
 
 
 def summarise(df: pd.DataFrame) -> dict[str, float]:

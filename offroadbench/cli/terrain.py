@@ -51,16 +51,20 @@ def save_figure(fig, path: str | Path) -> Path:
     return p
 
 
-def load_heightmap_arg(source: str, seed: int, cell_size_m: float | None = None, relief_m: float | None = None):
-    """A Heightmap from a PNG path (16-bit, with sidecar) or a preset / recipe name."""
+def load_heightmap_arg(
+    source: str, seed: int, cell_size_m: float | None = None, relief_m: float | None = None, sets: list[str] | None = None
+):
+    """(Heightmap, label, recipe or None) from a PNG path (16-bit, with sidecar) or a preset / recipe."""
     if source.lower().endswith(".png"):
         from offroadbench.io.png16 import read_png16
 
-        return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem
-    from offroadbench.recipe import generate_terrain, load_recipe
+        if sets:
+            raise InputError("--set applies to presets and recipes, not to a PNG heightmap")
+        return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem, None
+    from offroadbench.recipe import generate_terrain
 
-    recipe = load_recipe(source)
-    return generate_terrain(recipe, seed), f"{recipe.name} seed {seed}"
+    recipe = load_recipe_with_sets(source, sets)
+    return generate_terrain(recipe, seed), f"{recipe.name} seed {seed}", recipe
 
 
 def format_table(df: pd.DataFrame, floatfmt: str = "{:.2f}") -> str:
@@ -126,7 +130,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         from offroadbench.io.atomic import check_writable
 
         check_writable(args.plot)
-    hm, label = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m)
+    hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
     rcfg = RoughnessConfig(border_m=args.border_m, closing_radius_m=args.closing_radius_m)
     grad = gradient_map(hm)
     classes = classify(hm, rcfg)
@@ -150,12 +154,46 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     print(f"Moore gradient (rise/run): median {np.median(grad):.3f}, 95th pct {np.percentile(grad, 95):.3f}, max {grad.max():.3f}")
     print(f"Roughness classes inside the {rcfg.border_m:g} m border (paper Sec. 2.3-2.4; closing disk r = {rcfg.closing_radius_m:g} m):")
     print(format_table(table))
+    from offroadbench.analysis.surface import surface_summary
+
+    surf = surface_summary(hm)
+    print(
+        "Surface (Horn slopes, radially averaged power spectrum): slope median {:.1f} deg, 90th pct {:.1f} deg, "
+        "99th pct {:.1f} deg; steeper than 10/20/30 deg: {:.1f} / {:.1f} / {:.1f} %; PSD slope {:.2f} -> D = {:.2f}".format(
+            surf["slope_p50_deg"], surf["slope_p90_deg"], surf["slope_p99_deg"],
+            100 * surf["fraction_steeper_10deg"], 100 * surf["fraction_steeper_20deg"],
+            100 * surf["fraction_steeper_30deg"], surf["psd_slope_beta"], surf["fractal_dimension"],
+        )
+    )
+    diameters = _crater_diameters(recipe, args.seed)
+    if diameters is not None:
+        from offroadbench.analysis.surface import fit_sfd_slope
+
+        if diameters.size >= 2:
+            print(f"Craters placed: {diameters.size}, D = {diameters.min():.2f} .. {diameters.max():.2f} m, "
+                  f"fitted cumulative slope k = {fit_sfd_slope(diameters):.2f}")
     if args.plot:
         from offroadbench.analysis.plots import plot_terrain_classes
+        from offroadbench.analysis.surface_plots import plot_surface_analysis
 
         fig = plot_terrain_classes(hm, classes, fractions=inside, border_m=rcfg.border_m, title=label)
         print(f"wrote {save_figure(fig, args.plot)}")
+        surf_path = Path(args.plot).with_name(Path(args.plot).stem + "_surface" + Path(args.plot).suffix)
+        fig = plot_surface_analysis(hm, crater_diameters_m=diameters, title=label)
+        print(f"wrote {save_figure(fig, surf_path)}")
     return 0
+
+
+def _crater_diameters(recipe, seed: int):
+    """Diameters (m) of the craters a recipe places, or None for a PNG or a crater-free recipe."""
+    if recipe is None:
+        return None
+    from offroadbench.terrain.craters import recipe_craters
+
+    tables = recipe_craters(recipe, seed)
+    if not tables:
+        return None
+    return np.concatenate([np.asarray(t.diameter_m) for t in tables.values()])
 
 
 def _inside_cells(hm, border_m: float) -> int:
@@ -248,6 +286,7 @@ def register(sub) -> None:
     p.add_argument("--closing-radius-m", type=float, default=0.25, help="closing disk radius, m (default 0.25)")
     p.add_argument("--cell-size-m", type=float, help="cell size for a PNG without sidecar, m")
     p.add_argument("--relief-m", type=float, help="relief of a PNG without sidecar, m")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("roughness-study", help="median class areas vs D (paper Fig. 5)")
