@@ -183,6 +183,15 @@ def fig_missions(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain:
 
 
 # ---------------------------------------------------------------------------- reference
+def _direction_agrees(paper: float, ours: float) -> str:
+    """``yes``/``no`` if the changes have the same/opposite sign; the paper's zero is its own case."""
+    if math.isnan(paper) or math.isnan(ours):
+        return "–"
+    if paper == 0:
+        return "paper: no change"
+    return "yes" if np.sign(paper) == np.sign(ours) else "no"
+
+
 def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
@@ -204,7 +213,9 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
         lines += ["### Successful trials", "", markdown_table(df), ""]
     changes = ref.get("median_change", {})
     if changes:
-        names = [n for n in changes if f"median_{n}" in summary]
+        order = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
+        names = sorted((n for n in changes if f"median_{n}" in summary),
+                       key=lambda n: order.index(n) if n in order else len(order))
         ours = stats.median_changes(summary, names)
         rows = []
         for name in names:
@@ -214,8 +225,7 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
                     break
                 p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
                 o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
-                same = "–" if math.isnan(p_abs) or math.isnan(o_abs) else (
-                    "yes" if np.sign(round(p_abs, 9)) == np.sign(round(o_abs, 9)) else "no")
+                same = _direction_agrees(p_abs, o_abs)
                 rows.append({"quantity": name, "step": f"{_short(mine.loc[i, 'from'])} → {_short(mine.loc[i, 'to'])}",
                              "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
