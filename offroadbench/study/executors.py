@@ -16,7 +16,6 @@ executor, a task's results depend only on the task, so all of them give the same
 
 from __future__ import annotations
 
-import logging
 import os
 import queue
 import signal
@@ -26,8 +25,6 @@ from typing import Callable, Sequence
 
 from offroadbench.errors import InputError
 from offroadbench.study.trial import TerrainTask, TrialFn, collect_terrain, run_terrain
-
-log = logging.getLogger(__name__)
 
 __all__ = ["EXECUTORS", "get_executor", "StudyError", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 

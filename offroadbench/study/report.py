@@ -146,9 +146,8 @@ def fig_missions(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain:
     from matplotlib.colors import ListedColormap
 
     from offroadbench.analysis.roughness import classify, close_rough
-    from offroadbench.recipe import generate_terrain
+    from offroadbench.recipe import generate_terrain, recipe_from_dict
     from offroadbench.study.config import build_section
-    from offroadbench.recipe import recipe_from_dict
     from offroadbench.study.seeds import terrain_seed
 
     info = meta["cells"][cell]
