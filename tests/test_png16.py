@@ -111,3 +111,13 @@ def test_flat_map_round_trip(tmp_path):
     write_png16(hm, tmp_path / "f.png")
     back = read_png16(tmp_path / "f.png")
     assert np.array_equal(back.z, hm.z)
+
+
+def test_written_files_get_the_usual_mode(tmp_path, hm):
+    old = os.umask(0o022)
+    try:
+        write_png16(hm, tmp_path / "m.png")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "m.png").stat().st_mode & 0o777 == 0o644
+    assert (tmp_path / "m.json").stat().st_mode & 0o777 == 0o644
