@@ -54,6 +54,7 @@ __all__ = [
     "apply_overrides",
     "generate_terrain",
     "seed_sequence",
+    "layer_rng",
 ]
 
 COMBINE_MODES = ("replace", "sum", "product", "apply")
@@ -223,7 +224,8 @@ def seed_sequence(seed: int | np.random.SeedSequence) -> np.random.SeedSequence:
     return np.random.SeedSequence(int(seed))
 
 
-def _layer_rng(root: np.random.SeedSequence, layer_name: str) -> np.random.Generator:
+def layer_rng(root: np.random.SeedSequence, layer_name: str) -> np.random.Generator:
+    """The random stream of one layer: a child of ``root`` keyed by the layer's name."""
     key = zlib.crc32(layer_name.encode())
     child = np.random.SeedSequence(entropy=root.entropy, spawn_key=(*root.spawn_key, key))
     return np.random.default_rng(child)
@@ -237,7 +239,7 @@ def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heig
     hm: Heightmap | None = None
     for layer in recipe.layers:
         spec = get_spec(layer.generator)
-        rng = _layer_rng(root, layer.name)
+        rng = layer_rng(root, layer.name)
         if spec.kind == "modifier":
             hm = spec.fn(layer.config, hm, rng)
             continue

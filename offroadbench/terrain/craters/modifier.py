@@ -130,14 +130,14 @@ def recipe_craters(recipe, seed) -> dict[str, CraterTable]:
     distribution). Craters are sampled over the recipe's grid extent, as in generation (every
     registered generator and modifier keeps that extent in metres).
     """
-    from offroadbench.recipe import _layer_rng, seed_sequence
+    from offroadbench.recipe import layer_rng, seed_sequence
 
     root = seed_sequence(seed)
     grid = recipe.grid
     width = (grid["cols"] - 1) * grid["cell_size_m"]
     height = (grid["rows"] - 1) * grid["cell_size_m"]
     return {
-        layer.name: crater_table_for(layer.config, width, height, _layer_rng(root, layer.name))
+        layer.name: crater_table_for(layer.config, width, height, layer_rng(root, layer.name))
         for layer in recipe.layers
         if layer.generator == "craters"
     }
