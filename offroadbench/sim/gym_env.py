@@ -1,0 +1,289 @@
+"""A Gymnasium environment for mission driving on one terrain: ``offroadbench/Traverse-v0``.
+
+Each episode is one mission drawn by :func:`offroadbench.missions.sample_missions` (Majhor & Bos
+Sec. 2.3) on the closed roughness-class map of the terrain (Eq. 3-4), with the generator Gymnasium
+seeds in ``reset(seed=...)``: the same seed gives the same mission and, because
+:meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
+
+- **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
+  the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to wheel
+  speeds by the skid-steer drive (:func:`offroadbench.sim.drive.wheel_speeds`) and held for one
+  control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 Bullet steps).
+  Actions outside the Box are clipped. There is no speed profile: the agent commands the wheels.
+- **Observation**: a Dict of
+  ``state`` (float32, 10): goal x and y in the vehicle's heading frame (m; x forward, y left,
+  horizontal), roll and pitch (rad, as in :mod:`offroadbench.metrics`), body roll, pitch and yaw
+  rates (rad/s), and the base velocity in the body frame (forward, left, up; m/s);
+  ``height_patch`` (float32, n x n): terrain heights relative to the base, on a square grid centred
+  on the vehicle and aligned with its heading (see :func:`height_patch`).
+- **End**: ``terminated`` on success (within ``rules.goal_tolerance_m`` of the goal) or on the
+  trial runner's failure rules, checked in the same order (tipped, off_map, success, stuck) by the
+  same function; ``truncated`` at the timeout, ``rules.timeout_factor`` times the mission length
+  over the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
+  one of ``tipped``, ``stuck``, ``off_map``, ``timeout``; ``info["success"]`` says whether the goal
+  was reached.
+- **Reward** per control tick of length ``dt``, with ``d`` the horizontal distance to the goal::
+
+      r = w_progress * (d_prev - d) - dt * (w_accel * a_z^2 + w_rate * (p^2 + q^2))
+          + success_bonus [on success] - failure_penalty [on tipped, stuck or off_map]
+
+  ``a_z`` is the vertical acceleration of the base (change of its world z velocity over the tick)
+  and ``p``, ``q`` the body roll and pitch rates: summed over an episode of duration T the penalty
+  is ``T * (w_accel * RMS(a_z)^2 + w_rate * (RMS(p)^2 + RMS(q)^2))``, the squares of the paper's
+  comfort metrics (Sec. 2.4). The progress term telescopes to ``d_0 - d_end``. A timeout adds
+  nothing beyond the accumulated terms.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
+from offroadbench.config import check_int, check_range
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.missions import Mission, MissionConfig, sample_missions
+from offroadbench.sim.config import FailureRules, SimConfig
+from offroadbench.sim.drive import wheel_speeds
+from offroadbench.sim.trial import _end_reason, _frame
+from offroadbench.sim.vehicle import VehicleSpec
+from offroadbench.sim.world import World
+
+__all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES", "STATE_FIELDS"]
+
+#: the default terrain: the paper's D = 2.45 preset, cut to 241 x 241 cells (12 m at 5 cm)
+DEFAULT_TERRAIN = "paper-d2.45"
+DEFAULT_OVERRIDES: Mapping[str, Any] = {"grid.rows": 241, "grid.cols": 241}
+
+#: the entries of observation["state"], in order
+STATE_FIELDS = (
+    "goal_x_m", "goal_y_m", "roll_rad", "pitch_rad",
+    "roll_rate_rad_s", "pitch_rate_rad_s", "yaw_rate_rad_s",
+    "v_forward_m_s", "v_left_m_s", "v_up_m_s",
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TraverseConfig:
+    """Missions, observation and reward of the Traverse environment."""
+
+    mission_length_m: float = 6.0
+    """Straight-line start-goal distance of each episode's mission, m (small maps: short missions)."""
+    border_m: float = 2.0
+    """No start or goal closer than this to the map edge, m."""
+    control_rate_hz: int = 20
+    """Actions per simulated second; must divide SimConfig.physics_rate_hz (paper: 20 Hz)."""
+    patch_cells: int = 16
+    """Side of the square height patch, samples."""
+    patch_spacing_m: float = 0.1
+    """Distance between height-patch samples, m (16 x 0.1 m: a 1.5 m square around a 1 m vehicle)."""
+    progress_weight: float = 1.0
+    """Reward per metre of progress toward the goal."""
+    accel_weight: float = 0.01
+    """Penalty per (m/s^2)^2 s of vertical acceleration."""
+    rate_weight: float = 0.1
+    """Penalty per (rad/s)^2 s of body roll and pitch rate."""
+    success_bonus: float = 10.0
+    """Reward added when the goal is reached."""
+    failure_penalty: float = 10.0
+    """Reward subtracted when the episode ends tipped, stuck or off_map (not on timeout)."""
+
+    def __post_init__(self) -> None:
+        check_range(self, "mission_length_m", self.mission_length_m, lo=0, lo_open=True)
+        check_range(self, "border_m", self.border_m, lo=0)
+        check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
+        check_int(self, "patch_cells", self.patch_cells, lo=1, hi=512)
+        check_range(self, "patch_spacing_m", self.patch_spacing_m, lo=0, lo_open=True)
+        for name in ("progress_weight", "accel_weight", "rate_weight", "success_bonus", "failure_penalty"):
+            check_range(self, name, getattr(self, name), lo=0)
+
+
+def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: int, spacing_m: float,
+                 fill_m: float) -> np.ndarray:
+    """Terrain heights (bilinear) on a ``cells x cells`` grid centred on (x, y), turned by ``yaw_rad``.
+
+    ``patch[i, j]`` is the height at body-frame offset ``(x_b, y_b) = ((j - c) s, (i - c) s)`` with
+    ``c = (cells - 1) / 2`` and ``s = spacing_m``: columns run forward, rows to the left, as
+    ``z[r, c]`` runs along x and y of the map. Samples outside the map read ``fill_m``.
+    """
+    from scipy.ndimage import map_coordinates
+
+    offs = (np.arange(cells) - (cells - 1) / 2.0) * spacing_m
+    yb, xb = np.meshgrid(offs, offs, indexing="ij")
+    cos, sin = math.cos(yaw_rad), math.sin(yaw_rad)
+    xw = x_m + cos * xb - sin * yb
+    yw = y_m + sin * xb + cos * yb
+    col = xw / hm.cell_size_m
+    row = yw / hm.cell_size_m
+    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
+    outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
+    z[outside] = fill_m
+    return z
+
+
+def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None) -> Heightmap:
+    if isinstance(terrain, Heightmap):
+        if overrides:
+            raise InputError("terrain overrides apply to a preset or recipe, not to a Heightmap")
+        return terrain
+    from offroadbench.recipe import apply_overrides, generate_terrain, load_recipe
+
+    recipe = load_recipe(terrain)
+    if overrides is None:
+        overrides = DEFAULT_OVERRIDES
+    return generate_terrain(apply_overrides(recipe, overrides), seed)
+
+
+class TraverseEnv(gym.Env):
+    """Drive sampled missions on one terrain with (v, omega) commands; see the module docstring.
+
+    ``terrain`` is a preset name, a recipe TOML path or a :class:`Heightmap`. A preset or recipe is
+    generated with ``terrain_seed`` after ``overrides`` (dotted recipe keys; default
+    :data:`DEFAULT_OVERRIDES`, a 12 m map; pass ``{}`` for the recipe's own size). The terrain and
+    its PyBullet world are built once, in the constructor; call :meth:`close` to free them.
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        terrain: str | Heightmap = DEFAULT_TERRAIN,
+        *,
+        terrain_seed: int = 0,
+        overrides: Mapping[str, Any] | None = None,
+        vehicle: VehicleSpec | str = "husky",
+        config: TraverseConfig = TraverseConfig(),
+        sim: SimConfig = SimConfig(),
+        rules: FailureRules = FailureRules(),
+        roughness: RoughnessConfig = RoughnessConfig(),
+        render_mode: str | None = None,
+    ) -> None:
+        if render_mode is not None:
+            raise InputError(f"render_mode {render_mode!r} is not supported; Traverse-v0 has no rendering")
+        if sim.physics_rate_hz % config.control_rate_hz:
+            raise InputError(
+                f"TraverseConfig.control_rate_hz = {config.control_rate_hz} must divide "
+                f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
+            )
+        self.render_mode = None
+        self.cfg = config
+        self.rules = rules
+        self.hm = _terrain(terrain, terrain_seed, overrides)
+        self.closed_classes = close_rough(classify(self.hm, roughness), roughness.closing_radius_m, self.hm.cell_size_m)
+        self._mission_cfg = MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m)
+        self._world: World | None = World(self.hm, vehicle, sim)
+        spec = self._world.spec
+        self.vehicle = spec
+        self.dt_s = 1.0 / config.control_rate_hz
+        self._steps_per_tick = sim.physics_rate_hz // config.control_rate_hz
+        self._stuck_window = int(round(rules.stuck_window_s * config.control_rate_hz))
+        self._tip = math.radians(rules.tip_angle_deg)
+        self._fill_m = self.hm.z_min_m - rules.fall_depth_m
+
+        high = np.array([spec.max_speed_m_s, spec.max_yaw_rate_rad_s], dtype=np.float32)
+        self.action_space = spaces.Box(-high, high, dtype=np.float32)
+        n = config.patch_cells
+        self.observation_space = spaces.Dict({
+            "state": spaces.Box(-np.inf, np.inf, shape=(len(STATE_FIELDS),), dtype=np.float32),
+            "height_patch": spaces.Box(-np.inf, np.inf, shape=(n, n), dtype=np.float32),
+        })
+        self.mission: Mission | None = None
+
+    # ------------------------------------------------------------------ gymnasium API
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Sample a mission with the env's generator, spawn the vehicle at its start (settled)."""
+        super().reset(seed=seed)
+        world = self._require_world()
+        self.mission = sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
+        sx, sy = self.mission.start_xy_m
+        world.spawn(sx, sy, self.mission.heading_rad)
+        self._ticks = 0
+        timeout_s = self.rules.timeout_factor * self.mission.length_m / self.vehicle.max_speed_m_s
+        self._timeout_ticks = int(math.ceil(timeout_s * self.cfg.control_rate_hz - 1e-9))
+        self._goal = np.asarray(self.mission.goal_xy_m, dtype=float)
+        self._xy_hist: list[tuple[float, float]] = []
+        state = self._read_state()
+        self._dist = state["dist"]
+        self._vz = state["lin"][2]
+        self._xy_hist.append(state["pos"][:2])
+        return self._observation(state), self._info(state, "")
+
+    def step(self, action):
+        world = self._require_world()
+        if self.mission is None:
+            raise RuntimeError("call reset() before step()")
+        a = np.clip(np.asarray(action, dtype=float).reshape(2), self.action_space.low, self.action_space.high)
+        world.command_wheels(*wheel_speeds(float(a[0]), float(a[1]), self.vehicle))
+        for _ in range(self._steps_per_tick):
+            world.step()
+        self._ticks += 1
+        state = self._read_state()
+        pos = state["pos"]
+        self._xy_hist.append(pos[:2])
+        bounds = (self.hm.width_m, self.hm.height_m, self.hm.z_min_m)
+        reason = _end_reason(bounds, self.rules, self._tip, self._goal, pos, state["roll"], state["pitch"],
+                             self._xy_hist, self._stuck_window)
+
+        cfg = self.cfg
+        a_z = (state["lin"][2] - self._vz) / self.dt_s
+        p, q = state["rates"][0], state["rates"][1]
+        reward = cfg.progress_weight * (self._dist - state["dist"])
+        reward -= self.dt_s * (cfg.accel_weight * a_z * a_z + cfg.rate_weight * (p * p + q * q))
+        self._dist = state["dist"]
+        self._vz = state["lin"][2]
+
+        terminated = reason is not None
+        truncated = not terminated and self._ticks >= self._timeout_ticks
+        if reason == "":
+            reward += cfg.success_bonus
+        elif terminated:
+            reward -= cfg.failure_penalty
+        if truncated:
+            reason = "timeout"
+        return self._observation(state), float(reward), terminated, truncated, self._info(state, reason or "")
+
+    def close(self) -> None:
+        if self._world is not None:
+            self._world.close()
+            self._world = None
+        super().close()
+
+    # ------------------------------------------------------------------ helpers
+    def _require_world(self) -> World:
+        if self._world is None:
+            raise RuntimeError("the environment is closed")
+        return self._world
+
+    def _read_state(self) -> dict:
+        world = self._require_world()
+        pos, quat, lin, ang = world.base_state()
+        roll, pitch, yaw, *rates = _frame(world, quat, ang)
+        r = world.rotation_matrix(quat)  # row-major, body -> world
+        v_body = tuple(r[i] * lin[0] + r[i + 3] * lin[1] + r[i + 6] * lin[2] for i in range(3))
+        dist = math.hypot(self._goal[0] - pos[0], self._goal[1] - pos[1])
+        return {"pos": pos, "lin": lin, "roll": roll, "pitch": pitch, "yaw": yaw, "rates": rates,
+                "v_body": v_body, "dist": dist}
+
+    def _observation(self, s: dict) -> dict[str, np.ndarray]:
+        x, y, z = s["pos"]
+        dx, dy = self._goal[0] - x, self._goal[1] - y
+        cos, sin = math.cos(s["yaw"]), math.sin(s["yaw"])
+        state = np.array([cos * dx + sin * dy, -sin * dx + cos * dy, s["roll"], s["pitch"], *s["rates"],
+                          *s["v_body"]], dtype=np.float32)
+        patch = height_patch(self.hm, x, y, s["yaw"], self.cfg.patch_cells, self.cfg.patch_spacing_m, self._fill_m)
+        return {"state": state, "height_patch": (patch - z).astype(np.float32)}
+
+    def _info(self, s: dict, reason: str) -> dict[str, Any]:
+        return {
+            "failure_reason": reason,
+            "success": reason == "" and s["dist"] <= self.rules.goal_tolerance_m,
+            "distance_to_goal_m": s["dist"],
+            "t_s": self._ticks * self.dt_s,
+            "mission": self.mission,
+        }
