@@ -12,7 +12,7 @@ import sys
 from offroadbench.errors import InputError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
-COMMAND_MODULES = ("terrain", "study", "drive")
+COMMAND_MODULES = ("terrain", "study", "drive", "export")
 
 EXIT_BAD_INPUT = 2
 

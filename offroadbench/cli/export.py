@@ -1,0 +1,84 @@
+"""``offroadbench export``: write a terrain (PNG or preset) for another simulator."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from offroadbench.errors import InputError
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from offroadbench.cli.terrain import load_heightmap_arg
+    from offroadbench.io.export import EXPORTERS, check_name, check_output_dir, export_heightmap, get_exporter
+
+    if args.list:
+        print("Export formats (offroadbench export TERRAIN --format NAME -o DIR):")
+        width = max(len(n) for n in EXPORTERS)
+        for name, exp in EXPORTERS.items():
+            print(f"  {name:<{width}}  {exp.summary}")
+        return 0
+    missing = [flag for flag, v in (("TERRAIN", args.terrain), ("--format", args.format), ("-o DIR", args.output)) if v is None]
+    if missing:
+        raise InputError(f"export: missing {', '.join(missing)} (or use --list to see the formats)")
+    exporter = get_exporter(args.format)  # fail on a bad format, name, option or directory before the work
+    options = {} if args.stride is None else {"stride": args.stride}
+    if options and "stride" not in exporter.options:
+        raise InputError(f"--stride applies to the obj format only, not to {args.format!r}")
+    if args.name is not None:
+        check_name(args.name)
+    out = check_output_dir(args.output)
+
+    t0 = time.perf_counter()
+    hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
+    if recipe is not None:
+        meta = {"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)}
+        name = args.name or f"{recipe.name}_seed{args.seed}"
+    else:
+        meta = {"source": str(args.terrain)}
+        name = args.name or label
+    result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
+    print(
+        f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
+        f"({time.perf_counter() - t0:.2f} s)"
+    )
+    for note in result.notes:
+        print(f"  {note}")
+    for path in result.files:
+        print(f"wrote {path}")
+    return 0
+
+
+def _stride(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"stride must be an integer >= 1, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"stride must be an integer >= 1, got {v}")
+    return v
+
+
+def register(sub) -> None:
+    from offroadbench.cli.terrain import _seed
+
+    p = sub.add_parser(
+        "export",
+        help="export a terrain for another simulator (unreal, gazebo, mujoco, obj, tiff, npy)",
+        description="Write a terrain (16-bit PNG with sidecar, preset or recipe) in another simulator's format. "
+        "All files appear together or not at all.",
+    )
+    p.add_argument("terrain", nargs="?", help="16-bit PNG heightmap, preset name or recipe .toml")
+    p.add_argument("--format", help="export format (see --list)")
+    p.add_argument("-o", "--output", help="output directory (created if missing; its parent must exist)")
+    p.add_argument("--list", action="store_true", help="list the export formats and exit")
+    p.add_argument("--seed", type=_seed, default=0, help="seed when TERRAIN is a preset (default 0)")
+    p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
+    p.add_argument("--stride", type=_stride, help="obj only: keep every N-th row and column (default 1)")
+    p.add_argument("--cell-size-m", type=float, help="cell size for a PNG without sidecar, m")
+    p.add_argument("--relief-m", type=float, help="relief of a PNG without sidecar, m")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")
+    p.set_defaults(func=cmd_export)
+
+
+__all__ = ["register", "cmd_export"]
