@@ -1,0 +1,356 @@
+"""Exporters: each simulator's own placement rules put every sample where the Heightmap says.
+
+The simulators are not installed here, so each test re-implements the simulator's documented
+mapping from file to world (cited in offroadbench/io/export.py) and checks the written files against
+the heightmap: sample (0, 0) at x = y = 0, the far corner at (width, height), heights z[r, c].
+"""
+
+import json
+import logging
+import os
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from offroadbench import Heightmap, InputError
+from offroadbench.cli import main
+from offroadbench.io import export as ex
+from offroadbench.io.export import EXPORTERS, export_heightmap, gazebo_grid_size, read_grid
+
+SMALL = ["--set", "grid.rows=33", "--set", "grid.cols=33"]
+
+
+@pytest.fixture
+def hm(rng):
+    """Non-square, off-zero heights, a distinct maximum: any flip or transpose shows."""
+    z = rng.normal(size=(9, 14)) * 0.3 + 5.0
+    z[2, 11] = 7.5
+    return Heightmap(z, 0.25)
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def listing(d):
+    return sorted(str(p.relative_to(d)) for p in d.rglob("*"))
+
+
+# --------------------------------------------------------------------------- registry
+def test_registry_has_the_formats_and_unknown_lists_them(hm, tmp_path):
+    assert set(EXPORTERS) == {"unreal", "gazebo", "mujoco", "obj", "tiff", "npy"}
+    with pytest.raises(InputError, match="known formats: gazebo, mujoco, npy, obj, tiff, unreal"):
+        export_heightmap(hm, "fbx", tmp_path / "o")
+    assert not (tmp_path / "o").exists()
+
+
+def test_option_for_another_format_and_bad_name_are_refused(hm, tmp_path):
+    with pytest.raises(InputError, match="takes no option stride"):
+        export_heightmap(hm, "tiff", tmp_path / "o", stride=2)
+    with pytest.raises(InputError, match="export name"):
+        export_heightmap(hm, "npy", tmp_path / "o", name="../escape")
+    assert listing(tmp_path) == []
+
+
+# --------------------------------------------------------------------------- obj
+def read_obj(path):
+    verts, faces = [], []
+    for line in path.read_text().splitlines():
+        if line.startswith("v "):
+            verts.append([float(t) for t in line.split()[1:]])
+        elif line.startswith("f "):
+            faces.append([int(t) for t in line.split()[1:]])
+    return np.array(verts), np.array(faces) - 1
+
+
+def test_obj_vertices_are_exactly_the_samples_and_faces_point_up(hm, tmp_path):
+    export_heightmap(hm, "obj", tmp_path, name="t")
+    v, f = read_obj(tmp_path / "t.obj")
+    rr, cc = np.meshgrid(np.arange(hm.rows), np.arange(hm.cols), indexing="ij")
+    assert v.shape == (hm.rows * hm.cols, 3)
+    assert np.array_equal(v[:, 2], hm.z.ravel())  # bit-exact heights
+    assert np.array_equal(v[:, 0], cc.ravel() * hm.cell_size_m)
+    assert np.array_equal(v[:, 1], rr.ravel() * hm.cell_size_m)
+    assert len(f) == 2 * (hm.rows - 1) * (hm.cols - 1)
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    normals = np.cross(b - a, c - a)
+    assert np.all(normals[:, 2] > 0)  # counter-clockwise from above
+    # the triangles tile the map: their projected areas add up to the extent
+    assert 0.5 * normals[:, 2].sum() == pytest.approx(hm.width_m * hm.height_m)
+
+
+def test_obj_stride_keeps_samples_and_extent(hm, tmp_path):
+    export_heightmap(hm, "obj", tmp_path, name="t", stride=4)
+    v, f = read_obj(tmp_path / "t.obj")
+    rows, cols = [0, 4, 8], [0, 4, 8, 12, 13]  # the last row / column are always kept
+    assert np.array_equal(v[:, 2], hm.z[np.ix_(rows, cols)].ravel())
+    assert v[:, 0].max() == hm.width_m and v[:, 1].max() == hm.height_m
+    assert len(f) == 2 * 2 * 4
+    with pytest.raises(InputError, match="stride"):
+        export_heightmap(hm, "obj", tmp_path / "x", stride=0)
+
+
+# --------------------------------------------------------------------------- tiff / npy
+def test_tiff_round_trips_float32_exactly(hm, tmp_path):
+    export_heightmap(hm, "tiff", tmp_path, name="t", meta={"seed": 3})
+    with Image.open(tmp_path / "t.tif") as img:
+        assert img.mode == "F" and img.size == (hm.cols, hm.rows)
+    back = read_grid(tmp_path / "t.tif")
+    assert np.array_equal(back.z, hm.z.astype(np.float32).astype(np.float64))
+    assert np.max(np.abs(back.z - hm.z)) <= np.finfo(np.float32).eps * np.abs(hm.z).max()
+    assert back.cell_size_m == hm.cell_size_m
+    side = json.loads((tmp_path / "t.tif.json").read_text())
+    assert side["dtype"] == "float32" and side["seed"] == 3 and side["z_max_m"] == hm.z_max_m
+
+
+def test_npy_round_trips_bit_exact(hm, tmp_path):
+    export_heightmap(hm, "npy", tmp_path, name="t")
+    assert np.array_equal(np.load(tmp_path / "t.npy"), hm.z)
+    back = read_grid(tmp_path / "t.npy")
+    assert np.array_equal(back.z, hm.z) and back.cell_size_m == hm.cell_size_m
+
+
+def test_formats_share_a_directory_without_clobbering(hm, tmp_path):
+    from offroadbench.io.png16 import read_png16
+
+    for fmt in ("unreal", "tiff", "npy"):
+        export_heightmap(hm, fmt, tmp_path, name="t")
+    assert np.array_equal(read_grid(tmp_path / "t.npy").z, hm.z)
+    assert np.max(np.abs(read_png16(tmp_path / "t.png").z - hm.z)) <= hm.relief_m / 65535
+    assert json.loads((tmp_path / "t.json").read_text())["format"] == "offroadbench-png16/1"
+
+
+# --------------------------------------------------------------------------- mujoco
+def test_mujoco_hfield_reproduces_extent_relief_and_heights(hm, tmp_path):
+    export_heightmap(hm, "mujoco", tmp_path, name="t")
+    root = ET.parse(tmp_path / "t.xml").getroot()
+    hf = root.find("asset/hfield")
+    geom = root.find("worldbody/geom")
+    assert geom.get("type") == "hfield" and geom.get("hfield") == hf.get("name")
+    rx, ry, ez, base = map(float, hf.get("size").split())
+    px, py, pz = map(float, geom.get("pos").split())
+    assert 2 * rx == pytest.approx(hm.width_m) and 2 * ry == pytest.approx(hm.height_m)
+    assert ez == pytest.approx(hm.relief_m) and base > 0
+    raw = (tmp_path / hf.get("file")).read_bytes()
+    nrow, ncol = np.frombuffer(raw[:8], dtype="<i4")
+    assert (nrow, ncol) == hm.shape and len(raw) == 4 * (2 + nrow * ncol)
+    data = np.frombuffer(raw[8:], dtype="<f4").reshape(nrow, ncol).astype(np.float64)
+    # MuJoCo: normalise to [0, 1]; column c at x = c * 2 rx / (ncol - 1) - rx, row r at y = r * 2 ry / (nrow - 1) - ry
+    norm = (data - data.min()) / (data.max() - data.min())
+    world_z = pz + norm * ez
+    c = np.arange(ncol)
+    r = np.arange(nrow)
+    world_x = px + c * 2 * rx / (ncol - 1) - rx
+    world_y = py + r * 2 * ry / (nrow - 1) - ry
+    assert world_x[0] == pytest.approx(0, abs=1e-12) and world_y[0] == pytest.approx(0, abs=1e-12)
+    assert world_x[-1] == pytest.approx(hm.width_m) and world_y[-1] == pytest.approx(hm.height_m)
+    assert np.allclose(world_x, hm.x_coords_m()) and np.allclose(world_y, hm.y_coords_m())
+    assert np.max(np.abs(world_z - hm.z)) < 1e-6 * max(1.0, np.abs(hm.z).max())
+    assert (world_z[0, 0], world_z[-1, -1]) == pytest.approx((hm.z[0, 0], hm.z[-1, -1]), abs=1e-5)
+
+
+# --------------------------------------------------------------------------- gazebo
+def gazebo_world(model_dir, name):
+    """World (x, y, z) grids of a Gazebo heightmap model: image column j -> +x, image row i -> -y
+    (the top row is the +y edge), level / 65535 * size.z above pos.z, centred on pos."""
+    sdf = ET.parse(model_dir / "model.sdf").getroot()
+    hmap = sdf.find("model/link/collision/geometry/heightmap")
+    assert hmap.find("uri").text == f"model://{name}/materials/textures/{name}_heightmap.png"
+    size = np.array(hmap.find("size").text.split(), dtype=float)
+    pos = np.array(hmap.find("pos").text.split(), dtype=float)
+    with Image.open(model_dir / "materials" / "textures" / f"{name}_heightmap.png") as img:
+        assert img.mode in ("I;16", "I;16B", "I")
+        q = np.asarray(img).astype(np.float64)
+    n = q.shape[0]
+    assert q.shape == (n, n) and n == gazebo_grid_size(n, n)
+    j = np.arange(n)
+    x = pos[0] - size[0] / 2 + j * size[0] / (n - 1)
+    y = pos[1] + size[1] / 2 - j * size[1] / (n - 1)  # image row i
+    z = pos[2] + q / 65535 * size[2]
+    return x, y, z
+
+
+def test_gazebo_grid_size():
+    assert [gazebo_grid_size(n, n) for n in (3, 5, 6, 9, 10, 1009, 1025)] == [3, 5, 9, 9, 17, 1025, 1025]
+    assert gazebo_grid_size(7, 13) == 17
+
+
+def test_gazebo_square_map_is_placed_exactly(rng, tmp_path):
+    z = rng.normal(size=(17, 17)) + 2.0
+    z[3, 12] = 6.0
+    hm = Heightmap(z, 0.5)
+    export_heightmap(hm, "gazebo", tmp_path, name="g")
+    x, y, zw = gazebo_world(tmp_path / "g", "g")
+    # image row i is at y[i]: sample (0, 0) is the bottom-left pixel, the far corner the top-right one
+    assert (x[0], y[-1]) == pytest.approx((0.0, 0.0), abs=1e-12)
+    assert (x[-1], y[0]) == pytest.approx((hm.width_m, hm.height_m))
+    step = hm.relief_m / 65535
+    assert abs(zw[-1, 0] - hm.z[0, 0]) <= step and abs(zw[0, -1] - hm.z[-1, -1]) <= step
+    assert np.max(np.abs(zw[::-1] - hm.z)) <= step / 2 + 1e-12
+    i, j = np.unravel_index(np.argmax(zw), zw.shape)
+    assert (x[j], y[i]) == pytest.approx((12 * 0.5, 3 * 0.5))  # the peak is where the Heightmap has it
+    config = ET.parse(tmp_path / "g" / "model.config").getroot()
+    assert config.find("name").text == "g" and "used as they are" in config.find("description").text
+
+
+def test_gazebo_non_square_map_is_resampled_over_the_same_extent(hm, tmp_path, caplog):
+    with caplog.at_level(logging.INFO, logger="offroadbench.io.export"):
+        export_heightmap(hm, "gazebo", tmp_path, name="g")
+    assert "resampled 9x14 -> 17x17 (bilinear" in caplog.text
+    description = ET.parse(tmp_path / "g" / "model.config").getroot().find("description").text
+    assert "resampled 9x14 -> 17x17 (bilinear" in description
+    x, y, zw = gazebo_world(tmp_path / "g", "g")
+    assert (x[0], y[-1]) == pytest.approx((0.0, 0.0), abs=1e-12)
+    assert (x[-1], y[0]) == pytest.approx((hm.width_m, hm.height_m))
+    xx, yy = np.meshgrid(x, y)
+    expected = hm.height_at(np.clip(xx, 0, hm.width_m), np.clip(yy, 0, hm.height_m))
+    assert np.max(np.abs(zw - expected)) <= hm.relief_m / 65535
+    assert abs(zw[-1, 0] - hm.z[0, 0]) <= hm.relief_m / 65535  # corners survive resampling
+    assert abs(zw[0, -1] - hm.z[-1, -1]) <= hm.relief_m / 65535
+
+
+# --------------------------------------------------------------------------- unreal
+def test_unreal_scale_and_location_reproduce_heights(hm, tmp_path):
+    export_heightmap(hm, "unreal", tmp_path, name="u")
+    text = (tmp_path / "u_unreal.txt").read_text()
+    s = ex.unreal_import_settings(hm)
+    assert f"Z {s['location_z_cm']:.6f}" in text and "1009" in text and "2017" in text
+    assert s["scale_x"] == s["scale_y"] == pytest.approx(25.0)
+    with Image.open(tmp_path / "u.png") as img:
+        q = np.asarray(img).astype(np.float64)
+    assert q.shape == hm.shape  # pixel (r, c) = z[r, c]: X = columns, Y = rows, as Unreal reads it
+    ue_z_m = (s["location_z_cm"] + (q - 32768) / 128 * s["scale_z"]) / 100
+    assert np.max(np.abs(ue_z_m - hm.z)) <= 1.5 * hm.relief_m / 65535
+    side = json.loads((tmp_path / "u.json").read_text())
+    assert side["ue_scale_z"] == pytest.approx(s["scale_z"])
+
+
+def test_unreal_paper_scale_and_size_warning(tmp_path, caplog):
+    z = np.zeros((127, 127))
+    z[5, 9] = 3.84
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+        res = export_heightmap(Heightmap(z, 0.05), "unreal", tmp_path / "a", name="p")
+    assert ex.unreal_import_settings(Heightmap(z, 0.05))["scale_z"] == pytest.approx(0.75)
+    assert "not one of" not in caplog.text and not any("warning" in n for n in res.notes)
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+        res = export_heightmap(Heightmap(z[:100, :100], 0.05), "unreal", tmp_path / "b", name="p")
+    assert "100x100 is not one of Unreal's recommended Landscape sizes" in caplog.text
+    assert "not one of" in (tmp_path / "b" / "p_unreal.txt").read_text()
+
+
+# --------------------------------------------------------------------------- atomic output
+@pytest.fixture
+def failing_exporter(monkeypatch):
+    def write(hm, d, name, meta):
+        (d / f"{name}.part").write_text("half")
+        (d / "sub").mkdir()
+        (d / "sub" / "x").write_text("half")
+        raise InputError("boom")
+
+    monkeypatch.setitem(EXPORTERS, "broken", ex.Exporter("broken", "fails half way", write))
+
+
+def test_failure_leaves_no_new_directory(hm, tmp_path, failing_exporter):
+    with pytest.raises(InputError, match="boom"):
+        export_heightmap(hm, "broken", tmp_path / "out", name="t")
+    assert listing(tmp_path) == []
+
+
+def test_failure_leaves_existing_directory_as_it_was(hm, tmp_path, failing_exporter):
+    export_heightmap(hm, "npy", tmp_path, name="t")
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*")}
+    with pytest.raises(InputError, match="boom"):
+        export_heightmap(hm, "broken", tmp_path, name="t")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*")} == before
+
+
+def test_failed_move_into_existing_directory_is_rolled_back(hm, tmp_path, monkeypatch):
+    real_replace = os.replace
+    calls = []
+
+    def flaky(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(ex.os, "replace", flaky)
+    with pytest.raises(OSError):
+        export_heightmap(hm, "gazebo", tmp_path, name="g")
+    assert listing(tmp_path) == []
+
+
+def test_unwritable_output_is_an_input_error(hm, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(InputError, match="not a directory"):
+        export_heightmap(hm, "npy", blocker / "out")
+    with pytest.raises(InputError, match="exists and is not a directory"):
+        export_heightmap(hm, "npy", blocker)
+    with pytest.raises(InputError, match="does not exist"):
+        export_heightmap(hm, "npy", tmp_path / "missing" / "out")
+    assert listing(tmp_path) == ["file"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write to read-only directories")
+def test_read_only_directory_is_an_input_error(hm, tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        with pytest.raises(InputError, match="not writable"):
+            export_heightmap(hm, "npy", ro)
+    finally:
+        ro.chmod(0o700)
+
+
+# --------------------------------------------------------------------------- CLI
+def test_cli_list(capsys):
+    code, out, _ = run(capsys, "export", "--list")
+    assert code == 0
+    for name in EXPORTERS:
+        assert f"  {name}" in out
+
+
+def test_cli_preset_to_mujoco_and_png_to_npy(tmp_path, capsys):
+    code, out, err = run(capsys, "export", "paper-d2.45", "--seed", "2", "--format", "mujoco", "-o", str(tmp_path / "m"), *SMALL)
+    assert code == 0, err
+    assert (tmp_path / "m" / "paper-d2.45_seed2.xml").is_file() and "hfield size" in out
+    png = tmp_path / "t.png"
+    assert run(capsys, "generate", "paper-d2.45", "--seed", "2", "-o", str(png), *SMALL)[0] == 0
+    code, out, err = run(capsys, "export", str(png), "--format", "npy", "-o", str(tmp_path / "n"))
+    assert code == 0, err
+    from offroadbench.io.png16 import read_png16
+
+    assert np.array_equal(np.load(tmp_path / "n" / "t.npy"), read_png16(png).z)
+    side = json.loads((tmp_path / "n" / "t.npy.json").read_text())
+    assert side["source"] == str(png)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["paper-d2.45", "--format", "fbx"], "known formats: gazebo, mujoco, npy, obj, tiff, unreal"),
+        (["paper-d2.45", "--format", "tiff", "--stride", "2"], "--stride applies to the obj format only"),
+        (["paper-d2.45", "--format", "npy", "--name", "a/b"], "export name"),
+        (["no-such-preset", "--format", "npy"], "no-such-preset"),
+        (["paper-d2.45", "--format", "npy", "--set", "grid.rows=0"], "rows"),
+    ],
+)
+def test_cli_bad_input_exit_2_and_no_output(tmp_path, capsys, argv, message):
+    out_dir = tmp_path / "o"
+    code, out, err = run(capsys, "export", *argv, "-o", str(out_dir))
+    assert code == 2
+    assert message in err and err.count("\n") == 1
+    assert not out_dir.exists()
+
+
+def test_cli_unwritable_directory_exit_2(tmp_path, capsys):
+    (tmp_path / "f").write_text("x")
+    code, _, err = run(capsys, "export", "paper-d2.45", "--format", "npy", "-o", str(tmp_path / "f" / "o"), *SMALL)
+    assert code == 2 and "not a directory" in err
+    assert listing(tmp_path) == ["f"]
