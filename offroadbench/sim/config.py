@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from offroadbench.config import check_int, check_range
+from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules"]
@@ -51,7 +51,8 @@ class SimConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class ControllerConfig:
-    """Pure pursuit on the start-goal line, with a jerk-limited (ruckig) speed profile."""
+    """Pure pursuit on the planned path (default: the start-goal line), with a jerk-limited (ruckig)
+    speed profile."""
 
     lookahead_m: float = 1.5
     """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
@@ -59,11 +60,17 @@ class ControllerConfig:
     """Controller updates per second; must divide SimConfig.physics_rate_hz."""
     cruise_speed_m_s: float = 1.0
     """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
+    planner: str = "straight"
+    """Path planner from offroadbench.planners.PLANNERS: ``straight`` (the paper's start-goal line)
+    or ``astar`` (around high-roughness cells, with PlannerConfig's defaults)."""
 
     def __post_init__(self) -> None:
+        from offroadbench.planners import PLANNERS
+
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
         check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
+        check_choice(self, "planner", self.planner, sorted(PLANNERS))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -1,4 +1,5 @@
-"""Path tracking on a straight start-goal line: pure pursuit for steering, ruckig for speed.
+"""Path tracking on a straight start-goal line or a planned polyline: pure pursuit for steering,
+ruckig for speed.
 
 Steering (pure pursuit, Coulter 1992): the goal point lies ``lookahead`` ahead of the vehicle's
 projection on the line (clamped to the goal); with ``alpha`` the bearing of that point in the
@@ -23,7 +24,7 @@ from ruckig import InputParameter, OutputParameter, Result, Ruckig
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.vehicle import VehicleSpec
 
-__all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker"]
+__all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker", "PathTracker", "make_tracker"]
 
 
 def pure_pursuit_omega(
@@ -102,3 +103,83 @@ class LineTracker:
         target = self.start + self.unit * min(max(s, 0.0) + self.cfg.lookahead_m, self.length_m)
         omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
         return v, omega, s
+
+
+class PathTracker:
+    """Follows a polyline of waypoints (N >= 2, metres) the way LineTracker follows a line.
+
+    Progress is the arc length of the vehicle's projection on the path. The projection is searched
+    on the segments from the current one to those starting within ``lookahead + 2 m`` of arc ahead
+    of the last progress (so a path that comes back near itself is not short-cut); before the first segment and past the last, the projection
+    runs on along their lines, as LineTracker's does. The pure-pursuit point lies ``lookahead``
+    further along the path, and the speed profile runs over the whole path length.
+    """
+
+    def __init__(self, waypoints, spec: VehicleSpec, cfg: ControllerConfig) -> None:
+        pts = np.asarray(waypoints, dtype=float)
+        seg = np.diff(pts, axis=0)
+        seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        keep = np.concatenate([[True], seg_len > 1e-9])  # drop repeated waypoints
+        self.points = pts[keep]
+        if len(self.points) < 2:
+            raise ValueError("a path needs two distinct waypoints")
+        seg = np.diff(self.points, axis=0)
+        self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        self._unit = seg / self._seg_len[:, None]
+        self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])
+        self.length_m = float(self._cum[-1])
+        self.cfg = cfg
+        self.spec = spec
+        self._seg = 0
+        self._s = 0.0
+        self._window_m = cfg.lookahead_m + 2.0
+        self.speed = SpeedProfile(
+            self.length_m,
+            1.0 / cfg.control_rate_hz,
+            min(cfg.cruise_speed_m_s, spec.max_speed_m_s),
+            spec.max_accel_m_s2,
+            spec.max_jerk_m_s3,
+        )
+
+    def _project(self, pos_xy: np.ndarray) -> tuple[int, float]:
+        """(segment index, arc length) of the nearest point within the search window."""
+        last = len(self._seg_len) - 1
+        best = (math.inf, self._seg, 0.0)
+        k = self._seg
+        while k <= last and (k == self._seg or self._cum[k] <= self._s + self._window_m):
+            t = float(np.dot(pos_xy - self.points[k], self._unit[k]))
+            t_c = t if (k == 0 and t < 0) or (k == last and t > 0) else min(max(t, 0.0), self._seg_len[k])
+            foot = self.points[k] + t_c * self._unit[k]
+            d = math.hypot(pos_xy[0] - foot[0], pos_xy[1] - foot[1])
+            if d < best[0]:
+                best = (d, k, float(self._cum[k] + t_c))
+            k += 1
+        return best[1], best[2]
+
+    def point_at(self, s_m: float) -> np.ndarray:
+        """The path point at arc length ``s_m`` (clamped to the path)."""
+        s = min(max(s_m, 0.0), self.length_m)
+        k = min(int(np.searchsorted(self._cum, s, side="right")) - 1, len(self._seg_len) - 1)
+        return self.points[k] + (s - self._cum[k]) * self._unit[k]
+
+    def progress(self, pos_xy: np.ndarray) -> float:
+        """Arc length along the path of the projection of ``pos_xy``, metres."""
+        self._seg, self._s = self._project(np.asarray(pos_xy, dtype=float))
+        return self._s
+
+    def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
+        """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
+        s = self.progress(pos_xy)
+        v = self.speed.command(s, float(np.dot(vel_xy, self._unit[self._seg])))
+        target = self.point_at(max(s, 0.0) + self.cfg.lookahead_m)
+        omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
+        return v, omega, s
+
+
+def make_tracker(waypoints, spec: VehicleSpec, cfg: ControllerConfig) -> LineTracker | PathTracker:
+    """LineTracker for two waypoints (the straight plan, exactly as before planners existed), else
+    PathTracker."""
+    pts = np.asarray(waypoints, dtype=float)
+    if len(pts) == 2:
+        return LineTracker(pts[0], pts[1], spec, cfg)
+    return PathTracker(pts, spec, cfg)

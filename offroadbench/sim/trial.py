@@ -2,9 +2,10 @@
 
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the end conditions are checked in the order tipped, off_map, success, stuck; at control ticks
-the line tracker issues (v, omega), mapped to wheel speeds by the skid-steer drive. The clock
-starts after the vehicle has settled at the start; the trial ends as ``timeout`` after
-``rules.timeout_factor`` times the nominal time ``length / cruise speed``.
+the path tracker issues (v, omega), mapped to wheel speeds by the skid-steer drive. The path is
+``controller.planner``'s (offroadbench.planners; default ``straight``, the start-goal line). The
+clock starts after the vehicle has settled at the start; the trial ends as ``timeout`` after
+``rules.timeout_factor`` times the nominal time ``path length / cruise speed``.
 
 Metrics follow Majhor & Bos Sec. 2.4 (see offroadbench.metrics) and are computed from the
 20 Hz telemetry between the clock start and the end of the trial.
@@ -24,9 +25,10 @@ from offroadbench import metrics
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.missions import Mission
+from offroadbench.planners import plan_path
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
-from offroadbench.sim.controller import LineTracker
+from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.drive import wheel_speeds
 from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
@@ -135,7 +137,8 @@ def run_mission(
     goal = np.asarray(mission.goal_xy_m, dtype=float)
     bounds = (hm.width_m, hm.height_m, hm.z_min_m)
 
-    tracker = LineTracker(mission.start_xy_m, mission.goal_xy_m, spec, controller)
+    waypoints = plan_path(controller.planner, hm, mission.start_xy_m, mission.goal_xy_m)
+    tracker = make_tracker(waypoints, spec, controller)
     timeout_s = rules.timeout_factor * tracker.length_m / min(controller.cruise_speed_m_s, spec.max_speed_m_s)
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
 
