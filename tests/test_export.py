@@ -201,6 +201,7 @@ def test_gazebo_non_square_map_is_resampled_over_the_same_extent(hm, tmp_path, c
     with caplog.at_level(logging.INFO, logger="offroadbench.io.export"):
         export_heightmap(hm, "gazebo", tmp_path, name="g")
     assert "resampled 9x14 -> 17x17 (bilinear" in caplog.text
+    assert "extent is not square" in caplog.text  # classic Gazebo would render it square
     description = ET.parse(tmp_path / "g" / "model.config").getroot().find("description").text
     assert "resampled 9x14 -> 17x17 (bilinear" in description
     x, y, zw = gazebo_world(tmp_path / "g", "g")
@@ -282,6 +283,32 @@ def test_failed_move_into_existing_directory_is_rolled_back(hm, tmp_path, monkey
     with pytest.raises(OSError):
         export_heightmap(hm, "gazebo", tmp_path, name="g")
     assert listing(tmp_path) == []
+
+
+def test_failed_move_restores_the_files_it_replaced(hm, tmp_path, monkeypatch):
+    export_heightmap(hm, "gazebo", tmp_path, name="g")
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    real_replace = os.replace
+    calls = []
+
+    def flaky(src, dst):  # calls: set aside old png, move new png, set aside old config, move new config
+        calls.append(dst)
+        if len(calls) == 4:
+            raise OSError(28, "No space left on device")
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(ex.os, "replace", flaky)
+    with pytest.raises(OSError):
+        export_heightmap(hm.with_z(hm.z * 2), "gazebo", tmp_path, name="g")
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_file_in_the_way_of_a_directory_is_an_input_error(hm, tmp_path):
+    (tmp_path / "g").write_text("mine")
+    with pytest.raises(InputError, match="is a file already"):
+        export_heightmap(hm, "gazebo", tmp_path, name="g")
+    assert listing(tmp_path) == ["g"] and (tmp_path / "g").read_text() == "mine"
 
 
 def test_unwritable_output_is_an_input_error(hm, tmp_path):

@@ -58,8 +58,10 @@ __all__ = [
     "check_output_dir",
     "export_heightmap",
     "gazebo_grid_size",
+    "gazebo_placement",
     "get_exporter",
     "grid_metadata",
+    "mujoco_hfield_size",
     "read_grid",
     "resample_bilinear",
     "unreal_import_settings",
@@ -159,10 +161,9 @@ def _staged_dir(out_dir: Path) -> Iterator[Path]:
     """Yield an empty staging directory; on success its contents appear in ``out_dir``.
 
     A new ``out_dir`` is staged beside it and renamed into place in one step. An existing ``out_dir``
-    gets a hidden staging directory inside it whose files are then moved in (same file system, so
-    each move is a rename); if a move fails, the files and directories created so far are removed.
-    On any error the staging directory is deleted and ``out_dir`` is as it was (an overwritten file
-    of an earlier export excepted, if the failure happens during the final moves).
+    gets a hidden staging directory inside it whose files are then moved in (renames on one file
+    system); files they replace are kept aside until every move has succeeded, and put back if one
+    fails. On any error the staging directory is deleted and ``out_dir`` is as it was.
     """
     out_dir = check_output_dir(out_dir)
     fresh = not out_dir.exists()
@@ -182,25 +183,46 @@ def _staged_dir(out_dir: Path) -> Iterator[Path]:
         shutil.rmtree(stage, ignore_errors=True)
 
 
+def _check_merge(stage: Path, out_dir: Path) -> None:
+    """InputError if an existing path in ``out_dir`` has the wrong kind (file vs directory)."""
+    for src in stage.rglob("*"):
+        dst = out_dir / src.relative_to(stage)
+        if dst.exists() and src.is_dir() != dst.is_dir():
+            kind = "a directory" if dst.is_dir() else "a file"
+            raise InputError(f"output {dst}: is {kind} already; remove it or choose another --name or directory")
+
+
 def _merge_into(stage: Path, out_dir: Path) -> None:
+    _check_merge(stage, out_dir)
+    backup = Path(tempfile.mkdtemp(prefix=".export-replaced.", suffix=".tmp", dir=out_dir))
     created: list[Path] = []
+    replaced: list[tuple[Path, Path]] = []  # (target, its previous version in backup)
     try:
         for src in sorted(stage.rglob("*")):
-            dst = out_dir / src.relative_to(stage)
+            rel = src.relative_to(stage)
+            dst = out_dir / rel
             if src.is_dir():
                 if not dst.is_dir():
                     dst.mkdir()
                     created.append(dst)
                 continue
-            existed = dst.exists()
+            if dst.exists():
+                old = backup / rel
+                old.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(dst, old)
+                replaced.append((dst, old))
             os.replace(src, dst)
-            if not existed:
-                created.append(dst)
+            created.append(dst)
     except BaseException:
         for p in reversed(created):
             with contextlib.suppress(OSError):
                 p.rmdir() if p.is_dir() else p.unlink()
+        for dst, old in replaced:
+            with contextlib.suppress(OSError):
+                os.replace(old, dst)
         raise
+    finally:
+        shutil.rmtree(backup, ignore_errors=True)
 
 
 def export_heightmap(
@@ -394,8 +416,11 @@ def _export_gazebo(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> l
     -y because traditionally images are read from top row to bottom row", DART HeightmapShape, used
     by gz-physics with flipY = false; classic Gazebo flips rows into a +y grid). The PNG is therefore
     written bottom row first, so that z[0, 0] lands at world (0, 0) and no mirroring happens.
-    Note: gz-physics' DART plugin scales x, y by size / N rather than size / (N - 1), a (N-1)/N shrink
-    (0.1 % at N = 1025) that we cannot compensate in a file shared with the renderer.
+    Caveats of the simulators, not of the file: Gazebo versions stretch the image over ``<size>`` with
+    N - 1, N or 2N - 1 intervals (gz-physics DART: size / N; classic ODE: size / (2N - 1) at
+    subsampling 2), up to a 1/N (0.1 % at N = 1025) shrink we cannot compensate in a file shared with
+    the renderer; and classic Gazebo's Ogre terrain renders a square of side size.x, so a map whose
+    extent is not square is logged with a warning (its collision shape is still right).
     """
     from offroadbench import __version__
     from offroadbench.io.png16 import encode_png16
@@ -409,6 +434,9 @@ def _export_gazebo(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> l
         how = f"{side}x{side} samples, used as they are"
     grid = Heightmap(z, hm.cell_size_m)  # only its heights are used; the cell size is not square here
     size, pos = gazebo_placement(hm, grid.z_min_m, grid.relief_m)
+    if hm.rows != hm.cols:
+        how += f"; the extent {hm.width_m:g} x {hm.height_m:g} m is not square: classic Gazebo renders it as a square of side size.x"
+        log.warning("gazebo: %s x %s m extent is not square; classic Gazebo renders a square of side size.x", f"{hm.width_m:g}", f"{hm.height_m:g}")
     model = d / name
     tex = model / "materials" / "textures"
     tex.mkdir(parents=True)
@@ -500,7 +528,6 @@ def _export_mujoco(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> l
     xml = (
         f"<mujoco model={quoteattr(name)}>\n"
         f"  <!-- {escape(comment).replace('--', '- -')} -->\n"
-        '  <compiler meshdir="."/>\n'
         "  <asset>\n"
         f'    <hfield name={quoteattr(name)} file={quoteattr(fname)} content_type="image/vnd.mujoco.hfield" size="{size_s}"/>\n'
         "  </asset>\n"
@@ -554,7 +581,8 @@ def _export_obj(hm: Heightmap, d: Path, name: str, meta: dict[str, Any], stride:
         tri = np.empty((n_tri, 3), dtype=np.int64)
         tri[0::2] = np.stack([a, b, c_], axis=1)
         tri[1::2] = np.stack([a, c_, e], axis=1)
-        fh.write("".join(f"f {p} {q} {s}\n" for p, q, s in tri.tolist()))
+        for k in range(0, n_tri, 1 << 17):  # in chunks: bounded memory on big maps
+            fh.write("".join(f"f {p} {q} {s}\n" for p, q, s in tri[k : k + (1 << 17)].tolist()))
     return [f"OBJ mesh: {nr * nc} vertices, {n_tri} triangles (stride {stride})"]
 
 
