@@ -76,8 +76,9 @@ GRID_FORMAT = "offroadbench-grid/1"
 #: these fill whole components exactly, so the import is 1:1 with no padding or cropping.
 UE_RECOMMENDED_SIZES = (127, 253, 505, 1009, 2017, 4033, 8129)
 
-#: Unreal maps 16-bit level v to (v - 32768) / 128 * Z scale (cm), i.e. 512 m over the 16-bit range at
-#: Z scale 100 (Landscape Technical Guide, "Calculating Heightmap Z Scale"; same constant as png16.py).
+#: Unreal maps 16-bit level v to (v - 32768) / 128 * Z scale (cm), i.e. -256..+256 m at Z scale 100
+#: (Landscape Technical Guide: Z scale = height in cm * 1/512; Unreal forum "How heightmaps for landscape
+#: are scaled?", forums.unrealengine.com/t/479315; the same 512 m as png16.py).
 UE_LEVELS_PER_Z_SCALE_UNIT = 128.0
 UE_ZERO_LEVEL = 32768
 
@@ -313,9 +314,10 @@ def _save_png16_levels(q: np.ndarray, path: Path) -> None:
 def unreal_import_settings(hm: Heightmap) -> dict[str, float]:
     """Landscape import scale and location (cm) that reproduce ``hm`` in Unreal Engine.
 
-    Unreal places landscape vertex (col c, row r) at actor location + (c * Scale X, r * Scale Y) cm,
-    and 16-bit level v at Z + (v - 32768) / 128 * Scale Z cm (Landscape Technical Guide; the
-    -256..+256 m range at Z scale 100). With the png16 encoding (level 0 = z_min, 65535 = z_max):
+    Unreal places landscape vertex (col c, row r) at actor location + (c * Scale X, r * Scale Y) cm
+    (the actor's origin is the first vertex, not the centre: UE4 wiki "Landscape - Sizes and Height
+    Guide"), and 16-bit level v at Z + (v - 32768) / 128 * Scale Z cm (the -256..+256 m range at
+    Z scale 100). With the png16 encoding (level 0 = z_min, 65535 = z_max):
 
     * Scale X = Scale Y = cell size in cm; Scale Z = relief in cm / 512 (as in the png16 sidecar);
     * Location = (0, 0, (z_min + relief / 2) * 100) cm, so level 0 lands on z_min.
@@ -595,7 +597,8 @@ def _export_tiff(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> lis
     from PIL import Image
 
     z32 = hm.z.astype(np.float32)
-    Image.fromarray(z32, mode="F").save(d / f"{name}.tif", format="TIFF", compression="tiff_adobe_deflate")
+    img = Image.fromarray(z32)  # float32 -> mode "F"
+    img.save(d / f"{name}.tif", format="TIFF", compression="tiff_adobe_deflate")
     cast_err = float(np.max(np.abs(z32.astype(np.float64) - hm.z)))
     _write_json(_grid_sidecar(d / f"{name}.tif"), grid_metadata(hm, "float32", {"file": f"{name}.tif", **meta}))
     return [f"TIFF float32: largest float64 -> float32 rounding {cast_err:.2e} m"]
