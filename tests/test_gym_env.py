@@ -159,3 +159,15 @@ def test_env_rejects_bad_settings():
         TraverseConfig(patch_cells=0)
     with pytest.raises(InputError, match="render_mode"):
         TraverseEnv(FLAT, render_mode="human")
+
+
+def test_reset_can_replay_a_given_mission():
+    from offroadbench.missions import Mission
+
+    m = Mission.between(5, (2.0, 2.0), (2.0, 6.0))
+    with TraverseEnv(FLAT, config=QUIET) as env:
+        obs, info = env.reset(seed=0, options={"mission": m})
+        assert env.mission == m and info["distance_to_goal_m"] == pytest.approx(4.0, abs=0.02)
+        assert obs["state"][0] == pytest.approx(4.0, abs=0.05)  # spawned facing the goal
+        with pytest.raises(InputError, match="mission"):
+            env.reset(options={"mission": (2.0, 2.0)})

@@ -112,7 +112,12 @@ class PathTracker:
     on the segments from the current one to those starting within ``lookahead + 2 m`` of arc ahead
     of the last progress (so a path that comes back near itself is not short-cut); before the first segment and past the last, the projection
     runs on along their lines, as LineTracker's does. The pure-pursuit point lies ``lookahead``
-    further along the path, and the speed profile runs over the whole path length.
+    further along the path, and the speed profile runs over the whole path length. A planned path
+    may leave the start in another direction than the mission heading the vehicle is spawned with:
+    while the pure-pursuit point is behind the vehicle (|bearing| > 90 deg, where the arc's
+    curvature ``2 sin(alpha) / l`` shrinks to 0), the bearing is taken as +-90 deg: the vehicle
+    drives the tightest pure-pursuit arc (curvature 2 / l) round toward it. (Turning on the spot
+    is no remedy: the skid-steered vehicle barely turns in place on rough ground.)
     """
 
     def __init__(self, waypoints, spec: VehicleSpec, cfg: ControllerConfig) -> None:
@@ -172,7 +177,13 @@ class PathTracker:
         s = self.progress(pos_xy)
         v = self.speed.command(s, float(np.dot(vel_xy, self._unit[self._seg])))
         target = self.point_at(max(s, 0.0) + self.cfg.lookahead_m)
-        omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
+        d = target - np.asarray(pos_xy, dtype=float)
+        alpha = (math.atan2(d[1], d[0]) - yaw_rad + math.pi) % (2.0 * math.pi) - math.pi
+        if abs(alpha) > 0.5 * math.pi:  # behind: the tightest arc, curvature 2 / l, toward it
+            w_max = self.spec.max_yaw_rate_rad_s
+            omega = max(-w_max, min(w_max, math.copysign(2.0 * v / max(math.hypot(d[0], d[1]), 1e-9), alpha)))
+        else:
+            omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
         return v, omega, s
 
 

@@ -197,10 +197,14 @@ class TraverseEnv(gym.Env):
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Sample a mission with the env's generator, spawn the vehicle at its start (settled)."""
+        """Sample a mission with the env's generator (or take ``options["mission"]``, a Mission, to
+        replay one the trial runner drove) and spawn the vehicle at its start, settled."""
         super().reset(seed=seed)
         world = self._require_world()
-        self.mission = sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
+        given = (options or {}).get("mission")
+        if given is not None and not isinstance(given, Mission):
+            raise InputError(f"reset options['mission'] must be an offroadbench.missions.Mission, got {type(given).__name__}")
+        self.mission = given or sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
         sx, sy = self.mission.start_xy_m
         world.spawn(sx, sy, self.mission.heading_rad)
         self._ticks = 0
