@@ -177,6 +177,16 @@ def test_path_tracker_follows_arc_length_and_does_not_short_cut_a_u_turn():
     assert s == pytest.approx(9.5) and v > 0 and w > 0
 
 
+def test_path_tracker_arcs_round_toward_a_target_behind():
+    spec = load_vehicle("husky")
+    back = np.array([[0.0, 0.0], [-5.0, 0.5], [-10.0, 0.5]])  # the path leaves behind the vehicle
+    tr = PathTracker(back, spec, ControllerConfig(lookahead_m=1.5))
+    for _ in range(40):
+        v, w, s = tr.command(np.array([0.0, 0.0]), 0.0, np.array([0.0, 0.0]))
+    # target at a bearing of about +174 deg: full-curvature arc (2 / l) to the left, not a stop
+    assert s == 0.0 and v > 0.1 and w == pytest.approx(min(2.0 * v / 1.5, spec.max_yaw_rate_rad_s), rel=0.02)
+
+
 # ---------------------------------------------------------------------------- trials
 def _wall_terrain() -> Heightmap:
     z = np.zeros(FLAT.shape)
