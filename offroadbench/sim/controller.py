@@ -110,8 +110,9 @@ class PathTracker:
 
     Progress is the arc length of the vehicle's projection on the path. The projection is searched
     on the segments from the current one to those starting within ``lookahead + 2 m`` of arc ahead
-    of the last progress (so a path that comes back near itself is not short-cut); before the first segment and past the last, the projection
-    runs on along their lines, as LineTracker's does. The pure-pursuit point lies ``lookahead``
+    of the last progress (so a path that comes back near itself is not short-cut); before the
+    first segment and past the last, the projection runs on along their lines, as LineTracker's
+    does. The pure-pursuit point lies ``lookahead``
     further along the path, and the speed profile runs over the whole path length. A planned path
     may leave the start in another direction than the mission heading the vehicle is spawned with:
     while the pure-pursuit point is behind the vehicle (|bearing| > 90 deg, where the arc's
