@@ -44,11 +44,12 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
+from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.missions import Mission, MissionConfig, sample_missions
+from offroadbench.planners import planning_classes
 from offroadbench.sim.config import FailureRules, SimConfig
 from offroadbench.sim.drive import wheel_speeds
 from offroadbench.sim.trial import _end_reason, _frame
@@ -175,7 +176,7 @@ class TraverseEnv(gym.Env):
         self.cfg = config
         self.rules = rules
         self.hm = _terrain(terrain, terrain_seed, overrides)
-        self.closed_classes = close_rough(classify(self.hm, roughness), roughness.closing_radius_m, self.hm.cell_size_m)
+        self.closed_classes = planning_classes(self.hm, roughness)  # closed class map, as the trials use
         self._mission_cfg = MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m)
         self._world: World | None = World(self.hm, vehicle, sim)
         spec = self._world.spec
