@@ -9,9 +9,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from offroadbench.cli._args import positive_int, seed_arg
 from offroadbench.cli.terrain import (
-    _positive_int,
-    _seed,
     format_table,
     load_heightmap_arg,
     save_figure,
@@ -123,12 +122,12 @@ def register(sub) -> None:
                        description="Sample missions on one terrain (paper Sec. 2.3), drive them with the "
                        "vehicle and print a per-mission table and a summary.")
     p.add_argument("terrain", help="a 16-bit PNG heightmap (with its .json sidecar) or a preset / recipe TOML")
-    p.add_argument("--seed", type=_seed, default=0, help="terrain seed (presets) and mission seed (default 0)")
-    p.add_argument("--missions", type=_positive_int, default=20, help="number of missions (default 20)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="terrain seed (presets) and mission seed (default 0)")
+    p.add_argument("--missions", type=positive_int, default=20, help="number of missions (default 20)")
     p.add_argument("--length-m", type=float, default=35.0, help="start-goal distance, m (default 35, paper)")
     p.add_argument("--out", help="directory for trials.csv, telemetry/ and figures")
     p.add_argument("--plot", action="store_true", help="write missions.png, trajectories.png, timeseries.png")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
-    p.add_argument("--physics-rate-hz", type=_positive_int, default=None, help="override SimConfig.physics_rate_hz")
+    p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.set_defaults(func=cmd_drive)

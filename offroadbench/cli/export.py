@@ -49,18 +49,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
-def _stride(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"stride must be an integer >= 1, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"stride must be an integer >= 1, got {v}")
-    return v
-
-
 def register(sub) -> None:
-    from offroadbench.cli.terrain import _seed
+    from offroadbench.cli._args import int_at_least, seed_arg
 
     p = sub.add_parser(
         "export",
@@ -72,9 +62,9 @@ def register(sub) -> None:
     p.add_argument("--format", help="export format (see --list)")
     p.add_argument("-o", "--output", help="output directory (created if missing; its parent must exist)")
     p.add_argument("--list", action="store_true", help="list the export formats and exit")
-    p.add_argument("--seed", type=_seed, default=0, help="seed when TERRAIN is a preset (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
     p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
-    p.add_argument("--stride", type=_stride, help="obj only: keep every N-th row and column (default 1)")
+    p.add_argument("--stride", type=int_at_least(1, "stride"), help="obj only: keep every N-th row and column (default 1)")
     p.add_argument("--cell-size-m", type=float, help="cell size for a PNG without sidecar, m")
     p.add_argument("--relief-m", type=float, help="relief of a PNG without sidecar, m")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")

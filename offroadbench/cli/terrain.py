@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from offroadbench.cli._args import positive_int, seed_arg
 from offroadbench.config import parse_set_value
 from offroadbench.errors import InputError
 
@@ -247,40 +248,20 @@ def cmd_roughness_study(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------- parsers
-def _seed(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"seed must be an integer >= 0, got {v}")
-    return v
-
-
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {v}")
-    return v
-
-
 def register(sub) -> None:
     p = sub.add_parser("terrains", help="list terrain presets and generators")
     p.set_defaults(func=cmd_terrains)
 
     p = sub.add_parser("generate", help="generate a terrain and write a 16-bit PNG + JSON sidecar")
     p.add_argument("recipe", help="preset name (see `offroadbench terrains`) or path to a recipe .toml")
-    p.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="random seed (default 0)")
     p.add_argument("-o", "--output", required=True, help="output .png (NAME.json is written beside it)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key, e.g. layers.base.D_high=2.6")
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("analyze", help="roughness classes of a terrain (PNG or preset)")
     p.add_argument("terrain", help="16-bit PNG heightmap, preset name or recipe .toml")
-    p.add_argument("--seed", type=_seed, default=0, help="seed when TERRAIN is a preset (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
     p.add_argument("--plot", help="write a figure: hillshade beside the class map (paper Fig. 4a)")
     p.add_argument("--border-m", type=float, default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--closing-radius-m", type=float, default=0.25, help="closing disk radius, m (default 0.25)")
@@ -291,8 +272,8 @@ def register(sub) -> None:
 
     p = sub.add_parser("roughness-study", help="median class areas vs D (paper Fig. 5)")
     p.add_argument("--dims", type=float, nargs="+", default=[2.3, 2.45, 2.6], help="D values of the high-frequency DEM")
-    p.add_argument("--terrains", type=_positive_int, default=20, help="terrains per D (default 20, as the paper)")
-    p.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
+    p.add_argument("--terrains", type=positive_int, default=20, help="terrains per D (default 20, as the paper)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="root seed (default 0)")
     p.add_argument("--recipe", default="paper-d2.45", help="base recipe (default paper-d2.45)")
     p.add_argument("--border-m", type=float, default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--dim-key", default="layers.base.D_high", help="dotted recipe key that --dims sets")
