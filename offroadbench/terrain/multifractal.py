@@ -71,6 +71,10 @@ class MultifractalConfig:
     The paper names a low-pass Gaussian but not its size. 0.5 px with a 3 x 3 kernel is the
     default of MATLAB's ``imgaussfilt``, the most likely tool of the original pipeline; it is a
     choice, not a fit (README, "Interpretation choices", shows how the result moves with it)."""
+    origin_offset_px: float = 0.0
+    """Origin of Eq. (1) this many pixels outside the first corner (0 = the paper's reading).
+    An option beyond the paper: moves the coherent extreme of [0, pi]-phase W-M sums off the map
+    (see WMConfig.origin_offset_px)."""
     relief_m: float = 3.84
     """Relief (max - min) of the product, metres: the paper's 16-bit range at Unreal Z scale 0.75."""
 
@@ -118,6 +122,7 @@ def layer_configs(cfg: MultifractalConfig) -> tuple[WMConfig, WMConfig, WMConfig
             amplitude_tol=cfg.amplitude_tol,
             band_limited=cfg.band_limited,
             smoothing_sigma_px=cfg.smoothing_sigma_px,
+            origin_offset_px=cfg.origin_offset_px,
         )
         for i in range(3)
     )  # type: ignore[return-value]

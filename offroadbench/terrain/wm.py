@@ -104,6 +104,11 @@ class WMConfig:
     """If true, also drop terms above the grid's Nyquist frequency (an anti-aliased surface)."""
     smoothing_sigma_px: float = 0.0
     """Gaussian low-pass sigma in pixels applied to the surface; 0 = none."""
+    origin_offset_px: float = 0.0
+    """Put the origin of Eq. (1) this many pixels outside the grid's first corner, along both
+    axes (the first sample is at x = y = offset). 0 = the paper's reading (origin on the corner).
+    Not in the paper: with phases in [0, pi] the terms of Eq. (1) add coherently near the origin
+    and the surface has its extreme there; an offset of a few hundred pixels moves that outside."""
 
     def __post_init__(self) -> None:
         check_int(self, "rows", self.rows, lo=3)
@@ -122,6 +127,7 @@ class WMConfig:
         check_choice(self, "coordinates", self.coordinates, COORDINATES)
         check_range(self, "amplitude_tol", self.amplitude_tol, lo=0, hi=1, hi_open=True)
         check_range(self, "smoothing_sigma_px", self.smoothing_sigma_px, lo=0)
+        check_range(self, "origin_offset_px", self.origin_offset_px, lo=0)
 
     def describe(self) -> str:
         """One line on the evaluated terms, e.g. for the CLI."""
@@ -150,9 +156,10 @@ def grid_step(cfg: WMConfig) -> float:
 
 
 def grid_coordinates(cfg: WMConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(x of each column, y of each row) in the units of Eq. (1); both start at 0."""
+    """(x of each column, y of each row) in the units of Eq. (1); both start at the origin offset."""
     step = grid_step(cfg)
-    return np.arange(cfg.cols) * step, np.arange(cfg.rows) * step
+    x0 = cfg.origin_offset_px * step
+    return x0 + np.arange(cfg.cols) * step, x0 + np.arange(cfg.rows) * step
 
 
 def kept_harmonics(cfg: WMConfig) -> np.ndarray:
@@ -207,13 +214,15 @@ def wm_surface(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
     """
     u, v, amp, phi = _term_table(cfg, phases)
     step = grid_step(cfg)
+    x0 = cfg.origin_offset_px * step
     z = np.zeros((cfg.rows, cfg.cols))
     const = 0.0
     blocks = [slice(r, r + _ROW_BLOCK) for r in range(0, cfg.rows, _ROW_BLOCK)]
     with _single_threaded_blas(), ThreadPoolExecutor(max_workers=_threads()) as pool:
         for lo in range(0, u.size, _CHUNK_TERMS):
             sl = slice(lo, lo + _CHUNK_TERMS)
-            w = amp[sl] * np.exp(1j * phi[sl])
+            # the origin offset x0 shifts every plane wave's phase by u x0 + v x0
+            w = amp[sl] * np.exp(1j * (phi[sl] + (u[sl] + v[sl]) * x0))
             ex = _exp_table(u[sl], cfg.cols, step) * w  # (cols, j)
             ey = _exp_table(v[sl], cfg.rows, step)  # (rows, j)
             left = np.concatenate([ey.real, -ey.imag], axis=1)
