@@ -11,23 +11,14 @@ Usage:  python benchmarks/bench_craters.py [--repeats 3] [--count 10000]
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
+from _timing import best_of
 
 from offroadbench.terrain.craters import CraterTable, StampOptions, inverse_cdf_diameters, stamp_craters
 from offroadbench.terrain.diamond_square import DiamondSquareConfig, generate_diamond_square
 from offroadbench.terrain.enhance import RMDExpandConfig, SpectralRestoreConfig, fill_gaps, rmd_expand, spectral_restore
 from offroadbench.terrain.fbm import FBMConfig, generate_fbm
-
-
-def best_of(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def population(count: int, profile: str, rng: np.random.Generator) -> CraterTable:

@@ -15,22 +15,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import platform
-import time
 
 import numpy as np
+from _timing import best_of
 
 from offroadbench.analysis.roughness import classify
 from offroadbench.terrain.multifractal import MultifractalConfig, generate_multifractal, layer_configs
 from offroadbench.terrain.wm import draw_phases, kept_harmonics, wm_surface, wm_surface_direct
-
-
-def best_of(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:
