@@ -45,6 +45,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from offroadbench.io.atomic import current_umask
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
@@ -151,12 +152,6 @@ def check_output_dir(out_dir: str | Path) -> Path:
     return d
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 @contextlib.contextmanager
 def _staged_dir(out_dir: Path) -> Iterator[Path]:
     """Yield an empty staging directory; on success its contents appear in ``out_dir``.
@@ -176,7 +171,7 @@ def _staged_dir(out_dir: Path) -> Iterator[Path]:
     try:
         yield stage
         if fresh:
-            os.chmod(stage, 0o777 & ~_umask())  # mkdtemp makes 0700; give the usual directory mode
+            os.chmod(stage, 0o777 & ~current_umask())  # mkdtemp makes 0700; give the usual directory mode
             os.rename(stage, out_dir)
         else:
             _merge_into(stage, out_dir)
