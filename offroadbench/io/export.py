@@ -45,9 +45,9 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
-from offroadbench.io.atomic import current_umask
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.io.atomic import current_umask
 
 __all__ = [
     "EXPORTERS",
