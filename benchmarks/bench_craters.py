@@ -3,7 +3,7 @@
 Prints figures; record them in benchmarks/RESULTS.md. Not a test: nothing here asserts a time.
 
 The population is 10,000 martin2014 craters with diameters 0.3-10 m drawn from the k = 1.8 power
-law (002 Eq. 21), uniform positions, random degradation, oldest first, on a 1009^2 map at 5 cm.
+law (Li et al. 2022, Eq. 21), uniform positions, random degradation, oldest first, on a 1009^2 map at 5 cm.
 
 Usage:  python benchmarks/bench_craters.py [--repeats 3] [--count 10000]
 """
@@ -16,9 +16,9 @@ import numpy as np
 from _timing import best_of
 
 from offroadbench.terrain.craters import CraterTable, StampOptions, inverse_cdf_diameters, stamp_craters
-from offroadbench.terrain.diamond_square import DiamondSquareConfig, generate_diamond_square
+from offroadbench.terrain.fractal.diamond_square import DiamondSquareConfig, generate_diamond_square
 from offroadbench.terrain.enhance import RMDExpandConfig, SpectralRestoreConfig, fill_gaps, rmd_expand, spectral_restore
-from offroadbench.terrain.fbm import FBMConfig, generate_fbm
+from offroadbench.terrain.fractal.fbm import FBMConfig, generate_fbm
 
 
 def population(count: int, profile: str, rng: np.random.Generator) -> CraterTable:

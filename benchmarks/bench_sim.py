@@ -21,8 +21,8 @@ import numpy as np
 
 from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
 from offroadbench.heightmap import Heightmap
-from offroadbench.missions import Mission, MissionConfig, sample_missions
-from offroadbench.recipe import generate_terrain, load_recipe
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.terrain.recipe import generate_terrain, load_recipe
 from offroadbench.sim import SimConfig, World, load_vehicle, run_mission
 
 CELL = 0.05

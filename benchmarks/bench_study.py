@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from offroadbench.study import load, load_study, run_study  # noqa: E402
-from offroadbench.study.config import plan_cells  # noqa: E402
+from offroadbench.study.spec import plan_cells  # noqa: E402
 from offroadbench.study.store import Store, machine_description  # noqa: E402
 
 

@@ -20,8 +20,8 @@ import numpy as np
 from _timing import best_of
 
 from offroadbench.analysis.roughness import classify
-from offroadbench.terrain.multifractal import MultifractalConfig, generate_multifractal, layer_configs
-from offroadbench.terrain.wm import draw_phases, kept_harmonics, wm_surface, wm_surface_direct
+from offroadbench.terrain.fractal.multifractal import MultifractalConfig, generate_multifractal, layer_configs
+from offroadbench.terrain.fractal.wm import draw_phases, kept_harmonics, wm_surface, wm_surface_direct
 
 
 def main() -> None:

@@ -12,7 +12,7 @@ def rng():
 @pytest.fixture
 def small_paper_recipe():
     """The D = 2.45 paper preset on a 161 x 161 grid (8 m at 5 cm): fast, same physics of roughness."""
-    from offroadbench.recipe import apply_overrides, load_recipe
+    from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
     return apply_overrides(load_recipe("paper-d2.45"), {"grid.rows": 161, "grid.cols": 161})
 

@@ -1,4 +1,4 @@
-"""Roughness classes from the Moore-neighbourhood gradient map, Majhor & Bos Sec. 2.3, Eq. (3)-(4).
+"""Roughness classes from the Moore-neighbourhood gradient map, Majhor & Bos 2023, Sec. 2.3, Eq. (3)-(4).
 
 Eq. (4): ``Q_grad = (Z_P - Z_Qi) / dist(P, Qi)`` for the 8 Moore neighbours Qi of pixel P, with
 dist = cell (edge neighbours) or cell * sqrt(2) (corner neighbours); Eq. (3): the gradient map
@@ -14,6 +14,7 @@ that converts is :func:`paper_gradient_to_slope`; here everything is metres and 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,8 @@ __all__ = [
     "class_fractions",
     "border_mask",
     "disk",
+    "ClassMaps",
+    "classify_terrain",
 ]
 
 LOW, SEMI, HIGH = 0, 1, 2
@@ -165,3 +168,39 @@ def class_fractions(classes: np.ndarray, cell_size_m: float, border_m: float = 5
         )
     vals = classes[inside]
     return {name: float(np.count_nonzero(vals == k)) / total for k, name in enumerate(CLASS_NAMES)}
+
+
+@dataclass(frozen=True)
+class ClassMaps:
+    """The roughness classes of one terrain (Majhor & Bos 2023, Eq. 3-4 and Fig. 4a-b).
+
+    ``classes`` and ``closed`` are read-only uint8 maps (0 low, 1 semi, 2 high) of the terrain's
+    shape. ``fractions`` is the area fraction of each class inside the border, before closing
+    (what the paper reports); ``closed_fractions`` the same after the closing. Both are computed
+    on first use (a map smaller than twice its border has none: InputError).
+    """
+
+    classes: np.ndarray
+    closed: np.ndarray
+    cell_size_m: float
+    border_m: float
+
+    @functools.cached_property
+    def fractions(self) -> dict[str, float]:
+        return class_fractions(self.classes, self.cell_size_m, self.border_m)
+
+    @functools.cached_property
+    def closed_fractions(self) -> dict[str, float]:
+        return class_fractions(self.closed, self.cell_size_m, self.border_m)
+
+
+def classify_terrain(hm: Heightmap, cfg: RoughnessConfig = RoughnessConfig()) -> ClassMaps:
+    """Classify ``hm`` and close the rough areas: the one pipeline every caller uses.
+
+    Missions are drawn on ``closed``; the paper's area statistics come from ``classes``.
+    """
+    classes = classify(hm, cfg)
+    closed = close_rough(classes, cfg.closing_radius_m, hm.cell_size_m)
+    classes.setflags(write=False)
+    closed.setflags(write=False)
+    return ClassMaps(classes=classes, closed=closed, cell_size_m=hm.cell_size_m, border_m=cfg.border_m)

@@ -1,12 +1,12 @@
 """Surface statistics for cratered and fractal terrain (Martin et al. 2014, Sec. V.E).
 
-* Slopes by Horn's method (the 3x3 weighted finite difference of 000 Fig. 11-13) and the
+* Slopes by Horn's method (the 3x3 weighted finite difference of Martin et al. 2014, Fig. 11-13) and the
   cumulative slope distribution: the fraction of the area steeper than each angle.
-* The radially averaged power spectrum (000 Fig. 14) and a fractal-dimension estimate from
+* The radially averaged power spectrum (Martin et al. 2014, Fig. 14) and a fractal-dimension estimate from
   its slope: for an fBm surface the 2-D spectral density falls as ``f^-beta`` with
-  ``beta = 2H + 2`` (001 Eq. 3), and ``D = 3 - H = 4 - beta / 2``.
+  ``beta = 2H + 2`` (Yoshikawa & Nishiguchi 2001, Eq. 3), and ``D = 3 - H = 4 - beta / 2``.
 * A crater size-frequency check: the power-law slope k of a placed population
-  (N_cum ~ D^-k, 000 Eq. 12), by maximum likelihood for a power law truncated to
+  (N_cum ~ D^-k, Martin et al. 2014, Eq. 12), by maximum likelihood for a power law truncated to
   [D_min, D_max].
 """
 
@@ -52,7 +52,7 @@ def horn_slope_deg(hm: Heightmap) -> np.ndarray:
 
 
 def cumulative_slope_distribution(slope_deg: np.ndarray, angles_deg=None) -> tuple[np.ndarray, np.ndarray]:
-    """(angles, fraction of pixels with slope > angle), as 000 Fig. 11 (in fractions, not %)."""
+    """(angles, fraction of pixels with slope > angle), as Martin et al. 2014, Fig. 11 (in fractions, not %)."""
     s = np.sort(np.asarray(slope_deg, dtype=float).ravel())
     if angles_deg is None:
         angles_deg = np.arange(0.0, 90.5, 0.5)
@@ -72,7 +72,7 @@ class RadialSpectrum:
 
 
 def radial_power_spectrum(hm: Heightmap, bins: int = 40) -> RadialSpectrum:
-    """Radially averaged 2-D power spectrum (000 Fig. 14).
+    """Radially averaged 2-D power spectrum (Martin et al. 2014, Fig. 14).
 
     A least-squares plane is removed and a 2-D Hann window applied before the FFT, so the
     map's edges do not leak power (which would flatten the spectrum towards f^-2). Power is

@@ -39,6 +39,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # process-wide choices belong to the application, not the library: the figure backend
+    # (the library draws on Figure objects and never picks one) and pybullet's exit banner
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    from offroadbench.sim._banner import hide_pybullet_banner
+
+    hide_pybullet_banner()
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")

@@ -45,7 +45,7 @@ def _load_terrain(args):
 
 def summarise(df: pd.DataFrame) -> dict[str, float]:
     """Success rate (Eq. 5) and medians of the successful trials' metrics."""
-    from offroadbench.metrics import success_rate
+    from offroadbench.navigation.metrics import success_rate
 
     ok = df[df["success"]]
     out = {"trials": float(len(df)), "success_rate_pct": success_rate(df["success"])}
@@ -55,10 +55,10 @@ def summarise(df: pd.DataFrame) -> dict[str, float]:
 
 
 def cmd_drive(args: argparse.Namespace) -> int:
-    from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
+    from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
     from offroadbench.cli._progress import bar
     from offroadbench.io.atomic import atomic_path
-    from offroadbench.missions import MissionConfig, sample_missions
+    from offroadbench.navigation.missions import MissionConfig, sample_missions
     from offroadbench.sim import SimConfig, load_vehicle, run_missions
 
     out = Path(args.out) if args.out else None
@@ -70,7 +70,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     sim = SimConfig() if args.physics_rate_hz is None else SimConfig(physics_rate_hz=args.physics_rate_hz)
     hm, label = _load_terrain(args)
     rcfg = RoughnessConfig()
-    closed = close_rough(classify(hm, rcfg), rcfg.closing_radius_m, hm.cell_size_m)
+    closed = classify_terrain(hm, rcfg).closed
     mcfg = MissionConfig(count=args.missions, length_m=args.length_m, border_m=rcfg.border_m)
     missions = sample_missions(hm, closed, mcfg, mission_rng(args.seed))
 
@@ -102,7 +102,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     written = ["trials.csv", "telemetry/mission_*.npz"]
     if args.plot:
         from offroadbench.io.telemetry import load_telemetry
-        from offroadbench.plots_sim import plot_missions, plot_timeseries, plot_trajectories
+        from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
 
         tel = {m.index: load_telemetry(tel_dir / f"mission_{m.index:03d}.npz") for m in missions}
         save_figure(plot_missions(hm, closed, missions, border_m=mcfg.border_m, title=f"{label}: missions"),

@@ -1,4 +1,4 @@
-"""``offroadbench study run|export|report``: Monte Carlo studies (issue 4)."""
+"""``offroadbench study run|export|report``: Monte Carlo studies."""
 
 from __future__ import annotations
 
@@ -120,8 +120,6 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
 
 def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
     """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
-    import matplotlib.pyplot as plt
-
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
@@ -130,7 +128,6 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
     for name, fig in report.figures.items():
         with atomic_path(out / name) as tmp:
             fig.savefig(tmp, format="png", dpi=110)
-        plt.close(fig)
     for name, df in report.tables.items():
         with atomic_path(out / name) as tmp:
             df.to_csv(tmp, index=False)

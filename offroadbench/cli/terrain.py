@@ -30,7 +30,7 @@ def parse_sets(pairs: list[str] | None) -> dict[str, object]:
 
 
 def load_recipe_with_sets(name: str, sets: list[str] | None):
-    from offroadbench.recipe import apply_overrides, load_recipe
+    from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
     recipe = load_recipe(name)
     overrides = parse_sets(sets)
@@ -38,17 +38,12 @@ def load_recipe_with_sets(name: str, sets: list[str] | None):
 
 
 def save_figure(fig, path: str | Path) -> Path:
-    """Save a matplotlib figure atomically (PNG, 150 dpi) and close it."""
-    import matplotlib.pyplot as plt
-
+    """Save a matplotlib figure atomically (PNG, 150 dpi)."""
     from offroadbench.io.atomic import atomic_path
 
     p = Path(path)
-    try:
-        with atomic_path(p) as tmp:
-            fig.savefig(tmp, dpi=150, format=p.suffix.lstrip(".") or "png")
-    finally:
-        plt.close(fig)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=150, format=p.suffix.lstrip(".") or "png")
     return p
 
 
@@ -62,7 +57,7 @@ def load_heightmap_arg(
         if sets:
             raise InputError("--set applies to presets and recipes, not to a PNG heightmap")
         return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem, None
-    from offroadbench.recipe import generate_terrain
+    from offroadbench.terrain.recipe import generate_terrain
 
     recipe = load_recipe_with_sets(source, sets)
     return generate_terrain(recipe, seed), f"{recipe.name} seed {seed}", recipe
@@ -74,7 +69,7 @@ def format_table(df: pd.DataFrame, floatfmt: str = "{:.2f}") -> str:
 
 # --------------------------------------------------------------------------- commands
 def cmd_terrains(args: argparse.Namespace) -> int:
-    from offroadbench.recipe import list_presets, presets_dir
+    from offroadbench.terrain.recipe import list_presets, presets_dir
     from offroadbench.terrain.registry import TERRAIN_REGISTRY, get_spec
 
     presets = list_presets()
@@ -91,7 +86,7 @@ def cmd_terrains(args: argparse.Namespace) -> int:
 
 def cmd_generate(args: argparse.Namespace) -> int:
     from offroadbench.io.png16 import sidecar_path, write_png16
-    from offroadbench.recipe import generate_terrain
+    from offroadbench.terrain.recipe import generate_terrain
 
     recipe = load_recipe_with_sets(args.recipe, args.set)
     out = Path(args.output)
@@ -122,8 +117,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         CLASS_NAMES,
         RoughnessConfig,
         class_fractions,
-        classify,
-        close_rough,
+        classify_terrain,
         gradient_map,
     )
 
@@ -134,10 +128,9 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
     rcfg = RoughnessConfig(border_m=args.border_m, closing_radius_m=args.closing_radius_m)
     grad = gradient_map(hm)
-    classes = classify(hm, rcfg)
-    inside = class_fractions(classes, hm.cell_size_m, rcfg.border_m)
-    closed = close_rough(classes, rcfg.closing_radius_m, hm.cell_size_m)
-    closed_frac = class_fractions(closed, hm.cell_size_m, rcfg.border_m)
+    maps = classify_terrain(hm, rcfg)
+    classes = maps.classes
+    inside, closed_frac = maps.fractions, maps.closed_fractions
     whole = class_fractions(classes, hm.cell_size_m, 0.0)
     cell_area = hm.cell_size_m**2
     table = pd.DataFrame(
@@ -174,8 +167,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
             print(f"Craters placed: {diameters.size}, D = {diameters.min():.2f} .. {diameters.max():.2f} m, "
                   f"fitted cumulative slope k = {fit_sfd_slope(diameters):.2f}")
     if args.plot:
-        from offroadbench.analysis.plots import plot_terrain_classes
-        from offroadbench.analysis.surface_plots import plot_surface_analysis
+        from offroadbench.plots.terrain import plot_terrain_classes
+        from offroadbench.plots.surface import plot_surface_analysis
 
         fig = plot_terrain_classes(hm, classes, fractions=inside, border_m=rcfg.border_m, title=label)
         print(f"wrote {save_figure(fig, args.plot)}")
@@ -204,9 +197,9 @@ def _inside_cells(hm, border_m: float) -> int:
 
 
 def cmd_roughness_study(args: argparse.Namespace) -> int:
-    from offroadbench.analysis.plots import plot_roughness_study
+    from offroadbench.plots.terrain import plot_roughness_study
     from offroadbench.analysis.roughness import RoughnessConfig
-    from offroadbench.analysis.roughness_study import (
+    from offroadbench.study.roughness import (
         PAPER_FIG5_CHANGES_PP,
         roughness_study,
         summarise_roughness_study,

@@ -1,8 +1,8 @@
-"""Crater files: a CSV with one crater per row, kept apart from the elevation model (003 Sec. 3).
+"""Crater files: a CSV with one crater per row, kept apart from the elevation model (Parkes & Martin 1999, Sec. 3).
 
 Columns (header required, this order not required): ``x_m, y_m, diameter_m, age, degradation,
 profile``. ``age`` or ``degradation`` may be empty (not both): a crater without degradation gets
-it from its age when it is stamped (000 Eq. 11). The same file can be stamped on any base terrain.
+it from its age when it is stamped (Martin et al. 2014, Eq. 11). The same file can be stamped on any base terrain.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Import of existing DEMs so real data can be enhanced (Martin et al. 2014 Sec. IV; Yoshikawa Sec. 3.4).
+"""Import of existing DEMs so real data can be enhanced (Martin et al. 2014, Sec. IV; Yoshikawa Sec. 3.4).
 
 Formats:
 

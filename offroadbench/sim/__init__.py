@@ -2,24 +2,45 @@
 
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
 load_vehicle, World, TrialResult, run_mission, run_missions.
+
+The names load lazily (PEP 562), so importing a config (``offroadbench.sim.config``) or this
+package does not import pybullet; only touching ``World`` or the runner does.
 """
 
-from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
-from offroadbench.sim.trial import FAILURE_REASONS, TELEMETRY_COLUMNS, TrialResult, run_mission, run_missions
-from offroadbench.sim.vehicle import VehicleSpec, list_vehicles, load_vehicle
-from offroadbench.sim.world import World
+from __future__ import annotations
 
-__all__ = [
-    "SimConfig",
-    "ControllerConfig",
-    "FailureRules",
-    "VehicleSpec",
-    "load_vehicle",
-    "list_vehicles",
-    "World",
-    "TrialResult",
-    "FAILURE_REASONS",
-    "TELEMETRY_COLUMNS",
-    "run_mission",
-    "run_missions",
-]
+import importlib
+from typing import Any
+
+#: public name -> the submodule that defines it
+_EXPORTS = {
+    "SimConfig": "config",
+    "ControllerConfig": "config",
+    "FailureRules": "config",
+    "VehicleSpec": "vehicle",
+    "load_vehicle": "vehicle",
+    "list_vehicles": "vehicle",
+    "vehicle_from_table": "vehicle",
+    "World": "world",
+    "TrialResult": "runner",
+    "FAILURE_REASONS": "runner",
+    "TELEMETRY_COLUMNS": "runner",
+    "run_mission": "runner",
+    "run_missions": "runner",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module 'offroadbench.sim' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f"offroadbench.sim.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

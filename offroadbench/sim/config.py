@@ -61,11 +61,11 @@ class ControllerConfig:
     cruise_speed_m_s: float = 1.0
     """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
     planner: str = "straight"
-    """Path planner from offroadbench.planners.PLANNERS: ``straight`` (the paper's start-goal line)
+    """Path planner from offroadbench.navigation.planners.PLANNERS: ``straight`` (the paper's start-goal line)
     or ``astar`` (around high-roughness cells, with PlannerConfig's defaults)."""
 
     def __post_init__(self) -> None:
-        from offroadbench.planners import PLANNERS
+        from offroadbench.navigation.planners import PLANNERS
 
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)

@@ -1,18 +1,18 @@
 """A Gymnasium environment for mission driving on one terrain: ``offroadbench/Traverse-v0``.
 
-Each episode is one mission drawn by :func:`offroadbench.missions.sample_missions` (Majhor & Bos
+Each episode is one mission drawn by :func:`offroadbench.navigation.missions.sample_missions` (Majhor & Bos
 Sec. 2.3) on the closed roughness-class map of the terrain (Eq. 3-4), with the generator Gymnasium
 seeds in ``reset(seed=...)``: the same seed gives the same mission and, because
 :meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
 
 - **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
   the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to wheel
-  speeds by the skid-steer drive (:func:`offroadbench.sim.drive.wheel_speeds`) and held for one
+  speeds by the skid-steer drive (:func:`offroadbench.sim.skid_steer.wheel_speeds`) and held for one
   control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 Bullet steps).
   Actions outside the Box are clipped. There is no speed profile: the agent commands the wheels.
 - **Observation**: a Dict of
   ``state`` (float32, 10): goal x and y in the vehicle's heading frame (m; x forward, y left,
-  horizontal), roll and pitch (rad, as in :mod:`offroadbench.metrics`), body roll, pitch and yaw
+  horizontal), roll and pitch (rad, as in :mod:`offroadbench.navigation.metrics`), body roll, pitch and yaw
   rates (rad/s), and the base velocity in the body frame (forward, left, up; m/s);
   ``height_patch`` (float32, n x n): terrain heights relative to the base, on a square grid centred
   on the vehicle and aligned with its heading (see :func:`height_patch`).
@@ -48,11 +48,11 @@ from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.missions import Mission, MissionConfig, sample_missions
-from offroadbench.planners import planning_classes
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.navigation.planners import planning_classes
 from offroadbench.sim.config import FailureRules, SimConfig
-from offroadbench.sim.drive import wheel_speeds
-from offroadbench.sim.trial import _end_reason, _frame
+from offroadbench.sim.skid_steer import wheel_speeds
+from offroadbench.sim.runner import _end_reason, _frame
 from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
 
@@ -133,7 +133,7 @@ def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] |
         if overrides:
             raise InputError("terrain overrides apply to a preset or recipe, not to a Heightmap")
         return terrain
-    from offroadbench.recipe import apply_overrides, generate_terrain, load_recipe
+    from offroadbench.terrain.recipe import apply_overrides, generate_terrain, load_recipe
 
     recipe = load_recipe(terrain)
     if overrides is None:
@@ -204,7 +204,7 @@ class TraverseEnv(gym.Env):
         world = self._require_world()
         given = (options or {}).get("mission")
         if given is not None and not isinstance(given, Mission):
-            raise InputError(f"reset options['mission'] must be an offroadbench.missions.Mission, got {type(given).__name__}")
+            raise InputError(f"reset options['mission'] must be an offroadbench.navigation.missions.Mission, got {type(given).__name__}")
         self.mission = given or sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
         sx, sy = self.mission.start_xy_m
         world.spawn(sx, sy, self.mission.heading_rad)

@@ -10,11 +10,12 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Mapping
 
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
 
-__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "VEHICLES_DIR"]
+__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "vehicle_from_table", "VEHICLES_DIR"]
 
 #: the repository's vehicle folder: one sub-folder per vehicle holding vehicle.toml + URDF
 VEHICLES_DIR = Path(__file__).resolve().parents[2] / "vehicles"
@@ -108,3 +109,15 @@ def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
     if not urdf.is_file():
         raise InputError(f"{path}: urdf {spec.urdf!r} not found at {urdf}")
     return dataclasses.replace(spec, urdf=str(urdf.resolve()))
+
+
+def vehicle_from_table(table: Mapping[str, Any], where: str = "[vehicle]"):
+    """The vehicle of a ``[vehicle]`` table: ``name`` (a known vehicle or a vehicle.toml path,
+    default husky) and any VehicleSpec fields to change."""
+    table = dict(table)
+    spec = load_vehicle(table.pop("name", "husky"))
+    known = {f.name for f in dataclasses.fields(VehicleSpec)} - {"name", "urdf"}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known keys: name, {', '.join(sorted(known))}")
+    return dataclasses.replace(spec, **table) if table else spec

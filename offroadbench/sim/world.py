@@ -23,8 +23,6 @@ import time
 
 import pybullet as pb
 
-from offroadbench.sim._banner import hide_pybullet_banner
-
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
@@ -33,7 +31,6 @@ from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 __all__ = ["World"]
 
 log = logging.getLogger(__name__)
-hide_pybullet_banner()
 
 
 class World:

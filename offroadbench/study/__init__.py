@@ -1,4 +1,4 @@
-"""Monte Carlo studies (issue 4): study configs, seeds, executors, result store, reports.
+"""Monte Carlo studies: study configs, seeds, executors, result store, reports.
 
 Typical use::
 
@@ -8,7 +8,7 @@ Typical use::
     df = load("runs/smoke")          # one tidy row per trial
 """
 
-from offroadbench.study.config import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
+from offroadbench.study.spec import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
 from offroadbench.study.results import load, load_meta, load_terrains
 from offroadbench.study.runner import RunSummary, run_study
 

@@ -2,7 +2,7 @@
 
 Registry :data:`EXECUTORS` (name -> class). Each executor's ``run(tasks, trial_fn, handle)``
 calls ``handle(message)`` in the calling process for every message of every task (see
-:mod:`offroadbench.study.trial`); the coordinator commits them to the store. Whatever the
+:mod:`offroadbench.study.tasks`); the coordinator commits them to the store. Whatever the
 executor, a task's results depend only on the task, so all of them give the same table.
 
 * ``local`` (default): ``workers`` forked processes pull tasks from a queue and stream each
@@ -24,7 +24,7 @@ import traceback
 from typing import Callable, Sequence
 
 from offroadbench.errors import InputError
-from offroadbench.study.trial import TerrainTask, TrialFn, collect_terrain, run_terrain
+from offroadbench.study.tasks import TerrainTask, TrialFn, collect_terrain, run_terrain
 
 __all__ = ["EXECUTORS", "get_executor", "StudyError", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 

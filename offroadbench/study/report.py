@@ -1,7 +1,7 @@
 """The report of a run directory: Markdown, the paper's figures and summary tables.
 
 :func:`build_report` returns a :class:`Report` (text, matplotlib figures, tables); the CLI
-writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos Sec. 3:
+writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023, Sec. 3:
 
 * Fig. 5: median class areas (low / semi / high, % of the map inside the border) per group;
 * Fig. 6: box plots of the per-terrain success rate (Eq. 5) per group;
@@ -24,22 +24,16 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
-import matplotlib
 import numpy as np
 import pandas as pd
 
+from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
 from offroadbench.study import stats
-
-matplotlib.use("Agg")
 from offroadbench.study.results import load, load_meta, load_terrains
 
 __all__ = ["Report", "build_report", "markdown_table"]
-
-#: paper colours of the classes (Fig. 4): low blue, semi orange, high yellow
-CLASS_COLOURS = ("#1f4fbf", "#f28e2b", "#f2d43b")
-
 
 @dataclass
 class Report:
@@ -76,109 +70,22 @@ def _pm(med: float, iqr: float) -> str:
 
 
 # ---------------------------------------------------------------------------- figures
-def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
-    boxes = []
-    for label, values in zip(groups, samples):
-        s = stats.box_stats(values)
-        if s["n"] == 0:
-            s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": label, "med": s["median"], "q1": s["q1"], "q3": s["q3"],
-                      "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
-    ax.bxp(boxes, showfliers=True,
-           medianprops={"color": "red"},
-           boxprops={"color": "#1f4fbf"},
-           whiskerprops={"color": "black", "linestyle": ":"},
-           flierprops={"marker": "+", "markeredgecolor": "red", "linestyle": "none"})
-    ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=10)
-    ax.grid(axis="y", alpha=0.3)
-
-
-def _short(label: str) -> str:
-    return label.replace(" = ", "=")
-
-
-def fig_class_areas(summary: pd.DataFrame):
-    """Fig. 5: median area of each class per group (bars)."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(10, 3.4), constrained_layout=True)
-    x = np.arange(len(summary))
-    for ax, cls, colour in zip(axes, stats.CLASSES, CLASS_COLOURS):
-        ax.bar(x, summary[f"median_area_{cls}_pct"], color=colour, edgecolor="black")
-        ax.set_xticks(x, [_short(g) for g in summary["group"]], fontsize=8)
-        ax.set_title(f"{cls} roughness", fontsize=10)
-        ax.set_ylabel("median area (%)")
-        ax.grid(axis="y", alpha=0.3)
-    fig.suptitle("Median area of each roughness class (inside the border, before closing)", fontsize=10)
-    return fig
-
-
-def fig_success(per_terrain: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 6: box plots of the per-terrain success rate per group."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(5, 3.6), constrained_layout=True)
-    cells = sorted(labels)
-    samples = [per_terrain.loc[per_terrain["cell"] == c, "success_rate_pct"] for c in cells]
-    _bxp(ax, [_short(labels[c]) for c in cells], samples, "success rate per terrain (%)", "Success rate (Eq. 5)")
-    ax.set_ylim(-3, 103)
-    return fig
-
-
-def fig_metrics(trials: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 7: box plots of the traversal metrics of successful trials per group."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 2, figsize=(9, 6.4), constrained_layout=True)
-    ok = trials[trials["success"].astype(bool)]
-    cells = sorted(labels)
-    for ax, (metric, (title, unit)) in zip(axes.ravel(), stats.METRICS.items()):
-        samples = [ok.loc[ok["cell"] == c, metric] for c in cells]
-        _bxp(ax, [_short(labels[c]) for c in cells], samples, f"{title} ({unit})", title)
-    fig.suptitle("Successful trials only", fontsize=10)
-    return fig
-
-
-def fig_missions(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
-    """Fig. 4: class map, closed class map and the terrain's missions (start green, goal red)."""
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
-
-    from offroadbench.analysis.roughness import classify, close_rough
-    from offroadbench.recipe import generate_terrain, recipe_from_dict
-    from offroadbench.study.config import build_section
+def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
+    """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
+    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.study.seeds import terrain_seed
+    from offroadbench.study.spec import build_section
+    from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
 
     info = meta["cells"][cell]
     seed = terrain_seed(meta["study"]["root_seed"], info["seed_key"], terrain)
     hm = generate_terrain(recipe_from_dict(info["recipe"]), seed)
     rcfg = build_section("roughness", info["settings"].get("roughness", {}), "report")
-    classes = classify(hm, rcfg)
-    closed = close_rough(classes, rcfg.closing_radius_m, hm.cell_size_m)
-    cmap = ListedColormap(CLASS_COLOURS)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 5.0), constrained_layout=True)
-    titles = ("(a) roughness classes", "(b) closed, with the border", "(c) missions")
-    for ax, data, title in zip(axes, (classes, closed, closed), titles):
-        ax.imshow(data, origin="lower", extent=hm.extent_m, cmap=cmap, vmin=-0.5, vmax=2.5, interpolation="nearest")
-        ax.set_title(title, fontsize=10)
-        ax.set_xlabel("x (m)")
-    axes[0].set_ylabel("y (m)")
-    b = rcfg.border_m
-    x0, x1, y0, y1 = hm.extent_m
-    axes[1].add_patch(plt.Rectangle((x0 + b, y0 + b), x1 - x0 - 2 * b, y1 - y0 - 2 * b, fill=False, ec="white", lw=1.5))
+    maps = classify_terrain(hm, rcfg)
     t = trials[(trials["cell"] == cell) & (trials["terrain"] == terrain)]
-    for r in t.itertuples(index=False):
-        colour = "white" if r.success else "black"
-        axes[2].plot([r.start_x_m, r.goal_x_m], [r.start_y_m, r.goal_y_m], color=colour, lw=1)
-        axes[2].plot(r.start_x_m, r.start_y_m, "o", color="limegreen", ms=5, mec="black", mew=0.5)
-        axes[2].plot(r.goal_x_m, r.goal_y_m, "o", color="red", ms=5, mec="black", mew=0.5)
-    fig.suptitle(
-        f"Terrain {terrain} of {_short(stats.group_labels(meta)[cell])} (seed {seed}); "
-        "missions: white = success, black = failure",
-        fontsize=10,
-    )
-    return fig
+    title = (f"Terrain {terrain} of {short_label(stats.group_labels(meta)[cell])} (seed {seed}); "
+             "missions: white = success, black = failure")
+    return fig_missions(hm, maps.classes, maps.closed, rcfg.border_m, t, title=title)
 
 
 # ---------------------------------------------------------------------------- reference
@@ -225,7 +132,7 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
                 p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
                 o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
                 same = _direction_agrees(p_abs, o_abs)
-                rows.append({"quantity": name, "step": f"{_short(mine.loc[i, 'from'])} → {_short(mine.loc[i, 'to'])}",
+                rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'])} → {short_label(mine.loc[i, 'to'])}",
                              "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
                              "same direction": same})
@@ -315,7 +222,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "fig5_class_areas.png": fig_class_areas(summary),
         "fig6_success_rate.png": fig_success(per_terrain, labels),
         "fig7_traversal_metrics.png": fig_metrics(trials, labels),
-        "fig4_missions.png": fig_missions(meta, trials, *fig4),
+        "fig4_missions.png": _fig4(meta, trials, *fig4),
     }
     tables = {
         "summary.csv": summary,
@@ -338,7 +245,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",
         "",
-        "Statistics as in Majhor & Bos Sec. 2.4: medians, IQR = Q3 - Q1 (Eq. 6), outliers beyond "
+        "Statistics as in Majhor & Bos 2023, Sec. 2.4: medians, IQR = Q3 - Q1 (Eq. 6), outliers beyond "
         "Q1 - 1.5 IQR or Q3 + 1.5 IQR (Eq. 7-8); quartiles by MATLAB's `prctile` definition (hazen). "
         "Success rate per terrain = successes / trials x 100 (Eq. 5). Traversal metrics are for "
         "successful trials only.",

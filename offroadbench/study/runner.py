@@ -17,10 +17,10 @@ from typing import Any, Callable, Mapping
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench.study import seeds
-from offroadbench.study.config import CellPlan, StudyConfig, study_id
+from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.study.executors import get_executor
 from offroadbench.study.store import Store
-from offroadbench.study.trial import TerrainTask, TrialFn
+from offroadbench.study.tasks import TerrainTask, TrialFn
 
 log = logging.getLogger(__name__)
 

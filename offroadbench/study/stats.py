@@ -1,4 +1,4 @@
-"""The paper's statistics (Majhor & Bos Sec. 2.4, 3): medians, IQR (Eq. 6), 1.5 IQR outliers
+"""The paper's statistics (Majhor & Bos 2023, Sec. 2.4, 3): medians, IQR (Eq. 6), 1.5 IQR outliers
 (Eq. 7-8), per-terrain success rate (Eq. 5), and the group tables of a study.
 
 Quartiles use the ``hazen`` definition (the p-th percentile sits at rank n p / 100 + 1/2),
@@ -13,6 +13,8 @@ from typing import Any, Sequence
 
 import numpy as np
 import pandas as pd
+
+from offroadbench.analysis.roughness import CLASS_NAMES
 
 __all__ = [
     "QUANTILE_METHOD",
@@ -38,7 +40,7 @@ METRICS: dict[str, tuple[str, str]] = {
     "rms_roll_rate_deg_s": ("RMS roll rate", "deg/s"),
     "traversal_time_s": ("Traversal time", "s"),
 }
-CLASSES = ("low", "semi", "high")
+CLASSES = CLASS_NAMES
 
 
 def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, Any]:

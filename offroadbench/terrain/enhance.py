@@ -2,14 +2,14 @@
 
 * ``spectral_restore`` (Yoshikawa & Nishiguchi Sec. 3.4, Fig. 4): DFT the DEM (a), keep the
   coefficients with wavelength longer than a cutoff (b), replace the rest with random ones that
-  follow the fBm law E|a|^2 = S0 / f^(2H+2) (c, 001 Eq. 5-7) and inverse-DFT (d). S0 is fitted to
+  follow the fBm law E|a|^2 = S0 / f^(2H+2) (c, Yoshikawa & Nishiguchi 2001, Eq. 5-7) and inverse-DFT (d). S0 is fitted to
   the DEM's own spectrum in the octave below the cutoff, so the synthetic spectrum continues the
   measured one. The kept (low-pass) part is unchanged.
-* ``rmd_expand`` (Martin et al. 2014 Sec. IV.A, Eq. 13-16, Fig. 5): each level doubles the
+* ``rmd_expand`` (Martin et al. 2014, Sec. IV.A, Eq. 13-16, Fig. 5): each level doubles the
   resolution. The old samples are copied to the even pixels of a (2R-1) x (2C-1) grid and the new
   ones are interpolated in a square phase and a diamond phase and displaced by Gaussians whose
   scale shrinks by S_f (Eq. 14) per phase. The original samples are kept exactly.
-* :func:`fill_gaps` (000 Sec. IV.B): unknown (NaN) pixels are filled from the outside in.
+* :func:`fill_gaps` (Martin et al. 2014, Sec. IV.B): unknown (NaN) pixels are filled from the outside in.
 * ``dem`` generator: import a DEM file (16-bit PNG + sidecar, or .npy), fill its gaps and sample
   it onto the recipe's grid (bilinear), so real data can be layered and enhanced.
 """
@@ -26,7 +26,7 @@ import numpy as np
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.terrain.diamond_square import diamond_phase, scale_factor, square_phase
+from offroadbench.terrain.fractal.diamond_square import diamond_phase, scale_factor, square_phase
 from offroadbench.terrain.registry import register
 
 log = logging.getLogger(__name__)
@@ -53,12 +53,12 @@ SAMPLE_DEM = Path(__file__).resolve().parent.parent.parent / "terrains" / "data"
 # --------------------------------------------------------------------------- spectral restoration
 @dataclass(frozen=True, kw_only=True)
 class SpectralRestoreConfig:
-    """Spectral restoration of the short wavelengths of a coarse or smoothed DEM (001 Sec. 3.4)."""
+    """Spectral restoration of the short wavelengths of a coarse or smoothed DEM (Yoshikawa & Nishiguchi 2001, Sec. 3.4)."""
 
     cutoff_wavelength_m: float = 1.0
-    """Wavelengths shorter than this are replaced by fBm (001's r_max, as a length in metres)."""
+    """Wavelengths shorter than this are replaced by fBm (Yoshikawa & Nishiguchi 2001's r_max, as a length in metres)."""
     H: float = 0.8
-    """Hurst exponent of the synthetic part (001 Sec. 5.1: H ~ 0.8, D ~ 2.2 for lunar DEMs)."""
+    """Hurst exponent of the synthetic part (Yoshikawa & Nishiguchi 2001, Sec. 5.1: H ~ 0.8, D ~ 2.2 for lunar DEMs)."""
     fit_octaves: float = 1.0
     """Width of the band below the cutoff used to fit the amplitude S0, in octaves."""
 
@@ -81,7 +81,7 @@ def _frequency_grid(rows: int, cols: int, cell: float) -> np.ndarray:
     summary="Keep a DEM's long wavelengths, synthesise the short ones as fBm (Yoshikawa & Nishiguchi Sec. 3.4)",
 )
 def spectral_restore(cfg: SpectralRestoreConfig, hm: Heightmap, rng: np.random.Generator) -> Heightmap:
-    """001 Sec. 3.4 steps (a)-(d) on ``hm`` (see the module docstring)."""
+    """Yoshikawa & Nishiguchi 2001, Sec. 3.4 steps (a)-(d) on ``hm`` (see the module docstring)."""
     coef = np.fft.rfft2(hm.z)
     f = _frequency_grid(hm.rows, hm.cols, hm.cell_size_m)
     fc = 1.0 / cfg.cutoff_wavelength_m
@@ -106,14 +106,14 @@ def spectral_restore(cfg: SpectralRestoreConfig, hm: Heightmap, rng: np.random.G
 # --------------------------------------------------------------------------- RMD expansion
 @dataclass(frozen=True, kw_only=True)
 class RMDExpandConfig:
-    """Fractal expansion of a DEM by 2^levels with RMD (000 Sec. IV.A, Eq. 13-16)."""
+    """Fractal expansion of a DEM by 2^levels with RMD (Martin et al. 2014, Sec. IV.A, Eq. 13-16)."""
 
     levels: int = 1
     """Number of doublings k: the grid becomes ((R-1) 2^k + 1) x ((C-1) 2^k + 1), cell / 2^k."""
     D: float = 2.2
-    """Fractal dimension F of the new detail (000 Eq. 14)."""
+    """Fractal dimension F of the new detail (Martin et al. 2014, Eq. 14)."""
     displacement_scale_m: float | None = None
-    """S_e of 000 Eq. (16), the scale of the first new square phase, metres. None: estimated from
+    """S_e of Martin et al. 2014, Eq. (16), the scale of the first new square phase, metres. None: estimated from
     the DEM (see :func:`estimate_displacement_scale`), since Eq. (15)'s height factor is unknown
     for real data."""
 
@@ -129,7 +129,7 @@ def estimate_displacement_scale(z: np.ndarray, dimension: float) -> float:
 
     The residual of each pixel from the mean of its 4 diagonal neighbours is what the last square
     phase would have added had the DEM been made by RMD; one diamond phase and one square phase
-    later (two factors S_f, 000 Eq. 14) comes the first new phase.
+    later (two factors S_f, Martin et al. 2014, Eq. 14) comes the first new phase.
     """
     if min(z.shape) < 3:
         return 0.0
@@ -141,7 +141,7 @@ def estimate_displacement_scale(z: np.ndarray, dimension: float) -> float:
     "rmd_expand",
     RMDExpandConfig,
     kind="modifier",
-    summary="RMD fractal expansion by 2^k keeping the original samples (Martin et al. 2014 Eq. 13-16)",
+    summary="RMD fractal expansion by 2^k keeping the original samples (Martin et al. 2014, Eq. 13-16)",
 )
 def rmd_expand(cfg: RMDExpandConfig, hm: Heightmap, rng: np.random.Generator) -> Heightmap:
     """Double the resolution ``levels`` times; ``result.z[::2^k, ::2^k] == hm.z`` exactly."""
@@ -214,10 +214,10 @@ def _idw_eight_directions(z: np.ndarray, known: np.ndarray, rr: np.ndarray, cc: 
 def fill_gaps(
     z: np.ndarray, cell_size_m: float, roughness: float, rng: np.random.Generator, reach_px: int = 64
 ) -> np.ndarray:
-    """Fill NaN pixels from the outside in (000 Sec. IV.B); known pixels are never changed.
+    """Fill NaN pixels from the outside in (Martin et al. 2014, Sec. IV.B); known pixels are never changed.
 
     Unknown pixels with the most known neighbours are filled first; the counts are then
-    recomputed and the next batch filled, until none is left. (000 fills one pixel at a time and
+    recomputed and the next batch filled, until none is left. (Martin et al. 2014 fills one pixel at a time and
     re-sorts; we fill all pixels sharing the current highest count at once, which keeps the
     outside-in order and is much faster.) A pixel's value is the inverse-distance weighted mean of
     the nearest known pixel in each of the 8 directions (looking up to ``reach_px`` pixels) plus
@@ -266,7 +266,7 @@ class DEMConfig:
     origin_y_m: float = 0.0
     """y in the DEM (metres from its first row) of the output's first row."""
     fill_roughness: float = 0.2
-    """Gap-fill noise: a unit Gaussian times this times the DEM cell (000 Sec. IV.B)."""
+    """Gap-fill noise: a unit Gaussian times this times the DEM cell (Martin et al. 2014, Sec. IV.B)."""
 
     def __post_init__(self) -> None:
         check_int(self, "rows", self.rows, lo=3)
@@ -305,7 +305,7 @@ def _resample(z: np.ndarray, src_cell: float, cfg: DEMConfig) -> np.ndarray:
 
 @register("dem", DEMConfig, summary="Imported DEM (16-bit PNG + sidecar or .npy), gaps filled, resampled to the grid")
 def generate_dem(cfg: DEMConfig, rng: np.random.Generator) -> Heightmap:
-    """Read the DEM, fill its gaps (000 Sec. IV.B) and sample it onto the grid."""
+    """Read the DEM, fill its gaps (Martin et al. 2014, Sec. IV.B) and sample it onto the grid."""
     from offroadbench.io.dem import read_dem
 
     path = Path(cfg.path) if cfg.path is not None else SAMPLE_DEM

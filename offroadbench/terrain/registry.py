@@ -10,7 +10,7 @@ Two kinds of entry:
 
 Register with the decorator::
 
-    @register("wm", WMConfig, summary="3D Weierstrass-Mandelbrot surface (Majhor & Bos Eq. 1-2)")
+    @register("wm", WMConfig, summary="3D Weierstrass-Mandelbrot surface (Majhor & Bos 2023, Eq. 1-2)")
     def generate_wm(cfg: WMConfig, rng: np.random.Generator) -> Heightmap: ...
 """
 

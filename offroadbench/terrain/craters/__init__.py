@@ -3,7 +3,7 @@
 Importing the package registers the ``craters`` terrain modifier.
 """
 
-from offroadbench.terrain.craters.modifier import CraterConfig, apply_craters, crater_table_for, recipe_craters
+from offroadbench.terrain.craters.layer import CraterConfig, apply_craters, crater_table_for, recipe_craters
 from offroadbench.terrain.craters.population import (
     PopulationConfig,
     cumulative_density,

@@ -1,23 +1,23 @@
 """Crater populations: power-law sizes, uniform positions, linear ages, degradation by age.
 
-Size-frequency distribution (000 Eq. 12, 003): the cumulative number of craters per square
+Size-frequency distribution (Martin et al. 2014, Eq. 12, Parkes & Martin 1999): the cumulative number of craters per square
 metre with diameter >= D (metres) is ``N_cum(D) = c D^-k``; k ~ 1.8 for the lunar mare and
 2.0 for a saturated ("dimensionless") surface. The expected number on an area A within
-[D_min, D_max] is ``A (N_cum(D_min) - N_cum(D_max))`` (000 Eq. 12).
+[D_min, D_max] is ``A (N_cum(D_min) - N_cum(D_max))`` (Martin et al. 2014, Eq. 12).
 
 Two ways to draw the diameters:
 
-* ``inversion`` (Li et al. 2022, 002 Eq. 17-21): the range is split into log-spaced size bins;
+* ``inversion`` (Li et al. 2022, Li et al. 2022, Eq. 17-21): the range is split into log-spaced size bins;
   each bin gets a Poisson number of craters with the power law's expectation, and diameters
   are drawn by inverting the bin's CDF, Eq. (21):
   ``D = [(D_R^-k - D_L^-k) u + D_L^-k]^(-1/k)``, u uniform in [0, 1).
-* ``kth_largest`` (Yoshikawa & Nishiguchi, 001 Eq. 9): deterministic sizes. The n-th largest
+* ``kth_largest`` (Yoshikawa & Nishiguchi, Yoshikawa & Nishiguchi 2001, Eq. 9): deterministic sizes. The n-th largest
   crater is the one with ``A N_cum(d_n) = n``: ``d_n = (c A / n)^(1/k)`` (for k = 2 this is
-  001's ``d_k = sqrt(10^-1.42 A / n)``).
+  Yoshikawa & Nishiguchi 2001's ``d_k = sqrt(10^-1.42 A / n)``).
 
-Positions are uniform over the map (overlaps allowed, 001 Sec. 5.1), ages are uniform in
-[0, max_age] (000's "simple linear age distribution": a constant impact rate), and the
-craters are returned oldest first (000 Sec. III.C). Degradation follows 000 Eq. (11).
+Positions are uniform over the map (overlaps allowed, Yoshikawa & Nishiguchi 2001, Sec. 5.1), ages are uniform in
+[0, max_age] (Martin et al. 2014's "simple linear age distribution": a constant impact rate), and the
+craters are returned oldest first (Martin et al. 2014, Sec. III.C). Degradation follows Martin et al. 2014, Eq. (11).
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ class PopulationConfig:
     """A crater population on a map. Defaults: lunar mare slope at rover scale."""
 
     k: float = 1.8
-    """Cumulative power-law slope: N_cum(D) = c D^-k (000 Eq. 12); mare 1.8, saturated 2.0."""
+    """Cumulative power-law slope: N_cum(D) = c D^-k (Martin et al. 2014, Eq. 12); mare 1.8, saturated 2.0."""
     c: float = 0.03
     """Cumulative density coefficient: craters per m^2 with D >= 1 m (D in metres)."""
     d_min_m: float = 0.3
@@ -65,15 +65,15 @@ class PopulationConfig:
     sampling: str = "inversion"
     """How diameters are drawn: one of SAMPLINGS."""
     size_bins: int = 3
-    """Number of log-spaced size bins for inversion sampling (002 Sec. 4.1 uses 3)."""
+    """Number of log-spaced size bins for inversion sampling (Li et al. 2022, Sec. 4.1 uses 3)."""
     max_age: float = 1.0
     """Ages are uniform in [0, max_age], in units of the baseline crater's full-degradation time."""
     baseline_diameter_m: float = 1.0
-    """D_b of 000 Eq. (11): the crater whose degradation is linear in age (degradation = T_b)."""
+    """D_b of Martin et al. 2014, Eq. (11): the crater whose degradation is linear in age (degradation = T_b)."""
     erosion_exponent: float = 1.1
-    """P of 000 Eq. (11); Soderblom: 1.0 - 1.2."""
+    """P of Martin et al. 2014, Eq. (11); Soderblom: 1.0 - 1.2."""
     density_ratio: float = 1.0
-    """sigma_b / sigma_x of 000 Eq. (11), relative surface density; 1 unless materials differ."""
+    """sigma_b / sigma_x of Martin et al. 2014, Eq. (11), relative surface density; 1 unless materials differ."""
     profile: str = "martin2014"
     """Crater profile name (a key of offroadbench.terrain.craters.PROFILES)."""
 
@@ -92,12 +92,12 @@ class PopulationConfig:
 
 
 def cumulative_density(cfg: PopulationConfig, diameter_m) -> np.ndarray:
-    """N_cum(D) = c D^-k: craters per m^2 with diameter >= D (000 Eq. 12)."""
+    """N_cum(D) = c D^-k: craters per m^2 with diameter >= D (Martin et al. 2014, Eq. 12)."""
     return cfg.c * np.power(np.asarray(diameter_m, dtype=float), -cfg.k)
 
 
 def expected_count(cfg: PopulationConfig, area_m2: float) -> float:
-    """Expected craters in [d_min, d_max] on ``area_m2``: A (N_cum(D_min) - N_cum(D_max)), 000 Eq. (12)."""
+    """Expected craters in [d_min, d_max] on ``area_m2``: A (N_cum(D_min) - N_cum(D_max)), Martin et al. 2014, Eq. (12)."""
     return float(area_m2 * (cumulative_density(cfg, cfg.d_min_m) - cumulative_density(cfg, cfg.d_max_m)))
 
 
@@ -107,7 +107,7 @@ def size_bins(cfg: PopulationConfig) -> np.ndarray:
 
 
 def inverse_cdf_diameters(u: np.ndarray, d_left_m: float, d_right_m: float, k: float) -> np.ndarray:
-    """002 Eq. (21): D = [(D_R^-k - D_L^-k) u + D_L^-k]^(-1/k) for u in [0, 1)."""
+    """Li et al. 2022, Eq. (21): D = [(D_R^-k - D_L^-k) u + D_L^-k]^(-1/k) for u in [0, 1)."""
     lo, hi = d_left_m ** (-k), d_right_m ** (-k)
     return np.power((hi - lo) * np.asarray(u, dtype=float) + lo, -1.0 / k)
 
@@ -118,7 +118,7 @@ def _check_count(n: float, what: str) -> None:
 
 
 def sample_diameters_inversion(cfg: PopulationConfig, area_m2: float, rng: np.random.Generator) -> np.ndarray:
-    """Per-bin Poisson counts and inversion sampling (002 Eq. 17-21), largest bin first."""
+    """Per-bin Poisson counts and inversion sampling (Li et al. 2022, Eq. 17-21), largest bin first."""
     _check_count(expected_count(cfg, area_m2), "the expected count")
     edges = size_bins(cfg)
     out = []
@@ -130,7 +130,7 @@ def sample_diameters_inversion(cfg: PopulationConfig, area_m2: float, rng: np.ra
 
 
 def kth_largest_diameters(cfg: PopulationConfig, area_m2: float) -> np.ndarray:
-    """001 Eq. (9) for slope k: d_n = (c A / n)^(1/k), keeping d_min <= d_n <= d_max, largest first."""
+    """Yoshikawa & Nishiguchi 2001, Eq. (9) for slope k: d_n = (c A / n)^(1/k), keeping d_min <= d_n <= d_max, largest first."""
     ca = cfg.c * area_m2
     n_max = math.floor(ca * cfg.d_min_m ** (-cfg.k) * (1 + 1e-12))
     _check_count(n_max, "the count")
@@ -141,10 +141,10 @@ def kth_largest_diameters(cfg: PopulationConfig, area_m2: float) -> np.ndarray:
 
 
 def degradation_from_age(cfg: PopulationConfig, age, diameter_m) -> np.ndarray:
-    """000 Eq. (11): T_b = T_x (sigma_b / sigma_x) (D_b / D_x)^P, degradation = min(T_b, 1).
+    """Martin et al. 2014, Eq. (11): T_b = T_x (sigma_b / sigma_x) (D_b / D_x)^P, degradation = min(T_b, 1).
 
     The baseline crater (``baseline_diameter_m``) degrades linearly with age and is fully
-    degraded at age 1; 000 read the baseline curves off Ross's figures, which it does not give.
+    degraded at age 1; Martin et al. 2014 read the baseline curves off Ross's figures, which it does not give.
     Smaller craters reach the same state sooner (P > 0).
     """
     t_b = (

@@ -8,15 +8,15 @@ Two stamping modes (see :mod:`offroadbench.terrain.craters.stamp`):
 
 * ``replace`` (Martin et al. 2014, Yoshikawa & Nishiguchi): inside the rim (rho <= 1) the
   height is measured from a local plane fitted to the old terrain, which it replaces (the
-  obliterated interior, 000 Sec. III.A, Fig. 1); outside the rim the height is added to the
-  existing terrain (the ejecta blanket, 000 Fig. 2). The profile also receives ``delta_m``, the
+  obliterated interior, Martin et al. 2014, Sec. III.A, Fig. 1); outside the rim the height is added to the
+  existing terrain (the ejecta blanket, Martin et al. 2014, Fig. 2). The profile also receives ``delta_m``, the
   terrain height at the rim minus the plane height at the rim along the pixel's direction
-  (``T_r - P_r`` of 000 Eq. 5-10), so the rim joins the surroundings without a step.
+  (``T_r - P_r`` of Martin et al. 2014, Eq. 5-10), so the rim joins the surroundings without a step.
 * ``add`` (Li et al. 2022 kernels): the kernel is summed onto the terrain, as in their locally
-  controlled spot noise (002 Eq. 2); ``delta_m`` is ignored.
+  controlled spot noise (Li et al. 2022, Eq. 2); ``delta_m`` is ignored.
 
 ``degradation`` is 0 for a fresh crater and 1 for a fully degraded one (a shallow depression
-with no rim, 000 Sec. I.C). How it maps to each profile's parameters is documented per profile.
+with no rim, Martin et al. 2014, Sec. I.C). How it maps to each profile's parameters is documented per profile.
 """
 
 from __future__ import annotations
@@ -101,12 +101,12 @@ def profile_height(name: str, r_m, diameter_m: float, degradation: float = 0.0) 
 
 # --------------------------------------------------------------------------- martin2014
 def melosh_depth_m(diameter_m):
-    """000 Eq. (1): fresh crater depth, rim crest to floor, H0 = 0.196 D^1.01 (metres)."""
+    """Martin et al. 2014, Eq. (1): fresh crater depth, rim crest to floor, H0 = 0.196 D^1.01 (metres)."""
     return 0.196 * np.power(diameter_m, 1.01)
 
 
 def melosh_rim_height_m(diameter_m):
-    """000 Eq. (2): fresh rim height above the surroundings, Hr0 = 0.036 D^1.01 (metres)."""
+    """Martin et al. 2014, Eq. (2): fresh rim height above the surroundings, Hr0 = 0.036 D^1.01 (metres)."""
     return 0.036 * np.power(diameter_m, 1.01)
 
 
@@ -128,7 +128,7 @@ _BETA_MAX = 0.9
 
 
 def _mcgetchin_m(x: np.ndarray, radius_m: float) -> np.ndarray:
-    """McGetchin ejecta thickness 0.14 R^0.74 (r/R)^-3 with r/R = x + 1 (000 Eq. 9)."""
+    """McGetchin ejecta thickness 0.14 R^0.74 (r/R)^-3 with r/R = x + 1 (Martin et al. 2014, Eq. 9)."""
     return 0.14 * radius_m**0.74 * np.power(x + 1.0, -3.0)
 
 
@@ -145,10 +145,10 @@ def _mcgetchin_scale(radius_m: float, rim_m: float) -> float:
 
 
 def _martin_ejecta(x: np.ndarray, radius_m: float, rim_m: float) -> np.ndarray:
-    """000 Eq. (9)-(10): h4 = McGetchin + F_c on 0 <= x <= 1, relative to the terrain.
+    """Martin et al. 2014, Eq. (9)-(10): h4 = McGetchin + F_c on 0 <= x <= 1, relative to the terrain.
 
     F_c is the linear corrective function that joins the blanket to the rim (h4(0) = Hr) and to
-    the surroundings (h4(1) = 0), the two conditions 000 states for it; the printed Eq. (10)
+    the surroundings (h4(1) = 0), the two conditions Martin et al. 2014 states for it; the printed Eq. (10)
     coefficients do not meet both ends in a frame where the ejecta lies on the terrain, so we
     solve them. McGetchin's law (fitted for kilometre craters, R in metres) exceeds Melosh's
     rim height for craters below ~6 m; its amplitude is then scaled down just enough that the
@@ -172,10 +172,10 @@ def _martin_ejecta_slope(x: float, radius_m: float, rim_m: float) -> float:
     "martin2014",
     mode="replace",
     extent=2.0,
-    summary="Martin et al. 2014: four joined polynomials with degradation, McGetchin ejecta (000 Eq. 1-10)",
+    summary="Martin et al. 2014: four joined polynomials with degradation, McGetchin ejecta (Martin et al. 2014, Eq. 1-10)",
 )
 def martin2014_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Martin, Parkes & Dunstan 2014 radial profile, 000 Eq. (1)-(10).
+    """Martin, Parkes & Dunstan 2014 radial profile, Martin et al. 2014, Eq. (1)-(10).
 
     With x = 2r/D - 1 (Eq. 3), K = Hr0 - Hr + H and the rim level Tp = Hr + T_r - P_r:
 
@@ -185,10 +185,10 @@ def martin2014_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -
       If Tp > Hr0 (terrain at the rim above the plane) there is no rounding; the bowl parabola is
       then stretched to reach Tp at the rim. alpha is clipped to [-1, 0].
     * exterior rim cubic, Eq. (7), on [0, beta]: zero slope and height Hr at the rim, meeting
-      the ejecta h4 at beta in value and slope (the conditions 000 states; the printed cubic
+      the ejecta h4 at beta in value and slope (the conditions Martin et al. 2014 states; the printed cubic
       meets a mirrored bowl instead and would dig a moat outside degraded craters).
     * beta, Eq. (8): 3 (Hr0 - Hr) / (2 K) = -3/2 alpha on flat ground (the printed sign gives
-      beta <= 0 for degraded craters, where 000 says beta moves outwards), capped at 0.9.
+      beta <= 0 for degraded craters, where Martin et al. 2014 says beta moves outwards), capped at 0.9.
     * ejecta, Eq. (9)-(10): see :func:`_martin_ejecta`.
 
     Heights for rho <= 1 are relative to the local plane (they include ``delta_m`` = T_r - P_r);
@@ -236,13 +236,13 @@ def martin2014_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -
 
 
 # --------------------------------------------------------------------------- yoshikawa
-# 001 Eq. (10)-(11): the fitted profile of a ~1.7 km bowl crater, in units of the rim radius r1.
+# Yoshikawa & Nishiguchi 2001, Eq. (10)-(11): the fitted profile of a ~1.7 km bowl crater, in units of the rim radius r1.
 _Y_R0, _Y_H0, _Y_H1 = 0.844, 0.367, 0.038
 _Y_ALPHA, _Y_A1, _Y_A2, _Y_A3, _Y_R2, _Y_BETA = 1.31, 3.13, -1.09, 2.55e-2, 1.054, 2.6
 
 
 def _yoshikawa_raw(u: np.ndarray) -> np.ndarray:
-    """001 Eq. (11) in units of r1, u = r / r1: central, rim and outer parts."""
+    """Yoshikawa & Nishiguchi 2001, Eq. (11) in units of r1, u = r / r1: central, rim and outer parts."""
     central = _Y_H0 * np.power(np.clip(u, 0.0, None) / _Y_R0, _Y_ALPHA) - _Y_H0
     rim = _Y_A1 * (u - 1.0) ** 3 + _Y_A2 * (u - 1.0) ** 2 + _Y_H1
     outer = _Y_H1 * np.power(np.maximum(u - _Y_A3, 1e-9), -_Y_BETA)
@@ -253,10 +253,10 @@ def _yoshikawa_raw(u: np.ndarray) -> np.ndarray:
     "yoshikawa",
     mode="replace",
     extent=2.0,
-    summary="Yoshikawa & Nishiguchi: fitted central/rim/outer bowl profile (001 Eq. 10-11)",
+    summary="Yoshikawa & Nishiguchi: fitted central/rim/outer bowl profile (Yoshikawa & Nishiguchi 2001, Eq. 10-11)",
 )
 def yoshikawa_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Yoshikawa & Nishiguchi fitted bowl profile, 001 Eq. (10)-(11), with r1 = D/2.
+    """Yoshikawa & Nishiguchi fitted bowl profile, Yoshikawa & Nishiguchi 2001, Eq. (10)-(11), with r1 = D/2.
 
     Depth h0 = 0.367 r1, rim height h1 = 0.038 r1 at r1, concave radius r0 = 0.844 r1.
     The outer part (r/r1 - a3)^-2.6 never reaches zero; the linear term
@@ -280,7 +280,7 @@ def yoshikawa_height(rho, diameter_m: float, degradation: float, delta_m=0.0) ->
 #: Depth / diameter of a fresh simple crater (kernels 1-2): Li et al. cite h/D ~ 0.2 for the
 #: freshest craters (Marchi et al. 2015, Eros).
 LI_SIMPLE_DEPTH_RATIO = 0.2
-#: Degradation vectors, relative change of each kernel parameter at degradation 1 (002 Fig. 8):
+#: Degradation vectors, relative change of each kernel parameter at degradation 1 (Li et al. 2022, Fig. 8):
 #: simple craters lose depth 0.4 -> 0.1 (Delta a = -0.75); fresh craters (Delta kappa,
 #: Delta gamma, Delta a) = (-0.3, -0.4, -0.25); complex craters (-0.05, -0.2, -0.1).
 LI_DEGRADATION = {
@@ -289,10 +289,10 @@ LI_DEGRADATION = {
     "li_fresh": {"kappa": -0.3, "gamma": -0.4, "a": -0.25},
     "li_complex": {"kappa": -0.05, "gamma": -0.2, "a": -0.1},
 }
-#: Kernel 3 parameters scaled to the rim diameter D from 002 Table A.1 (fresh, 0 Gyr, rows for
+#: Kernel 3 parameters scaled to the rim diameter D from Li et al. 2022, Table A.1 (fresh, 0 Gyr, rows for
 #: D = 300 m, 1 km, 3 km): kappa ~ 0.05 D, a ~ 0.185 D, b ~ 8 / D^2, beta = 5, gamma = 4 / D^2.
 LI_FRESH = {"kappa": 0.05, "a": 0.185, "b": 8.0, "beta": 5.0}
-#: Kernel 4: 002 gives only Fig. 6's normalised shape (H_rim = 0.471, H_c = 0.2 at D_rim = 2);
+#: Kernel 4: Li et al. 2022 gives only Fig. 6's normalised shape (H_rim = 0.471, H_c = 0.2 at D_rim = 2);
 #: we keep its ratio H_c / H_rim and choose H_rim = 0.03 D, a central uplift of e-folding
 #: radius ~ D/6 (b = 40 / D^2) and beta = 5.
 LI_COMPLEX = {"kappa": 0.03, "a": 0.03 * 0.2 / 0.471, "b": 40.0, "beta": 5.0}
@@ -305,7 +305,7 @@ def _scaled(name: str, param: str, value: float, degradation: float) -> float:
 
 
 def _li_simple(rho: np.ndarray, diameter_m: float, degradation: float, name: str, q: int, fwhm_factor: float):
-    """002 Eq. (3)-(5): -a exp(-(p.p / 2 sigma^2)^q), D_a = fwhm_factor * FWHM."""
+    """Li et al. 2022, Eq. (3)-(5): -a exp(-(p.p / 2 sigma^2)^q), D_a = fwhm_factor * FWHM."""
     d = float(diameter_m)
     sigma = d / (fwhm_factor * 2.0 * math.sqrt(2.0 * math.log(2.0)))
     a = _scaled(name, "a", LI_SIMPLE_DEPTH_RATIO * d, degradation)
@@ -313,18 +313,18 @@ def _li_simple(rho: np.ndarray, diameter_m: float, degradation: float, name: str
     return -a * np.exp(-((r**2 / (2.0 * sigma**2)) ** q))
 
 
-@register_profile("li_gaussian", mode="add", extent=2.0, summary="Li et al. 2022 kernel 1: Gaussian bowl (002 Eq. 3-5)")
+@register_profile("li_gaussian", mode="add", extent=2.0, summary="Li et al. 2022 kernel 1: Gaussian bowl (Li et al. 2022, Eq. 3-5)")
 def li_gaussian_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Kernel 1 (002 Eq. 3, q1 = 1), apparent diameter D_a = 2.5 FWHM (Eq. 5) = D.
+    """Kernel 1 (Li et al. 2022, Eq. 3, q1 = 1), apparent diameter D_a = 2.5 FWHM (Eq. 5) = D.
 
-    Depth a = 0.2 D when fresh (002 Sec. 3.3, h/D); degradation scales a along (Delta a = -0.75).
+    Depth a = 0.2 D when fresh (Li et al. 2022, Sec. 3.3, h/D); degradation scales a along (Delta a = -0.75).
     """
     return _li_simple(np.asarray(rho, dtype=float), diameter_m, degradation, "li_gaussian", 1, 2.5)
 
 
-@register_profile("li_flat_floor", mode="add", extent=2.0, summary="Li et al. 2022 kernel 2: flat-floored bowl (002 Eq. 3-5)")
+@register_profile("li_flat_floor", mode="add", extent=2.0, summary="Li et al. 2022 kernel 2: flat-floored bowl (Li et al. 2022, Eq. 3-5)")
 def li_flat_floor_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Kernel 2 (002 Eq. 3, q2 = 2): flat floor, D_a = 2 FWHM (Eq. 5) = D.
+    """Kernel 2 (Li et al. 2022, Eq. 3, q2 = 2): flat floor, D_a = 2 FWHM (Eq. 5) = D.
 
     Eq. (3) writes exp(-b (p.p)^q) with b = 1/(2 sigma^2); for q = 2 we use the dimensionally
     consistent (p.p / (2 sigma^2))^q, equal to Eq. (3) for q = 1. Degradation as kernel 1.
@@ -333,7 +333,7 @@ def li_flat_floor_height(rho, diameter_m: float, degradation: float, delta_m=0.0
 
 
 def _li_ring(rho, diameter_m, degradation, name, params, sign):
-    """kappa exp(-beta ln(gamma p.p)^2) + sign * a exp(-b p.p)   (002 Eq. 6 / Eq. 12)."""
+    """kappa exp(-beta ln(gamma p.p)^2) + sign * a exp(-b p.p)   (Li et al. 2022, Eq. 6 / Eq. 12)."""
     d = float(diameter_m)
     kappa = _scaled(name, "kappa", params["kappa"] * d, degradation)
     a = _scaled(name, "a", params["a"] * d, degradation)
@@ -346,23 +346,23 @@ def _li_ring(rho, diameter_m, degradation, name, params, sign):
     return ring + sign * a * np.exp(-b * r2)
 
 
-@register_profile("li_fresh", mode="add", extent=2.5, summary="Li et al. 2022 kernel 3: fresh crater with rim (002 Eq. 6-11)")
+@register_profile("li_fresh", mode="add", extent=2.5, summary="Li et al. 2022 kernel 3: fresh crater with rim (Li et al. 2022, Eq. 6-11)")
 def li_fresh_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Kernel 3 (002 Eq. 6): kappa exp(-beta (ln(gamma p.p))^2) - a exp(-b p.p), D = D_rim.
+    """Kernel 3 (Li et al. 2022, Eq. 6): kappa exp(-beta (ln(gamma p.p))^2) - a exp(-b p.p), D = D_rim.
 
     We read the bowl exponent as b p.p (not (p.p)^2): that is what makes Eq. (7)
     H_rim ~ kappa - a exp(-b/gamma) and the Table A.1 values (b ~ 8/D^2) consistent.
     Parameters: :data:`LI_FRESH`; degradation vector (Delta kappa, Delta gamma, Delta a) =
-    (-0.3, -0.4, -0.25) at degradation 1 (002 Sec. 3.3, Fig. 8).
+    (-0.3, -0.4, -0.25) at degradation 1 (Li et al. 2022, Sec. 3.3, Fig. 8).
     """
     return _li_ring(rho, diameter_m, degradation, "li_fresh", LI_FRESH, -1.0)
 
 
-@register_profile("li_complex", mode="add", extent=2.5, summary="Li et al. 2022 kernel 4: complex crater, central uplift (002 Eq. 12-16)")
+@register_profile("li_complex", mode="add", extent=2.5, summary="Li et al. 2022 kernel 4: complex crater, central uplift (Li et al. 2022, Eq. 12-16)")
 def li_complex_height(rho, diameter_m: float, degradation: float, delta_m=0.0) -> np.ndarray:
-    """Kernel 4 (002 Eq. 12): kappa exp(-beta (ln(gamma p.p))^2) + a exp(-b p.p), D = D_rim.
+    """Kernel 4 (Li et al. 2022, Eq. 12): kappa exp(-beta (ln(gamma p.p))^2) + a exp(-b p.p), D = D_rim.
 
     H_rim = kappa (Eq. 13), H_c = a (Eq. 14), D_rim = 2/sqrt(gamma) (Eq. 15). Parameters:
-    :data:`LI_COMPLEX`; degradation vector (-0.05, -0.2, -0.1) (002 Fig. 8).
+    :data:`LI_COMPLEX`; degradation vector (-0.05, -0.2, -0.1) (Li et al. 2022, Fig. 8).
     """
     return _li_ring(rho, diameter_m, degradation, "li_complex", LI_COMPLEX, 1.0)

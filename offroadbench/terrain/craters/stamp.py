@@ -3,17 +3,17 @@
 For each crater (oldest first, so younger craters overprint older ones), on the pixels within
 ``extent`` crater radii of its centre only:
 
-* ``replace`` profiles (martin2014, yoshikawa), 000 Sec. III.A and 003 Sec. 2.2: a plane is
+* ``replace`` profiles (martin2014, yoshikawa), Martin et al. 2014, Sec. III.A and Parkes & Martin 1999, Sec. 2.2: a plane is
   fitted (least squares) to the old terrain inside the rim: it stands for the average slope of the
-  obliterated bowl region (000 Fig. 1). Inside the rim the new height is plane + profile; the
+  obliterated bowl region (Martin et al. 2014, Fig. 1). Inside the rim the new height is plane + profile; the
   profile receives ``T_r - P_r`` (terrain minus plane at the rim point in the pixel's direction)
   so the rim meets the surrounding terrain without a step. Outside the rim the ejecta profile is
-  added to the existing terrain and falls to zero at the window edge (000 Fig. 2). An older
+  added to the existing terrain and falls to zero at the window edge (Martin et al. 2014, Fig. 2). An older
   crater's bowl under a new rim is therefore cut and re-formed, and its rim under a new
   blanket is buried but keeps its shape: overlapping craters blend.
-* ``add`` profiles (Li kernels): the kernel is added to the terrain (002 Eq. 2).
+* ``add`` profiles (Li kernels): the kernel is added to the terrain (Li et al. 2022, Eq. 2).
 
-Optional realism (000 Sec. III.A):
+Optional realism (Martin et al. 2014, Sec. III.A):
 
 * irregular rims: the rim radius along direction theta is ``R (1 + p(theta))``, p a periodic
   1-D fractal (fBm trace, matching start and end values) of standard deviation
@@ -36,7 +36,7 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.terrain.craters.profiles import get_profile, melosh_depth_m
 from offroadbench.terrain.craters.table import CraterTable
-from offroadbench.terrain.fbm import fbm_surface, hurst_from_dimension
+from offroadbench.terrain.fractal.fbm import fbm_surface, hurst_from_dimension
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +51,7 @@ _PROGRESS_EVERY = 1000
 
 @dataclass(frozen=True, kw_only=True)
 class StampOptions:
-    """How craters are stamped (realism options of 000 Sec. III.A)."""
+    """How craters are stamped (realism options of Martin et al. 2014, Sec. III.A)."""
 
     rim_irregularity: float = 0.0
     """Std of the rim radius perturbation as a fraction of the radius; 0 = circular rims."""
@@ -62,9 +62,9 @@ class StampOptions:
     roughness_D_interior: float = 2.2
     """Fractal dimension of the overlay inside the rim (floor and wall)."""
     roughness_D_ejecta: float = 2.4
-    """Fractal dimension of the overlay on the ejecta (rough near the rim, 000 Sec. III.A)."""
+    """Fractal dimension of the overlay on the ejecta (rough near the rim, Martin et al. 2014, Sec. III.A)."""
     min_diameter_cells: float = 2.0
-    """Craters smaller than this many cells are skipped (000 Sec. IV.A rejects sub-pixel craters)."""
+    """Craters smaller than this many cells are skipped (Martin et al. 2014, Sec. IV.A rejects sub-pixel craters)."""
 
     def __post_init__(self) -> None:
         check_range(self, "rim_irregularity", self.rim_irregularity, lo=0, hi=0.5)
@@ -78,7 +78,7 @@ class StampOptions:
 def rim_perturbations(count: int, irregularity: float, dimension: float, rng: np.random.Generator) -> np.ndarray:
     """(count, RIM_SAMPLES) periodic 1-D fBm traces p(theta) of std ``irregularity``.
 
-    A 1-D fBm trace of dimension D has H = 2 - D and power ~ f^-(2H+1) (001 Eq. 2 with E = 1).
+    A 1-D fBm trace of dimension D has H = 2 - D and power ~ f^-(2H+1) (Yoshikawa & Nishiguchi 2001, Eq. 2 with E = 1).
     Harmonics start at 2 (harmonic 1 would only shift the crater). Periodic, so p(0) = p(2 pi).
     """
     if count == 0 or irregularity <= 0:
@@ -112,7 +112,7 @@ def _bilinear(a: np.ndarray, fr: np.ndarray, fc: np.ndarray) -> np.ndarray:
 
 
 def _fit_plane(sub: np.ndarray, dx: np.ndarray, dy: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares plane z = p0 + a dx + b dy over the masked window pixels (000 Fig. 1)."""
+    """Least-squares plane z = p0 + a dx + b dy over the masked window pixels (Martin et al. 2014, Fig. 1)."""
     n = int(mask.sum())
     if n == 0:
         return float(sub.mean()), 0.0, 0.0

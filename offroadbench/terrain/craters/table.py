@@ -1,6 +1,6 @@
 """The crater list model: one row per crater, kept apart from any elevation model.
 
-Parkes & Martin (003 Sec. 3) keep crater files separate from the DEM, so the same craters can be
+Parkes & Martin (Parkes & Martin 1999, Sec. 3) keep crater files separate from the DEM, so the same craters can be
 put on different base terrains. :class:`CraterTable` is that list in memory; the CSV form is
 read and written by :mod:`offroadbench.io.craters_csv`.
 """
@@ -104,7 +104,7 @@ class CraterTable:
         )
 
     def oldest_first(self) -> "CraterTable":
-        """Sorted by age, oldest first (000 Sec. III.C); craters of unknown age keep their order, last."""
+        """Sorted by age, oldest first (Martin et al. 2014, Sec. III.C); craters of unknown age keep their order, last."""
         key = np.where(np.isnan(self.age), -np.inf, self.age)
         return self.take(np.argsort(-key, kind="stable"))
 

@@ -1,0 +1,99 @@
+"""Figures of a study report (after Majhor & Bos 2023, Figs. 4-7). Each returns a
+:class:`matplotlib.figure.Figure`; the caller saves it."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from offroadbench.analysis.roughness import CLASS_NAMES
+from offroadbench.plots.style import CLASS_COLOURS, draw_border, draw_classes, new_figure
+from offroadbench.study import stats
+
+__all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "short_label"]
+
+
+def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
+    boxes = []
+    for label, values in zip(groups, samples):
+        s = stats.box_stats(values)
+        if s["n"] == 0:
+            s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
+        boxes.append({"label": label, "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+                      "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
+    ax.bxp(boxes, showfliers=True,
+           medianprops={"color": "red"},
+           boxprops={"color": CLASS_COLOURS[0]},
+           whiskerprops={"color": "black", "linestyle": ":"},
+           flierprops={"marker": "+", "markeredgecolor": "red", "linestyle": "none"})
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(axis="y", alpha=0.3)
+
+
+def short_label(label: str) -> str:
+    """A group label without spaces around ``=``, to fit under a box."""
+    return label.replace(" = ", "=")
+
+
+def fig_class_areas(summary: pd.DataFrame):
+    """Fig. 5: median area of each class per group (bars)."""
+    fig, axes = new_figure(1, 3, figsize=(10, 3.4))
+    x = np.arange(len(summary))
+    for ax, cls, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS):
+        ax.bar(x, summary[f"median_area_{cls}_pct"], color=colour, edgecolor="black")
+        ax.set_xticks(x, [short_label(g) for g in summary["group"]], fontsize=8)
+        ax.set_title(f"{cls} roughness", fontsize=10)
+        ax.set_ylabel("median area (%)")
+        ax.grid(axis="y", alpha=0.3)
+    fig.suptitle("Median area of each roughness class (inside the border, before closing)", fontsize=10)
+    return fig
+
+
+def fig_success(per_terrain: pd.DataFrame, labels: dict[int, str]):
+    """Fig. 6: box plots of the per-terrain success rate per group."""
+    fig, ax = new_figure(figsize=(5, 3.6))
+    cells = sorted(labels)
+    samples = [per_terrain.loc[per_terrain["cell"] == c, "success_rate_pct"] for c in cells]
+    _bxp(ax, [short_label(labels[c]) for c in cells], samples, "success rate per terrain (%)", "Success rate (Eq. 5)")
+    ax.set_ylim(-3, 103)
+    return fig
+
+
+def fig_metrics(trials: pd.DataFrame, labels: dict[int, str]):
+    """Fig. 7: box plots of the traversal metrics of successful trials per group."""
+    fig, axes = new_figure(2, 2, figsize=(9, 6.4))
+    ok = trials[trials["success"].astype(bool)]
+    cells = sorted(labels)
+    for ax, (metric, (title, unit)) in zip(axes.ravel(), stats.METRICS.items()):
+        samples = [ok.loc[ok["cell"] == c, metric] for c in cells]
+        _bxp(ax, [short_label(labels[c]) for c in cells], samples, f"{title} ({unit})", title)
+    fig.suptitle("Successful trials only", fontsize=10)
+    return fig
+
+
+def fig_missions(hm, classes: np.ndarray, closed: np.ndarray, border_m: float, trials: pd.DataFrame, *, title: str = ""):
+    """Fig. 4 (Majhor & Bos 2023): class map, closed class map with the border, and the terrain's
+    missions (start green, goal red; line white = success, black = failure).
+
+    ``trials`` holds the terrain's rows (``start_x_m``, ``start_y_m``, ``goal_x_m``, ``goal_y_m``,
+    ``success``).
+    """
+    fig, axes = new_figure(1, 3, figsize=(13, 5.0))
+    titles = ("(a) roughness classes", "(b) closed, with the border", "(c) missions")
+    for ax, data, sub in zip(axes, (classes, closed, closed), titles):
+        draw_classes(ax, data, hm.extent_m)
+        ax.set_title(sub, fontsize=10)
+        ax.set_xlabel("x (m)")
+    axes[0].set_ylabel("y (m)")
+    draw_border(axes[1], hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.5)
+    for r in trials.itertuples(index=False):
+        colour = "white" if r.success else "black"
+        axes[2].plot([r.start_x_m, r.goal_x_m], [r.start_y_m, r.goal_y_m], color=colour, lw=1)
+        axes[2].plot(r.start_x_m, r.start_y_m, "o", color="limegreen", ms=5, mec="black", mew=0.5)
+        axes[2].plot(r.goal_x_m, r.goal_y_m, "o", color="red", ms=5, mec="black", mew=0.5)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return fig

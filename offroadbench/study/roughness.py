@@ -1,0 +1,66 @@
+"""The paper's terrain roughness study (Majhor & Bos 2023, Sec. 2.4 and 3.1, Fig. 5).
+
+For each high-frequency fractal dimension D, generate N terrains and measure the area fraction of
+the low / semi / high roughness classes inside the 5 m border, before the morphological closing.
+
+Seeds: terrain j of every D uses the j-th child of ``SeedSequence(seed)``, so the D values are
+compared on the same random phases (common random numbers): the differences between D groups come
+from D, not from which phases each group happened to draw. Results do not depend on run order.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from offroadbench.analysis.roughness import RoughnessConfig, class_fractions, classify
+from offroadbench.errors import InputError
+from offroadbench.progress import ProgressFn, report
+from offroadbench.terrain.recipe import Recipe, apply_overrides, generate_terrain
+
+__all__ = ["roughness_study", "summarise_roughness_study", "PAPER_FIG5_CHANGES_PP"]
+
+#: Majhor & Bos 2023, Sec. 3.1: change of the median class areas, percentage points,
+#: for D 2.3 -> 2.45 and 2.45 -> 2.6.
+PAPER_FIG5_CHANGES_PP = {"low": (-13.8, -7.16), "semi": (11.7, 5.63), "high": (1.54, 3.33)}
+
+
+def roughness_study(
+    recipe: Recipe,
+    dims: Sequence[float],
+    terrains: int,
+    seed: int,
+    *,
+    dim_key: str = "layers.base.D_high",
+    roughness: RoughnessConfig = RoughnessConfig(),
+    progress: ProgressFn | None = None,
+) -> pd.DataFrame:
+    """One row per (D, terrain): class area fractions in percent, plus the terrain seed index."""
+    if terrains < 1:
+        raise InputError(f"terrains must be >= 1, got {terrains}")
+    if not dims:
+        raise InputError("dims: give at least one fractal dimension")
+    recipes = [apply_overrides(recipe, {dim_key: float(d)}) for d in dims]  # validates every D first
+    children = np.random.SeedSequence(seed).spawn(terrains)
+    rows = []
+    total = len(dims) * terrains
+    for i, (d, rec) in enumerate(zip(dims, recipes)):
+        for j, child in enumerate(children):
+            hm = generate_terrain(rec, child)
+            frac = class_fractions(classify(hm, roughness), hm.cell_size_m, roughness.border_m)
+            rows.append({"D": float(d), "terrain": j, **{f"{k}_pct": 100.0 * v for k, v in frac.items()}})
+            report(progress, i * terrains + j + 1, total)
+    return pd.DataFrame(rows)
+
+
+def summarise_roughness_study(table: pd.DataFrame) -> pd.DataFrame:
+    """Median class areas (percent) per D, and their change from the previous D (percentage points)."""
+    med = table.groupby("D")[["low_pct", "semi_pct", "high_pct"]].median()
+    med.columns = ["median_low_pct", "median_semi_pct", "median_high_pct"]
+    diff = med.diff()
+    diff.columns = [c.replace("median_", "change_").replace("_pct", "_pp") for c in med.columns]
+    out = pd.concat([med, diff], axis=1)
+    out.insert(0, "terrains", table.groupby("D").size())
+    return out.reset_index()

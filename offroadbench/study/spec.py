@@ -1,0 +1,349 @@
+"""Study configs: one TOML file describes a whole Monte Carlo study (Majhor & Bos 2023, Sec. 2.4).
+
+File layout (every table but ``[study]`` is optional)::
+
+    [study]
+    name = "majhor2023"
+    recipe = "paper-d2.45"          # terrain preset name, or a recipe .toml (relative to this file)
+    root_seed = 2023
+    terrains_per_cell = 20
+    missions_per_terrain = 20
+    paired_terrains = true          # see offroadbench.study.seeds
+
+    [grid]                          # axes of the parameter grid: dotted key = [values]
+    "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]
+
+    [recipe_overrides]              # fixed dotted-key changes of the recipe (e.g. small maps)
+    "grid.rows" = 201
+
+    [roughness]   # offroadbench.analysis.roughness.RoughnessConfig fields
+    [missions]    # offroadbench.navigation.missions.MissionConfig fields
+    [vehicle]     # vehicle name and fields (offroadbench.sim)
+    [controller]  # offroadbench.sim.ControllerConfig fields
+    [sim]         # offroadbench.sim.SimConfig fields
+    [rules]       # offroadbench.sim.FailureRules fields
+    [reference]   # published numbers to set beside ours in the report (see offroadbench.study.report)
+
+Grid keys. ``recipe`` varies the recipe itself (values: preset names or paths);
+``recipe.<dotted key>`` a key of the recipe TOML; ``<section>.<field>`` a field of one of the
+settings tables above (``vehicle.name`` picks the vehicle). Every grid cell (the cartesian
+product of the axes, first axis slowest) is resolved and validated when the study is loaded,
+so a bad value is refused before anything runs, with the key named.
+
+Each resolved cell is a :class:`CellPlan`: plain data (recipe dict, settings tables) that a
+worker anywhere can turn back into configs without reading files.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+from offroadbench.config import check_int, config_id, from_dict, load_toml, to_dict
+from offroadbench.errors import InputError
+from offroadbench.analysis.roughness import RoughnessConfig
+from offroadbench.navigation.missions import MissionConfig
+from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
+from offroadbench.sim.vehicle import vehicle_from_table
+from offroadbench.study import seeds
+
+__all__ = [
+    "SECTIONS",
+    "StudyConfig",
+    "GridAxis",
+    "CellPlan",
+    "study_from_dict",
+    "load_study",
+    "build_section",
+]
+
+
+def _config_builder(cls: type) -> Callable[[dict, str], Any]:
+    """A builder that fills and validates ``cls`` from a settings table."""
+
+    def build(table: dict, where: str):
+        return from_dict(cls, table, where=where)
+
+    return build
+
+
+#: settings tables of a study -> fn(table, where) that builds and validates their config
+SECTIONS: dict[str, Callable[[dict, str], Any]] = {
+    "roughness": _config_builder(RoughnessConfig),
+    "missions": _config_builder(MissionConfig),
+    "vehicle": vehicle_from_table,
+    "controller": _config_builder(ControllerConfig),
+    "sim": _config_builder(SimConfig),
+    "rules": _config_builder(FailureRules),
+}
+
+_STUDY_KEYS = (
+    "name",
+    "description",
+    "recipe",
+    "root_seed",
+    "terrains_per_cell",
+    "missions_per_terrain",
+    "paired_terrains",
+)
+_TOP_KEYS = ("study", "grid", "recipe_overrides", "reference", *SECTIONS)
+
+#: columns of the trial table that a grid axis may not be named after
+RESERVED_COLUMNS = frozenset(
+    {"cell", "terrain", "mission", "terrain_seed", "mission_seed", "success", "failure_reason"}
+)
+
+
+@dataclass(frozen=True)
+class GridAxis:
+    """One axis of the parameter grid: a dotted key and the values it takes."""
+
+    key: str
+    values: tuple[Any, ...]
+
+    @property
+    def target(self) -> str:
+        """``recipe`` or the settings table the key points into."""
+        return self.key.split(".", 1)[0]
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudyConfig:
+    """A whole study: recipe, parameter grid, counts, settings tables and root seed."""
+
+    name: str
+    """Study name: names the default run directory ``runs/<name>``."""
+    recipe: str
+    """Terrain recipe: a preset name (``terrains/*.toml``) or a path to a recipe TOML."""
+    root_seed: int
+    """Root of every seed of the study (``SeedSequence(root_seed)``)."""
+    terrains_per_cell: int = 20
+    """Terrains generated per grid cell (paper: 20 per D)."""
+    missions_per_terrain: int = 20
+    """Missions (trials) per terrain (paper: 20)."""
+    description: str = ""
+    """Free text shown in the report."""
+    paired_terrains: bool = True
+    """Terrain j of every cell comes from the same seed (common random numbers); see seeds."""
+    grid: tuple[GridAxis, ...] = ()
+    """Axes of the parameter grid, in file order (first axis varies slowest)."""
+    recipe_overrides: Mapping[str, Any] = field(default_factory=dict)
+    """Dotted recipe keys set for every cell (before the grid values)."""
+    settings: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    """Raw settings tables by section name (roughness, missions, vehicle, controller, sim, rules)."""
+    reference: Mapping[str, Any] = field(default_factory=dict)
+    """Published numbers shown beside this study's in the report (free-form, see report)."""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.strip() or "/" in self.name:
+            raise InputError(f"study.name = {self.name!r}; must be a non-empty name without '/'")
+        if not isinstance(self.recipe, str) or not self.recipe:
+            raise InputError(f"study.recipe = {self.recipe!r}; must be a preset name or a .toml path")
+        check_int(self, "root_seed", self.root_seed, lo=0)
+        check_int(self, "terrains_per_cell", self.terrains_per_cell, lo=1)
+        check_int(self, "missions_per_terrain", self.missions_per_terrain, lo=1)
+        if not isinstance(self.paired_terrains, bool):
+            raise InputError(f"study.paired_terrains = {self.paired_terrains!r}; must be true or false")
+        unknown = sorted(set(self.settings) - set(SECTIONS))
+        if unknown:
+            raise InputError(f"study settings: unknown table(s) {', '.join(unknown)}; known: {', '.join(SECTIONS)}")
+        keys = [a.key for a in self.grid]
+        for axis in self.grid:
+            _check_axis(axis)
+            if keys.count(axis.key) > 1:
+                raise InputError(f"grid: key {axis.key!r} appears twice")
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def n_cells(self) -> int:
+        n = 1
+        for axis in self.grid:
+            n *= len(axis.values)
+        return n
+
+    @property
+    def n_trials(self) -> int:
+        return self.n_cells * self.terrains_per_cell * self.missions_per_terrain
+
+    def column_names(self) -> dict[str, str]:
+        """Table column of each grid key: its last part, or the full key if that is ambiguous."""
+        lasts = [a.key.rsplit(".", 1)[-1] for a in self.grid]
+        out = {}
+        for axis, last in zip(self.grid, lasts):
+            ok = lasts.count(last) == 1 and last not in RESERVED_COLUMNS
+            out[axis.key] = last if ok else axis.key
+        return out
+
+    def cell_values(self) -> list[dict[str, Any]]:
+        """Grid values of every cell ({grid key: value}), first axis slowest."""
+        keys = [a.key for a in self.grid]
+        return [dict(zip(keys, combo)) for combo in itertools.product(*(a.values for a in self.grid))]
+
+
+def _check_axis(axis: GridAxis) -> None:
+    if not isinstance(axis.values, tuple) or not axis.values:
+        raise InputError(f"grid.{axis.key}: needs a non-empty list of values, got {axis.values!r}")
+    target = axis.target
+    if target not in ("recipe", *SECTIONS):
+        raise InputError(
+            f"grid key {axis.key!r}: must start with recipe or a settings table ({', '.join(SECTIONS)})"
+        )
+    if target != "recipe" and "." not in axis.key:
+        raise InputError(f"grid key {axis.key!r}: name a field, e.g. {target}.FIELD")
+    if target in SECTIONS and axis.key.count(".") > 1:
+        raise InputError(f"grid key {axis.key!r}: settings fields are one level deep ({target}.FIELD)")
+
+
+# ---------------------------------------------------------------------------- cells
+@dataclass(frozen=True)
+class CellPlan:
+    """One resolved grid cell: plain, picklable data a worker turns back into configs."""
+
+    index: int
+    """Position of the cell in the grid (first axis slowest)."""
+    values: Mapping[str, Any]
+    """{grid key: value} of this cell."""
+    key: int
+    """Spawn-key entry of the cell's seeds (0 when terrains are paired)."""
+    recipe_data: Mapping[str, Any]
+    """The cell's recipe as a TOML dict, overrides and grid values applied."""
+    settings: Mapping[str, Mapping[str, Any]]
+    """Settings tables with the cell's grid values applied."""
+
+    def recipe(self):
+        from offroadbench.terrain.recipe import recipe_from_dict
+
+        return recipe_from_dict(dict(self.recipe_data), source=f"cell {self.index}")
+
+    def section(self, name: str):
+        """The frozen config of one of the cell's settings tables."""
+        return build_section(name, self.settings.get(name, {}), where=f"cell {self.index} [{name}]")
+
+
+def build_section(name: str, table: Mapping[str, Any], where: str):
+    """The frozen config of settings table ``name`` (VehicleSpec for ``vehicle``)."""
+    return SECTIONS[name](dict(table), where)
+
+
+def _resolve_recipe(ref: str, base_dir: Path | None):
+    from offroadbench.terrain.recipe import load_recipe
+
+    if base_dir is not None and ref.endswith(".toml") and not Path(ref).is_absolute():
+        candidate = base_dir / ref
+        if candidate.exists():
+            ref = str(candidate)
+    return load_recipe(ref)
+
+
+def plan_cells(study: StudyConfig, base_dir: Path | None = None, check_sections: bool = True) -> list[CellPlan]:
+    """Resolve and validate every grid cell. Raises InputError naming the key on a bad value."""
+    from offroadbench.terrain.recipe import apply_overrides
+
+    recipes: dict[str, Any] = {}
+
+    def recipe_for(ref: str):
+        if ref not in recipes:
+            recipes[ref] = apply_overrides(_resolve_recipe(ref, base_dir), study.recipe_overrides)
+        return recipes[ref]
+
+    plans = []
+    for index, values in enumerate(study.cell_values()):
+        ref = values.get("recipe", study.recipe)
+        if not isinstance(ref, str):
+            raise InputError(f"grid.recipe: values must be preset names or paths, got {ref!r}")
+        recipe = recipe_for(ref)
+        rec_over = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("recipe.")}
+        try:
+            recipe = apply_overrides(recipe, rec_over) if rec_over else recipe
+        except InputError as exc:
+            raise InputError(f"grid cell {index} ({_fmt(values)}): {exc}") from None
+        settings = {name: dict(study.settings.get(name, {})) for name in SECTIONS}
+        if "count" in settings["missions"] or "missions.count" in values:
+            raise InputError("[missions] count: set the number of missions with study.missions_per_terrain")
+        for k, v in values.items():
+            target, _, fld = k.partition(".")
+            if target in settings:
+                settings[target][fld] = v
+        plan = CellPlan(
+            index=index,
+            values=values,
+            key=seeds.cell_key(values, study.paired_terrains),
+            recipe_data=dict(recipe.data),
+            settings={k: v for k, v in settings.items() if v},
+        )
+        if check_sections:
+            for name in SECTIONS:
+                plan.section(name)
+        plans.append(plan)
+    return plans
+
+
+def _fmt(values: Mapping[str, Any]) -> str:
+    return ", ".join(f"{k}={v}" for k, v in values.items()) or "no grid"
+
+
+def study_id(study: StudyConfig, plans: list[CellPlan]) -> str:
+    """Stable id of a study: its config plus every cell's resolved recipe (a changed preset changes it)."""
+    return config_id({"study": to_dict(study), "recipes": [dict(p.recipe_data) for p in plans]})
+
+
+# ---------------------------------------------------------------------------- loading
+def _flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    out = {}
+    for k, v in table.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfig:
+    """Build a StudyConfig from a TOML dict, refusing unknown tables and keys."""
+    if not isinstance(data, dict):
+        raise InputError(f"{where}: expected a TOML table")
+    unknown = sorted(set(data) - set(_TOP_KEYS))
+    if unknown:
+        raise InputError(f"{where}: unknown table(s) {', '.join(unknown)}; known: {', '.join(_TOP_KEYS)}")
+    if "study" not in data or not isinstance(data["study"], dict):
+        raise InputError(f"{where}: missing [study] table (keys: {', '.join(_STUDY_KEYS)})")
+    head = dict(data["study"])
+    bad = sorted(set(head) - set(_STUDY_KEYS))
+    if bad:
+        raise InputError(f"{where}: [study]: unknown key(s) {', '.join(bad)}; known keys: {', '.join(_STUDY_KEYS)}")
+    grid = []
+    for key, values in _flatten(data.get("grid", {})).items():
+        if not isinstance(values, list):
+            raise InputError(f"{where}: grid.{key} must be a list of values, got {values!r}")
+        grid.append(GridAxis(key=key, values=tuple(values)))
+    overrides = _flatten(data.get("recipe_overrides", {}))
+    settings = {}
+    for name in SECTIONS:
+        if name in data:
+            if not isinstance(data[name], dict):
+                raise InputError(f"{where}: [{name}] must be a table")
+            settings[name] = dict(data[name])
+    reference = data.get("reference", {})
+    try:
+        return StudyConfig(
+            **head, grid=tuple(grid), recipe_overrides=overrides, settings=settings, reference=dict(reference)
+        )
+    except TypeError as exc:  # a missing required key
+        raise InputError(f"{where}: [study]: {exc}") from None
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def load_study(path: str | Path, check_sections: bool = True) -> tuple[StudyConfig, list[CellPlan]]:
+    """Read and fully validate a study TOML: the config and its resolved cells."""
+    p = Path(path)
+    study = study_from_dict(load_toml(p), where=str(p))
+    try:
+        plans = plan_cells(study, base_dir=p.parent, check_sections=check_sections)
+    except InputError as exc:
+        raise InputError(f"{p}: {exc}") from None
+    return study, plans
+

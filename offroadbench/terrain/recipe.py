@@ -1,0 +1,260 @@
+"""Terrain recipes: named TOML files that layer registered generators into one Heightmap.
+
+Format (``terrains/*.toml``)::
+
+    [recipe]
+    name = "paper-d2.45"
+    description = "..."
+    relief_m = 3.84          # optional: final rescale to min 0 .. relief_m
+
+    [grid]
+    rows = 1009
+    cols = 1009
+    cell_size_m = 0.05
+
+    [layers.base]            # applied in file order; the table name is the layer's name
+    generator = "multifractal"
+    D_high = 2.45            # every other key goes to the generator's frozen config
+
+Layer keys besides the config: ``generator`` (required, a name in the terrain registry),
+``combine`` (``replace`` | ``sum`` | ``product`` for generators, ``apply`` for modifiers; the
+first layer must be a generator and defaults to ``replace``, later generators to ``sum``) and
+``weight`` (factor on a ``sum`` layer, default 1). Generator configs get ``rows``, ``cols`` and
+``cell_size_m`` from ``[grid]`` unless the layer sets them.
+
+Randomness: each layer's generator is seeded from (seed, layer name) with ``SeedSequence``, so
+adding, removing or reordering layers never changes another layer's random numbers.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import os
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from offroadbench.config import config_id, from_dict, load_toml, set_dotted
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.registry import get_spec
+
+__all__ = [
+    "Recipe",
+    "Layer",
+    "COMBINE_MODES",
+    "presets_dir",
+    "list_presets",
+    "load_recipe",
+    "recipe_from_dict",
+    "apply_overrides",
+    "generate_terrain",
+    "seed_sequence",
+    "layer_rng",
+]
+
+COMBINE_MODES = ("replace", "sum", "product", "apply")
+_LAYER_KEYS = ("generator", "combine", "weight")
+_TOP_KEYS = ("recipe", "grid", "layers")
+_RECIPE_KEYS = ("name", "description", "relief_m")
+_GRID_KEYS = ("rows", "cols", "cell_size_m")
+GRID_FIELDS = _GRID_KEYS
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One validated layer: its name, registry entry name, how it combines, and its config."""
+
+    name: str
+    generator: str
+    combine: str
+    weight: float
+    config: Any
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """A validated recipe. ``data`` is the plain TOML dict it was built from (for overrides/ids)."""
+
+    name: str
+    description: str
+    relief_m: float | None
+    layers: tuple[Layer, ...]
+    data: Mapping[str, Any]
+    source: str = ""
+
+    def terrain_id(self, seed: int | None) -> str:
+        """Stable id of (recipe data, seed): same recipe and seed, same id."""
+        return config_id(self.data, seed)
+
+    @property
+    def grid(self) -> Mapping[str, Any]:
+        return self.data["grid"]
+
+
+# --------------------------------------------------------------------------- presets
+def presets_dir() -> Path:
+    """Where named presets live: $OFFROADBENCH_TERRAINS, else the repository's ``terrains/``."""
+    env = os.environ.get("OFFROADBENCH_TERRAINS")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[2] / "terrains"
+
+
+def list_presets() -> dict[str, str]:
+    """{preset name: description} of every ``*.toml`` in :func:`presets_dir`."""
+    out = {}
+    d = presets_dir()
+    if d.is_dir():
+        for p in sorted(d.glob("*.toml")):
+            data = load_toml(p)
+            out[p.stem] = str(data.get("recipe", {}).get("description", ""))
+    return out
+
+
+def load_recipe(name_or_path: str | Path) -> Recipe:
+    """Load a preset by name (``paper-d2.45``) or a recipe TOML by path."""
+    text = str(name_or_path)
+    p = Path(text)
+    if text.endswith(".toml") or p.exists():
+        if not p.is_file():
+            raise InputError(f"recipe file {p} does not exist")
+        return recipe_from_dict(load_toml(p), source=str(p))
+    preset = presets_dir() / f"{text}.toml"
+    if not preset.is_file():
+        known = ", ".join(list_presets()) or "none found"
+        raise InputError(f"unknown terrain preset {text!r}; known presets: {known} (or give a path to a .toml)")
+    return recipe_from_dict(load_toml(preset), source=str(preset))
+
+
+# --------------------------------------------------------------------------- validation
+def _check_keys(table: Mapping[str, Any], allowed, where: str) -> None:
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known keys: {', '.join(allowed)}")
+
+
+def _build_layer(lname: str, table: Mapping[str, Any], grid: Mapping[str, Any], first: bool, where: str) -> Layer:
+    if not isinstance(table, dict):
+        raise InputError(f"{where}: layers.{lname} must be a table")
+    if "generator" not in table:
+        raise InputError(f"{where}: layers.{lname} has no 'generator' key")
+    spec = get_spec(str(table["generator"]))
+    default_combine = "apply" if spec.kind == "modifier" else ("replace" if first else "sum")
+    combine = str(table.get("combine", default_combine))
+    if combine not in COMBINE_MODES:
+        raise InputError(f"{where}: layers.{lname}.combine = {combine!r}; allowed: {', '.join(COMBINE_MODES)}")
+    if (spec.kind == "modifier") != (combine == "apply"):
+        raise InputError(
+            f"{where}: layers.{lname}: {spec.kind} {spec.name!r} cannot use combine = {combine!r} "
+            f"({'modifiers use apply' if spec.kind == 'modifier' else 'apply is for modifiers'})"
+        )
+    if first and spec.kind == "modifier":
+        raise InputError(f"{where}: the first layer ({lname}) must be a generator, got modifier {spec.name!r}")
+    weight = table.get("weight", 1.0)
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not np.isfinite(weight):
+        raise InputError(f"{where}: layers.{lname}.weight must be a finite number, got {weight!r}")
+    params = {k: v for k, v in table.items() if k not in _LAYER_KEYS}
+    field_names = {f.name for f in dataclasses.fields(spec.config_cls)}
+    for key in _GRID_KEYS:
+        if key in field_names and key not in params:
+            params[key] = grid[key]
+    cfg = from_dict(spec.config_cls, params, where=f"{where}: layers.{lname} ({spec.name})")
+    return Layer(name=lname, generator=spec.name, combine=combine, weight=float(weight), config=cfg)
+
+
+def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
+    """Validate a recipe dict (as read from TOML). Errors name the file and the key."""
+    where = source or "recipe"
+    _check_keys(data, _TOP_KEYS, where)
+    meta = data.get("recipe", {})
+    _check_keys(meta, _RECIPE_KEYS, f"{where}: [recipe]")
+    grid = data.get("grid")
+    if not isinstance(grid, dict):
+        raise InputError(f"{where}: missing [grid] table with {', '.join(_GRID_KEYS)}")
+    _check_keys(grid, _GRID_KEYS, f"{where}: [grid]")
+    missing = [k for k in _GRID_KEYS if k not in grid]
+    if missing:
+        raise InputError(f"{where}: [grid] is missing {', '.join(missing)}")
+    for k in ("rows", "cols"):
+        if isinstance(grid[k], bool) or not isinstance(grid[k], int) or grid[k] < 3:
+            raise InputError(f"{where}: grid.{k} = {grid[k]!r}; must be an integer >= 3")
+    cell = grid["cell_size_m"]
+    if isinstance(cell, bool) or not isinstance(cell, (int, float)) or not cell > 0 or not np.isfinite(cell):
+        raise InputError(f"{where}: grid.cell_size_m = {cell!r}; must be a number > 0 (metres)")
+    relief = meta.get("relief_m")
+    if relief is not None and (isinstance(relief, bool) or not isinstance(relief, (int, float)) or not relief > 0):
+        raise InputError(f"{where}: recipe.relief_m = {relief!r}; must be a number > 0 (metres)")
+    layers_tbl = data.get("layers")
+    if not isinstance(layers_tbl, dict) or not layers_tbl:
+        raise InputError(f"{where}: needs at least one [layers.NAME] table")
+    layers = tuple(
+        _build_layer(lname, tbl, grid, i == 0, where) for i, (lname, tbl) in enumerate(layers_tbl.items())
+    )
+    name = str(meta.get("name", Path(source).stem if source else "recipe"))
+    return Recipe(
+        name=name,
+        description=str(meta.get("description", "")),
+        relief_m=None if relief is None else float(relief),
+        layers=layers,
+        data=copy.deepcopy(dict(data)),
+        source=source,
+    )
+
+
+def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:
+    """A new recipe with dotted TOML keys replaced, e.g. ``{"layers.base.D_high": 2.6}``."""
+    data = dict(recipe.data)
+    for key, value in overrides.items():
+        data = set_dotted(data, key, value)
+    return recipe_from_dict(data, source=recipe.source)
+
+
+# --------------------------------------------------------------------------- generation
+def seed_sequence(seed: int | np.random.SeedSequence) -> np.random.SeedSequence:
+    """A SeedSequence from an int seed (>= 0) or pass one through."""
+    if isinstance(seed, np.random.SeedSequence):
+        return seed
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    return np.random.SeedSequence(int(seed))
+
+
+def layer_rng(root: np.random.SeedSequence, layer_name: str) -> np.random.Generator:
+    """The random stream of one layer: a child of ``root`` keyed by the layer's name."""
+    key = zlib.crc32(layer_name.encode())
+    child = np.random.SeedSequence(entropy=root.entropy, spawn_key=(*root.spawn_key, key))
+    return np.random.default_rng(child)
+
+
+def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heightmap:
+    """Run the recipe's layers in order and return the Heightmap (pure: no I/O)."""
+    root = seed_sequence(seed)
+    grid = recipe.grid
+    shape = (grid["rows"], grid["cols"])
+    hm: Heightmap | None = None
+    for layer in recipe.layers:
+        spec = get_spec(layer.generator)
+        rng = layer_rng(root, layer.name)
+        if spec.kind == "modifier":
+            hm = spec.fn(layer.config, hm, rng)
+            continue
+        new = spec.fn(layer.config, rng)
+        if new.shape != shape and layer.combine != "replace":
+            raise InputError(
+                f"{recipe.source or recipe.name}: layer {layer.name} made a {new.shape} grid, the recipe's grid is {shape}"
+            )
+        if hm is None or layer.combine == "replace":
+            hm = new
+        elif layer.combine == "sum":
+            hm = hm.with_z(hm.z + layer.weight * new.z)
+        else:  # product
+            hm = hm.with_z(hm.z * new.z)
+    assert hm is not None
+    if recipe.relief_m is not None:
+        hm = hm.rescaled(recipe.relief_m)
+    return hm

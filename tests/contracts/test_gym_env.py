@@ -1,0 +1,173 @@
+"""The Gymnasium environment: API conformance, seeding, the failure rules, reward and observations."""
+
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import offroadbench.envs  # noqa: F401  (registers offroadbench/Traverse-v0)
+from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.navigation.missions import MissionConfig, sample_missions
+from offroadbench.sim import FailureRules, SimConfig
+from offroadbench.sim.gym_env import STATE_FIELDS, TraverseConfig, TraverseEnv, height_patch
+
+CELL = 0.05
+FLAT = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square
+SHORT = TraverseConfig(mission_length_m=3.0, border_m=1.0)
+QUIET = TraverseConfig(mission_length_m=3.0, border_m=1.0, accel_weight=0.0, rate_weight=0.0, success_bonus=0.0)
+
+
+def _goal_seeker(obs) -> np.ndarray:
+    gx, gy = obs["state"][:2]
+    return np.array([1.0, np.clip(2.0 * math.atan2(gy, gx), -2.0, 2.0)], dtype=np.float32)
+
+
+def _run(env, policy, seed):
+    obs, info = env.reset(seed=seed)
+    rewards, states = [], [obs["state"]]
+    while True:
+        obs, r, term, trunc, info = env.step(policy(obs))
+        rewards.append(r)
+        states.append(obs["state"])
+        if term or trunc:
+            return np.array(rewards), np.array(states), term, trunc, info
+
+
+def test_check_env_passes_on_the_registered_env():
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make("offroadbench/Traverse-v0")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # unbounded observation Boxes and unnormalised actions: advice only
+            check_env(env.unwrapped)
+        assert env.unwrapped.hm.shape == (241, 241)
+    finally:
+        env.close()
+
+
+def test_spaces_follow_the_vehicle_limits():
+    with TraverseEnv(FLAT, config=SHORT) as env:
+        v = env.vehicle
+        assert np.allclose(env.action_space.high, [v.max_speed_m_s, v.max_yaw_rate_rad_s])
+        assert np.allclose(env.action_space.low, -env.action_space.high)
+        assert env.observation_space["state"].shape == (len(STATE_FIELDS),)
+        assert env.observation_space["height_patch"].shape == (16, 16)
+
+
+def test_same_seed_same_episode_and_missions_come_from_the_sampler(small_paper_recipe):
+    from offroadbench.terrain.recipe import generate_terrain
+
+    hm = generate_terrain(small_paper_recipe, 3)
+    with TraverseEnv(hm, config=SHORT) as env:
+        a = _run(env, _goal_seeker, 7)
+        mission_a = env.mission
+        b = _run(env, _goal_seeker, 7)
+        assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]) and a[4] == b[4]
+        _run(env, _goal_seeker, 8)
+        assert env.mission != mission_a
+    rc = RoughnessConfig()
+    closed = close_rough(classify(hm, rc), rc.closing_radius_m, CELL)
+    expected = sample_missions(hm, closed, MissionConfig(count=1, length_m=3.0, border_m=1.0), np.random.default_rng(7))
+    assert mission_a == expected[0]
+
+
+def test_goal_seeker_succeeds_and_progress_reward_telescopes():
+    with TraverseEnv(FLAT, config=QUIET) as env:
+        obs, info = env.reset(seed=1)
+        # the vehicle is spawned facing the goal, mission length away
+        assert obs["state"][0] == pytest.approx(3.0, abs=0.05) and abs(obs["state"][1]) < 0.05
+        d0 = info["distance_to_goal_m"]
+        rewards, _, term, trunc, info = _run(env, _goal_seeker, 1)
+    assert term and not trunc and info["success"] and info["failure_reason"] == ""
+    assert info["distance_to_goal_m"] <= FailureRules().goal_tolerance_m
+    # only the progress term is on: the sum is d0 - d_end
+    assert rewards.sum() == pytest.approx(d0 - info["distance_to_goal_m"], abs=1e-9)
+    # 2.5 m to the goal circle at up to 1 m/s (20 Hz ticks)
+    assert 2.5 <= info["t_s"] < 4.0
+
+
+def test_success_bonus_and_comfort_penalty():
+    bonus = TraverseConfig(mission_length_m=3.0, border_m=1.0, success_bonus=5.0)
+    with TraverseEnv(FLAT, config=QUIET) as env:
+        plain, *_ = _run(env, _goal_seeker, 1)
+    with TraverseEnv(FLAT, config=bonus) as env:
+        rewards, *_ , info = _run(env, _goal_seeker, 1)
+    assert info["success"]
+    penalty = plain.sum() + 5.0 - rewards.sum()
+    # starting from rest, the vehicle pitches and bounces a little: a small positive penalty
+    assert 0.0 < penalty < 0.5
+    assert rewards[-1] == pytest.approx(plain[-1] + 5.0, abs=0.1)
+
+
+def test_standing_still_ends_stuck_with_the_failure_penalty():
+    rules = FailureRules(stuck_window_s=1.0)
+    with TraverseEnv(FLAT, config=SHORT, rules=rules) as env:
+        rewards, _, term, trunc, info = _run(env, lambda obs: np.zeros(2, dtype=np.float32), 2)
+    assert term and not trunc and info["failure_reason"] == "stuck" and not info["success"]
+    assert len(rewards) == 20  # 1 s window at 20 Hz, checked as in the trial runner
+    assert rewards[-1] == pytest.approx(-SHORT.failure_penalty, abs=0.01)
+
+
+def test_timeout_truncates():
+    with TraverseEnv(FLAT, config=SHORT) as env:  # 30 s stuck window > 9 s timeout
+        rewards, _, term, trunc, info = _run(env, lambda obs: np.zeros(2, dtype=np.float32), 2)
+    assert trunc and not term and info["failure_reason"] == "timeout"
+    assert len(rewards) == 180  # 3 x 3 m / 1 m/s at 20 Hz
+    assert abs(rewards.sum()) < 0.1  # no bonus or penalty on timeout
+
+
+def test_reversing_off_the_edge_ends_off_map():
+    rules = FailureRules(timeout_factor=10.0)
+    with TraverseEnv(FLAT, config=SHORT, rules=rules) as env:
+        _, states, term, _, info = _run(env, lambda obs: np.array([-1.0, 0.0], dtype=np.float32), 4)
+    assert term and info["failure_reason"] == "off_map"
+    assert states[-1][0] > 3.0  # it moved away from the goal
+
+
+def test_tilted_plane_beyond_the_tip_angle_ends_tipped():
+    x = np.arange(161) * CELL
+    plane = Heightmap(np.tile(0.2 * x, (161, 1)), CELL)  # 11.3 deg
+    with TraverseEnv(plane, config=SHORT, rules=FailureRules(tip_angle_deg=5.0)) as env:
+        obs, _ = env.reset(seed=0)
+        tilt = math.degrees(max(abs(obs["state"][2]), abs(obs["state"][3])))
+        assert tilt > 5.0
+        _, _, term, _, info = env.step(np.zeros(2, dtype=np.float32))
+    assert term and info["failure_reason"] == "tipped"
+
+
+def test_height_patch_is_heading_aligned():
+    x = np.arange(101) * CELL
+    ramp = Heightmap(np.tile(0.1 * x, (101, 1)), CELL)  # z = 0.1 x
+    p = height_patch(ramp, 2.0, 2.5, math.pi / 2, 5, 0.2, fill_m=-9.0)  # facing +y
+    c = 2.0
+    i = np.arange(5)[:, None]
+    # body left (rows) points to world -x; forward (columns) to +y, along which z is constant
+    assert np.allclose(p, 0.1 * (2.0 - (i - c) * 0.2) * np.ones((1, 5)), atol=1e-12)
+    edge = height_patch(ramp, 0.1, 2.5, 0.0, 5, 0.2, fill_m=-9.0)
+    assert np.all(edge[:, :2] == -9.0) and np.all(edge[:, 2:] >= 0.0)
+
+
+def test_env_rejects_bad_settings():
+    with pytest.raises(InputError, match="control_rate_hz"):
+        TraverseEnv(FLAT, config=TraverseConfig(control_rate_hz=7), sim=SimConfig())
+    with pytest.raises(InputError, match="patch_cells"):
+        TraverseConfig(patch_cells=0)
+    with pytest.raises(InputError, match="render_mode"):
+        TraverseEnv(FLAT, render_mode="human")
+
+
+def test_reset_can_replay_a_given_mission():
+    from offroadbench.navigation.missions import Mission
+
+    m = Mission.between(5, (2.0, 2.0), (2.0, 6.0))
+    with TraverseEnv(FLAT, config=QUIET) as env:
+        obs, info = env.reset(seed=0, options={"mission": m})
+        assert env.mission == m and info["distance_to_goal_m"] == pytest.approx(4.0, abs=0.02)
+        assert obs["state"][0] == pytest.approx(4.0, abs=0.05)  # spawned facing the goal
+        with pytest.raises(InputError, match="mission"):
+            env.reset(options={"mission": (2.0, 2.0)})

@@ -1,0 +1,121 @@
+"""Physics sanity tests of the traversal trials (issue 3): short missions on small maps."""
+
+import math
+
+import numpy as np
+import pytest
+
+from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
+from offroadbench.heightmap import Heightmap
+from offroadbench.io.telemetry import load_telemetry
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.sim import FAILURE_REASONS, TELEMETRY_COLUMNS, ControllerConfig, FailureRules, World, run_mission, run_missions
+
+CELL = 0.05
+
+
+def _strip(z_of_x: np.ndarray, rows: int = 81) -> Heightmap:
+    """A 4 m wide strip whose height depends on x only."""
+    return Heightmap(np.tile(z_of_x, (rows, 1)), CELL)
+
+
+def _drive(hm, mission, **kw):
+    with World(hm) as world:
+        return run_mission(world, mission, **kw)
+
+
+def test_flat_ground_10_m_in_about_10_s_with_quiet_attitude():
+    r, tel = _drive(Heightmap.flat(81, 321, CELL, z_m=0.4), Mission.between(0, (3, 2), (13, 2)))
+    assert r.success and r.failure_reason == ""
+    # 9.5 m to the 0.5 m goal circle at 1 m/s plus the jerk-limited ramps at both ends
+    assert 9.5 <= r.traversal_time_s <= 11.5
+    assert r.path_length_m == pytest.approx(9.5, abs=0.2)
+    assert r.max_abs_roll_deg < 1 and r.max_abs_pitch_deg < 2
+    assert r.rms_pitch_rate_deg_s < 2.5 and r.rms_roll_rate_deg_s < 2.5  # paper's smoothest terrain: ~17, ~11
+    assert r.rms_vertical_accel_m_s2 < 0.4
+    assert np.abs(tel["y_m"] - 2.0).max() < 0.1  # stays on the line
+    assert 0.99 < tel["cmd_v_m_s"].max() <= 1.0
+    assert np.allclose(np.diff(tel["t_s"]), 0.05)  # 20 Hz telemetry
+    assert set(tel) == set(TELEMETRY_COLUMNS)
+
+
+def test_15_degree_ramp_is_climbed():
+    x = np.arange(321) * CELL
+    hm = _strip(np.tan(np.radians(15)) * np.clip(x - 4.0, 0, None))
+    r, tel = _drive(hm, Mission.between(0, (2, 2), (13, 2)))
+    assert r.success
+    assert r.max_abs_pitch_deg == pytest.approx(15, abs=2.5)  # it really was on the ramp
+    assert tel["z_m"][-1] - tel["z_m"][0] > 2.0
+
+
+def test_vertical_wall_ends_stuck():
+    x = np.arange(501) * CELL
+    hm = _strip(np.where(x >= 8.0, 1.0, 0.0))  # a 1 m step across the path
+    r, tel = _drive(hm, Mission.between(0, (3, 2), (23, 2)))
+    assert r.failure_reason == "stuck" and not r.success
+    assert math.isnan(r.traversal_time_s)
+    # stuck is declared once the vehicle has stayed within 0.2 m for 30 s
+    assert 30.0 < r.sim_time_s < 40.0
+    assert tel["x_m"].max() < 8.0
+
+
+def test_vehicle_spawned_on_its_side_ends_tipped():
+    r, _ = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (13, 2)), spawn_roll_rad=math.pi / 2)
+    assert r.failure_reason == "tipped"
+    assert r.max_abs_roll_deg > 75
+
+
+def test_driving_off_the_edge_ends_off_map():
+    r, tel = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (25, 2)))  # goal beyond x = 16 m
+    assert r.failure_reason == "off_map"
+    assert tel["x_m"][-1] > 16.0 - 0.5
+
+
+def test_timeout_is_a_multiple_of_the_nominal_time():
+    x = np.arange(501) * CELL
+    hm = _strip(np.where(x >= 8.0, 1.0, 0.0))
+    rules = FailureRules(stuck_window_s=1000.0)  # never stuck: held at the wall until 3 x 20 s
+    r, _ = _drive(hm, Mission.between(0, (3, 2), (23, 2)), rules=rules)
+    assert r.failure_reason == "timeout" and r.sim_time_s == pytest.approx(60.0, abs=0.02)
+
+
+@pytest.fixture(scope="module")
+def rough():
+    """A small D = 2.6 terrain, steeper than the paper's (1.5 m relief over 12 m), and 3 missions."""
+    from offroadbench.terrain.recipe import apply_overrides, generate_terrain, load_recipe
+
+    recipe = apply_overrides(load_recipe("paper-d2.6"),
+                             {"grid.rows": 241, "grid.cols": 241, "layers.base.relief_m": 1.5})
+    hm = generate_terrain(recipe, 11)
+    rc = RoughnessConfig()
+    closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
+    missions = sample_missions(hm, closed, MissionConfig(count=3, length_m=6.0, border_m=2.0), np.random.default_rng(4))
+    return hm, missions
+
+
+def test_wheel_penetration_stays_under_3_cm_on_rough_terrain(rough):
+    hm, missions = rough
+    results = run_missions(hm, missions)
+    assert max(r.max_penetration_m for r in results) < 0.03
+    assert all(r.failure_reason in ("", *FAILURE_REASONS) and r.success == (r.failure_reason == "") for r in results)
+    # the terrain is rough for the vehicle: it shakes far more than on flat ground
+    assert np.median([r.rms_pitch_rate_deg_s for r in results]) > 5.0
+
+
+def test_results_do_not_depend_on_earlier_missions_and_repeat_exactly(rough, tmp_path):
+    hm, missions = rough
+    all_three = run_missions(hm, missions, telemetry_dir=tmp_path)
+    alone = run_missions(hm, missions[2:])
+    assert alone[0] == all_three[2]
+    again = run_missions(hm, missions)
+    assert again == all_three
+    tel = load_telemetry(tmp_path / f"mission_{missions[2].index:03d}.npz")
+    assert set(tel) == set(TELEMETRY_COLUMNS)
+    assert tel["t_s"][-1] == pytest.approx(all_three[2].sim_time_s)
+
+
+def test_control_rate_must_divide_physics_rate():
+    from offroadbench.errors import InputError
+
+    with World(Heightmap.flat(41, 41, CELL)) as world, pytest.raises(InputError, match="control_rate_hz"):
+        run_mission(world, Mission.between(0, (0.5, 1), (1.5, 1)), controller=ControllerConfig(control_rate_hz=25))

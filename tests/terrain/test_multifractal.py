@@ -1,0 +1,86 @@
+"""Multifractal product of three W-M DEMs (paper Sec. 2.1, Table 1)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from offroadbench import InputError
+from offroadbench.terrain.fractal.multifractal import (
+    MultifractalConfig,
+    generate_multifractal,
+    layer_configs,
+    multifractal_layers,
+    normalise_layer,
+)
+
+SMALL = dict(rows=96, cols=96)
+
+
+def test_table1_defaults():
+    low, mid, high = layer_configs(MultifractalConfig())
+    assert (low.M, mid.M, high.M) == (16, 32, 64)
+    assert (low.D, mid.D, high.D) == (2.2, 2.45, 2.45)
+    assert (low.G, mid.G, high.G) == (1e-6, 8e-8, 1e-8)
+    for c in (low, mid, high):
+        assert c.gamma == 1.5 and c.L == 100.9 and c.n_max_effective == 1009
+        assert c.phase_min == 0.0 and c.phase_max == pytest.approx(np.pi)
+        assert (c.rows, c.cols, c.cell_size_m) == (1009, 1009, 0.05)
+
+
+def test_layers_zero_mean_same_range_and_product():
+    cfg = MultifractalConfig(**SMALL, D_high=2.6)
+    layers = multifractal_layers(cfg, np.random.default_rng(2))
+    for z in layers:
+        assert abs(z.mean()) < 1e-12
+        assert np.abs(z).max() == pytest.approx(1.0)
+    hm = generate_multifractal(cfg, np.random.default_rng(2))
+    prod = layers[0] * layers[1] * layers[2]
+    expect = (prod - prod.min()) / (prod.max() - prod.min()) * 3.84
+    np.testing.assert_allclose(hm.z, expect, atol=1e-12)
+    assert hm.relief_m == pytest.approx(3.84)
+    assert hm.cell_size_m == 0.05
+
+
+def test_amplitudes_A_and_G_do_not_change_the_result():
+    cfg = MultifractalConfig(**SMALL)
+    a = generate_multifractal(cfg, np.random.default_rng(4))
+    b = generate_multifractal(dataclasses.replace(cfg, G=(1e-3, 1e-5, 1e-2)), np.random.default_rng(4))
+    np.testing.assert_allclose(a.z, b.z, atol=1e-9)
+
+
+def test_contract_and_d_high_changes_only_the_high_layer():
+    cfg = MultifractalConfig(**SMALL)
+    before = dataclasses.asdict(cfg)
+    a = generate_multifractal(cfg, np.random.default_rng(9))
+    assert np.array_equal(a.z, generate_multifractal(cfg, np.random.default_rng(9)).z)
+    assert not np.array_equal(a.z, generate_multifractal(cfg, np.random.default_rng(10)).z)
+    assert dataclasses.asdict(cfg) == before
+    la = multifractal_layers(cfg, np.random.default_rng(9))
+    lb = multifractal_layers(dataclasses.replace(cfg, D_high=2.6), np.random.default_rng(9))
+    assert np.array_equal(la[0], lb[0]) and np.array_equal(la[1], lb[1])
+    assert not np.array_equal(la[2], lb[2])
+
+
+def test_higher_d_high_is_rougher_in_gradient_classes():
+    """The paper's claim (Sec. 3.1) on small maps, same phases: less low-roughness area as D rises."""
+    from offroadbench.analysis import class_fractions, classify
+
+    lows = []
+    for D in (2.3, 2.6):
+        fr = []
+        for s in range(3):
+            hm = generate_multifractal(MultifractalConfig(rows=201, cols=201, D_high=D), np.random.default_rng(s))
+            fr.append(class_fractions(classify(hm), hm.cell_size_m, 0.5)["low"])
+        lows.append(np.median(fr))
+    assert lows[1] < lows[0]
+
+
+def test_normalise_flat_layer_is_safe():
+    assert np.array_equal(normalise_layer(np.ones((3, 3))), np.zeros((3, 3)))
+
+
+@pytest.mark.parametrize("kw", [dict(D_high=3.2), dict(D_low=2.0), dict(M=(16, 32)), dict(relief_m=0.0), dict(gamma=0.5)])
+def test_bad_config(kw):
+    with pytest.raises(InputError):
+        MultifractalConfig(**kw)

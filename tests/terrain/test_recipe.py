@@ -1,0 +1,87 @@
+"""Recipes: presets by name, layering, overrides, validation, seeds per layer."""
+
+import numpy as np
+import pytest
+
+from offroadbench import InputError
+from offroadbench.terrain.recipe import apply_overrides, generate_terrain, list_presets, load_recipe, recipe_from_dict
+
+
+def _wm_recipe(**extra_layers):
+    data = {
+        "recipe": {"name": "t"},
+        "grid": {"rows": 30, "cols": 40, "cell_size_m": 0.1},
+        "layers": {"a": {"generator": "wm", "M": 4, "n_max": 12}},
+    }
+    data["layers"].update(extra_layers)
+    return data
+
+
+def test_paper_presets_exist():
+    presets = list_presets()
+    for d in ("2.3", "2.45", "2.6"):
+        r = load_recipe(f"paper-d{d}")
+        assert r.layers[0].config.D_high == float(d)
+        assert f"paper-d{d}" in presets
+
+
+def test_layers_sum_product_and_independent_rngs():
+    one = recipe_from_dict(_wm_recipe())
+    two = recipe_from_dict(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "weight": 0.5}))
+    prod = recipe_from_dict(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "combine": "product"}))
+    only_b = recipe_from_dict(
+        {"grid": {"rows": 30, "cols": 40, "cell_size_m": 0.1}, "layers": {"b": {"generator": "wm", "M": 3, "n_max": 10}}}
+    )
+    a = generate_terrain(one, 5).z
+    b = generate_terrain(only_b, 5).z  # same layer name -> same random numbers
+    np.testing.assert_allclose(generate_terrain(two, 5).z, a + 0.5 * b, atol=1e-12)
+    np.testing.assert_allclose(generate_terrain(prod, 5).z, a * b, atol=1e-12)
+
+
+def test_relief_and_grid_injection():
+    data = _wm_recipe()
+    data["recipe"]["relief_m"] = 2.0
+    hm = generate_terrain(recipe_from_dict(data), 1)
+    assert hm.shape == (30, 40) and hm.cell_size_m == 0.1
+    assert hm.relief_m == pytest.approx(2.0) and hm.z_min_m == 0.0
+
+
+def test_overrides_and_ids():
+    r = load_recipe("paper-d2.45")
+    r2 = apply_overrides(r, {"layers.base.D_high": 2.6, "grid.rows": 50, "grid.cols": 50})
+    assert r2.layers[0].config.D_high == 2.6 and r2.layers[0].config.rows == 50
+    assert r.layers[0].config.D_high == 2.45  # original untouched
+    assert r2.terrain_id(1) == apply_overrides(r, {"layers.base.D_high": 2.6, "grid.rows": 50, "grid.cols": 50}).terrain_id(1)
+    assert r2.terrain_id(1) != r2.terrain_id(2) != r.terrain_id(1)
+
+
+@pytest.mark.parametrize(
+    "mutate, match",
+    [
+        (lambda d: d["layers"]["a"].update(bogus=1), "unknown key.*bogus"),
+        (lambda d: d["layers"]["a"].update(generator="nope"), "unknown terrain generator 'nope'; known:.*wm"),
+        (lambda d: d["layers"]["a"].update(combine="blend"), "combine"),
+        (lambda d: d["grid"].update(rows=0), "grid.rows"),
+        (lambda d: d["grid"].update(cell_size_m=-1), "cell_size_m"),
+        (lambda d: d.update(extra={}), "unknown key.*extra"),
+        (lambda d: d["layers"]["a"].update(D=3.5), r"D = 3.5 is out of range"),
+        (lambda d: d.pop("grid"), r"\[grid\]"),
+    ],
+)
+def test_bad_recipes(mutate, match):
+    data = _wm_recipe()
+    mutate(data)
+    with pytest.raises(InputError, match=match):
+        recipe_from_dict(data)
+
+
+def test_unknown_preset_lists_known():
+    with pytest.raises(InputError, match="unknown terrain preset 'paper-d9'; known presets: .*paper-d2.45"):
+        load_recipe("paper-d9")
+    with pytest.raises(InputError, match="does not exist"):
+        load_recipe("/no/such/recipe.toml")
+
+
+def test_bad_seed():
+    with pytest.raises(InputError, match="seed"):
+        generate_terrain(recipe_from_dict(_wm_recipe()), -1)
