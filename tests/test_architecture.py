@@ -1,0 +1,114 @@
+"""The package's shape: side effects at the edges, no import cycles, pybullet only in sim/."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "offroadbench"
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for path in PKG.rglob("*.py"):
+        rel = path.relative_to(PKG.parent).with_suffix("")
+        parts = list(rel.parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def _top_level_imports(path: Path, module: str, known: set[str]) -> set[str]:
+    """offroadbench modules imported at module level (not inside functions or TYPE_CHECKING)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    found: set[str] = set()
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+    def resolve(name: str) -> str | None:
+        while name and name not in known:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    for node in tree.body:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            continue
+        stmts = [node] if not isinstance(node, (ast.Try, ast.If)) else [*node.body]
+        for st in stmts:
+            if isinstance(st, ast.Import):
+                names = [a.name for a in st.names]
+            elif isinstance(st, ast.ImportFrom):
+                base = st.module or ""
+                if st.level:
+                    anchor = package.split(".")[: len(package.split(".")) - st.level + 1]
+                    base = ".".join([*anchor, base] if base else anchor)
+                names = [f"{base}.{a.name}" for a in st.names] + [base]
+            else:
+                continue
+            for n in names:
+                if n.startswith("offroadbench"):
+                    r = resolve(n)
+                    if r and r != module:
+                        found.add(r)
+    return found
+
+
+def test_no_module_level_import_cycles():
+    mods = _modules()
+    graph = {m: _top_level_imports(p, m, set(mods)) for m, p in mods.items()}
+    # a package's __init__ importing its own submodules is not a cycle of concern; edges from a
+    # submodule back to its parent package are (they re-enter a half-initialised package)
+    state: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(m: str) -> None:
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(graph.get(m, ())):
+            if m.startswith(n + "."):
+                continue  # submodule -> its own parent package: importing the parent is already under way
+            if state.get(n) == 1:
+                cycles.append(stack[stack.index(n):] + [n])
+            elif n not in state:
+                visit(n)
+        stack.pop()
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m)
+    assert not cycles, "module-level import cycles:\n" + "\n".join(" -> ".join(c) for c in cycles)
+
+
+@pytest.mark.parametrize("module", ["offroadbench.study", "offroadbench.sim.config", "offroadbench.study.spec",
+                                    "offroadbench.terrain", "offroadbench.navigation.planners",
+                                    "offroadbench.study.report", "offroadbench.plots.study"])
+def test_importing_leaves_pybullet_and_matplotlib_backend_alone(module):
+    code = (
+        "import sys, matplotlib\n"
+        "before = matplotlib.rcParams._get_backend_or_none()\n"
+        f"import {module}\n"
+        "assert 'pybullet' not in sys.modules, 'pybullet imported'\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
+        "assert matplotlib.rcParams._get_backend_or_none() == before, 'backend changed'\n"
+    )
+    env = {k: v for k, v in __import__("os").environ.items() if k != "MPLBACKEND"}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert r.returncode == 0, r.stderr
+
+
+def test_pybullet_only_in_sim_and_print_only_in_cli():
+    for m, path in _modules().items():
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+                if any(n.split(".")[0] == "pybullet" for n in names):
+                    assert m.startswith("offroadbench.sim."), f"{m} imports pybullet"
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "print":
+                assert m.startswith("offroadbench.cli"), f"{m} calls print()"
