@@ -21,6 +21,7 @@ import math
 import numpy as np
 from ruckig import InputParameter, OutputParameter, Result, Ruckig
 
+from offroadbench.errors import InputError
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.vehicle import VehicleSpec
 
@@ -128,7 +129,7 @@ class PathTracker:
         keep = np.concatenate([[True], seg_len > 1e-9])  # drop repeated waypoints
         self.points = pts[keep]
         if len(self.points) < 2:
-            raise ValueError("a path needs two distinct waypoints")
+            raise InputError(f"a path needs two distinct waypoints, got {len(pts)} point(s) with {len(self.points)} distinct")
         seg = np.diff(self.points, axis=0)
         self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
         self._unit = seg / self._seg_len[:, None]

@@ -55,7 +55,9 @@ class TrialResult:
     """
 
     mission_index: int
+    """Index k of the mission on its terrain (the mission sampler's order)."""
     success: bool
+    """True when the vehicle came within the goal tolerance before any failure rule fired."""
     failure_reason: str
     """"" on success, else one of FAILURE_REASONS."""
     traversal_time_s: float
@@ -63,20 +65,31 @@ class TrialResult:
     path_length_m: float
     """Length of the 20 Hz 3-D trajectory of the vehicle's base."""
     max_abs_roll_deg: float
+    """Largest |roll| over the trial, degrees."""
     max_abs_pitch_deg: float
+    """Largest |pitch| over the trial, degrees."""
     rms_vertical_accel_m_s2: float
+    """RMS of the base's vertical acceleration (z differentiated twice at 20 Hz), m/s^2 (Majhor & Bos 2023, Sec. 2.4)."""
     rms_pitch_rate_deg_s: float
+    """RMS pitch rate from the unwrapped pitch angle, deg/s (Majhor & Bos 2023, Sec. 2.4)."""
     rms_roll_rate_deg_s: float
+    """RMS roll rate from the unwrapped roll angle, deg/s (Majhor & Bos 2023, Sec. 2.4)."""
     max_penetration_m: float
     """Deepest wheel-terrain penetration seen at the telemetry ticks."""
     sim_time_s: float
     """Simulated time at the end of the trial (success, failure or timeout)."""
     final_distance_to_goal_m: float
+    """Horizontal distance from the base to the goal when the trial ended, metres."""
     start_x_m: float
+    """Mission start x on the map, metres."""
     start_y_m: float
+    """Mission start y on the map, metres."""
     goal_x_m: float
+    """Mission goal x on the map, metres."""
     goal_y_m: float
+    """Mission goal y on the map, metres."""
     heading_deg: float
+    """Direction from start to goal, degrees counter-clockwise from +x."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)

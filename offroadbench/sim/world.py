@@ -47,7 +47,7 @@ class World:
         try:
             self._configure_engine()
             t0 = time.perf_counter()
-            self.terrain_id = self._build_terrain()
+            self.terrain_body = self._build_terrain()
             log.info("heightfield %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
             self.vehicle_id = self._load_vehicle()
         except BaseException:
@@ -196,7 +196,7 @@ class World:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres."""
         worst = 0.0
         wheels = self.wheel_joints
-        for c in pb.getContactPoints(bodyA=self.vehicle_id, bodyB=self.terrain_id, physicsClientId=self._cid):
+        for c in pb.getContactPoints(bodyA=self.vehicle_id, bodyB=self.terrain_body, physicsClientId=self._cid):
             if c[3] in wheels and -c[8] > worst:
                 worst = -c[8]
         return worst
@@ -206,6 +206,6 @@ class World:
         top = self.hm.z_max_m + 1.0
         bottom = self.hm.z_min_m - 1.0
         hit = pb.rayTest([x_m, y_m, top], [x_m, y_m, bottom], physicsClientId=self._cid)[0]
-        if hit[0] != self.terrain_id:
+        if hit[0] != self.terrain_body:
             return float("nan")
         return float(hit[3][2])

@@ -40,7 +40,7 @@ def test_settled_vehicle_rests_on_the_heightmap_surface():
     hm = _smooth_map()
     with World(hm) as world:
         world.spawn(4.0, 3.0, math.radians(30))
-        contacts = pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_id, physicsClientId=world.client_id)
+        contacts = pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_body, physicsClientId=world.client_id)
         wheel_contacts = [c for c in contacts if c[3] in world.wheel_joints]
         assert len({c[3] for c in wheel_contacts}) >= 3  # a rigid 4-wheeler on a curved surface
         for c in wheel_contacts:

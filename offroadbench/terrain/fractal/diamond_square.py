@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from offroadbench.config import check_int, check_range
+from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.registry import register
 
@@ -96,7 +97,7 @@ def diamond_square(size_px: int, dimension: float, sigma0: float, rng: np.random
     """A (size, size) RMD surface; size must be 2^n + 1. Corners are N(0, sigma0^2)."""
     n = size_px - 1
     if n < 2 or n & (n - 1):
-        raise ValueError(f"diamond-square size must be 2^n + 1, got {size_px}")
+        raise InputError(f"diamond-square size = {size_px} px is not allowed; it must be 2^n + 1 (3, 5, 9, 17, ...)")
     sf = scale_factor(dimension)
     z = np.zeros((size_px, size_px))
     z[np.ix_([0, n], [0, n])] = sigma0 * rng.standard_normal((2, 2))
