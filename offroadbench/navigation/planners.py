@@ -1,154 +1,385 @@
-"""Path planners: a registry of pure functions ``(heightmap, classes, start_xy, goal_xy, cfg) -> (N, 2)``.
+"""Path planners: a registry of functions ``plan(problem, cfg) -> (N, 2) waypoints``.
 
-Every planner returns waypoints in map metres (x, y), the first exactly ``start_xy`` and the last
-exactly ``goal_xy``; the trial runner follows them with pure pursuit
-(``ControllerConfig.planner``). ``classes`` is the roughness-class map of Majhor & Bos 2023, Eq. (3)-(4)
-(uint8 LOW/SEMI/HIGH, the heightmap's shape), usually the closed map the missions are drawn on.
+A planner receives a :class:`PlanningProblem` (the heightmap, the study's closed roughness-class
+map, start, goal, the mission border and the vehicle's envelope) and its own frozen config, and
+returns waypoints in map metres (x, y), the first exactly the start and the last exactly the goal.
+The trial runner follows them with pure pursuit (offroadbench.navigation.trackers).
 
-- ``straight``: the paper's naive plan (Sec. 2.3): the start-goal line, two waypoints.
-- ``astar``: terrain-aware. The map is coarsened to cells of about ``cfg.grid_m``; a coarse cell
-  is forbidden if any of its pixels is ``high`` (the paper's non-traversable class), and otherwise
-  costs, per metre,
+Registering a planner:
 
-      c = 1 + gradient_weight * mean Moore gradient (Eq. 3, rise/run) + semi_cost * (semi fraction)
-            + clearance_cost * [within clearance_m of a high pixel]
+* in the same process, with the decorator::
 
-  Costs are then averaged over the vehicle's footprint (a ``footprint_m`` square), so the path does
-  not weave between rough patches smaller than the vehicle, and the forbidden cells are put back.
-  8-connected A* (octile heuristic, admissible since c >= 1) finds the cheapest cell path, whose
-  step cost is the step length times the mean cost of its two cells. The path is then shortened
-  by string pulling: a run of waypoints is replaced by one straight segment when the segment
-  crosses no forbidden cell and costs at most ``1 + shortcut_tolerance`` times the run
-  (costs integrated along the segment at a quarter-cell spacing). If no path avoids the high
-  cells, ``astar`` returns the straight line and logs a warning (or raises, see
-  ``PlannerConfig.fallback_to_straight``).
+      @register_planner("mine", config=MyConfig)
+      def plan_mine(problem: PlanningProblem, cfg: MyConfig) -> np.ndarray: ...
+
+* from an installed package, with an entry point in its ``pyproject.toml``::
+
+      [project.entry-points."offroadbench.planners"]
+      mine = "my_package:PLANNER"        # a PlannerSpec (or a plan function)
+
+Then ``[planner] name = "mine"`` (plus the config's fields) in a study, ``drive --planner mine``
+and ``TraverseEnv(planner="mine")`` use it. ``examples/offroadbench-example-planner`` is a
+complete package.
+
+Built-in planners (what each optimises and what it cannot see is in its docstring):
+
+- ``straight``: the paper's start-goal line (Majhor & Bos 2023, Sec. 2.3).
+- ``astar``: 8-connected A* on a roughness cost grid, string-pulled.
+- ``lattice``: hybrid A* over arcs of bounded curvature (a state lattice in heading).
+
+The cost grid (:func:`cost_grid`, shared by ``astar`` and ``lattice``). The map is coarsened to
+cells of about ``grid_m``. A cell is *forbidden* if any of its pixels lies outside the mission
+border or within half the vehicle's width of a ``high`` pixel (the paper's non-traversable class,
+Eq. 3-4), so the vehicle's sides stay clear of it. Every other cell costs, per metre,
+
+    c = 1 + gradient_weight * (mean Moore gradient, Eq. 3) / vehicle max slope
+          + semi_cost * (semi fraction) + clearance_cost * [within half the vehicle's diagonal of high]
+
+averaged over a square as long as the vehicle (so a path does not weave between rough patches
+smaller than the vehicle). The cells round the start and goal that are forbidden only by the
+clearance (not by the border or a high pixel) are opened, so a mission that starts next to a
+rough patch can leave it.
 """
 
 from __future__ import annotations
 
-import functools
+import dataclasses
 import heapq
 import logging
 import math
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from offroadbench.analysis.roughness import HIGH, SEMI, RoughnessConfig, classify_terrain, disk, gradient_map
-from offroadbench.config import check_range
+from offroadbench.analysis.roughness import HIGH, SEMI, border_mask, disk, gradient_map
+from offroadbench.config import check_int, check_range, from_dict
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.registry import Registry
 
 __all__ = [
-    "PlannerConfig",
-    "Planner",
+    "VehicleEnvelope",
+    "PlanningProblem",
+    "NoConfig",
+    "PlannerSpec",
     "PLANNERS",
-    "get_planner",
-    "plan_path",
-    "planning_classes",
+    "register_planner",
+    "PlannerChoice",
+    "planner_from_table",
+    "plan",
+    "CostConfig",
+    "AStarConfig",
+    "LatticeConfig",
+    "CostGrid",
+    "cost_grid",
     "plan_straight",
     "plan_astar",
-    "path_cost_grid",
+    "plan_lattice",
 ]
 
 log = logging.getLogger(__name__)
 
 
+# ---------------------------------------------------------------------------- the problem
 @dataclass(frozen=True, kw_only=True)
-class PlannerConfig:
-    """Settings of the terrain-aware planners (``straight`` ignores them)."""
+class VehicleEnvelope:
+    """What a planner knows of the vehicle: its footprint and limits (defaults: the Husky)."""
+
+    length_m: float = 0.99
+    """Overall length of the footprint, m (Clearpath Husky A200: 0.99 m)."""
+    width_m: float = 0.67
+    """Overall width of the footprint, m (Husky: 0.67 m)."""
+    max_speed_m_s: float = 1.0
+    """Top speed, m/s."""
+    max_yaw_rate_rad_s: float = 2.0
+    """Largest yaw rate command, rad/s."""
+    max_slope: float = 0.8
+    """Steepest climbable slope, rise/run (about the tyre friction coefficient on a slope)."""
+
+    def __post_init__(self) -> None:
+        for name in ("length_m", "width_m", "max_speed_m_s", "max_yaw_rate_rad_s", "max_slope"):
+            check_range(self, name, getattr(self, name), lo=0, lo_open=True)
+
+    @property
+    def half_diagonal_m(self) -> float:
+        return 0.5 * math.hypot(self.length_m, self.width_m)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanningProblem:
+    """One planning query: terrain, classes, the mission's ends, its border and the vehicle."""
+
+    hm: Heightmap
+    """The terrain."""
+    classes: np.ndarray
+    """The closed roughness-class map (uint8 LOW/SEMI/HIGH, the heightmap's shape), classified with
+    the study's ``[roughness]`` config: the map the missions were drawn on."""
+    start_xy: tuple[float, float]
+    """Mission start, map metres."""
+    goal_xy: tuple[float, float]
+    """Mission goal, map metres."""
+    border_m: float = 0.0
+    """Missions keep this far from the map edge; planned paths must too."""
+    vehicle: VehicleEnvelope = field(default_factory=VehicleEnvelope)
+    """Footprint and limits of the vehicle that will drive the path."""
+
+    def __post_init__(self) -> None:
+        classes = np.asarray(self.classes)
+        if classes.shape != self.hm.shape:
+            raise InputError(f"class map shape {classes.shape} does not match the heightmap's {self.hm.shape}")
+        object.__setattr__(self, "classes", classes)
+        object.__setattr__(self, "start_xy", (float(self.start_xy[0]), float(self.start_xy[1])))
+        object.__setattr__(self, "goal_xy", (float(self.goal_xy[0]), float(self.goal_xy[1])))
+
+    @property
+    def heading_rad(self) -> float:
+        """Direction start -> goal: the vehicle is spawned facing it."""
+        return math.atan2(self.goal_xy[1] - self.start_xy[1], self.goal_xy[0] - self.start_xy[0])
+
+    def endpoints(self) -> np.ndarray:
+        """``[start, goal]`` as a (2, 2) array: the straight plan."""
+        return np.array([self.start_xy, self.goal_xy], dtype=float)
+
+    def inside_border(self, xy: np.ndarray, tol_m: float = 1e-9) -> np.ndarray:
+        """Which points (N, 2) lie inside the mission border."""
+        p = np.asarray(xy, dtype=float).reshape(-1, 2)
+        lo = self.border_m - tol_m
+        x_hi = (self.hm.cols - 1) * self.hm.cell_size_m - self.border_m + tol_m
+        y_hi = (self.hm.rows - 1) * self.hm.cell_size_m - self.border_m + tol_m
+        return (p[:, 0] >= lo) & (p[:, 0] <= x_hi) & (p[:, 1] >= lo) & (p[:, 1] <= y_hi)
+
+
+# ---------------------------------------------------------------------------- registry
+@dataclass(frozen=True, kw_only=True)
+class NoConfig:
+    """A planner without settings."""
+
+
+@dataclass(frozen=True)
+class PlannerSpec:
+    """A registry entry: the plan function, its config class and a one-line summary."""
+
+    plan: Callable[[PlanningProblem, Any], np.ndarray]
+    config: type = NoConfig
+    summary: str = ""
+
+
+def _as_spec(name: str, obj: object) -> PlannerSpec:
+    """An entry point's object as a PlannerSpec: a PlannerSpec, or a plan function (whose
+    ``config`` attribute, if any, is its config class)."""
+    if isinstance(obj, PlannerSpec):
+        return obj
+    if callable(obj):
+        doc = (getattr(obj, "__doc__", None) or "").strip().splitlines()
+        return PlannerSpec(obj, getattr(obj, "config", NoConfig), doc[0] if doc else "")
+    raise TypeError(f"planner {name!r}: expected a PlannerSpec or a function, got {type(obj).__name__}")
+
+
+#: name -> PlannerSpec; installed packages add entries through the ``offroadbench.planners`` group
+PLANNERS: Registry[PlannerSpec] = Registry("planner", entry_point_group="offroadbench.planners", adapt=_as_spec)
+
+
+def register_planner(name: str, *, config: type = NoConfig, summary: str = ""):
+    """Decorator: register ``fn(problem, cfg) -> waypoints`` as planner ``name`` with its config class."""
+
+    def deco(fn):
+        doc = (fn.__doc__ or "").strip().splitlines()
+        PLANNERS.add(name, PlannerSpec(fn, config, summary or (doc[0] if doc else "")))
+        return fn
+
+    return deco
+
+
+@dataclass(frozen=True)
+class PlannerChoice:
+    """What drives a trial: a planner (or a policy, see offroadbench.navigation.policies) by name,
+    with its frozen config. A study's ``[planner]`` table."""
+
+    name: str = "straight"
+    config: Any = NoConfig()
+    kind: str = "planner"
+    """``planner`` (pure pursuit follows its path) or ``policy`` (closed loop on observations)."""
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """The config's fields as a plain dict (for tables and replays)."""
+        return dataclasses.asdict(self.config) if dataclasses.is_dataclass(self.config) else {}
+
+
+def planner_from_table(table: Mapping[str, Any], where: str = "[planner]") -> PlannerChoice:
+    """A study's ``[planner]`` table: ``name`` (a planner or a policy; default ``straight``) and the
+    fields of that entry's config. Unknown names and fields are InputErrors."""
+    from offroadbench.navigation.policies import POLICIES
+
+    data = dict(table)
+    name = data.pop("name", "straight")
+    if not isinstance(name, str):
+        raise InputError(f"{where}: name must be a string, got {name!r}")
+    if name in PLANNERS:
+        spec, kind = PLANNERS.get(name), "planner"
+    elif name in POLICIES:
+        spec, kind = POLICIES.get(name), "policy"
+    else:
+        PLANNERS.get(name)  # the did-you-mean error
+        raise AssertionError  # pragma: no cover
+    try:
+        cfg = from_dict(spec.config, data, where=f"{where} ({name})")
+    except TypeError as exc:
+        raise InputError(f"{where} ({name}): {exc}") from None
+    return PlannerChoice(name, cfg, kind)
+
+
+def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
+    """Waypoints (N, 2) from a planner, checked: finite, at least two, from exactly the start to
+    exactly the goal, on the map. A plug-in that breaks the contract raises RuntimeError."""
+    if isinstance(choice, str):
+        choice = PlannerChoice(choice, PLANNERS.get(choice).config())
+    if choice.kind != "planner":
+        raise InputError(f"{choice.name!r} is a policy, not a planner")
+    spec = PLANNERS.get(choice.name)
+    wp = np.asarray(spec.plan(problem, choice.config), dtype=float)
+    bad = None
+    if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2 or not np.all(np.isfinite(wp)):
+        bad = f"returned an array of shape {wp.shape}; expected (N >= 2, 2) finite waypoints"
+    elif not (np.array_equal(wp[0], problem.start_xy) and np.array_equal(wp[-1], problem.goal_xy)):
+        bad = f"runs from {wp[0].tolist()} to {wp[-1].tolist()}, not from the start {problem.start_xy} to the goal {problem.goal_xy}"
+    elif not np.all((wp >= 0) & (wp <= [problem.hm.width_m, problem.hm.height_m])):
+        bad = "leaves the map"
+    if bad:
+        raise RuntimeError(f"planner {choice.name!r} {bad}")
+    return wp
+
+
+# ---------------------------------------------------------------------------- straight
+@register_planner("straight", summary="the start-goal line (the paper's naive plan)")
+def plan_straight(problem: PlanningProblem, cfg: NoConfig = NoConfig()) -> np.ndarray:
+    """The start-goal line (Majhor & Bos 2023, Sec. 2.3): waypoints ``[start, goal]``.
+
+    Optimises: length. Cannot see: anything of the terrain.
+    """
+    return problem.endpoints()
+
+
+# ---------------------------------------------------------------------------- cost grid
+@dataclass(frozen=True, kw_only=True)
+class CostConfig:
+    """The cost grid of the terrain-aware planners (see the module docstring)."""
 
     grid_m: float = 0.25
     """Size of the planning cells, m (rounded to a whole number of map cells)."""
     gradient_weight: float = 2.0
-    """Extra cost per metre per unit of mean Moore gradient (rise/run) of a cell."""
+    """Extra cost per metre at a mean Moore gradient equal to the vehicle's max slope."""
     semi_cost: float = 2.0
     """Extra cost per metre of an all-semi cell (times the fraction of semi pixels in the cell)."""
-    clearance_m: float = 0.6
-    """Cells within this distance of a high pixel pay ``clearance_cost``: about half the Husky's
-    diagonal (0.99 x 0.67 m), so that the corners of a vehicle on the path stay clear."""
     clearance_cost: float = 4.0
-    """Extra cost per metre of a cell within ``clearance_m`` of a high pixel."""
-    footprint_m: float = 1.0
-    """Side of the square over which cell costs are averaged, m (the Husky is 0.99 x 0.67 m)."""
-    shortcut_tolerance: float = 0.1
-    """String pulling may raise the cost of a stretch of path by at most this fraction. Not 0,
-    because every turn costs the skid-steered vehicle more than the cost grid says (it turns at
-    only ~0.2-0.4 rad/s, measured), so fewer, straighter legs track better."""
+    """Extra cost per metre of a cell within half the vehicle's diagonal of a high pixel."""
     fallback_to_straight: bool = True
-    """With no path around the high cells: True returns the straight line (logged), False raises."""
+    """With no path round the high cells: True returns the straight line (logged), False raises."""
 
     def __post_init__(self) -> None:
         check_range(self, "grid_m", self.grid_m, lo=0, lo_open=True)
-        for name in ("gradient_weight", "semi_cost", "clearance_m", "clearance_cost", "footprint_m",
-                     "shortcut_tolerance"):
+        for name in ("gradient_weight", "semi_cost", "clearance_cost"):
             check_range(self, name, getattr(self, name), lo=0)
 
 
-PlannerFn = Callable[[Heightmap, "np.ndarray | None", tuple, tuple, PlannerConfig], np.ndarray]
-
-
 @dataclass(frozen=True)
-class Planner:
-    """A registry entry: the function and whether it reads the class map."""
+class CostGrid:
+    """Cost per metre of each planning cell (inf = forbidden); cell (R, C) covers map pixels
+    ``[R f, R f + f) x [C f, C f + f)``, ``step_m = f * cell size``."""
 
-    fn: PlannerFn
-    needs_classes: bool
-    summary: str
+    cost: np.ndarray
+    f: int
+    step_m: float
 
+    def cell_of(self, xy) -> tuple[int, int]:
+        r = min(max(int(xy[1] / self.step_m + 0.5 / self.f), 0), self.cost.shape[0] - 1)
+        c = min(max(int(xy[0] / self.step_m + 0.5 / self.f), 0), self.cost.shape[1] - 1)
+        return r, c
 
-def _endpoints(start_xy, goal_xy) -> np.ndarray:
-    return np.array([[float(start_xy[0]), float(start_xy[1])], [float(goal_xy[0]), float(goal_xy[1])]])
+    def at(self, pts: np.ndarray) -> np.ndarray:
+        """Cost at points (N, 2) in metres (the planning cell each falls in; pixel centres at k * cell)."""
+        idx = np.floor(np.asarray(pts) / self.step_m + 0.5 / self.f).astype(int)
+        idx = np.clip(idx, 0, [self.cost.shape[1] - 1, self.cost.shape[0] - 1])
+        return self.cost[idx[:, 1], idx[:, 0]]
 
-
-def plan_straight(hm: Heightmap, classes, start_xy, goal_xy, cfg: PlannerConfig = PlannerConfig()) -> np.ndarray:
-    """The start-goal line (Majhor & Bos 2023, Sec. 2.3): waypoints ``[start, goal]``."""
-    return _endpoints(start_xy, goal_xy)
-
-
-# ------------------------------------------------------------------------------ A*
-def _factor(hm: Heightmap, cfg: PlannerConfig) -> int:
-    return max(1, int(round(cfg.grid_m / hm.cell_size_m)))
+    def segment_cost(self, a: np.ndarray, b: np.ndarray) -> float:
+        """Cost of the straight segment a -> b, integrated at a quarter-cell spacing."""
+        length = float(math.hypot(b[0] - a[0], b[1] - a[1]))
+        if length == 0.0:
+            return 0.0
+        n = max(1, int(math.ceil(length / (0.25 * self.step_m))))
+        t = (np.arange(n + 1)) / n
+        pts = a[None, :] + t[:, None] * (b - a)[None, :]
+        c = self.at(pts)
+        return float(np.mean(0.5 * (c[1:] + c[:-1])) * length)
 
 
 def _blocks(a: np.ndarray, f: int, reduce) -> np.ndarray:
     """Reduce ``f x f`` blocks of ``a`` (edge-padded to whole blocks)."""
     rows, cols = a.shape
-    pr, pc = -rows % f, -cols % f
-    p = np.pad(a, ((0, pr), (0, pc)), mode="edge")
+    p = np.pad(a, ((0, -rows % f), (0, -cols % f)), mode="edge")
     return reduce(p.reshape(p.shape[0] // f, f, p.shape[1] // f, f), axis=(1, 3))
 
 
-def path_cost_grid(hm: Heightmap, classes: np.ndarray, cfg: PlannerConfig = PlannerConfig()) -> tuple[np.ndarray, int]:
-    """(cost per metre of each planning cell, inf = forbidden; cells per planning cell ``f``).
-
-    Planning cell (R, C) covers map cells ``[R f, R f + f) x [C f, C f + f)``.
-    """
+def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig()) -> CostGrid:
+    """The planning cost grid of ``problem`` (see the module docstring)."""
     from scipy.ndimage import binary_dilation, uniform_filter
 
-    classes = np.asarray(classes)
-    if classes.shape != hm.shape:
-        raise InputError(f"class map shape {classes.shape} does not match the heightmap's {hm.shape}")
-    f = _factor(hm, cfg)
+    hm, classes, veh = problem.hm, problem.classes, problem.vehicle
+    cell = hm.cell_size_m
+    f = max(1, int(round(cfg.grid_m / cell)))
     high = classes == HIGH
-    cost = 1.0 + cfg.gradient_weight * _blocks(gradient_map(hm), f, np.mean)
+    cost = 1.0 + cfg.gradient_weight * _blocks(gradient_map(hm), f, np.mean) / veh.max_slope
     cost += cfg.semi_cost * _blocks((classes == SEMI).astype(float), f, np.mean)
-    radius_px = cfg.clearance_m / hm.cell_size_m
-    if radius_px >= 1 and high.any():
-        near = binary_dilation(high, structure=disk(radius_px))
+    if high.any():
+        near = binary_dilation(high, structure=disk(max(veh.half_diagonal_m / cell, 1.0)))
         cost += cfg.clearance_cost * _blocks(near, f, np.any)
-    size = int(round(cfg.footprint_m / (f * hm.cell_size_m)))
+        blocked = binary_dilation(high, structure=disk(max(0.5 * veh.width_m / cell, 1.0)))
+    else:
+        blocked = high
+    size = int(round(veh.length_m / (f * cell)))
     if size > 1:
         cost = uniform_filter(cost, size=size, mode="nearest")
-    cost[_blocks(high, f, np.any)] = np.inf
-    return cost, f
+    outside = ~border_mask(hm.shape, problem.border_m, cell)
+    hard = _blocks(high | outside, f, np.any)
+    soft = _blocks(blocked, f, np.any) & ~hard
+    # open the clearance-only cells round the start and the goal, so the vehicle can leave them
+    grid = CostGrid(cost, f, f * cell)
+    reach = 0.5 * veh.width_m + 2 * grid.step_m
+    rr, cc = np.mgrid[0 : cost.shape[0], 0 : cost.shape[1]]
+    for xy in (problem.start_xy, problem.goal_xy):
+        soft &= np.hypot(cc * grid.step_m - xy[0], rr * grid.step_m - xy[1]) > reach
+    cost[hard | soft] = np.inf
+    for xy in (problem.start_xy, problem.goal_xy):  # the mission's own ends are always usable
+        rc = grid.cell_of(xy)
+        if not math.isfinite(cost[rc]):
+            cost[rc] = 1.0 + cfg.semi_cost + cfg.clearance_cost + cfg.gradient_weight
+    return grid
 
 
-def _cell_of(xy, f: int, hm: Heightmap, shape) -> tuple[int, int]:
-    r = min(max(int(round(xy[1] / hm.cell_size_m)), 0), hm.rows - 1) // f
-    c = min(max(int(round(xy[0] / hm.cell_size_m)), 0), hm.cols - 1) // f
-    return min(r, shape[0] - 1), min(c, shape[1] - 1)
+def _no_path(name: str, problem: PlanningProblem, cfg: CostConfig) -> np.ndarray:
+    (sx, sy), (gx, gy) = problem.start_xy, problem.goal_xy
+    msg = f"{name}: no path from ({sx:.2f}, {sy:.2f}) to ({gx:.2f}, {gy:.2f}) m avoids the high-roughness cells"
+    if not cfg.fallback_to_straight:
+        raise InputError(msg)
+    log.warning("%s; following the straight line", msg)
+    return problem.endpoints()
+
+
+# ---------------------------------------------------------------------------- A*
+@dataclass(frozen=True, kw_only=True)
+class AStarConfig(CostConfig):
+    """Settings of ``astar``."""
+
+    shortcut_tolerance: float = 0.1
+    """String pulling may raise the cost of a stretch of path by at most this fraction. Not 0:
+    every turn costs a skid-steered vehicle more than the cost grid says, so fewer, straighter
+    legs track better."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_range(self, "shortcut_tolerance", self.shortcut_tolerance, lo=0)
 
 
 _MOVES = tuple((dr, dc, math.hypot(dr, dc)) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc)
@@ -197,21 +428,9 @@ def _astar(cost: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> l
     return None
 
 
-def _segment_cost(cost: np.ndarray, step_m: float, a: np.ndarray, b: np.ndarray) -> float:
-    """Cost of the straight segment a -> b (metres), integrated over the planning cells it crosses."""
-    length = float(np.hypot(*(b - a)))
-    if length == 0.0:
-        return 0.0
-    n = max(1, int(math.ceil(length / (0.25 * step_m))))
-    t = (np.arange(n) + 0.5) / n
-    pts = a[None, :] + t[:, None] * (b - a)[None, :]
-    idx = np.clip(np.floor(pts / step_m).astype(int), 0, [cost.shape[1] - 1, cost.shape[0] - 1])
-    return float(cost[idx[:, 1], idx[:, 0]].mean() * length)
-
-
-def _string_pull(points: np.ndarray, cost: np.ndarray, step_m: float, tol: float) -> np.ndarray:
+def _string_pull(points: np.ndarray, grid: CostGrid, tol: float) -> np.ndarray:
     """Greedy shortcutting: from each kept waypoint, jump to the farthest one the rule allows."""
-    seg = [_segment_cost(cost, step_m, points[k], points[k + 1]) for k in range(len(points) - 1)]
+    seg = [grid.segment_cost(points[k], points[k + 1]) for k in range(len(points) - 1)]
     keep = [0]
     i = 0
     while i < len(points) - 1:
@@ -219,7 +438,7 @@ def _string_pull(points: np.ndarray, cost: np.ndarray, step_m: float, tol: float
         run = seg[i]
         while j + 1 < len(points):
             run_next = run + seg[j]
-            direct = _segment_cost(cost, step_m, points[i], points[j + 1])
+            direct = grid.segment_cost(points[i], points[j + 1])
             if not math.isfinite(direct) or direct > (1.0 + tol) * run_next:
                 break
             j += 1
@@ -229,57 +448,164 @@ def _string_pull(points: np.ndarray, cost: np.ndarray, step_m: float, tol: float
     return points[keep]
 
 
-def plan_astar(hm: Heightmap, classes, start_xy, goal_xy, cfg: PlannerConfig = PlannerConfig()) -> np.ndarray:
-    """Terrain-aware waypoints: A* on the cost grid of :func:`path_cost_grid`, then string pulling."""
-    cost, f = path_cost_grid(hm, classes, cfg)
-    step_m = f * hm.cell_size_m
-    s_cell = _cell_of(start_xy, f, hm, cost.shape)
-    g_cell = _cell_of(goal_xy, f, hm, cost.shape)
-    cost = cost.copy()
-    for cell in (s_cell, g_cell):  # the mission's own ends are always usable
-        if not math.isfinite(cost[cell]):
-            cost[cell] = 1.0 + cfg.semi_cost + cfg.clearance_cost
-    cells = _astar(cost, s_cell, g_cell)
-    if cells is None:
-        msg = (f"astar: no path from ({start_xy[0]:.2f}, {start_xy[1]:.2f}) to ({goal_xy[0]:.2f}, {goal_xy[1]:.2f}) m "
-               "avoids the high-roughness cells")
-        if not cfg.fallback_to_straight:
-            raise InputError(msg)
-        log.warning("%s; following the straight line", msg)
-        return _endpoints(start_xy, goal_xy)
-    centres = (np.array(cells, dtype=float)[:, ::-1] + 0.5) * step_m  # (x, y) of each cell's centre
-    ends = _endpoints(start_xy, goal_xy)
-    points = np.vstack([ends[:1], centres[1:-1], ends[1:]])
-    return _string_pull(points, cost, step_m, cfg.shortcut_tolerance)
+@register_planner("astar", config=AStarConfig,
+                  summary="8-connected A* on a roughness cost grid, high cells and the border forbidden, string-pulled")
+def plan_astar(problem: PlanningProblem, cfg: AStarConfig = AStarConfig()) -> np.ndarray:
+    """A* on the cost grid (see the module docstring), then string pulling.
 
-
-# ------------------------------------------------------------------------------ registry
-PLANNERS: dict[str, Planner] = {
-    "straight": Planner(plan_straight, False, "the start-goal line (the paper's naive plan)"),
-    "astar": Planner(plan_astar, True, "8-connected A* on a roughness cost grid, high cells forbidden, string-pulled"),
-}
-
-
-def get_planner(name: str) -> Planner:
-    try:
-        return PLANNERS[name]
-    except KeyError:
-        raise InputError(f"unknown planner {name!r}; known planners: {', '.join(sorted(PLANNERS))}") from None
-
-
-@functools.lru_cache(maxsize=2)
-def planning_classes(hm: Heightmap, cfg: RoughnessConfig = RoughnessConfig()) -> np.ndarray:
-    """The closed class map the missions are drawn on (read-only), cached per Heightmap object.
-
-    Heightmaps are immutable, so the cache (keyed on the object and the config) never goes stale.
+    Optimises: the integral of the cost grid along the path (length, weighted by roughness and
+    nearness to high cells). Cannot see: the vehicle's heading and turning (the path may start
+    sideways or turn on the spot), slopes as such (only the local Moore gradient), anything the
+    class map and the cell size blur out.
     """
-    return classify_terrain(hm, cfg).closed
+    grid = cost_grid(problem, cfg)
+    cells = _astar(grid.cost, grid.cell_of(problem.start_xy), grid.cell_of(problem.goal_xy))
+    if cells is None:
+        return _no_path("astar", problem, cfg)
+    centres = np.array(cells, dtype=float)[:, ::-1] * grid.step_m + 0.5 * (grid.f - 1) * problem.hm.cell_size_m
+    ends = problem.endpoints()
+    points = np.vstack([ends[:1], centres[1:-1], ends[1:]])
+    return _string_pull(points, grid, cfg.shortcut_tolerance)
 
 
-def plan_path(name: str, hm: Heightmap, start_xy, goal_xy, cfg: PlannerConfig = PlannerConfig(),
-              classes: np.ndarray | None = None) -> np.ndarray:
-    """Waypoints (N, 2) from the planner ``name``; ``classes`` defaults to :func:`planning_classes`."""
-    planner = get_planner(name)
-    if planner.needs_classes and classes is None:
-        classes = planning_classes(hm)
-    return planner.fn(hm, classes, start_xy, goal_xy, cfg)
+# ---------------------------------------------------------------------------- hybrid A*
+@dataclass(frozen=True, kw_only=True)
+class LatticeConfig(CostConfig):
+    """Settings of ``lattice``."""
+
+    turn_radius_m: float = 1.5
+    """Smallest turning radius of the arcs, m. A skid-steer can turn on the spot, but turning in
+    place on rough ground is slow and slips; pure pursuit with a 1.5 m lookahead follows arcs of
+    this radius cleanly."""
+    step_m: float = 0.75
+    """Arc length of one motion primitive, m."""
+    headings: int = 16
+    """Heading bins of the search's closed set."""
+    turn_weight: float = 0.5
+    """Extra cost per radian turned (metres of straight driving a radian of turning is worth)."""
+    goal_tolerance_m: float = 0.5
+    """The search ends within this distance of the goal; a last straight piece reaches it exactly."""
+    max_expansions: int = 60000
+    """Search budget (expanded states) before falling back (``fallback_to_straight``)."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name in ("turn_radius_m", "step_m", "goal_tolerance_m"):
+            check_range(self, name, getattr(self, name), lo=0, lo_open=True)
+        check_range(self, "turn_weight", self.turn_weight, lo=0)
+        check_int(self, "headings", self.headings, lo=4, hi=360)
+        check_int(self, "max_expansions", self.max_expansions, lo=1)
+
+
+def _cost_to_go(grid: CostGrid, goal: tuple[int, int]) -> np.ndarray:
+    """Cheapest 8-connected cost from every cell to the goal cell (Dijkstra), metres x cost."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    rows, cols = grid.cost.shape
+    idx = np.arange(rows * cols).reshape(rows, cols)
+    c = grid.cost
+    src, dst, w = [], [], []
+    for dr, dc, step in _MOVES:
+        here = (slice(max(0, -dr), rows - max(0, dr)), slice(max(0, -dc), cols - max(0, dc)))
+        there = (slice(max(0, dr), rows + min(0, dr)), slice(max(0, dc), cols + min(0, dc)))
+        a, ib, ca, cb = idx[here], idx[there], c[here], c[there]
+        wt = step * grid.step_m * 0.5 * (ca + cb)
+        ok = np.isfinite(wt)
+        src.append(a[ok])
+        dst.append(ib[ok])
+        w.append(wt[ok])
+    graph = coo_matrix((np.concatenate(w), (np.concatenate(src), np.concatenate(dst))), shape=(rows * cols,) * 2)
+    # distances *to* the goal = distances from it on the transposed graph
+    d = dijkstra(graph.T.tocsr(), indices=goal[0] * cols + goal[1])
+    return d.reshape(rows, cols)
+
+
+@register_planner("lattice", config=LatticeConfig,
+                  summary="hybrid A* over arcs of bounded curvature from the vehicle's heading, on the roughness cost grid")
+def plan_lattice(problem: PlanningProblem, cfg: LatticeConfig = LatticeConfig()) -> np.ndarray:
+    """Hybrid A* (after Dolgov et al. 2010): a search over poses (x, y, heading) whose moves are
+    arcs of length ``step_m`` and curvature 0 or +-1/``turn_radius_m``, starting along the
+    mission heading the vehicle is spawned with. A pose is pruned if an arc sample falls in a
+    forbidden cell; the closed set is (planning cell, heading bin). The heuristic is the 2-D
+    cost-to-go (Dijkstra on the cost grid, turning ignored), so the search follows the cheap
+    corridor. The result is the sampled arcs (every ~quarter cell) plus a last straight piece
+    to the exact goal.
+
+    Optimises: the integral of the cost grid along a path the vehicle can follow without turning
+    tighter than ``turn_radius_m``, plus ``turn_weight`` per radian turned. Cannot see: slopes as
+    such (only the local Moore gradient and the classes), wheel slip and the tracker's own
+    errors; its heuristic is a little optimistic-or-pessimistic (8-connected), so the path is near
+    but not provably optimal.
+    """
+    grid = cost_grid(problem, cfg)
+    sx, sy = problem.start_xy
+    gx, gy = problem.goal_xy
+    goal_cell = grid.cell_of(problem.goal_xy)
+    h2d = _cost_to_go(grid, goal_cell)
+    if not math.isfinite(h2d[grid.cell_of(problem.start_xy)]):
+        return _no_path("lattice", problem, cfg)
+    nb = cfg.headings
+    kappas = (0.0, 1.0 / cfg.turn_radius_m, -1.0 / cfg.turn_radius_m)
+    n_sub = max(2, int(math.ceil(cfg.step_m / (0.25 * grid.step_m))))
+    s = np.arange(1, n_sub + 1) / n_sub * cfg.step_m
+    W, H = problem.hm.width_m, problem.hm.height_m
+
+    def arc(x, y, th, k):
+        if k == 0.0:
+            return x + s * math.cos(th), y + s * math.sin(th), th + 0.0 * s
+        ths = th + k * s
+        return x + (np.sin(ths) - math.sin(th)) / k, y - (np.cos(ths) - math.cos(th)) / k, ths
+
+    def h(x, y):
+        r, c = grid.cell_of((x, y))
+        return max(float(h2d[r, c]), math.hypot(gx - x, gy - y))
+
+    def key(x, y, th):
+        r, c = grid.cell_of((x, y))
+        return r, c, int(round((th % (2 * math.pi)) / (2 * math.pi) * nb)) % nb
+
+    th0 = problem.heading_rad
+    nodes = [(sx, sy, th0, -1, None)]  # x, y, heading, parent, samples of the arc from the parent
+    heap = [(h(sx, sy), 0.0, 0)]
+    closed = set()
+    found = None
+    expansions = 0
+    while heap and expansions < cfg.max_expansions:
+        _, g, i = heapq.heappop(heap)
+        x, y, th, _, _ = nodes[i]
+        k0 = key(x, y, th)
+        if k0 in closed:
+            continue
+        closed.add(k0)
+        expansions += 1
+        if math.hypot(gx - x, gy - y) <= cfg.goal_tolerance_m:
+            found = i
+            break
+        for k in kappas:
+            xs, ys, ths = arc(x, y, th, k)
+            if xs.min() < 0 or ys.min() < 0 or xs.max() > W or ys.max() > H:
+                continue
+            pts = np.column_stack([xs, ys])
+            c = grid.at(pts)
+            if not np.all(np.isfinite(c)):
+                continue
+            g2 = g + float(c.mean()) * cfg.step_m + cfg.turn_weight * abs(k) * cfg.step_m
+            nx, ny, nth = float(xs[-1]), float(ys[-1]), float(ths[-1])
+            if key(nx, ny, nth) in closed:
+                continue
+            nodes.append((nx, ny, nth, i, pts))
+            heapq.heappush(heap, (g2 + h(nx, ny), g2, len(nodes) - 1))
+    if found is None:
+        return _no_path("lattice", problem, cfg)
+    pieces = []
+    i = found
+    while nodes[i][3] != -1:
+        pieces.append(nodes[i][4])
+        i = nodes[i][3]
+    samples = np.vstack(pieces[::-1]) if pieces else np.empty((0, 2))
+    # about two samples per primitive; drop those that would repeat an end point
+    samples = samples[n_sub // 2 - 1 :: max(1, n_sub // 2)]
+    ends = problem.endpoints()
+    far = (np.hypot(*(samples - ends[0]).T) > 1e-6) & (np.hypot(*(samples - ends[1]).T) > 1e-6)
+    return np.vstack([ends[:1], samples[far], ends[1:]])

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from offroadbench.config import check_choice, check_int, check_range
+from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
+from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules"]
 
@@ -51,8 +52,8 @@ class SimConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class ControllerConfig:
-    """Pure pursuit on the planned path (default: the start-goal line), with a jerk-limited (ruckig)
-    speed profile."""
+    """Pure pursuit on the planned path (the study's ``[planner]``; default the start-goal line), with
+    a jerk-limited (ruckig) speed profile."""
 
     lookahead_m: float = 1.5
     """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
@@ -60,40 +61,8 @@ class ControllerConfig:
     """Controller updates per second; must divide SimConfig.physics_rate_hz."""
     cruise_speed_m_s: float = 1.0
     """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
-    planner: str = "straight"
-    """Path planner from offroadbench.navigation.planners.PLANNERS: ``straight`` (the paper's start-goal line)
-    or ``astar`` (around high-roughness cells, with PlannerConfig's defaults)."""
 
     def __post_init__(self) -> None:
-        from offroadbench.navigation.planners import PLANNERS
-
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
         check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
-        check_choice(self, "planner", self.planner, sorted(PLANNERS))
-
-
-@dataclass(frozen=True, kw_only=True)
-class FailureRules:
-    """When a trial ends, paper Sec. 2.4 (tip-over 75 deg; stuck = under 0.2 m in 30 s)."""
-
-    tip_angle_deg: float = 75.0
-    """A trial fails as ``tipped`` once |roll| or |pitch| exceeds this, degrees."""
-    stuck_distance_m: float = 0.2
-    """A trial fails as ``stuck`` if the vehicle stays within this distance of where it was ..."""
-    stuck_window_s: float = 30.0
-    """... for this long, seconds."""
-    timeout_factor: float = 3.0
-    """A trial fails as ``timeout`` after this many times the nominal time (length / cruise speed)."""
-    goal_tolerance_m: float = 0.5
-    """The mission succeeds when the vehicle's centre is this close to the goal (horizontal), m."""
-    fall_depth_m: float = 1.0
-    """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
-
-    def __post_init__(self) -> None:
-        check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
-        check_range(self, "stuck_distance_m", self.stuck_distance_m, lo=0, lo_open=True)
-        check_range(self, "stuck_window_s", self.stuck_window_s, lo=0, lo_open=True)
-        check_range(self, "timeout_factor", self.timeout_factor, lo=1.0)
-        check_range(self, "goal_tolerance_m", self.goal_tolerance_m, lo=0, lo_open=True)
-        check_range(self, "fall_depth_m", self.fall_depth_m, lo=0, lo_open=True)

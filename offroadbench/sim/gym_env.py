@@ -17,11 +17,17 @@ seeds in ``reset(seed=...)``: the same seed gives the same mission and, because
   ``height_patch`` (float32, n x n): terrain heights relative to the base, on a square grid centred
   on the vehicle and aligned with its heading (see :func:`height_patch`).
 - **End**: ``terminated`` on success (within ``rules.goal_tolerance_m`` of the goal) or on the
-  trial runner's failure rules, checked in the same order (tipped, off_map, success, stuck) by the
-  same function; ``truncated`` at the timeout, ``rules.timeout_factor`` times the mission length
+  trial runner's failure rules (offroadbench.navigation.rules: tipped, off_map, success, stuck, with
+  the stuck window capped below the timeout), checked by the same code at the control rate; ``truncated`` at the timeout, ``rules.timeout_factor`` times the mission length
   over the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
   one of ``tipped``, ``stuck``, ``off_map``, ``timeout``; ``info["success"]`` says whether the goal
   was reached.
+- **Planner** (optional): ``planner="astar"`` (any registered planner, name or
+  :class:`~offroadbench.navigation.planners.PlannerChoice`) plans each episode's mission on the class map;
+  the waypoints are in ``info["path_xy"]`` after ``reset`` and drawn by ``render``.
+- **Rendering**: ``render_mode="rgb_array"`` returns a top-down image (uint8, H x W x 3) of the
+  closed class map (paper Fig. 4 colours), the planned path (white), the goal (red) and the
+  vehicle's footprint (black, its front white).
 - **Reward** per control tick of length ``dt``, with ``d`` the horizontal distance to the goal::
 
       r = w_progress * (d_prev - d) - dt * (w_accel * a_z^2 + w_rate * (p^2 + q^2))
@@ -44,31 +50,26 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from offroadbench.analysis.roughness import RoughnessConfig
+from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
-from offroadbench.navigation.planners import planning_classes
-from offroadbench.sim.config import FailureRules, SimConfig
+from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig, height_patch, observation
+from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, plan
+from offroadbench.navigation.rules import FailureRules, RuleChecker
+from offroadbench.sim.config import SimConfig
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.runner import _end_reason, _frame
+from offroadbench.sim.runner import body_frame, body_velocity, vehicle_envelope
 from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
 
-__all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES", "STATE_FIELDS"]
+__all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",
+           "STATE_FIELDS"]
 
 #: the default terrain: the paper's D = 2.45 preset, cut to 241 x 241 cells (12 m at 5 cm)
 DEFAULT_TERRAIN = "paper-d2.45"
 DEFAULT_OVERRIDES: Mapping[str, Any] = {"grid.rows": 241, "grid.cols": 241}
-
-#: the entries of observation["state"], in order
-STATE_FIELDS = (
-    "goal_x_m", "goal_y_m", "roll_rad", "pitch_rad",
-    "roll_rate_rad_s", "pitch_rate_rad_s", "yaw_rate_rad_s",
-    "v_forward_m_s", "v_left_m_s", "v_up_m_s",
-)
-
 
 @dataclass(frozen=True, kw_only=True)
 class TraverseConfig:
@@ -105,29 +106,6 @@ class TraverseConfig:
             check_range(self, name, getattr(self, name), lo=0)
 
 
-def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: int, spacing_m: float,
-                 fill_m: float) -> np.ndarray:
-    """Terrain heights (bilinear) on a ``cells x cells`` grid centred on (x, y), turned by ``yaw_rad``.
-
-    ``patch[i, j]`` is the height at body-frame offset ``(x_b, y_b) = ((j - c) s, (i - c) s)`` with
-    ``c = (cells - 1) / 2`` and ``s = spacing_m``: columns run forward, rows to the left, as
-    ``z[r, c]`` runs along x and y of the map. Samples outside the map read ``fill_m``.
-    """
-    from scipy.ndimage import map_coordinates
-
-    offs = (np.arange(cells) - (cells - 1) / 2.0) * spacing_m
-    yb, xb = np.meshgrid(offs, offs, indexing="ij")
-    cos, sin = math.cos(yaw_rad), math.sin(yaw_rad)
-    xw = x_m + cos * xb - sin * yb
-    yw = y_m + sin * xb + cos * yb
-    col = xw / hm.cell_size_m
-    row = yw / hm.cell_size_m
-    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
-    outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
-    z[outside] = fill_m
-    return z
-
-
 def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None) -> Heightmap:
     if isinstance(terrain, Heightmap):
         if overrides:
@@ -150,7 +128,7 @@ class TraverseEnv(gym.Env):
     its PyBullet world are built once, in the constructor; call :meth:`close` to free them.
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(
         self,
@@ -163,28 +141,33 @@ class TraverseEnv(gym.Env):
         sim: SimConfig = SimConfig(),
         rules: FailureRules = FailureRules(),
         roughness: RoughnessConfig = RoughnessConfig(),
+        planner: str | PlannerChoice | None = None,
         render_mode: str | None = None,
     ) -> None:
-        if render_mode is not None:
-            raise InputError(f"render_mode {render_mode!r} is not supported; Traverse-v0 has no rendering")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise InputError(f"render_mode {render_mode!r} is not supported; allowed: None, "
+                             f"{', '.join(map(repr, self.metadata['render_modes']))}")
         if sim.physics_rate_hz % config.control_rate_hz:
             raise InputError(
                 f"TraverseConfig.control_rate_hz = {config.control_rate_hz} must divide "
                 f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
             )
-        self.render_mode = None
+        if isinstance(planner, str):
+            planner = PlannerChoice(planner, PLANNERS.get(planner).config())
+        self.planner = planner
+        self.render_mode = render_mode
         self.cfg = config
         self.rules = rules
+        self._obs_cfg = ObservationConfig(patch_cells=config.patch_cells, patch_spacing_m=config.patch_spacing_m)
         self.hm = _terrain(terrain, terrain_seed, overrides)
-        self.closed_classes = planning_classes(self.hm, roughness)  # closed class map, as the trials use
+        self.closed_classes = classify_terrain(self.hm, roughness).closed  # the map the trials' missions use
         self._mission_cfg = MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m)
         self._world: World | None = World(self.hm, vehicle, sim)
         spec = self._world.spec
         self.vehicle = spec
+        self.envelope = vehicle_envelope(self._world)
         self.dt_s = 1.0 / config.control_rate_hz
         self._steps_per_tick = sim.physics_rate_hz // config.control_rate_hz
-        self._stuck_window = int(round(rules.stuck_window_s * config.control_rate_hz))
-        self._tip = math.radians(rules.tip_angle_deg)
         self._fill_m = self.hm.z_min_m - rules.fall_depth_m
 
         high = np.array([spec.max_speed_m_s, spec.max_yaw_rate_rad_s], dtype=np.float32)
@@ -195,6 +178,7 @@ class TraverseEnv(gym.Env):
             "height_patch": spaces.Box(-np.inf, np.inf, shape=(n, n), dtype=np.float32),
         })
         self.mission: Mission | None = None
+        self.path_xy: np.ndarray | None = None
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -206,17 +190,25 @@ class TraverseEnv(gym.Env):
         if given is not None and not isinstance(given, Mission):
             raise InputError(f"reset options['mission'] must be an offroadbench.navigation.missions.Mission, got {type(given).__name__}")
         self.mission = given or sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
-        sx, sy = self.mission.start_xy_m
-        world.spawn(sx, sy, self.mission.heading_rad)
+        m = self.mission
+        self.path_xy = None
+        if self.planner is not None:
+            problem = PlanningProblem(hm=self.hm, classes=self.closed_classes, start_xy=m.start_xy_m,
+                                      goal_xy=m.goal_xy_m, border_m=self.cfg.border_m, vehicle=self.envelope)
+            self.path_xy = plan(self.planner, problem)
+        world.spawn(m.start_xy_m[0], m.start_xy_m[1], m.heading_rad)
         self._ticks = 0
-        timeout_s = self.rules.timeout_factor * self.mission.length_m / self.vehicle.max_speed_m_s
+        timeout_s = self.rules.timeout_factor * m.length_m / self.vehicle.max_speed_m_s
         self._timeout_ticks = int(math.ceil(timeout_s * self.cfg.control_rate_hz - 1e-9))
-        self._goal = np.asarray(self.mission.goal_xy_m, dtype=float)
-        self._xy_hist: list[tuple[float, float]] = []
+        self._goal = np.asarray(m.goal_xy_m, dtype=float)
+        self._rules = RuleChecker(self.rules, (self.hm.width_m, self.hm.height_m, self.hm.z_min_m), self._goal,
+                                  timeout_s=timeout_s, sample_rate_hz=self.cfg.control_rate_hz,
+                                  mission_length_m=m.length_m)
         state = self._read_state()
         self._dist = state["dist"]
         self._vz = state["lin"][2]
-        self._xy_hist.append(state["pos"][:2])
+        self._rules.xy_hist.append(state["pos"][:2])
+        self._state = state
         return self._observation(state), self._info(state, "")
 
     def step(self, action):
@@ -229,11 +221,8 @@ class TraverseEnv(gym.Env):
             world.step()
         self._ticks += 1
         state = self._read_state()
-        pos = state["pos"]
-        self._xy_hist.append(pos[:2])
-        bounds = (self.hm.width_m, self.hm.height_m, self.hm.z_min_m)
-        reason = _end_reason(bounds, self.rules, self._tip, self._goal, pos, state["roll"], state["pitch"],
-                             self._xy_hist, self._stuck_window)
+        self._state = state
+        reason = self._rules.check(state["pos"], state["roll"], state["pitch"])
 
         cfg = self.cfg
         a_z = (state["lin"][2] - self._vz) / self.dt_s
@@ -268,21 +257,15 @@ class TraverseEnv(gym.Env):
     def _read_state(self) -> dict:
         world = self._require_world()
         pos, quat, lin, ang = world.base_state()
-        roll, pitch, yaw, *rates = _frame(world, quat, ang)
-        r = world.rotation_matrix(quat)  # row-major, body -> world
-        v_body = tuple(r[i] * lin[0] + r[i + 3] * lin[1] + r[i + 6] * lin[2] for i in range(3))
+        roll, pitch, yaw, *rates = body_frame(world, quat, ang)
+        v_body = body_velocity(world, quat, lin)
         dist = math.hypot(self._goal[0] - pos[0], self._goal[1] - pos[1])
         return {"pos": pos, "lin": lin, "roll": roll, "pitch": pitch, "yaw": yaw, "rates": rates,
                 "v_body": v_body, "dist": dist}
 
     def _observation(self, s: dict) -> dict[str, np.ndarray]:
-        x, y, z = s["pos"]
-        dx, dy = self._goal[0] - x, self._goal[1] - y
-        cos, sin = math.cos(s["yaw"]), math.sin(s["yaw"])
-        state = np.array([cos * dx + sin * dy, -sin * dx + cos * dy, s["roll"], s["pitch"], *s["rates"],
-                          *s["v_body"]], dtype=np.float32)
-        patch = height_patch(self.hm, x, y, s["yaw"], self.cfg.patch_cells, self.cfg.patch_spacing_m, self._fill_m)
-        return {"state": state, "height_patch": (patch - z).astype(np.float32)}
+        return observation(self.hm, self._obs_cfg, self._goal, s["pos"], s["roll"], s["pitch"], s["yaw"], s["rates"],
+                           s["v_body"], self._fill_m)
 
     def _info(self, s: dict, reason: str) -> dict[str, Any]:
         return {
@@ -291,4 +274,49 @@ class TraverseEnv(gym.Env):
             "distance_to_goal_m": s["dist"],
             "t_s": self._ticks * self.dt_s,
             "mission": self.mission,
+            "path_xy": None if self.path_xy is None else self.path_xy.copy(),
         }
+
+    def render(self) -> np.ndarray | None:
+        """A top-down RGB image (``render_mode="rgb_array"``; see the module docstring), else None."""
+        if self.render_mode != "rgb_array":
+            return None
+        if self.mission is None:
+            raise RuntimeError("call reset() before render()")
+        return top_down_image(self.closed_classes, self.hm.cell_size_m, self._state["pos"], self._state["yaw"],
+                              self.envelope.length_m, self.envelope.width_m, self._goal, self.path_xy)
+
+
+_CLASS_RGB = np.array([[0x1F, 0x5F, 0xBF], [0xF0, 0x8C, 0x1A], [0xF5, 0xE5, 0x2A]], dtype=np.uint8)  # plots.style
+
+
+def top_down_image(classes: np.ndarray, cell_m: float, pos, yaw: float, length_m: float, width_m: float, goal_xy,
+                   path_xy: np.ndarray | None = None, max_side: int = 256) -> np.ndarray:
+    """Class map (north up: row 0 of the image is the largest y) with the path, goal and vehicle,
+    as uint8 RGB, at most ``max_side`` pixels a side."""
+    step = max(1, int(math.ceil(max(classes.shape) / max_side)))
+    img = _CLASS_RGB[np.asarray(classes)[::step, ::step]].copy()
+    px = cell_m * step
+    rows, cols = img.shape[:2]
+
+    def paint(xy: np.ndarray, colour) -> None:
+        c = np.rint(xy[:, 0] / px).astype(int)
+        r = np.rint(xy[:, 1] / px).astype(int)
+        ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        img[r[ok], c[ok]] = colour
+
+    if path_xy is not None and len(path_xy) > 1:
+        seg = [a + (b - a) * t for a, b in zip(path_xy[:-1], path_xy[1:])
+               for t in np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / px) + 1))[:, None]]
+        paint(np.vstack(seg).reshape(-1, 2), (255, 255, 255))
+    gy, gx = np.mgrid[-2:3, -2:3]
+    paint(np.column_stack([goal_xy[0] + gx.ravel() * px, goal_xy[1] + gy.ravel() * px]), (220, 20, 20))
+    u = np.linspace(-0.5, 0.5, max(3, int(length_m / px) * 2))
+    v = np.linspace(-0.5, 0.5, max(3, int(width_m / px) * 2))
+    uu, vv = np.meshgrid(u * length_m, v * width_m)
+    cos, sin = math.cos(yaw), math.sin(yaw)
+    body = np.column_stack([pos[0] + cos * uu.ravel() - sin * vv.ravel(), pos[1] + sin * uu.ravel() + cos * vv.ravel()])
+    paint(body, (0, 0, 0))
+    front = uu.ravel() > 0.3 * length_m
+    paint(body[front], (255, 255, 255))
+    return np.ascontiguousarray(img[::-1])

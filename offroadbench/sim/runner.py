@@ -1,11 +1,13 @@
 """The trial runner: drive one mission in a World, apply the failure rules, compute the metrics.
 
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
-the end conditions are checked in the order tipped, off_map, success, stuck; at control ticks
-the path tracker issues (v, omega), mapped to wheel speeds by the skid-steer drive. The path is
-``controller.planner``'s (offroadbench.navigation.planners; default ``straight``, the start-goal line). The
-clock starts after the vehicle has settled at the start; the trial ends as ``timeout`` after
-``rules.timeout_factor`` times the nominal time ``path length / cruise speed``.
+the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
+at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
+The driver is the study's ``[planner]``: a planner (offroadbench.navigation.planners; default
+``straight``, the start-goal line) whose path pure pursuit follows, or a closed-loop policy
+(offroadbench.navigation.policies) fed the Gymnasium env's observation. The clock starts after the
+vehicle has settled at the start; the trial ends as ``timeout`` after ``rules.timeout_factor``
+times the nominal time ``path length / cruise speed`` (for a policy, the mission length).
 
 Metrics follow Majhor & Bos 2023, Sec. 2.4 (see offroadbench.navigation.metrics) and are computed from the
 20 Hz telemetry between the clock start and the end of the trial.
@@ -21,22 +23,24 @@ from typing import Sequence
 
 import numpy as np
 
-from offroadbench.navigation import metrics
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
-from offroadbench.navigation.planners import plan_path
+from offroadbench.navigation.observation import ObservationConfig
+from offroadbench.navigation.observation import observation as observe
+from offroadbench.navigation.planners import PlannerChoice, PlanningProblem, VehicleEnvelope, plan
+from offroadbench.navigation.policies import PolicyContext, make_policy
+from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
 from offroadbench.progress import ProgressFn, report
-from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
+from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
 from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
 
-__all__ = ["TrialResult", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "run_mission", "run_missions"]
-
-#: failure_reason values; "" means success
-FAILURE_REASONS = ("tipped", "stuck", "timeout", "off_map")
+__all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
+           "run_missions", "vehicle_envelope", "body_velocity", "body_frame"]
 
 #: telemetry columns, each a 1-D array sampled at SimConfig.telemetry_rate_hz
 TELEMETRY_COLUMNS = (
@@ -106,7 +110,7 @@ class TrialResult:
     __hash__ = None  # type: ignore[assignment]  # NaN-aware equality has no matching hash
 
 
-def _frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
+def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
     """(roll, pitch, yaw, body roll rate, body pitch rate, body yaw rate) from the base quaternion
     and world angular velocity; angles as in metrics.roll_pitch_yaw_from_quat (scalar, fast path)."""
     r = world.rotation_matrix(quat)  # row-major 3x3, body -> world
@@ -121,16 +125,49 @@ def _frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, float, f
             r[2] * wx + r[5] * wy + r[8] * wz)
 
 
-def run_mission(
+def vehicle_envelope(world: World) -> VehicleEnvelope:
+    """The footprint (overall length and width, from the links' bounding boxes at rest, heading +x)
+    and limits of ``world``'s vehicle, for planners. Moves the vehicle: call it before ``spawn``."""
+    import pybullet as pb
+
+    cid, body = world.client_id, world.vehicle_id
+    pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
+    boxes = [pb.getAABB(body, link, physicsClientId=cid) for link in range(-1, pb.getNumJoints(body, physicsClientId=cid))]
+    lo = np.min([b[0] for b in boxes], axis=0)
+    hi = np.max([b[1] for b in boxes], axis=0)
+    spec = world.spec
+    return VehicleEnvelope(length_m=float(hi[0] - lo[0]), width_m=float(hi[1] - lo[1]),
+                           max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
+                           max_slope=spec.wheel_friction * world.sim.terrain_friction)
+
+
+@dataclass(frozen=True, eq=False)
+class TrialRecord:
+    """Everything one trial produced: the result row, the 20 Hz telemetry and the planned path."""
+
+    result: TrialResult
+    telemetry: dict[str, np.ndarray]
+    """TELEMETRY_COLUMNS, each a 1-D array."""
+    path_xy: np.ndarray
+    """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
+
+
+def drive_mission(
     world: World,
     mission: Mission,
     *,
+    planner: PlannerChoice = PlannerChoice(),
+    classes: np.ndarray | None = None,
+    border_m: float = 0.0,
     controller: ControllerConfig = ControllerConfig(),
     rules: FailureRules = FailureRules(),
+    observation: ObservationConfig = ObservationConfig(),
     spawn_roll_rad: float = 0.0,
-) -> tuple[TrialResult, dict[str, np.ndarray]]:
-    """Drive one mission in ``world``; returns the result and the telemetry columns.
+) -> TrialRecord:
+    """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy.
 
+    ``classes`` is the closed roughness-class map the planner sees (the study's; needed by every
+    planner but ``straight``), ``border_m`` the mission border planned paths keep to.
     ``spawn_roll_rad`` tilts the vehicle about its long axis at spawn (a test hook: 90 deg puts it
     on its side).
     """
@@ -145,21 +182,41 @@ def run_mission(
     ctrl_every = sim.physics_rate_hz // controller.control_rate_hz
     tel_every = sim.physics_rate_hz // sim.telemetry_rate_hz
     tel_dt = 1.0 / sim.telemetry_rate_hz
-    stuck_window = int(round(rules.stuck_window_s * sim.telemetry_rate_hz))
-    tip = math.radians(rules.tip_angle_deg)
     goal = np.asarray(mission.goal_xy_m, dtype=float)
-    bounds = (hm.width_m, hm.height_m, hm.z_min_m)
+    v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
-    waypoints = plan_path(controller.planner, hm, mission.start_xy_m, mission.goal_xy_m)
-    tracker = make_tracker(waypoints, spec, controller)
-    timeout_s = rules.timeout_factor * tracker.length_m / min(controller.cruise_speed_m_s, spec.max_speed_m_s)
+    policy = tracker = None
+    if planner.name == "straight" and planner.kind == "planner":
+        waypoints = np.array([mission.start_xy_m, mission.goal_xy_m], dtype=float)
+    else:
+        if classes is None:
+            raise InputError(f"planner {planner.name!r} needs the class map (classes=...)")
+        problem = PlanningProblem(hm=hm, classes=classes, start_xy=mission.start_xy_m, goal_xy=mission.goal_xy_m,
+                                  border_m=border_m, vehicle=vehicle_envelope(world))
+        if planner.kind == "policy":
+            waypoints = problem.endpoints()
+            policy = make_policy(planner.name, planner.config, PolicyContext(
+                observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
+                control_rate_hz=controller.control_rate_hz))
+            policy.reset(problem)
+        else:
+            waypoints = plan(planner, problem)
+    if policy is None:
+        tracker = make_tracker(waypoints, spec, controller)
+        length = tracker.length_m
+    else:
+        length = mission.length_m
+    timeout_s = rules.timeout_factor * length / v_nominal
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
+    checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
+                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m)
+    fill_m = hm.z_min_m - rules.fall_depth_m
+    v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
 
     rows: list[tuple] = []
-    xy_hist: list[tuple[float, float]] = []
-    cmd_v = cmd_w = progress = 0.0
+    cmd_v = cmd_w = 0.0
     reason = "timeout"
     traversal_time = float("nan")
     end_step = n_steps
@@ -168,17 +225,24 @@ def run_mission(
         ctrl_tick = k % ctrl_every == 0
         if tel_tick or ctrl_tick:
             pos, quat, lin, ang = world.base_state()
-            roll, pitch, yaw, *rates = _frame(world, quat, ang)
+            roll, pitch, yaw, *rates = body_frame(world, quat, ang)
         if ctrl_tick:
-            cmd_v, cmd_w, progress = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
+            if policy is None:
+                cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
+            else:
+                obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
+                a = policy.act(obs)
+                cmd_v = min(max(float(a[0]), -v_lim), v_lim)
+                cmd_w = min(max(float(a[1]), -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
+            progress = tracker.progress(np.array(pos[:2])) if tracker is not None else mission.length_m - math.hypot(
+                goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
-                 cmd_v, cmd_w, tracker.progress(np.array(pos[:2])), world.wheel_penetration_m())
+                 cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            xy_hist.append((pos[0], pos[1]))
-            done = _end_reason(bounds, rules, tip, goal, pos, roll, pitch, xy_hist, stuck_window)
+            done = checker.check(pos, roll, pitch)
             if done is not None:
                 reason = done
                 end_step = k
@@ -190,28 +254,19 @@ def run_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    return result, tel
+    return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
 
 
-def _end_reason(bounds, rules, tip, goal, pos, roll, pitch, xy_hist, stuck_window) -> str | None:
-    """The reason the trial ends now ('' = success), or None to go on.
+def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
+    """:func:`drive_mission`, returning (result, telemetry columns)."""
+    rec = drive_mission(world, mission, **kwargs)
+    return rec.result, rec.telemetry
 
-    ``bounds`` = (width, height, lowest z) of the map, metres."""
-    if abs(roll) > tip or abs(pitch) > tip:
-        return "tipped"
-    width, height, z_min = bounds
-    if not (0.0 <= pos[0] <= width and 0.0 <= pos[1] <= height) or pos[2] < z_min - rules.fall_depth_m:
-        return "off_map"
-    if math.hypot(pos[0] - goal[0], pos[1] - goal[1]) <= rules.goal_tolerance_m:
-        return ""
-    if len(xy_hist) > stuck_window:
-        first = xy_hist[-stuck_window - 1]
-        # cheap test first: only a vehicle back near where it was a window ago can be stuck
-        if math.hypot(pos[0] - first[0], pos[1] - first[1]) < rules.stuck_distance_m:
-            window = np.asarray(xy_hist[-stuck_window - 1 :])
-            if metrics.stuck_index(window, stuck_window, rules.stuck_distance_m) is not None:
-                return "stuck"
-    return None
+
+def body_velocity(world: World, quat: tuple, lin: tuple) -> tuple[float, float, float]:
+    """The base's velocity in the body frame (forward, left, up), m/s."""
+    r = world.rotation_matrix(quat)  # row-major, body -> world
+    return tuple(r[i] * lin[0] + r[i + 3] * lin[1] + r[i + 6] * lin[2] for i in range(3))
 
 
 def _result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialResult:
@@ -242,6 +297,9 @@ def run_missions(
     missions: Sequence[Mission],
     *,
     vehicle: VehicleSpec | str = "husky",
+    planner: PlannerChoice = PlannerChoice(),
+    classes: np.ndarray | None = None,
+    border_m: float = 0.0,
     controller: ControllerConfig = ControllerConfig(),
     sim: SimConfig = SimConfig(),
     rules: FailureRules = FailureRules(),
@@ -250,8 +308,9 @@ def run_missions(
 ) -> list[TrialResult]:
     """Run every mission on one terrain (built once) and return one TrialResult per mission.
 
-    With ``telemetry_dir`` the telemetry of each trial is saved there as
-    ``mission_<index>.npz`` (see offroadbench.io.telemetry).
+    ``planner``, ``classes`` and ``border_m`` as in :func:`drive_mission`. With ``telemetry_dir``
+    the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
+    offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.
     """
     from offroadbench.io.telemetry import save_telemetry
 
@@ -261,9 +320,12 @@ def run_missions(
     results: list[TrialResult] = []
     with World(hm, vehicle, sim) as world:
         for i, mission in enumerate(missions):
-            result, tel = run_mission(world, mission, controller=controller, rules=rules)
-            results.append(result)
+            rec = drive_mission(world, mission, planner=planner, classes=classes, border_m=border_m,
+                                controller=controller, rules=rules)
+            results.append(rec.result)
             if out_dir is not None:
-                save_telemetry(tel, out_dir / f"mission_{mission.index:03d}.npz")
+                save_telemetry(rec.telemetry, out_dir / f"mission_{mission.index:03d}.npz")
+                save_telemetry({"x_m": rec.path_xy[:, 0], "y_m": rec.path_xy[:, 1]},
+                               out_dir / f"mission_{mission.index:03d}_path.npz")
             report(progress, i + 1, len(missions))
     return results

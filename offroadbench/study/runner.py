@@ -24,7 +24,24 @@ from offroadbench.study.tasks import TerrainTask, TrialFn
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta"]
+__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry"]
+
+
+def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
+    """(telemetry, planned path) Parquet files of one trial in a run directory."""
+    stem = Path(run_dir) / "telemetry" / f"cell{cell}_terrain{terrain}_mission{mission}"
+    return stem.with_name(stem.name + ".parquet"), stem.with_name(stem.name + "_path.parquet")
+
+
+def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> None:
+    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files)."""
+    from offroadbench.io.telemetry import save_telemetry
+
+    tel_path, path_path = telemetry_paths(run_dir, cell, terrain, mission)
+    tel_path.parent.mkdir(exist_ok=True)
+    save_telemetry(kept["telemetry"], tel_path)
+    xy = kept["path_xy"]
+    save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path)
 
 
 @dataclass(frozen=True)
@@ -56,7 +73,8 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
             )
             if pending:
                 tseed = seeds.terrain_seed(study.root_seed, plan.key, j)
-                tasks.append(TerrainTask(cell=plan, terrain=j, terrain_seed=tseed, missions=pending))
+                tasks.append(TerrainTask(cell=plan, terrain=j, terrain_seed=tseed, missions=pending,
+                                         telemetry=study.telemetry))
     return tasks
 
 
@@ -140,8 +158,10 @@ def run_study(
                 _, cell, terrain, tseed, stats = msg
                 store.add_terrain(cell, terrain, tseed, stats)
                 return
-            _, cell, terrain, mission, tseed, mseed, row = msg
+            _, cell, terrain, mission, tseed, mseed, row, kept = msg
             if store.add_trial(cell, terrain, mission, tseed, mseed, row):
+                if kept is not None:
+                    save_trial_telemetry(run_dir, cell, terrain, mission, kept)
                 ran += 1
                 done += 1
                 store.note_progress(run_id, ran)

@@ -9,6 +9,7 @@ File layout (every table but ``[study]`` is optional)::
     terrains_per_cell = 20
     missions_per_terrain = 20
     paired_terrains = true          # see offroadbench.study.seeds
+    telemetry = "failed"            # keep telemetry of: none | failed | all trials (Parquet)
 
     [grid]                          # axes of the parameter grid: dotted key = [values]
     "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]
@@ -16,6 +17,7 @@ File layout (every table but ``[study]`` is optional)::
     [recipe_overrides]              # fixed dotted-key changes of the recipe (e.g. small maps)
     "grid.rows" = 201
 
+    [planner]     # name = a planner or policy (offroadbench.navigation), plus its config's fields
     [roughness]   # offroadbench.analysis.roughness.RoughnessConfig fields
     [missions]    # offroadbench.navigation.missions.MissionConfig fields
     [vehicle]     # vehicle name and fields (offroadbench.sim)
@@ -26,7 +28,8 @@ File layout (every table but ``[study]`` is optional)::
 
 Grid keys. ``recipe`` varies the recipe itself (values: preset names or paths);
 ``recipe.<dotted key>`` a key of the recipe TOML; ``<section>.<field>`` a field of one of the
-settings tables above (``vehicle.name`` picks the vehicle). Every grid cell (the cartesian
+settings tables above (``vehicle.name`` picks the vehicle, ``planner.name`` the planner or policy;
+their table columns are ``vehicle`` and ``planner``). Every grid cell (the cartesian
 product of the axes, first axis slowest) is resolved and validated when the study is loaded,
 so a bad value is refused before anything runs, with the key named.
 
@@ -45,6 +48,7 @@ from offroadbench.config import check_int, config_id, from_dict, load_toml, to_d
 from offroadbench.errors import InputError
 from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.navigation.missions import MissionConfig
+from offroadbench.navigation.planners import planner_from_table
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
 from offroadbench.sim.vehicle import vehicle_from_table
 from offroadbench.study import seeds
@@ -77,7 +81,11 @@ SECTIONS: dict[str, Callable[[dict, str], Any]] = {
     "controller": _config_builder(ControllerConfig),
     "sim": _config_builder(SimConfig),
     "rules": _config_builder(FailureRules),
+    "planner": planner_from_table,
 }
+
+#: what ``[study] telemetry`` may keep
+TELEMETRY_CHOICES = ("none", "failed", "all")
 
 _STUDY_KEYS = (
     "name",
@@ -87,10 +95,14 @@ _STUDY_KEYS = (
     "terrains_per_cell",
     "missions_per_terrain",
     "paired_terrains",
+    "telemetry",
 )
 _TOP_KEYS = ("study", "grid", "recipe_overrides", "reference", *SECTIONS)
 
 #: columns of the trial table that a grid axis may not be named after
+#: grid keys whose column is named after their table (``planner.name`` -> ``planner``)
+_NAME_KEYS = ("planner.name", "vehicle.name")
+
 RESERVED_COLUMNS = frozenset(
     {"cell", "terrain", "mission", "terrain_seed", "mission_seed", "success", "failure_reason"}
 )
@@ -127,6 +139,9 @@ class StudyConfig:
     """Free text shown in the report."""
     paired_terrains: bool = True
     """Terrain j of every cell comes from the same seed (common random numbers); see seeds."""
+    telemetry: str = "failed"
+    """Trials whose telemetry (20 Hz, Parquet, with the planned path) the run directory keeps:
+    ``none``, ``failed`` (for ``study replay`` forensics) or ``all``."""
     grid: tuple[GridAxis, ...] = ()
     """Axes of the parameter grid, in file order (first axis varies slowest)."""
     recipe_overrides: Mapping[str, Any] = field(default_factory=dict)
@@ -146,6 +161,8 @@ class StudyConfig:
         check_int(self, "missions_per_terrain", self.missions_per_terrain, lo=1)
         if not isinstance(self.paired_terrains, bool):
             raise InputError(f"study.paired_terrains = {self.paired_terrains!r}; must be true or false")
+        if self.telemetry not in TELEMETRY_CHOICES:
+            raise InputError(f"study.telemetry = {self.telemetry!r}; allowed: {', '.join(TELEMETRY_CHOICES)}")
         unknown = sorted(set(self.settings) - set(SECTIONS))
         if unknown:
             raise InputError(f"study settings: unknown table(s) {', '.join(unknown)}; known: {', '.join(SECTIONS)}")
@@ -169,7 +186,7 @@ class StudyConfig:
 
     def column_names(self) -> dict[str, str]:
         """Table column of each grid key: its last part, or the full key if that is ambiguous."""
-        lasts = [a.key.rsplit(".", 1)[-1] for a in self.grid]
+        lasts = [a.key.split(".", 1)[0] if a.key in _NAME_KEYS else a.key.rsplit(".", 1)[-1] for a in self.grid]
         out = {}
         for axis, last in zip(self.grid, lasts):
             ok = lasts.count(last) == 1 and last not in RESERVED_COLUMNS

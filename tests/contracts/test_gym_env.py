@@ -113,12 +113,55 @@ def test_standing_still_ends_stuck_with_the_failure_penalty():
     assert rewards[-1] == pytest.approx(-SHORT.failure_penalty, abs=0.01)
 
 
-def test_timeout_truncates():
-    with TraverseEnv(FLAT, config=SHORT) as env:  # 30 s stuck window > 9 s timeout
+def test_default_rules_end_a_standing_vehicle_stuck_before_the_timeout():
+    with TraverseEnv(FLAT, config=SHORT) as env:  # 3 m mission: 9 s timeout, stuck window 4.5 s
+        rewards, _, term, trunc, info = _run(env, lambda obs: np.zeros(2, dtype=np.float32), 2)
+    assert term and not trunc and info["failure_reason"] == "stuck"
+    assert len(rewards) == 90
+
+
+def test_timeout_truncates(caplog):
+    rules = FailureRules(stuck_window_max_fraction=2.0)  # window min(30 s, 18 s) > 9 s timeout: stuck cannot fire
+    with caplog.at_level("WARNING", logger="offroadbench.navigation.rules"), \
+            TraverseEnv(FLAT, config=SHORT, rules=rules) as env:
         rewards, _, term, trunc, info = _run(env, lambda obs: np.zeros(2, dtype=np.float32), 2)
     assert trunc and not term and info["failure_reason"] == "timeout"
     assert len(rewards) == 180  # 3 x 3 m / 1 m/s at 20 Hz
     assert abs(rewards.sum()) < 0.1  # no bonus or penalty on timeout
+    assert "stuck" in caplog.text and "cannot fire" in caplog.text
+
+
+def test_rgb_array_render_draws_classes_path_goal_and_vehicle():
+    from gymnasium.utils.env_checker import check_env
+
+    with TraverseEnv(FLAT, config=SHORT, planner="astar", render_mode="rgb_array") as env:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            check_env(env)
+        obs, info = env.reset(seed=3)
+        img = env.render()
+        assert img.dtype == np.uint8 and img.shape == (161, 161, 3)
+        assert np.array_equal(info["path_xy"][0], env.mission.start_xy_m)
+        colours = {tuple(c) for c in img.reshape(-1, 3)}
+        assert {(0x1F, 0x5F, 0xBF), (255, 255, 255), (0, 0, 0), (220, 20, 20)} <= colours  # low, path, body, goal
+        # the vehicle is drawn where it is: black pixels round the start (image rows run north to south)
+        r, c = np.nonzero(np.all(img == 0, axis=2))
+        sx, sy = env.mission.start_xy_m
+        assert abs(c.mean() * CELL - sx) < 0.3 and abs((160 - r.mean()) * CELL - sy) < 0.3
+    with TraverseEnv(FLAT, config=SHORT) as env:
+        env.reset(seed=0)
+        assert env.render() is None
+
+
+def test_make_vec_env_style_construction_needs_no_extra_arguments():
+    """What stable-baselines3's make_vec_env does: gym.make(id, render_mode=...) and reset/step."""
+    env = gym.make("offroadbench/Traverse-v0", render_mode="rgb_array")
+    try:
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+        assert env.render().ndim == 3
+    finally:
+        env.close()
 
 
 def test_reversing_off_the_edge_ends_off_map():

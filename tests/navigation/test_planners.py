@@ -13,15 +13,18 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.planners import (
     PLANNERS,
-    PlannerConfig,
+    AStarConfig,
+    LatticeConfig,
+    PlannerChoice,
+    PlanningProblem,
+    VehicleEnvelope,
     _astar,
-    _segment_cost,
-    get_planner,
-    path_cost_grid,
+    cost_grid,
+    plan,
     plan_astar,
-    plan_path,
+    plan_lattice,
     plan_straight,
-    planning_classes,
+    planner_from_table,
 )
 from offroadbench.sim import ControllerConfig, FailureRules, World, load_vehicle, run_mission
 from offroadbench.sim.controller import LineTracker, PathTracker, make_tracker
@@ -38,6 +41,15 @@ def _wall_classes(gap: bool = True) -> np.ndarray:
     return classes
 
 
+def _problem(classes, start, goal, hm=None, border_m=0.0, vehicle=VehicleEnvelope()):
+    return PlanningProblem(hm=hm or FLAT, classes=classes, start_xy=start, goal_xy=goal, border_m=border_m,
+                           vehicle=vehicle)
+
+
+def _open():
+    return np.full(FLAT.shape, LOW, dtype=np.uint8)
+
+
 def _dense(points: np.ndarray, step: float = 0.01) -> np.ndarray:
     out = [points[0]]
     for a, b in zip(points[:-1], points[1:]):
@@ -51,16 +63,29 @@ def _length(points: np.ndarray) -> float:
 
 
 # ---------------------------------------------------------------------------- registry
-def test_registry_and_straight_plan():
-    assert set(PLANNERS) >= {"straight", "astar"}
-    wp = plan_straight(FLAT, None, (1.0, 2.0), (9.5, 3.25))
+def test_registry_and_the_planner_table():
+    assert set(PLANNERS) >= {"straight", "astar", "lattice"}
+    wp = plan_straight(_problem(_open(), (1.0, 2.0), (9.5, 3.25)))
     assert wp.shape == (2, 2) and np.array_equal(wp, [[1.0, 2.0], [9.5, 3.25]])
-    with pytest.raises(InputError, match="known planners: astar, straight"):
-        get_planner("rrt")
-    with pytest.raises(InputError, match="planner"):
-        ControllerConfig(planner="rrt")
-    assert from_dict(ControllerConfig, {"planner": "astar"}).planner == "astar"
-    assert ControllerConfig().planner == "straight"
+    with pytest.raises(InputError, match="unknown planner 'astra'; did you mean 'astar'"):
+        planner_from_table({"name": "astra"})
+    choice = planner_from_table({"name": "astar", "grid_m": 0.5})
+    assert choice == PlannerChoice("astar", AStarConfig(grid_m=0.5), "planner") and choice.params["grid_m"] == 0.5
+    with pytest.raises(InputError, match="turn_radius_m"):
+        planner_from_table({"name": "astar", "turn_radius_m": 2.0})  # a lattice field
+    assert planner_from_table({}).name == "straight"
+    assert planner_from_table({"name": "reactive"}).kind == "policy"
+
+
+def test_plan_checks_the_contract_of_a_plug_in():
+    from offroadbench.navigation.planners import PlannerSpec
+
+    PLANNERS.add("_test_bad", PlannerSpec(lambda problem, cfg: np.array([[0.0, 0.0], [1.0, 1.0]])))
+    try:
+        with pytest.raises(RuntimeError, match="not from the start"):
+            plan("_test_bad", _problem(_open(), (1.0, 2.0), (3.0, 2.0)))
+    finally:
+        PLANNERS._entries.pop("_test_bad")
 
 
 # ---------------------------------------------------------------------------- A*
@@ -75,81 +100,120 @@ def test_astar_cost_on_a_uniform_grid_is_the_octile_distance():
 
 
 def test_segment_cost_integrates_cell_costs():
-    cost = np.ones((4, 4))
-    cost[:, 2] = 3.0  # x in [0.5, 0.75) m at 0.25 m cells
-    c = _segment_cost(cost, 0.25, np.array([0.0, 0.1]), np.array([1.0, 0.1]))
-    assert c == pytest.approx(0.75 * 1.0 + 0.25 * 3.0, rel=0.05)
+    grid = cost_grid(_problem(_open(), (1.0, 1.0), (2.0, 1.0)), AStarConfig(grid_m=0.25))
+    cost = np.ones_like(grid.cost)
+    cost[:, 10:14] = 3.0  # x in [2.5, 3.5) m minus half a pixel
+    g = type(grid)(cost, grid.f, grid.step_m)
+    c = g.segment_cost(np.array([1.5, 2.0]), np.array([4.5, 2.0]))
+    assert c == pytest.approx(2.0 * 1.0 + 1.0 * 3.0, rel=0.03)
 
 
 def test_astar_on_open_ground_is_the_straight_line():
-    classes = np.full(FLAT.shape, LOW, dtype=np.uint8)
-    wp = plan_astar(FLAT, classes, (1.0, 2.0), (10.0, 6.0))
-    assert np.array_equal(wp, [[1.0, 2.0], [10.0, 6.0]])
+    for planner in (plan_astar, plan_lattice):
+        wp = planner(_problem(_open(), (1.0, 2.0), (10.0, 6.0)))
+        assert np.array_equal(wp[0], [1.0, 2.0]) and np.array_equal(wp[-1], [10.0, 6.0])
+        assert _length(wp) == pytest.approx(math.hypot(9.0, 4.0), rel=0.01)
 
 
-def test_astar_goes_through_the_gap_in_a_wall_of_high_cells():
+def _clearance(points, classes):
+    """Smallest distance from the (dense) path to a high pixel, metres."""
+    from scipy.ndimage import distance_transform_edt
+
+    d = distance_transform_edt(classes != HIGH) * CELL
+    r = np.rint(points[:, 1] / CELL).astype(int)
+    c = np.rint(points[:, 0] / CELL).astype(int)
+    return float(d[r, c].min())
+
+
+@pytest.mark.parametrize("planner", [plan_astar, plan_lattice])
+def test_terrain_aware_planners_go_through_the_gap_with_half_a_width_of_clearance(planner):
     classes = _wall_classes()
-    cfg = PlannerConfig()
-    wp = plan_astar(FLAT, classes, (2.0, 2.5), (10.0, 2.5), cfg)
+    veh = VehicleEnvelope()
+    wp = planner(_problem(classes, (2.0, 2.5), (10.0, 2.5)))
     assert np.array_equal(wp[0], [2.0, 2.5]) and np.array_equal(wp[-1], [10.0, 2.5])
     dense = _dense(wp)
-    r = np.rint(dense[:, 1] / CELL).astype(int)
-    c = np.rint(dense[:, 0] / CELL).astype(int)
-    assert not np.any(classes[r, c] == HIGH)
-    # over the wall's end (y = 5 m) with the clearance, and no longer than needed
-    assert dense[:, 1].max() > 5.0 + cfg.clearance_m - 0.25
-    assert 8.0 < _length(wp) < 2 * math.hypot(4.0, 3.5) + 1.0
-    assert len(wp) <= 6  # string pulling left a few corners, not one per cell
-    # the straight line crosses the wall
-    line = _dense(plan_straight(FLAT, classes, (2.0, 2.5), (10.0, 2.5)))
-    assert np.any(classes[np.rint(line[:, 1] / CELL).astype(int), np.rint(line[:, 0] / CELL).astype(int)] == HIGH)
+    assert _clearance(dense, classes) >= 0.5 * veh.width_m - CELL
+    assert dense[:, 1].max() > 5.0 + 0.5 * veh.width_m  # over the wall's end (y = 5 m)
+    assert 8.0 < _length(wp) < 2 * math.hypot(4.0, 3.5) + 2.0
+    line = _dense(plan_straight(_problem(classes, (2.0, 2.5), (10.0, 2.5))))
+    assert _clearance(line, classes) == 0.0  # the straight line crosses the wall
+
+
+def test_a_wider_vehicle_keeps_further_from_high_cells():
+    classes = _wall_classes()
+    wide = VehicleEnvelope(width_m=1.4, length_m=1.4)
+    wp = plan_astar(_problem(classes, (2.0, 2.5), (10.0, 2.5), vehicle=wide))
+    assert _clearance(_dense(wp), classes) >= 0.7 - CELL
+
+
+@pytest.mark.parametrize("planner", [plan_astar, plan_lattice])
+def test_paths_stay_inside_the_mission_border(planner):
+    """A wall that leaves a gap only in the border strip: the planners must not use it."""
+    classes = np.full(FLAT.shape, LOW, dtype=np.uint8)
+    classes[int(1.5 / CELL):, 118:123] = HIGH  # the wall reaches down to y = 1.5 m; the border is 2 m
+    problem = _problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0)
+    with pytest.raises(InputError, match="no path"):
+        planner(problem, type(planner.__defaults__[0])(fallback_to_straight=False))
+    classes[: int(6.5 / CELL)] = LOW
+    classes[int(6.5 / CELL):, 118:123] = HIGH  # now a gap at y < 6.5 m, inside the border
+    wp = planner(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0))
+    assert np.all(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0).inside_border(_dense(wp)))
 
 
 def test_astar_goes_round_a_semi_patch_but_crosses_a_semi_band():
-    classes = np.full(FLAT.shape, LOW, dtype=np.uint8)
+    classes = _open()
     classes[60:101, 100:141] = SEMI  # 2 m square on the line y = 4 m
-    cost, f = path_cost_grid(FLAT, classes)
-    assert f == 5
-    assert cost.min() == pytest.approx(1.0) and cost.max() == pytest.approx(1.0 + PlannerConfig().semi_cost)
+    problem = _problem(classes, (2.0, 4.0), (10.0, 4.0))
+    grid = cost_grid(problem)
+    assert grid.f == 5
+    assert np.nanmin(grid.cost) == pytest.approx(1.0) and grid.cost.max() == pytest.approx(1.0 + AStarConfig().semi_cost)
 
     def path_cost(points):
-        return sum(_segment_cost(cost, f * CELL, a, b) for a, b in zip(points[:-1], points[1:]))
+        return sum(grid.segment_cost(a, b) for a, b in zip(points[:-1], points[1:]))
 
-    # planning cells of 5 px: the patch fills cells 20..27 (x = 5 .. 7 m, extra cost 2) and one
-    # pixel column in five of cell 28; the footprint's box filter keeps that integral across it
-    straight = plan_straight(FLAT, classes, (2.0, 4.0), (10.0, 4.0))
-    assert path_cost(straight) == pytest.approx(8.0 + 2.0 * (2.0 + 0.2 * 0.25), rel=0.01)
-    wp = plan_astar(FLAT, classes, (2.0, 4.0), (10.0, 4.0))
+    straight = plan_straight(problem)
+    assert path_cost(straight) == pytest.approx(8.0 + 2.0 * 2.0, rel=0.05)
+    wp = plan_astar(problem)
     d = _dense(wp)  # 1 cm steps
     in_semi = classes[np.rint(d[:, 1] / CELL).astype(int), np.rint(d[:, 0] / CELL).astype(int)] == SEMI
     assert in_semi.sum() * 0.01 < 0.8  # a corner clipped at most, not 2 m through it
-    assert _length(wp) < 8.6 and path_cost(wp) < 0.8 * path_cost(straight)
+    assert _length(wp) < 8.8 and path_cost(wp) < 0.8 * path_cost(straight)
     classes[:, 100:141] = SEMI  # now a band across the whole map: semi is dear, not forbidden
-    wp = plan_astar(FLAT, classes, (2.0, 4.0), (10.0, 4.0))
+    wp = plan_astar(_problem(classes, (2.0, 4.0), (10.0, 4.0)))
     assert _length(wp) == pytest.approx(8.0, abs=0.1)
 
 
 def test_astar_without_a_way_round_falls_back_or_raises(caplog):
     classes = _wall_classes(gap=False)
+    problem = _problem(classes, (2.0, 2.5), (10.0, 2.5))
     with caplog.at_level(logging.WARNING, logger="offroadbench.navigation.planners"):
-        wp = plan_astar(FLAT, classes, (2.0, 2.5), (10.0, 2.5))
+        wp = plan_astar(problem)
     assert np.array_equal(wp, [[2.0, 2.5], [10.0, 2.5]]) and "no path" in caplog.text
     with pytest.raises(InputError, match="no path"):
-        plan_astar(FLAT, classes, (2.0, 2.5), (10.0, 2.5), PlannerConfig(fallback_to_straight=False))
+        plan_astar(problem, AStarConfig(fallback_to_straight=False))
 
 
-def test_plan_path_classes_default_to_the_closed_map_and_are_cached():
-    hm = Heightmap.flat(61, 61, CELL)
-    assert planning_classes(hm) is planning_classes(hm)
-    assert not planning_classes(hm).flags.writeable
-    assert np.array_equal(plan_path("astar", hm, (0.5, 0.5), (2.5, 2.5)), [[0.5, 0.5], [2.5, 2.5]])
+def test_lattice_leaves_along_the_heading_and_never_turns_tighter_than_its_radius():
+    classes = _wall_classes()
+    start, goal = (2.0, 2.5), (10.0, 2.5)  # the wall ahead forces two turns
+    cfg = LatticeConfig(turn_radius_m=1.5)
+    wp = plan_lattice(_problem(classes, start, goal), cfg)
+    heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+    first = wp[1] - wp[0]
+    assert abs(math.atan2(first[1], first[0]) - heading) < 0.2
+    seg = np.diff(wp[:-1], axis=0)  # the last piece to the exact goal is a straight stub
+    ang = np.unwrap(np.arctan2(seg[:, 1], seg[:, 0]))
+    lens = np.hypot(seg[:, 0], seg[:, 1])
+    kappa = np.abs(np.diff(ang)) / (0.5 * (lens[1:] + lens[:-1]))
+    assert kappa.max() <= 1.0 / cfg.turn_radius_m * 1.05
+    assert _clearance(_dense(wp), classes) >= 0.5 * VehicleEnvelope().width_m - CELL
 
 
 # ---------------------------------------------------------------------------- tracking
 def test_two_waypoints_use_the_line_tracker_unchanged():
     spec = load_vehicle("husky")
     cfg = ControllerConfig()
-    wp = plan_straight(FLAT, None, (1.0, 2.0), (9.0, 5.0))
+    wp = plan_straight(_problem(_open(), (1.0, 2.0), (9.0, 5.0)))
     tr = make_tracker(wp, spec, cfg)
     ref = LineTracker((1.0, 2.0), (9.0, 5.0), spec, cfg)
     assert isinstance(tr, LineTracker)
@@ -202,7 +266,8 @@ def test_astar_drives_round_a_wall_the_straight_line_is_stopped_by():
     rules = FailureRules(stuck_window_s=5.0)
     with World(hm) as world:
         straight, tel_s = run_mission(world, mission, rules=rules)
-        astar, tel_a = run_mission(world, mission, controller=ControllerConfig(planner="astar"), rules=rules)
+        astar, tel_a = run_mission(world, mission, planner=planner_from_table({"name": "astar"}),
+                                   classes=_wall_classes(), rules=rules)
     assert straight.failure_reason == "stuck" and tel_s["x_m"].max() < 6.0
     assert astar.success
     assert astar.path_length_m > 9.0  # the detour

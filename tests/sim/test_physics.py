@@ -71,10 +71,19 @@ def test_driving_off_the_edge_ends_off_map():
     assert tel["x_m"][-1] > 16.0 - 0.5
 
 
+def test_stuck_fires_on_a_6_m_mission():
+    """The paper's 30 s window would never fire before the 18 s timeout; the capped window (9 s) does."""
+    x = np.arange(241) * CELL
+    hm = _strip(np.where(x >= 5.0, 1.0, 0.0))  # a 1 m step 3 m ahead
+    r, tel = _drive(hm, Mission.between(0, (2, 2), (8, 2)))
+    assert r.failure_reason == "stuck"
+    assert 9.0 < r.sim_time_s < 18.0 and tel["x_m"].max() < 5.0
+
+
 def test_timeout_is_a_multiple_of_the_nominal_time():
     x = np.arange(501) * CELL
     hm = _strip(np.where(x >= 8.0, 1.0, 0.0))
-    rules = FailureRules(stuck_window_s=1000.0)  # never stuck: held at the wall until 3 x 20 s
+    rules = FailureRules(stuck_window_s=1000.0, stuck_window_max_fraction=2.0)  # never stuck: held at the wall until 3 x 20 s
     r, _ = _drive(hm, Mission.between(0, (3, 2), (23, 2)), rules=rules)
     assert r.failure_reason == "timeout" and r.sim_time_s == pytest.approx(60.0, abs=0.02)
 

@@ -1,0 +1,80 @@
+"""What a closed-loop policy sees: the observation of ``offroadbench/Traverse-v0``, built in one place
+for the Gymnasium env and for the trial runner (so a policy stress-tested by a study sees exactly
+what it was trained on).
+
+A Dict of
+
+* ``state`` (float32, 10, see :data:`STATE_FIELDS`): the goal in the vehicle's heading frame (m;
+  x forward, y left, horizontal), roll and pitch (rad, as in offroadbench.navigation.metrics), body
+  roll, pitch and yaw rates (rad/s) and the base velocity in the body frame (forward, left, up; m/s);
+* ``height_patch`` (float32, n x n): terrain heights relative to the base on a square grid centred
+  on the vehicle and aligned with its heading (:func:`height_patch`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench.config import check_int, check_range
+from offroadbench.heightmap import Heightmap
+
+__all__ = ["STATE_FIELDS", "ObservationConfig", "height_patch", "observation"]
+
+#: the entries of observation["state"], in order
+STATE_FIELDS = (
+    "goal_x_m", "goal_y_m", "roll_rad", "pitch_rad",
+    "roll_rate_rad_s", "pitch_rate_rad_s", "yaw_rate_rad_s",
+    "v_forward_m_s", "v_left_m_s", "v_up_m_s",
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObservationConfig:
+    """The height patch of the observation."""
+
+    patch_cells: int = 16
+    """Side of the square height patch, samples."""
+    patch_spacing_m: float = 0.1
+    """Distance between height-patch samples, m (16 x 0.1 m: a 1.5 m square around a 1 m vehicle)."""
+
+    def __post_init__(self) -> None:
+        check_int(self, "patch_cells", self.patch_cells, lo=1, hi=512)
+        check_range(self, "patch_spacing_m", self.patch_spacing_m, lo=0, lo_open=True)
+
+
+def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: int, spacing_m: float,
+                 fill_m: float) -> np.ndarray:
+    """Terrain heights (bilinear) on a ``cells x cells`` grid centred on (x, y), turned by ``yaw_rad``.
+
+    ``patch[i, j]`` is the height at body-frame offset ``(x_b, y_b) = ((j - c) s, (i - c) s)`` with
+    ``c = (cells - 1) / 2`` and ``s = spacing_m``: columns run forward, rows to the left, as
+    ``z[r, c]`` runs along x and y of the map. Samples outside the map read ``fill_m``.
+    """
+    from scipy.ndimage import map_coordinates
+
+    offs = (np.arange(cells) - (cells - 1) / 2.0) * spacing_m
+    yb, xb = np.meshgrid(offs, offs, indexing="ij")
+    cos, sin = math.cos(yaw_rad), math.sin(yaw_rad)
+    xw = x_m + cos * xb - sin * yb
+    yw = y_m + sin * xb + cos * yb
+    col = xw / hm.cell_size_m
+    row = yw / hm.cell_size_m
+    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
+    outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
+    z[outside] = fill_m
+    return z
+
+
+def observation(hm: Heightmap, cfg: ObservationConfig, goal_xy, pos, roll: float, pitch: float, yaw: float,
+                rates, v_body, fill_m: float) -> dict[str, np.ndarray]:
+    """The observation of the vehicle at ``pos`` (x, y, z) with the given attitude, body rates and
+    body velocity, heading for ``goal_xy`` (see the module docstring)."""
+    x, y, z = pos
+    dx, dy = goal_xy[0] - x, goal_xy[1] - y
+    cos, sin = math.cos(yaw), math.sin(yaw)
+    state = np.array([cos * dx + sin * dy, -sin * dx + cos * dy, roll, pitch, *rates, *v_body], dtype=np.float32)
+    patch = height_patch(hm, x, y, yaw, cfg.patch_cells, cfg.patch_spacing_m, fill_m)
+    return {"state": state, "height_patch": (patch - z).astype(np.float32)}

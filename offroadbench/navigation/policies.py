@@ -1,0 +1,197 @@
+"""Closed-loop policies: observation -> (v, omega), stress-tested by a study exactly like a planner.
+
+A policy sees what an agent of ``offroadbench/Traverse-v0`` sees (offroadbench.navigation.observation:
+the goal in the heading frame, attitude, rates, body velocity and a height patch) and returns the
+env's action, ``(v, omega)`` in m/s and rad/s, clipped to the vehicle's limits. The trial runner
+calls it at the control rate and applies the same failure rules and metrics as for a planned path,
+so ``[planner] name = "reactive"`` in a study puts a policy on the same missions as ``straight``.
+
+A policy is an object with ``reset(problem)`` (called once per mission with the
+:class:`~offroadbench.navigation.planners.PlanningProblem`: a trained RL policy ignores it, a
+model-predictive controller may read the map from it) and ``act(observation) -> (v, omega)``.
+The registry holds :class:`PolicySpec` entries whose ``make(cfg, context)`` builds one. Register in
+the same process with :func:`register_policy`, or from an installed package with an entry point::
+
+    [project.entry-points."offroadbench.policies"]
+    my-rl = "my_package:POLICY"           # a PolicySpec
+
+A stable-baselines3 model fits in a few lines: ``act = lambda obs: model.predict(obs, deterministic=True)[0]``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping, Protocol
+
+import numpy as np
+
+from offroadbench.config import check_int, check_range
+from offroadbench.navigation.observation import ObservationConfig
+from offroadbench.navigation.planners import PLANNERS, NoConfig, PlanningProblem, VehicleEnvelope
+from offroadbench.registry import Registry
+
+__all__ = ["Policy", "PolicyContext", "PolicySpec", "POLICIES", "register_policy", "make_policy",
+           "ReactiveConfig", "ReactivePolicy"]
+
+
+class Policy(Protocol):
+    def reset(self, problem: PlanningProblem) -> None: ...
+
+    def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]: ...
+
+
+@dataclass(frozen=True, kw_only=True)
+class PolicyContext:
+    """What a policy is built with: the observation layout, the vehicle and the control rate."""
+
+    observation: ObservationConfig = ObservationConfig()
+    vehicle: VehicleEnvelope = VehicleEnvelope()
+    track_m: float = 0.571
+    """Distance between the left and right wheels, m."""
+    control_rate_hz: int = 20
+    """How often ``act`` is called per simulated second."""
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A registry entry: ``make(cfg, context) -> Policy``, its config class and a one-line summary."""
+
+    make: Callable[[Any, PolicyContext], Policy]
+    config: type = NoConfig
+    summary: str = ""
+
+
+def _as_spec(name: str, obj: object) -> PolicySpec:
+    if isinstance(obj, PolicySpec):
+        return obj
+    raise TypeError(f"policy {name!r}: expected a PolicySpec, got {type(obj).__name__}")
+
+
+#: name -> PolicySpec; installed packages add entries through the ``offroadbench.policies`` group
+POLICIES: Registry[PolicySpec] = Registry("policy", entry_point_group="offroadbench.policies", adapt=_as_spec)
+
+
+def register_policy(name: str, *, config: type = NoConfig, summary: str = ""):
+    """Decorator: register a class (or factory) ``make(cfg, context)`` as policy ``name``."""
+
+    def deco(make):
+        if name in PLANNERS:
+            raise ValueError(f"policy {name!r}: the name is a planner's")
+        doc = (make.__doc__ or "").strip().splitlines()
+        POLICIES.add(name, PolicySpec(make, config, summary or (doc[0] if doc else "")))
+        return make
+
+    return deco
+
+
+def make_policy(name: str, cfg: Any, context: PolicyContext) -> Policy:
+    """Build the registered policy ``name``."""
+    return POLICIES.get(name).make(cfg, context)
+
+
+# ---------------------------------------------------------------------------- reactive
+@dataclass(frozen=True, kw_only=True)
+class ReactiveConfig:
+    """Settings of the ``reactive`` policy."""
+
+    cruise_speed_m_s: float = 1.0
+    """Speed on smooth ground, m/s (capped by the vehicle's top speed)."""
+    lookahead_m: float = 1.5
+    """Distance of the pure-pursuit point toward the goal, m."""
+    max_curvature_1_m: float = 1.0
+    """Tightest arc among the candidates, 1/m."""
+    candidates: int = 11
+    """Arcs compared per control tick (evenly spread in curvature, plus the pure-pursuit arc)."""
+    roughness_weight: float = 1.0
+    """Weight of the terrain term against the heading term (0: pure pursuit to the goal)."""
+    slow_down: float = 0.5
+    """Fraction of the speed given up on the roughest arc (roughness 1 = the vehicle's max slope)."""
+
+    def __post_init__(self) -> None:
+        for name in ("cruise_speed_m_s", "lookahead_m", "max_curvature_1_m"):
+            check_range(self, name, getattr(self, name), lo=0, lo_open=True)
+        check_int(self, "candidates", self.candidates, lo=1, hi=101)
+        check_range(self, "roughness_weight", self.roughness_weight, lo=0)
+        check_range(self, "slow_down", self.slow_down, lo=0, hi=1)
+
+
+@register_policy("reactive", config=ReactiveConfig,
+                 summary="pure pursuit to the goal, bent away from steep steps seen in the height patch")
+class ReactivePolicy:
+    """A reactive, terrain-aware policy on the observation alone.
+
+    Each tick it compares arcs of several curvatures (plus the pure-pursuit arc to a point
+    ``lookahead_m`` toward the goal, curvature ``2 y / (x^2 + y^2)``, Coulter 1992). Along each arc,
+    as far as the height patch reaches, it reads the heights under the left and right wheel tracks
+    and takes the arc's roughness ``r`` as the steepest along-track step or cross-slope, over the
+    vehicle's max slope. It drives the arc minimising ``(heading error over the lookahead)^2 +
+    roughness_weight * r^2`` at ``cruise * (1 - slow_down * min(r, 1))``, slowing to stop at the goal
+    within the vehicle's acceleration. A goal behind the vehicle is turned toward on the tightest arc.
+
+    Optimises: progress toward the goal with the gentlest ground under the wheels in the next metre.
+    Cannot see: beyond the height patch (0.75 m ahead by default), the class map, the way round a
+    large obstacle (it is greedy and can be trapped in a dead end).
+    """
+
+    def __init__(self, cfg: ReactiveConfig, context: PolicyContext) -> None:
+        self.cfg = cfg
+        self.ctx = context
+        obs = context.observation
+        self._n = obs.patch_cells
+        self._ds = obs.patch_spacing_m
+        self._centre = (obs.patch_cells - 1) / 2.0
+        reach = self._centre * self._ds
+        self._s = np.linspace(0.0, max(reach - 0.5 * context.track_m, self._ds), 8)
+        self._half_track = 0.5 * context.track_m
+
+    def reset(self, problem: PlanningProblem) -> None:
+        """Nothing to remember between missions."""
+
+    def _heights(self, patch: np.ndarray, xb: np.ndarray, yb: np.ndarray) -> np.ndarray:
+        from scipy.ndimage import map_coordinates
+
+        return map_coordinates(patch, [yb / self._ds + self._centre, xb / self._ds + self._centre], order=1, mode="nearest")
+
+    def _roughness(self, patch: np.ndarray, kappa: float) -> float:
+        s = self._s
+        if abs(kappa) < 1e-9:
+            x, y, th = s, 0.0 * s, 0.0 * s
+        else:
+            th = kappa * s
+            x, y = np.sin(th) / kappa, (1.0 - np.cos(th)) / kappa
+        nx, ny = -np.sin(th), np.cos(th)
+        h = self._half_track
+        zl = self._heights(patch, x + h * nx, y + h * ny)
+        zr = self._heights(patch, x - h * nx, y - h * ny)
+        step = s[1] - s[0]
+        along = max(np.max(np.abs(np.diff(zl))), np.max(np.abs(np.diff(zr)))) / step
+        cross = float(np.max(np.abs(zl - zr))) / (2.0 * h)
+        return max(along, cross) / self.ctx.vehicle.max_slope
+
+    def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
+        cfg, veh = self.cfg, self.ctx.vehicle
+        state = observation["state"]
+        gx, gy = float(state[0]), float(state[1])
+        d = math.hypot(gx, gy)
+        k_max = cfg.max_curvature_1_m
+        v_top = min(cfg.cruise_speed_m_s, veh.max_speed_m_s)
+        if d < 1e-6:
+            return 0.0, 0.0
+        if gx <= 0.0:  # goal behind: the tightest arc toward it, slowly
+            v = 0.3 * v_top
+            return v, max(-veh.max_yaw_rate_rad_s, min(veh.max_yaw_rate_rad_s, math.copysign(v * k_max, gy)))
+        tx, ty = (gx, gy) if d <= cfg.lookahead_m else (gx * cfg.lookahead_m / d, gy * cfg.lookahead_m / d)
+        k_star = max(-k_max, min(k_max, 2.0 * ty / (tx * tx + ty * ty)))
+        patch = np.asarray(observation["height_patch"], dtype=float)
+        best = (math.inf, k_star, 0.0)
+        for k in (k_star, *np.linspace(-k_max, k_max, cfg.candidates)):
+            r = self._roughness(patch, float(k)) if cfg.roughness_weight > 0 else 0.0
+            score = ((k - k_star) * cfg.lookahead_m) ** 2 + cfg.roughness_weight * r * r
+            if score < best[0]:
+                best = (score, float(k), r)
+        _, k, r = best
+        v = v_top * (1.0 - cfg.slow_down * min(r, 1.0))
+        v = min(v, math.sqrt(2.0 * 0.5 * max(d - 0.2, 0.0)) + 0.1)  # arrive gently (0.5 m/s^2)
+        omega = max(-veh.max_yaw_rate_rad_s, min(veh.max_yaw_rate_rad_s, v * k))
+        return v, omega

@@ -1,0 +1,149 @@
+"""When a trial ends: the failure rules of Majhor & Bos 2023, Sec. 2.4, shared by the trial runner
+and the Gymnasium env.
+
+A trial ends, checked in this order at every telemetry sample:
+
+* ``tipped``: |roll| or |pitch| above ``tip_angle_deg`` (paper: 75 deg);
+* ``off_map``: the base left the map horizontally, or fell ``fall_depth_m`` below its lowest point;
+* success (end reason ``""``): the base within ``goal_tolerance_m`` of the goal (horizontal);
+* ``stuck``: the base stayed within ``stuck_distance_m`` of where it was one stuck window ago
+  for the whole window (paper: 0.2 m in 30 s);
+* ``timeout``: the caller's clock passed ``timeout_factor`` times the nominal time (path length
+  over cruise speed). The runner ends the trial; the env truncates the episode.
+
+The stuck window. The paper's 30 s window cannot fire on a mission shorter than 10 m at 1 m/s
+with a 3x timeout: the timeout comes first. The window used is therefore
+``min(stuck_window_s, stuck_window_max_fraction * timeout)``; with the defaults, 35 m missions
+keep the paper's 30 s and a 6 m mission (18 s timeout) gets 9 s. :func:`unreachable` names any
+rule a configuration makes impossible to fire, and :class:`RuleChecker` logs it as a warning.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench.config import check_range
+from offroadbench.navigation import metrics
+
+__all__ = ["FAILURE_REASONS", "FailureRules", "stuck_window_s", "unreachable", "end_reason", "RuleChecker"]
+
+log = logging.getLogger(__name__)
+
+#: failure_reason values; "" means success
+FAILURE_REASONS = ("tipped", "stuck", "timeout", "off_map")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FailureRules:
+    """When a trial ends, paper Sec. 2.4 (tip-over 75 deg; stuck = under 0.2 m in 30 s)."""
+
+    tip_angle_deg: float = 75.0
+    """A trial fails as ``tipped`` once |roll| or |pitch| exceeds this, degrees."""
+    stuck_distance_m: float = 0.2
+    """A trial fails as ``stuck`` if the vehicle stays within this distance of where it was ..."""
+    stuck_window_s: float = 30.0
+    """... for this long, seconds (capped by ``stuck_window_max_fraction``)."""
+    stuck_window_max_fraction: float = 0.5
+    """The stuck window is at most this fraction of the trial's timeout, so that ``stuck`` can fire
+    on short missions (a 6 m mission at 1 m/s times out after 18 s: its window is 9 s). 35 m
+    missions keep the paper's 30 s. 1 or more lets the timeout pre-empt the stuck rule."""
+    timeout_factor: float = 3.0
+    """A trial fails as ``timeout`` after this many times the nominal time (length / cruise speed)."""
+    goal_tolerance_m: float = 0.5
+    """The mission succeeds when the vehicle's centre is this close to the goal (horizontal), m."""
+    fall_depth_m: float = 1.0
+    """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
+
+    def __post_init__(self) -> None:
+        check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
+        check_range(self, "stuck_distance_m", self.stuck_distance_m, lo=0, lo_open=True)
+        check_range(self, "stuck_window_s", self.stuck_window_s, lo=0, lo_open=True)
+        check_range(self, "stuck_window_max_fraction", self.stuck_window_max_fraction, lo=0, lo_open=True)
+        check_range(self, "timeout_factor", self.timeout_factor, lo=1.0)
+        check_range(self, "goal_tolerance_m", self.goal_tolerance_m, lo=0, lo_open=True)
+        check_range(self, "fall_depth_m", self.fall_depth_m, lo=0, lo_open=True)
+
+
+def stuck_window_s(rules: FailureRules, timeout_s: float) -> float:
+    """The stuck window of a trial with this timeout, seconds (see the module docstring)."""
+    return min(rules.stuck_window_s, rules.stuck_window_max_fraction * timeout_s)
+
+
+def unreachable(rules: FailureRules, timeout_s: float, mission_length_m: float) -> list[str]:
+    """The rules that cannot fire in a trial with this timeout and mission, each with the reason."""
+    out = []
+    window = stuck_window_s(rules, timeout_s)
+    if window >= timeout_s:
+        out.append(f"stuck: the {window:g} s stuck window is not shorter than the {timeout_s:g} s timeout")
+    if rules.tip_angle_deg >= 180.0:
+        out.append(f"tipped: tip_angle_deg = {rules.tip_angle_deg:g}; |roll| never exceeds 180 deg")
+    if rules.goal_tolerance_m >= mission_length_m:
+        out.append(f"success at the start: goal_tolerance_m = {rules.goal_tolerance_m:g} reaches the "
+                   f"{mission_length_m:g} m mission's start")
+    return out
+
+
+def end_reason(rules: FailureRules, bounds: tuple[float, float, float], goal_xy, pos, roll: float, pitch: float,
+               xy_hist, window: int) -> str | None:
+    """The reason a trial ends now (``""`` = success), or None to go on.
+
+    ``bounds`` = (width, height, lowest z) of the map, metres; ``pos`` = (x, y, z) of the base;
+    ``roll``, ``pitch`` in radians; ``xy_hist`` the (x, y) samples so far, the current one last;
+    ``window`` the stuck window in samples.
+    """
+    tip = math.radians(rules.tip_angle_deg)
+    if abs(roll) > tip or abs(pitch) > tip:
+        return "tipped"
+    width, height, z_min = bounds
+    if not (0.0 <= pos[0] <= width and 0.0 <= pos[1] <= height) or pos[2] < z_min - rules.fall_depth_m:
+        return "off_map"
+    if math.hypot(pos[0] - goal_xy[0], pos[1] - goal_xy[1]) <= rules.goal_tolerance_m:
+        return ""
+    if len(xy_hist) > window:
+        first = xy_hist[-window - 1]
+        # cheap test first: only a vehicle back near where it was a window ago can be stuck
+        if math.hypot(pos[0] - first[0], pos[1] - first[1]) < rules.stuck_distance_m:
+            recent = np.asarray(xy_hist[-window - 1:])
+            if metrics.stuck_index(recent, window, rules.stuck_distance_m) is not None:
+                return "stuck"
+    return None
+
+
+@functools.lru_cache(maxsize=64)
+def _warn_once(why: str) -> None:
+    """Log an unreachable rule once per process (a study checks thousands of trials)."""
+    log.warning("failure rule cannot fire: %s", why)
+
+
+class RuleChecker:
+    """The rules of one trial, fed one sample at a time.
+
+    Args:
+        rules: the failure rules.
+        bounds: (width, height, lowest z) of the map, metres.
+        goal_xy: the mission's goal, metres.
+        timeout_s: the trial's timeout, seconds (sets the stuck window).
+        sample_rate_hz: how often :meth:`check` is called per simulated second.
+        mission_length_m: start-goal distance, for the reachability warning.
+    """
+
+    def __init__(self, rules: FailureRules, bounds, goal_xy, *, timeout_s: float, sample_rate_hz: float,
+                 mission_length_m: float) -> None:
+        self.rules = rules
+        self.bounds = tuple(bounds)
+        self.goal = (float(goal_xy[0]), float(goal_xy[1]))
+        self.window_s = stuck_window_s(rules, timeout_s)
+        self.window = max(1, int(round(self.window_s * sample_rate_hz)))
+        self.xy_hist: list[tuple[float, float]] = []
+        for why in unreachable(rules, timeout_s, mission_length_m):
+            _warn_once(why)
+
+    def check(self, pos, roll: float, pitch: float) -> str | None:
+        """Record the sample and return the end reason (``""`` = success), or None to go on."""
+        self.xy_hist.append((pos[0], pos[1]))
+        return end_reason(self.rules, self.bounds, self.goal, pos, roll, pitch, self.xy_hist, self.window)
