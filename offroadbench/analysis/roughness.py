@@ -7,7 +7,8 @@ is ``P_grad = max |Q_grad|``. Pixels are then ``low`` (P_grad <= t_low), ``semi`
 
 Units. The paper's thresholds 50 and 140 are in 16-bit DEM units per centimetre, as its
 5 / 7.07 cm distances say. Its Unreal import used Z scale 0.75 %: at Z scale 100 a 16-bit map
-spans 512 m (128 DEM units per cm of height at scale 1), so one DEM unit is 0.75/128 cm and the
+spans 512 m (128 DEM units per cm of height at scale 1; :func:`offroadbench.io.png16.ue_z_range_m`),
+so one DEM unit is 0.75/128 cm and the
 thresholds in rise/run are 50 * 0.75/128 = 0.293 and 140 * 0.75/128 = 0.820. The one function
 that converts is :func:`paper_gradient_to_slope`; here everything is metres and rise/run.
 """
@@ -21,13 +22,13 @@ import numpy as np
 
 from offroadbench.config import check_range
 from offroadbench.heightmap import Heightmap
+from offroadbench.io.png16 import LEVELS, ue_z_range_m
 
 __all__ = [
     "LOW",
     "SEMI",
     "HIGH",
     "CLASS_NAMES",
-    "UE_Z_RANGE_M_AT_SCALE_100",
     "paper_gradient_to_slope",
     "RoughnessConfig",
     "gradient_map",
@@ -43,8 +44,6 @@ __all__ = [
 LOW, SEMI, HIGH = 0, 1, 2
 CLASS_NAMES = ("low", "semi", "high")
 
-#: Unreal Engine landscapes map the 16-bit range to 512 m at Z scale 100 (-256 .. +256 m).
-UE_Z_RANGE_M_AT_SCALE_100 = 512.0
 #: The paper's Unreal Z scale, percent (Sec. 2.2).
 PAPER_UE_Z_SCALE = 0.75
 
@@ -52,10 +51,10 @@ PAPER_UE_Z_SCALE = 0.75
 def paper_gradient_to_slope(grad_units_per_cm: float, ue_z_scale: float = PAPER_UE_Z_SCALE) -> float:
     """Convert a Majhor & Bos gradient threshold (16-bit DEM units per cm) to rise/run.
 
-    One 16-bit unit is ``ue_z_scale / 100 * 512 m / 65536`` of height = ``ue_z_scale / 128`` cm,
+    One 16-bit unit is ``ue_z_range_m(ue_z_scale) / 65535`` of height = ``ue_z_scale / 128`` cm,
     so a gradient g units/cm is ``g * ue_z_scale / 128`` cm/cm. 50 -> 0.293, 140 -> 0.820.
     """
-    cm_per_unit = ue_z_scale / 100.0 * UE_Z_RANGE_M_AT_SCALE_100 * 100.0 / 65536.0
+    cm_per_unit = ue_z_range_m(ue_z_scale) * 100.0 / LEVELS
     return grad_units_per_cm * cm_per_unit
 
 

@@ -10,18 +10,20 @@ from offroadbench.errors import InputError
 
 def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.cli.terrain import load_heightmap_arg
-    from offroadbench.io.export import EXPORTERS, check_name, check_output_dir, export_heightmap, get_exporter
+    from offroadbench.io.export import EXPORTERS, check_name, check_output_dir, export_heightmap
 
     if args.list:
         print("Export formats (offroadbench export TERRAIN --format NAME -o DIR):")
         width = max(len(n) for n in EXPORTERS)
         for name, exp in EXPORTERS.items():
-            print(f"  {name:<{width}}  {exp.summary}")
+            needs = f" [needs pip install 'offroadbench[{exp.extra}]']" if exp.extra else ""
+            print(f"  {name:<{width}}  {exp.summary}; read by {exp.reader}{needs}")
         return 0
     missing = [flag for flag, v in (("TERRAIN", args.terrain), ("--format", args.format), ("-o DIR", args.output)) if v is None]
     if missing:
         raise InputError(f"export: missing {', '.join(missing)} (or use --list to see the formats)")
-    exporter = get_exporter(args.format)  # fail on a bad format, name, option or directory before the work
+    exporter = EXPORTERS.get(args.format)  # fail on a bad format, name, option or directory before the work
+    exporter.check_available()
     options = {} if args.stride is None else {"stride": args.stride}
     if options and "stride" not in exporter.options:
         raise InputError(f"--stride applies to the obj format only, not to {args.format!r}")
@@ -54,7 +56,7 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "export",
-        help="export a terrain for another simulator (unreal, gazebo, mujoco, obj, tiff, npy)",
+        help="export a terrain for another simulator or tool (see --list)",
         description="Write a terrain (16-bit PNG with sidecar, preset or recipe) in another simulator's format. "
         "All files appear together or not at all.",
     )

@@ -6,14 +6,25 @@ Encoding: pixel (row r, col c) is ``z[r, c]`` (no flips); the full 0..65535 rang
 
 Metadata is written twice: a sidecar ``NAME.json`` beside ``NAME.png`` (flat keys, read back
 exactly) and PNG ``tEXt`` chunks with the same keys (so the PNG alone still says what it is).
-Both carry the Unreal Engine import scales that reproduce the metres: X/Y scale = cell size in
-cm, Z scale = relief in cm / 512 (a 16-bit landscape spans 512 m at Z scale 100).
+Both carry the Unreal Engine Landscape import settings that reproduce the metres
+(:func:`ue_landscape_settings`).
+
+Unreal's mapping (Landscape Technical Guide, "Calculating Heightmap Z Scale"; UE source
+``LandscapeDataAccess.h``: ``LANDSCAPE_ZSCALE = 1/128``, ``MidValue = 32768``): a 16-bit level v
+lies at ``Location.Z + (v - 32768) / 128 * Scale.Z`` centimetres. Level 0..65535 therefore spans
+``65535 / 128 * Scale.Z`` cm (:func:`ue_z_range_m`: 511.99 m at Scale.Z 100, the "-256..+256 m" of
+the docs). Our level 0 is ``z_min`` and 65535 is ``z_max``, so the exact Z scale is
+``relief_cm * 128 / 65535`` and the location ``z_min_cm + 256 * Scale.Z``: Unreal then puts every
+level exactly where :func:`decode_png16` does. The only loss is the PNG's own quantisation, at
+most half a step ``relief / 65535 / 2`` (29 um for the paper's 3.84 m), plus Unreal's float32
+transform (relative 6e-8 of the numbers typed in).
 """
 
 from __future__ import annotations
 
 import json
 import struct
+from decimal import Decimal
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -23,11 +34,60 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.atomic import atomic_path, check_writable
 
-__all__ = ["FORMAT", "encode_png16", "decode_png16", "sidecar_path", "png_metadata", "write_png16", "read_png16"]
+__all__ = [
+    "FORMAT",
+    "LEVELS",
+    "encode_png16",
+    "decode_png16",
+    "sidecar_path",
+    "png_metadata",
+    "write_png16",
+    "read_png16",
+    "ue_z_range_m",
+    "ue_landscape_settings",
+    "ue_heights_m",
+]
 
 FORMAT = "offroadbench-png16/1"
 LEVELS = 65535
-UE_RANGE_M_AT_Z_SCALE_100 = 512.0  # a 16-bit Unreal landscape spans 512 m at Z scale 100
+#: Unreal's 16-bit level at Location.Z, and levels per centimetre at Scale.Z = 1 (LANDSCAPE_ZSCALE = 1/128)
+UE_ZERO_LEVEL = 32768
+UE_LEVELS_PER_CM = 128
+
+
+def ue_z_range_m(z_scale: float) -> float:
+    """Height in metres that Unreal spans from level 0 to level 65535 at Landscape ``Scale.Z``.
+
+    ``65535 / 128 * z_scale`` cm: 511.99 m at 100, 3.83994 m at the paper's 0.75. The one place
+    that holds Unreal's vertical scale (see the module docstring).
+    """
+    return LEVELS / UE_LEVELS_PER_CM * z_scale / 100.0
+
+
+def ue_landscape_settings(hm: Heightmap) -> dict[str, float]:
+    """Landscape import scale and location (cm) that reproduce ``hm`` in Unreal Engine exactly.
+
+    Scale X = Scale Y = cell size in cm (vertex (col c, row r) at Location + (c * Scale.X,
+    r * Scale.Y)); Scale Z = relief / :func:`ue_z_range_m` (1), i.e. relief_cm * 128 / 65535;
+    Location Z = z_min_cm + 32768 / 128 * Scale Z, so level 0 lands on z_min and 65535 on z_max.
+    A flat map gets Scale Z = 100 (any scale puts level 0 on z_min).
+    """
+    relief = hm.relief_m
+    scale_z = relief / ue_z_range_m(1.0) if relief > 0 else 100.0
+    cell_cm = float(Decimal(repr(hm.cell_size_m)) * 100)  # 0.07 m -> 7 cm, not 7.000000000000001
+    return {
+        "scale_x": cell_cm,
+        "scale_y": cell_cm,
+        "scale_z": scale_z,
+        "location_x_cm": 0.0,
+        "location_y_cm": 0.0,
+        "location_z_cm": hm.z_min_m * 100.0 + UE_ZERO_LEVEL / UE_LEVELS_PER_CM * scale_z,
+    }
+
+
+def ue_heights_m(levels: np.ndarray, scale_z: float, location_z_cm: float) -> np.ndarray:
+    """World Z (metres) Unreal gives 16-bit ``levels`` at ``Scale.Z`` and ``Location.Z``."""
+    return (location_z_cm + (np.asarray(levels, dtype=np.float64) - UE_ZERO_LEVEL) / UE_LEVELS_PER_CM * scale_z) / 100.0
 
 
 def sidecar_path(png_path: str | Path) -> Path:
@@ -57,6 +117,7 @@ def png_metadata(hm: Heightmap, extra: Mapping[str, Any] | None = None) -> dict[
     from offroadbench import __version__
 
     relief = hm.relief_m
+    ue = ue_landscape_settings(hm)
     meta: dict[str, Any] = {
         "format": FORMAT,
         "rows": hm.rows,
@@ -66,9 +127,10 @@ def png_metadata(hm: Heightmap, extra: Mapping[str, Any] | None = None) -> dict[
         "z_max_m": hm.z_max_m,
         "relief_m": relief,
         "quantisation_step_m": relief / LEVELS,
-        "ue_scale_x": hm.cell_size_m * 100.0,
-        "ue_scale_y": hm.cell_size_m * 100.0,
-        "ue_scale_z": relief * 100.0 / UE_RANGE_M_AT_Z_SCALE_100,
+        "ue_scale_x": ue["scale_x"],
+        "ue_scale_y": ue["scale_y"],
+        "ue_scale_z": ue["scale_z"],
+        "ue_location_z_cm": ue["location_z_cm"],
         "offroadbench_version": __version__,
     }
     for k, v in (extra or {}).items():

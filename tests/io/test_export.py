@@ -1,9 +1,8 @@
-"""Exporters: each simulator's own placement rules put every sample where the Heightmap says.
-
-The simulators are not installed here, so each test re-implements the simulator's documented
-mapping from file to world (cited in offroadbench/io/export.py) and checks the written files against
-the heightmap: sample (0, 0) at x = y = 0, the far corner at (width, height), heights z[r, c].
-"""
+"""Exporters, format by format: each simulator's own placement rules put every sample where the
+Heightmap says, on non-square maps and edge cases the contract test (tests/contracts/
+test_exporters.py) does not cover. These tests re-implement each simulator's documented mapping
+from file to world (cited in offroadbench/io/export/<format>.py); tests/io/test_export_readers.py
+loads the files with the real tools."""
 
 import json
 import logging
@@ -17,7 +16,11 @@ from PIL import Image
 from offroadbench import Heightmap, InputError
 from offroadbench.cli import main
 from offroadbench.io import export as ex
-from offroadbench.io.export import EXPORTERS, export_heightmap, gazebo_grid_size, read_grid
+from offroadbench.io.export import EXPORTERS, export_heightmap
+from offroadbench.io.export._staging import os as staging_os
+from offroadbench.io.export.gazebo import gazebo_grid_size
+from offroadbench.io.export.grid import read_grid
+from offroadbench.io.png16 import ue_heights_m, ue_landscape_settings
 
 SMALL = ["--set", "grid.rows=33", "--set", "grid.cols=33"]
 
@@ -41,10 +44,10 @@ def listing(d):
 
 
 # --------------------------------------------------------------------------- registry
-def test_registry_has_the_formats_and_unknown_lists_them(hm, tmp_path):
-    assert set(EXPORTERS) == {"unreal", "gazebo", "mujoco", "obj", "tiff", "npy"}
-    with pytest.raises(InputError, match="known formats: gazebo, mujoco, npy, obj, tiff, unreal"):
-        export_heightmap(hm, "fbx", tmp_path / "o")
+def test_unknown_format_suggests_and_lists_the_known_ones(hm, tmp_path):
+    with pytest.raises(InputError, match="unknown export format 'gazbo'; did you mean 'gazebo'") as err:
+        export_heightmap(hm, "gazbo", tmp_path / "o")
+    assert ", ".join(EXPORTERS.names()) in str(err.value)
     assert not (tmp_path / "o").exists()
 
 
@@ -198,7 +201,7 @@ def test_gazebo_square_map_is_placed_exactly(rng, tmp_path):
 
 
 def test_gazebo_non_square_map_is_resampled_over_the_same_extent(hm, tmp_path, caplog):
-    with caplog.at_level(logging.INFO, logger="offroadbench.io.export"):
+    with caplog.at_level(logging.INFO, logger="offroadbench.io.export.gazebo"):
         export_heightmap(hm, "gazebo", tmp_path, name="g")
     assert "resampled 9x14 -> 17x17 (bilinear" in caplog.text
     assert "extent is not square" in caplog.text  # classic Gazebo would render it square
@@ -218,26 +221,32 @@ def test_gazebo_non_square_map_is_resampled_over_the_same_extent(hm, tmp_path, c
 def test_unreal_scale_and_location_reproduce_heights(hm, tmp_path):
     export_heightmap(hm, "unreal", tmp_path, name="u")
     text = (tmp_path / "u_unreal.txt").read_text()
-    s = ex.unreal_import_settings(hm)
-    assert f"Z {s['location_z_cm']:.6f}" in text and "1009" in text and "2017" in text
-    assert s["scale_x"] == s["scale_y"] == pytest.approx(25.0)
+    s = ue_landscape_settings(hm)
+    assert f"Z {s['location_z_cm']!r}" in text and f"Z {s['scale_z']!r}" in text and "1009" in text and "2017" in text
+    assert s["scale_x"] == s["scale_y"] == 25.0
+    assert s["scale_z"] == pytest.approx(hm.relief_m * 100 * 128 / 65535, rel=1e-15)
     with Image.open(tmp_path / "u.png") as img:
         q = np.asarray(img).astype(np.float64)
     assert q.shape == hm.shape  # pixel (r, c) = z[r, c]: X = columns, Y = rows, as Unreal reads it
+    # Unreal: level v at Location.Z + (v - 32768) / 128 * Scale.Z cm, written out here once more by hand
     ue_z_m = (s["location_z_cm"] + (q - 32768) / 128 * s["scale_z"]) / 100
-    assert np.max(np.abs(ue_z_m - hm.z)) <= 1.5 * hm.relief_m / 65535
+    assert np.array_equal(ue_z_m, ue_heights_m(q, s["scale_z"], s["location_z_cm"]))
+    step = hm.relief_m / 65535
+    assert np.max(np.abs(ue_z_m - hm.z)) <= step / 2 * (1 + 1e-9)  # the PNG's own quantisation, nothing more
+    assert (ue_z_m.min(), ue_z_m.max()) == pytest.approx((hm.z_min_m, hm.z_max_m), abs=1e-12)
     side = json.loads((tmp_path / "u.json").read_text())
-    assert side["ue_scale_z"] == pytest.approx(s["scale_z"])
+    assert side["ue_scale_z"] == s["scale_z"] and side["ue_location_z_cm"] == s["location_z_cm"]
 
 
 def test_unreal_paper_scale_and_size_warning(tmp_path, caplog):
     z = np.zeros((127, 127))
     z[5, 9] = 3.84
-    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export.unreal"):
         res = export_heightmap(Heightmap(z, 0.05), "unreal", tmp_path / "a", name="p")
-    assert ex.unreal_import_settings(Heightmap(z, 0.05))["scale_z"] == pytest.approx(0.75)
+    # the paper's 3.84 m at Z scale 0.75: Unreal's exact scale is 384 * 128 / 65535 = 0.7500114...
+    assert ue_landscape_settings(Heightmap(z, 0.05))["scale_z"] == pytest.approx(384 * 128 / 65535, rel=1e-15)
     assert "not one of" not in caplog.text and not any("warning" in n for n in res.notes)
-    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export.unreal"):
         res = export_heightmap(Heightmap(z[:100, :100], 0.05), "unreal", tmp_path / "b", name="p")
     assert "100x100 is not one of Unreal's recommended Landscape sizes" in caplog.text
     assert "not one of" in (tmp_path / "b" / "p_unreal.txt").read_text()
@@ -252,7 +261,8 @@ def failing_exporter(monkeypatch):
         (d / "sub" / "x").write_text("half")
         raise InputError("boom")
 
-    monkeypatch.setitem(EXPORTERS, "broken", ex.Exporter("broken", "fails half way", write))
+    entry = ex.Exporter(name="broken", summary="fails half way", reader="none", write=write, read=None, precision_m=None)
+    monkeypatch.setitem(EXPORTERS._entries, "broken", entry)
 
 
 def test_failure_leaves_no_new_directory(hm, tmp_path, failing_exporter):
@@ -279,7 +289,7 @@ def test_failed_move_into_existing_directory_is_rolled_back(hm, tmp_path, monkey
             raise OSError(28, "No space left on device")
         return real_replace(src, dst)
 
-    monkeypatch.setattr(ex.os, "replace", flaky)
+    monkeypatch.setattr(staging_os, "replace", flaky)
     with pytest.raises(OSError):
         export_heightmap(hm, "gazebo", tmp_path, name="g")
     assert listing(tmp_path) == []
@@ -297,7 +307,7 @@ def test_failed_move_restores_the_files_it_replaced(hm, tmp_path, monkeypatch):
             raise OSError(28, "No space left on device")
         return real_replace(src, dst)
 
-    monkeypatch.setattr(ex.os, "replace", flaky)
+    monkeypatch.setattr(staging_os, "replace", flaky)
     with pytest.raises(OSError):
         export_heightmap(hm.with_z(hm.z * 2), "gazebo", tmp_path, name="g")
     assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
@@ -361,7 +371,7 @@ def test_cli_preset_to_mujoco_and_png_to_npy(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["paper-d2.45", "--format", "fbx"], "known formats: gazebo, mujoco, npy, obj, tiff, unreal"),
+        (["paper-d2.45", "--format", "fbx"], "unknown export format 'fbx'"),
         (["paper-d2.45", "--format", "tiff", "--stride", "2"], "--stride applies to the obj format only"),
         (["paper-d2.45", "--format", "npy", "--name", "a/b"], "export name"),
         (["no-such-preset", "--format", "npy"], "no-such-preset"),

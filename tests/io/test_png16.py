@@ -8,7 +8,7 @@ import pytest
 from PIL import Image
 
 from offroadbench import Heightmap, InputError
-from offroadbench.io.png16 import read_png16, sidecar_path, write_png16
+from offroadbench.io.png16 import read_png16, sidecar_path, ue_z_range_m, write_png16
 
 
 @pytest.fixture
@@ -30,7 +30,9 @@ def test_written_png_is_true_16_bit_with_full_range(tmp_path, hm):
     side = json.loads(sidecar_path(p).read_text())
     assert side["cell_size_m"] == 0.05 and side["z_min_m"] == hm.z_min_m and side["z_max_m"] == hm.z_max_m
     assert side["ue_scale_x"] == pytest.approx(5.0)
-    assert side["ue_scale_z"] == pytest.approx(hm.relief_m * 100 / 512)
+    # Unreal: level v at Location.Z + (v - 32768) / 128 * Scale.Z cm, so 65535 levels span relief exactly
+    assert side["ue_scale_z"] == pytest.approx(hm.relief_m * 100 * 128 / 65535, rel=1e-15)
+    assert side["ue_location_z_cm"] == pytest.approx(hm.z_min_m * 100 + 256 * side["ue_scale_z"], rel=1e-15)
     assert meta["seed"] == 7
 
 
@@ -45,10 +47,13 @@ def test_round_trip_within_half_step(tmp_path, hm):
 
 
 def test_paper_ue_scale_for_paper_relief(tmp_path):
+    """The paper's Z scale 0.75 spans 65535 / 128 * 0.75 cm = 3.83994 m; its 3.84 m relief needs 0.7500114."""
     z = np.zeros((5, 5))
     z[2, 2] = 3.84
     meta = write_png16(Heightmap(z, 0.05), tmp_path / "p.png")
-    assert meta["ue_scale_z"] == pytest.approx(0.75)
+    assert meta["ue_scale_z"] == pytest.approx(0.75, rel=2e-5) and meta["ue_scale_z"] != 0.75
+    assert ue_z_range_m(meta["ue_scale_z"]) == pytest.approx(3.84, rel=1e-15)
+    assert ue_z_range_m(100.0) == pytest.approx(511.9921875)  # the "-256..+256 m" at Z scale 100
 
 
 def test_without_sidecar_uses_text_chunks_or_user_values(tmp_path, hm):
