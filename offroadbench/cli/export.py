@@ -35,6 +35,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
     if recipe is not None:
         meta = {"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)}
+        if recipe.data.get("recipe", {}).get("crs"):
+            meta["crs"] = recipe.data["recipe"]["crs"]
         name = args.name or f"{recipe.name}_seed{args.seed}"
     else:
         meta = {"source": str(args.terrain)}

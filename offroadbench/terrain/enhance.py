@@ -248,7 +248,7 @@ class DEMConfig:
     """An imported DEM sampled onto the recipe's grid (gaps filled first)."""
 
     path: str | None = None
-    """A 16-bit PNG (with sidecar) or .npy DEM; None = the bundled synthetic sample with gaps."""
+    """A 16-bit PNG (with sidecar), .npy or GeoTIFF DEM (offroadbench.io.dem); None = the bundled synthetic sample with gaps."""
     rows: int = 1009
     """Grid rows of the output."""
     cols: int = 1009
@@ -303,7 +303,7 @@ def _resample(z: np.ndarray, src_cell: float, cfg: DEMConfig) -> np.ndarray:
     return top * (1 - tr) + bot * tr
 
 
-@register("dem", DEMConfig, summary="Imported DEM (16-bit PNG + sidecar or .npy), gaps filled, resampled to the grid")
+@register("dem", DEMConfig, summary="Imported DEM (16-bit PNG + sidecar, .npy or GeoTIFF), gaps filled, resampled to the grid")
 def generate_dem(cfg: DEMConfig, rng: np.random.Generator) -> Heightmap:
     """Read the DEM, fill its gaps (Martin et al. 2014, Sec. IV.B) and sample it onto the grid."""
     from offroadbench.io.dem import read_dem

@@ -6,6 +6,7 @@ Format (``terrains/*.toml``)::
     name = "paper-d2.45"
     description = "..."
     relief_m = 3.84          # optional: final rescale to min 0 .. relief_m
+    crs = "IAU_2015:30110"   # optional: coordinate reference system of exports (geotiff); none = local metres
 
     [grid]
     rows = 1009
@@ -60,7 +61,7 @@ __all__ = [
 COMBINE_MODES = ("replace", "sum", "product", "apply")
 _LAYER_KEYS = ("generator", "combine", "weight")
 _TOP_KEYS = ("recipe", "grid", "layers")
-_RECIPE_KEYS = ("name", "description", "relief_m")
+_RECIPE_KEYS = ("name", "description", "relief_m", "crs")
 _GRID_KEYS = ("rows", "cols", "cell_size_m")
 GRID_FIELDS = _GRID_KEYS
 
@@ -189,6 +190,8 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
     relief = meta.get("relief_m")
     if relief is not None and (isinstance(relief, bool) or not isinstance(relief, (int, float)) or not relief > 0):
         raise InputError(f"{where}: recipe.relief_m = {relief!r}; must be a number > 0 (metres)")
+    if not isinstance(meta.get("crs", ""), str):
+        raise InputError(f"{where}: recipe.crs = {meta['crs']!r}; must be a string such as \"IAU_2015:30110\"")
     layers_tbl = data.get("layers")
     if not isinstance(layers_tbl, dict) or not layers_tbl:
         raise InputError(f"{where}: needs at least one [layers.NAME] table")
