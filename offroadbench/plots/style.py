@@ -6,13 +6,32 @@ choice); the CLI picks the backend and saves them.
 
 from __future__ import annotations
 
+import numpy as np
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 
-__all__ = ["CLASS_COLOURS", "class_cmap", "new_figure", "draw_border", "class_legend_handles", "draw_classes"]
+__all__ = ["CLASS_COLOURS", "HEIGHT_PERCENTILE", "class_cmap", "new_figure", "draw_border", "class_legend_handles", "draw_classes", "height_limits"]
+
+#: height colour maps span the HEIGHT_PERCENTILE .. 100 - HEIGHT_PERCENTILE percentiles of the map
+HEIGHT_PERCENTILE = 0.5
+
+
+def height_limits(z, percentile: float = HEIGHT_PERCENTILE) -> tuple[float, float, str]:
+    """(vmin, vmax, colorbar extend) for a height colour map: the percentile range, not min..max.
+
+    On the paper presets a few corner cells hold 3 m of the 3.84 m relief (see
+    :mod:`offroadbench.analysis.relief`); min..max limits would paint the rest of the map one colour.
+    ``extend`` is "both", "min", "max" or "neither", as matplotlib's ``colorbar(extend=...)`` takes it.
+    """
+    z_min, z_max = float(np.min(z)), float(np.max(z))
+    lo, hi = (float(v) for v in np.percentile(z, [percentile, 100 - percentile]))
+    if not hi > lo:  # (nearly) flat: fall back to the full range, or a 1 m window around a flat map
+        return (z_min, z_max, "neither") if z_max > z_min else (z_min - 0.5, z_min + 0.5, "neither")
+    extend = {(True, True): "both", (True, False): "min", (False, True): "max", (False, False): "neither"}
+    return lo, hi, extend[(z_min < lo, z_max > hi)]
 
 #: The paper's Fig. 4 colours (Majhor & Bos 2023): low blue, semi orange, high yellow.
 CLASS_COLOURS = ("#1f5fbf", "#f08c1a", "#f5e52a")

@@ -11,7 +11,7 @@ from matplotlib.colors import LightSource
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.heightmap import Heightmap
-from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
+from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, height_limits, new_figure
 
 __all__ = ["hillshade", "plot_terrain_classes", "plot_roughness_study"]
 
@@ -36,8 +36,9 @@ def plot_terrain_classes(
     fig, axes = new_figure(1, 2, figsize=(12, 5.6))
     ax = axes[0]
     ax.imshow(hillshade(hm), cmap="gray", origin="lower", extent=hm.extent_m, vmin=0, vmax=1)
-    im = ax.imshow(hm.z, cmap="terrain", origin="lower", extent=hm.extent_m, alpha=0.35)
-    fig.colorbar(im, ax=ax, shrink=0.8, label="height (m)")
+    vmin, vmax, extend = height_limits(hm.z)  # percentile limits: a corner spire must not flatten the colours
+    im = ax.imshow(hm.z, cmap="terrain", origin="lower", extent=hm.extent_m, alpha=0.35, vmin=vmin, vmax=vmax)
+    fig.colorbar(im, ax=ax, shrink=0.8, label="height (m)", extend=extend)
     ax.set_title("hillshade and height")
     ax = axes[1]
     draw_classes(ax, classes, hm.extent_m)

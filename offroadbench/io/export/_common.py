@@ -11,7 +11,7 @@ import numpy as np
 
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["fmt", "fmt_list", "span_m", "half_span_m", "describe", "write_json", "resample_bilinear", "save_png16_levels"]
+__all__ = ["fmt", "fmt_list", "span_m", "half_span_m", "describe", "grid_triangles", "write_json", "resample_bilinear", "save_png16_levels", "load_png16_levels"]
 
 #: meta keys copied into the description of a model file (SDF, MJCF, USD, Webots world)
 PROVENANCE_KEYS = ("recipe_name", "seed", "terrain_id", "source")
@@ -63,6 +63,18 @@ def describe(hm: Heightmap, name: str, meta: Mapping[str, Any]) -> str:
         if k in meta:
             text += f" {k}: {meta[k]}."
     return text
+
+
+def grid_triangles(rows: int, cols: int) -> np.ndarray:
+    """(2 (rows-1)(cols-1), 3) 0-based vertex indices of a row-major vertex grid: two triangles per
+    cell, (r, c) (r, c+1) (r+1, c+1) and (r, c) (r+1, c+1) (r+1, c), counter-clockwise seen from +z."""
+    idx = np.arange(rows * cols).reshape(rows, cols)
+    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
+    c, e = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    tri = np.empty((2 * a.size, 3), dtype=np.int32 if rows * cols < 2**31 else np.int64)
+    tri[0::2] = np.stack([a, b, c], axis=1)
+    tri[1::2] = np.stack([a, c, e], axis=1)
+    return tri
 
 
 def write_json(path: Path, data: Mapping[str, Any]) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export import EXPORTERS, Exporter
-from offroadbench.io.export._common import describe, fmt
+from offroadbench.io.export._common import describe, fmt, grid_triangles
 
 __all__ = ["write_obj", "read_obj"]
 
@@ -38,10 +38,8 @@ def write_obj(hm: Heightmap, d: Path, name: str, meta: dict[str, Any], stride: i
     xs = [fmt(v) for v in cols * hm.cell_size_m]
     ys = [fmt(v) for v in rows * hm.cell_size_m]
     sub = hm.z[np.ix_(rows, cols)]
-    idx = np.arange(nr * nc).reshape(nr, nc) + 1  # OBJ indices start at 1
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()  # (r, c), (r, c+1)
-    c_, e = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()  # (r+1, c+1), (r+1, c)
-    n_tri = 2 * a.size
+    tri = grid_triangles(nr, nc) + 1  # OBJ indices start at 1
+    n_tri = len(tri)
     with (d / f"{name}.obj").open("w") as fh:
         fh.write(
             f"# {describe(hm, name, meta)}\n"
@@ -51,9 +49,6 @@ def write_obj(hm: Heightmap, d: Path, name: str, meta: dict[str, Any], stride: i
         for i in range(nr):
             y = ys[i]
             fh.write("".join(f"v {xs[j]} {y} {fmt(z)}\n" for j, z in enumerate(sub[i].tolist())))
-        tri = np.empty((n_tri, 3), dtype=np.int64)
-        tri[0::2] = np.stack([a, b, c_], axis=1)
-        tri[1::2] = np.stack([a, c_, e], axis=1)
         for k in range(0, n_tri, _CHUNK):
             fh.write("".join(f"f {p} {q} {s}\n" for p, q, s in tri[k : k + _CHUNK].tolist()))
     return [f"OBJ mesh: {nr * nc} vertices, {n_tri} triangles (stride {stride})"]

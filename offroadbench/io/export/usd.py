@@ -22,22 +22,11 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export import EXPORTERS, Exporter
-from offroadbench.io.export._common import describe
+from offroadbench.io.export._common import describe, grid_triangles
 
-__all__ = ["write_usd", "read_usd", "grid_triangles"]
+__all__ = ["write_usd", "read_usd"]
 
 PRIM_PATH = "/World/terrain"
-
-
-def grid_triangles(rows: int, cols: int) -> np.ndarray:
-    """(2 (rows-1)(cols-1), 3) 0-based vertex indices of a row-major grid, counter-clockwise from +z."""
-    idx = np.arange(rows * cols).reshape(rows, cols)
-    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-    c, e = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
-    tri = np.empty((2 * a.size, 3), dtype=np.int32)
-    tri[0::2] = np.stack([a, b, c], axis=1)
-    tri[1::2] = np.stack([a, c, e], axis=1)
-    return tri
 
 
 def write_usd(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> list[str]:
