@@ -18,7 +18,7 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["TAIL_FRACTION", "TailReport", "tail_report", "clip_percentile"]
+__all__ = ["TAIL_FRACTION", "TailReport", "tail_report", "check_clip_percentile", "clip_percentile"]
 
 #: the fraction of samples in each tail that :func:`tail_report` examines (0.1 %)
 TAIL_FRACTION = 0.001
@@ -59,6 +59,14 @@ def tail_report(hm: Heightmap, fraction: float = TAIL_FRACTION) -> TailReport:
     )
 
 
+def check_clip_percentile(percentile: float) -> float:
+    """``percentile`` as a float if 0 <= P < 50, else an InputError naming the allowed range."""
+    p = float(percentile)
+    if not 0 <= p < 50:
+        raise InputError(f"--clip-percentile {percentile!r} is out of range; allowed: 0 <= P < 50")
+    return p
+
+
 def clip_percentile(hm: Heightmap, percentile: float) -> Heightmap:
     """Heights clipped to the ``percentile`` .. ``100 - percentile`` percentiles (0 <= P < 50).
 
@@ -66,9 +74,7 @@ def clip_percentile(hm: Heightmap, percentile: float) -> Heightmap:
     floor of a pit to the percentile heights and leaves every other sample unchanged. The relief
     shrinks to the percentile range; nothing is rescaled.
     """
-    p = float(percentile)
-    if not 0 <= p < 50:
-        raise InputError(f"--clip-percentile {percentile!r} is out of range; allowed: 0 <= P < 50")
+    p = check_clip_percentile(percentile)
     if p == 0:
         return hm
     lo, hi = np.percentile(hm.z, [p, 100 - p])

@@ -10,6 +10,7 @@ from offroadbench.errors import InputError
 
 def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.cli.terrain import load_heightmap_arg
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
     from offroadbench.io.export import EXPORTERS, check_name, check_output_dir, export_heightmap
 
     if args.list:
@@ -29,10 +30,13 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise InputError(f"--stride applies to the obj format only, not to {args.format!r}")
     if args.name is not None:
         check_name(args.name)
+    check_clip_percentile(args.clip_percentile)
     out = check_output_dir(args.output)
 
     t0 = time.perf_counter()
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
+    if args.clip_percentile:
+        hm = clip_percentile(hm, args.clip_percentile)
     if recipe is not None:
         meta = {"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)}
         if recipe.data.get("recipe", {}).get("crs"):
@@ -41,6 +45,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     else:
         meta = {"source": str(args.terrain)}
         name = args.name or label
+    if args.clip_percentile:
+        meta["clip_percentile"] = args.clip_percentile
     result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
     print(
         f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
@@ -69,6 +75,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
     p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
     p.add_argument("--stride", type=int_at_least(1, "stride"), help="obj only: keep every N-th row and column (default 1)")
+    p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
+                   help="clip heights to the P..100-P percentiles before export (not in the paper; e.g. 0.1 removes "
+                   "the paper presets' corner spire; default 0 = keep every height)")
     p.add_argument("--cell-size-m", type=float, help="cell size for a PNG without sidecar, m")
     p.add_argument("--relief-m", type=float, help="relief of a PNG without sidecar, m")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")

@@ -239,8 +239,7 @@ def test_unreal_scale_and_location_reproduce_heights(hm, tmp_path):
 
 
 def test_unreal_paper_scale_and_size_warning(tmp_path, caplog):
-    z = np.zeros((127, 127))
-    z[5, 9] = 3.84
+    z = np.add.outer(np.linspace(0, 1.92, 127), np.linspace(0, 1.92, 127))  # a 3.84 m ramp: no spire
     with caplog.at_level(logging.WARNING, logger="offroadbench.io.export.unreal"):
         res = export_heightmap(Heightmap(z, 0.05), "unreal", tmp_path / "a", name="p")
     # the paper's 3.84 m at Z scale 0.75: Unreal's exact scale is 384 * 128 / 65535 = 0.7500114...
@@ -391,3 +390,41 @@ def test_cli_unwritable_directory_exit_2(tmp_path, capsys):
     code, _, err = run(capsys, "export", "paper-d2.45", "--format", "npy", "-o", str(tmp_path / "f" / "o"), *SMALL)
     assert code == 2 and "not a directory" in err
     assert listing(tmp_path) == ["f"]
+
+
+def _spire_png(tmp_path):
+    from offroadbench.io.png16 import write_png16
+
+    y, x = np.mgrid[0:40, 0:40] * 0.05
+    z = 0.6 + 0.2 * np.sin(3 * x) * np.cos(2 * y)
+    z[0, 0] = 3.84  # one corner sample holds most of the relief, as on the paper presets
+    write_png16(Heightmap(z, 0.05), tmp_path / "spire.png")
+    return tmp_path / "spire.png", z
+
+
+def test_cli_export_warns_about_a_spire_and_clips_on_request(tmp_path, capsys, caplog):
+    png, z = _spire_png(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+        code, out, err = run(capsys, "export", str(png), "--format", "npy", "-o", str(tmp_path / "a"))
+    assert code == 0, err
+    assert "top 0.1 % of samples span" in caplog.text and "--clip-percentile" in caplog.text
+    assert "warning: the top 0.1 % of samples span" in out
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="offroadbench.io.export"):
+        code, out, err = run(capsys, "export", str(png), "--format", "npy", "-o", str(tmp_path / "b"), "--clip-percentile", "0.1")
+    assert code == 0, err
+    assert "span" not in caplog.text and "warning" not in out
+    clipped = np.load(tmp_path / "b" / "spire.npy")
+    source = np.load(tmp_path / "a" / "spire.npy")
+    assert clipped.max() == pytest.approx(np.percentile(source, 99.9)) and clipped.max() < 1.0
+    lo, hi = np.percentile(source, [0.1, 99.9])
+    keep = (source >= lo) & (source <= hi)
+    assert np.array_equal(clipped[keep], source[keep]) and keep.sum() >= 0.997 * source.size
+    assert json.loads((tmp_path / "b" / "spire.npy.json").read_text())["clip_percentile"] == 0.1
+
+
+def test_cli_bad_clip_percentile_is_exit_2_before_any_work(tmp_path, capsys):
+    png, _ = _spire_png(tmp_path)
+    code, _, err = run(capsys, "export", str(png), "--format", "npy", "-o", str(tmp_path / "o"), "--clip-percentile", "50")
+    assert code == 2 and "--clip-percentile 50.0 is out of range; allowed: 0 <= P < 50" in err
+    assert not (tmp_path / "o").exists()
