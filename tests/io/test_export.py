@@ -428,3 +428,29 @@ def test_cli_bad_clip_percentile_is_exit_2_before_any_work(tmp_path, capsys):
     code, _, err = run(capsys, "export", str(png), "--format", "npy", "-o", str(tmp_path / "o"), "--clip-percentile", "50")
     assert code == 2 and "--clip-percentile 50.0 is out of range; allowed: 0 <= P < 50" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_text_numbers_are_exact_and_free_of_float_noise(tmp_path):
+    """200 samples at 0.05 m span 9.95 m: 199 * 0.05 is 9.950000000000001 in float64, but the files
+    say 9.95 (the decimal extent, one rounding) and every number reads back as the double written."""
+    import re
+
+    z = np.add.outer(np.linspace(0.1, 0.3, 9), np.linspace(0.0, 0.7, 200))  # 9 x 200 at 0.05 m
+    hm = Heightmap(z, 0.05)
+    assert 199 * 0.05 == 9.950000000000001
+    export_heightmap(hm, "mujoco", tmp_path, name="m")
+    export_heightmap(hm, "gazebo", tmp_path, name="g")
+    export_heightmap(hm, "webots", tmp_path, name="w")
+    export_heightmap(hm, "unreal", tmp_path, name="u")
+    hf = ET.parse(tmp_path / "m.xml").getroot().find("asset/hfield")
+    assert hf.get("size").split()[:2] == ["4.975", "0.2"]
+    size = ET.parse(tmp_path / "g" / "model.sdf").getroot().find("model/link/collision/geometry/heightmap/size").text
+    assert size.split()[:2] == ["9.95", "0.4"]
+    wbt = (tmp_path / "w.wbt").read_text()
+    assert "xSpacing 0.05" in wbt and "(x 0..9.95, y 0..0.4)" in wbt
+    noise = re.compile(r"\d\.\d*(0000000|9999999)\d")  # geometry only: the heights are whatever the data are
+    for text in [(tmp_path / "m.xml").read_text(), (tmp_path / "g" / "model.sdf").read_text()]:
+        assert not noise.search(text), noise.search(text).group(0)
+    for text in [(tmp_path / "m.xml").read_text(), (tmp_path / "g" / "model.sdf").read_text(), wbt, (tmp_path / "u_unreal.txt").read_text()]:
+        for token in re.findall(r"-?\d+\.\d+(?:e-?\d+)?", text):
+            assert repr(float(token)) == token or token.endswith(".0")  # the shortest text of its double
