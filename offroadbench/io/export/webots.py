@@ -36,10 +36,28 @@ WEBOTS_VERSION = "R2023b"
 THICKNESS_MIN_M = 0.5
 
 
+def _axis_angle_yaw_pitch(yaw: float, pitch: float) -> tuple[float, float, float, float]:
+    """Webots rotation (axis x y z, angle) of a camera turned by ``yaw`` about z, then tilted down by
+    ``pitch`` (a Webots camera looks along +x with z up)."""
+    qz = np.array([np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)])
+    qy = np.array([np.cos(pitch / 2), 0.0, np.sin(pitch / 2), 0.0])  # +pitch about y turns +x towards -z
+    w1, x1, y1, z1 = qz
+    w2, x2, y2, z2 = qy
+    q = np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                  w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+    angle = 2 * np.arccos(np.clip(q[0], -1, 1))
+    axis = q[1:] / np.linalg.norm(q[1:])
+    return tuple(round(float(v), 4) for v in (*axis, angle))
+
+
+#: the Viewpoint: looking north (+y) and 36.87 deg down (the eye is 0.8 south and 0.6 above)
+_VIEW_ORIENTATION = _axis_angle_yaw_pitch(np.pi / 2, float(np.arctan2(0.6, 0.8)))
+
+
 def write_webots(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> list[str]:
     thickness = max(hm.relief_m, THICKNESS_MIN_M)
     w, h = span_m(hm.cols, hm.cell_size_m), span_m(hm.rows, hm.cell_size_m)
-    eye = (w / 2, -0.8 * max(w, h), hm.z_max_m + 0.6 * max(w, h))
+    eye = (w / 2, -0.8 * max(w, h), hm.z_max_m + 0.6 * max(w, h))  # south of the map, looking north and down
     info = describe(hm, name, meta).replace("\\", "/").replace('"', "'")
     rows = "\n".join("        " + " ".join(fmt(v) for v in row) for row in hm.z.tolist())
     text = f"""#VRML_SIM {WEBOTS_VERSION} utf8
@@ -52,7 +70,7 @@ WorldInfo {{
   coordinateSystem "ENU"
 }}
 Viewpoint {{
-  orientation {fmt_list((0.0, 0.0, 1.0, 1.5708))}
+  orientation {fmt_list(_VIEW_ORIENTATION)}
   position {fmt_list(eye)}
 }}
 DirectionalLight {{
@@ -67,7 +85,7 @@ Solid {{
         roughness 1
         metalness 0
       }}
-      geometry DEF {name.upper().replace('.', '_').replace('-', '_')}_GRID ElevationGrid {{
+      geometry DEF TERRAIN_GRID ElevationGrid {{
         xDimension {hm.cols}
         xSpacing {fmt(hm.cell_size_m)}
         yDimension {hm.rows}
@@ -80,7 +98,7 @@ Solid {{
     }}
   ]
   name "{name}"
-  boundingObject USE {name.upper().replace('.', '_').replace('-', '_')}_GRID
+  boundingObject USE TERRAIN_GRID
   locked TRUE
 }}
 """
