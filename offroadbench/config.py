@@ -152,14 +152,18 @@ def config_id(obj: Any, seed: int | None = None, length: int = 12) -> str:
 
 def load_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file; a missing file or a syntax error becomes an InputError naming the file."""
-    p = Path(path)
+    from offroadbench.io.inputs import check_input_file
+
+    p = check_input_file(path, "TOML file")
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)
-    except FileNotFoundError:
-        raise InputError(f"{p}: no such file") from None
+    except OSError as exc:
+        raise InputError(f"TOML file {p}: cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"TOML file {p}: not valid TOML (not UTF-8 text)") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{p}: not valid TOML ({exc})") from None
+        raise InputError(f"TOML file {p}: not valid TOML ({exc})") from None
 
 
 def parse_set_value(text: str) -> Any:

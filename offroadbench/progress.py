@@ -2,7 +2,7 @@
 
 Long library functions take ``progress: ProgressFn | None``, a callable ``progress(done, total)``
 called after each finished unit of work (terrains, trials). The library never prints; the CLI
-turns the callback into a tqdm bar with :func:`offroadbench.cli._progress.bar`.
+turns the callback into a tqdm bar with :func:`offroadbench.cli._common.bar`.
 """
 
 from __future__ import annotations

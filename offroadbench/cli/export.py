@@ -9,9 +9,9 @@ from offroadbench.errors import InputError
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from offroadbench.cli.terrain import load_heightmap_arg
     from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
-    from offroadbench.io.export import EXPORTERS, check_name, check_output_dir, export_heightmap
+    from offroadbench.cli._common import check_output_dir, created_dirs, load_heightmap_arg
+    from offroadbench.io.export import EXPORTERS, check_name, export_heightmap
 
     if args.list:
         print("Export formats (offroadbench export TERRAIN --format NAME -o DIR):")
@@ -31,10 +31,10 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.name is not None:
         check_name(args.name)
     check_clip_percentile(args.clip_percentile)
-    out = check_output_dir(args.output)
+    out = check_output_dir(args.output, "-o")
 
     t0 = time.perf_counter()
-    hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set)
+    hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
     if args.clip_percentile:
         hm = clip_percentile(hm, args.clip_percentile)
     if recipe is not None:
@@ -47,7 +47,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         name = args.name or label
     if args.clip_percentile:
         meta["clip_percentile"] = args.clip_percentile
-    result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
+    with created_dirs(out.parent):  # the exporter stages beside out and creates out itself
+        result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
     print(
         f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
         f"({time.perf_counter() - t0:.2f} s)"
@@ -60,7 +61,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    from offroadbench.cli._args import int_at_least, seed_arg
+    from offroadbench.cli._common import int_at_least, seed_arg
 
     p = sub.add_parser(
         "export",
@@ -70,7 +71,7 @@ def register(sub) -> None:
     )
     p.add_argument("terrain", nargs="?", help="16-bit PNG heightmap, preset name or recipe .toml")
     p.add_argument("--format", help="export format (see --list)")
-    p.add_argument("-o", "--output", help="output directory (created if missing; its parent must exist)")
+    p.add_argument("-o", "--output", help="output directory (created with its missing parents)")
     p.add_argument("--list", action="store_true", help="list the export formats and exit")
     p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
     p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
@@ -81,6 +82,8 @@ def register(sub) -> None:
     p.add_argument("--cell-size-m", type=float, help="cell size for a PNG without sidecar, m")
     p.add_argument("--relief-m", type=float, help="relief of a PNG without sidecar, m")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")
+    p.add_argument("--force", action="store_true",
+                   help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_export)
 
 

@@ -1,9 +1,8 @@
-"""``offroadbench study run|export|report``: Monte Carlo studies."""
+"""``offroadbench study run|export|report``: Monte Carlo studies (the work is in offroadbench.study)."""
 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
@@ -14,6 +13,7 @@ EXPORT_FORMATS = ("parquet", "csv")
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
+    from offroadbench.cli._common import int_at_least
     from offroadbench.study.executors import EXECUTORS
 
     p = subparsers.add_parser("study", help="run, export and report Monte Carlo studies")
@@ -22,7 +22,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run = sub.add_parser("run", help="run (or resume) a study TOML; finished trials are skipped")
     run.add_argument("study", help="study TOML, e.g. experiments/smoke.toml")
     run.add_argument("--out", help="run directory (default: runs/<study name>)")
-    run.add_argument("--workers", type=int, default=None, help="worker processes (default: the core count)")
+    run.add_argument("--workers", type=int_at_least(1, "--workers"), default=None,
+                     help="worker processes (default: as many as both the cores and the memory allow)")
     run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
@@ -49,39 +50,28 @@ def _run_dir(path: str) -> Path:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
+    from offroadbench.cli._common import bar, check_output_dir
+    from offroadbench.io.inputs import check_input_file
     from offroadbench.study import load_study, run_study
 
-    study, plans = load_study(args.study)
-    out = Path(args.out) if args.out else Path("runs") / study.name
-    if args.workers is not None and args.workers < 1:
-        raise InputError(f"--workers = {args.workers}; must be >= 1")
+    path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
-    text = Path(args.study).read_text()
+    study, plans = load_study(path)
+    out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
+    text = path.read_text()
     counts = {"new": 0, "ok": 0}
-    bar = None
 
-    def progress(done: int, total: int) -> None:
-        nonlocal bar
-        if bar is None:
-            bar = tqdm(total=total, initial=done, desc=study.name, unit="trial", file=sys.stderr, dynamic_ncols=True)
-            return
-        if counts["new"]:
-            bar.set_postfix(success=f"{100.0 * counts['ok'] / counts['new']:.0f}%", refresh=False)
-        bar.update(done - bar.n)
+    def success() -> dict:
+        return {"success": f"{100.0 * counts['ok'] / counts['new']:.0f}%"} if counts["new"] else {}
 
     def on_trial(row) -> None:
         counts["new"] += 1
         counts["ok"] += bool(row["success"])
 
-    try:
+    with bar(study.name, unit="trial", postfix=success) as progress:
         summary = run_study(study, plans, out, executor=args.executor, workers=args.workers,
                             scheduler=args.scheduler, source_text=text, progress=progress, on_trial=on_trial)
-    finally:
-        if bar is not None:
-            bar.close()
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
     if summary.done == summary.total and not args.no_report:
@@ -93,18 +83,20 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.study import load, load_terrains
 
+    from offroadbench.cli._common import check_output_dir, created_dirs
+
     run_dir = _run_dir(args.run_dir)
-    out = Path(args.out) if args.out else run_dir
-    if not out.is_dir():
-        raise InputError(f"--out {out}: not a directory")
-    for name, df in (("trials", load(run_dir)), ("terrains", load_terrains(run_dir))):
-        path = out / f"{name}.{args.format}"
-        with atomic_path(path) as tmp:
-            if args.format == "csv":
-                df.to_csv(tmp, index=False)
-            else:
-                df.to_parquet(tmp, index=False)
-        print(f"{path} ({len(df)} rows)")
+    out = check_output_dir(args.out if args.out else run_dir, "--out")
+    tables = (("trials", load(run_dir)), ("terrains", load_terrains(run_dir)))
+    with created_dirs(out):
+        for name, df in tables:
+            path = out / f"{name}.{args.format}"
+            with atomic_path(path) as tmp:
+                if args.format == "csv":
+                    df.to_csv(tmp, index=False)
+                else:
+                    df.to_parquet(tmp, index=False)
+            print(f"{path} ({len(df)} rows)")
     return 0
 
 
@@ -123,27 +115,30 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
+    from offroadbench.cli._common import created_dirs, save_figure
+
     report = build_report(run_dir, fig4=fig4)
-    out.mkdir(parents=True, exist_ok=True)
-    for name, fig in report.figures.items():
-        with atomic_path(out / name) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
-    for name, df in report.tables.items():
-        with atomic_path(out / name) as tmp:
-            df.to_csv(tmp, index=False)
     toml = load_meta(run_dir).get("study_toml")
-    if toml:
-        with atomic_path(out / "study.toml") as tmp:
-            tmp.write_text(toml)
     path = out / "report.md"
-    with atomic_path(path) as tmp:
-        tmp.write_text(report.markdown)
+    with created_dirs(out):
+        for name, fig in report.figures.items():
+            save_figure(fig, out / name, dpi=110)
+        for name, df in report.tables.items():
+            with atomic_path(out / name) as tmp:
+                df.to_csv(tmp, index=False)
+        if toml:
+            with atomic_path(out / "study.toml") as tmp:
+                tmp.write_text(toml)
+        with atomic_path(path) as tmp:
+            tmp.write_text(report.markdown)
     return path
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    from offroadbench.cli._common import check_output_dir
+
     run_dir = _run_dir(args.run_dir)
-    out = Path(args.out) if args.out else run_dir / "report"
+    out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
     path = write_report(run_dir, out, _parse_fig4(args.fig4))
     print(f"report: {path}")
     return 0

@@ -1,7 +1,7 @@
 """Traversal trials in PyBullet: the only package that imports pybullet.
 
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
-load_vehicle, World, TrialResult, run_mission, run_missions.
+load_vehicle, World, TrialResult, run_mission, run_missions, drive_missions / DriveRun.
 
 The names load lazily (PEP 562), so importing a config (``offroadbench.sim.config``) or this
 package does not import pybullet; only touching ``World`` or the runner does.
@@ -27,6 +27,8 @@ _EXPORTS = {
     "TELEMETRY_COLUMNS": "runner",
     "run_mission": "runner",
     "run_missions": "runner",
+    "DriveRun": "batch",
+    "drive_missions": "batch",
 }
 
 __all__ = list(_EXPORTS)

@@ -10,6 +10,7 @@ from D, not from which phases each group happened to draw. Results do not depend
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -20,7 +21,7 @@ from offroadbench.errors import InputError
 from offroadbench.progress import ProgressFn, report
 from offroadbench.terrain.recipe import Recipe, apply_overrides, generate_terrain
 
-__all__ = ["roughness_study", "summarise_roughness_study", "PAPER_FIG5_CHANGES_PP"]
+__all__ = ["RoughnessStudy", "run_roughness_study", "roughness_study", "summarise_roughness_study", "PAPER_FIG5_CHANGES_PP"]
 
 #: Majhor & Bos 2023, Sec. 3.1: change of the median class areas, percentage points,
 #: for D 2.3 -> 2.45 and 2.45 -> 2.6.
@@ -64,3 +65,37 @@ def summarise_roughness_study(table: pd.DataFrame) -> pd.DataFrame:
     out = pd.concat([med, diff], axis=1)
     out.insert(0, "terrains", table.groupby("D").size())
     return out.reset_index()
+
+
+@dataclass(frozen=True, eq=False)
+class RoughnessStudy:
+    """The result of :func:`run_roughness_study`."""
+
+    terrains: pd.DataFrame
+    """One row per (D, terrain): ``D``, ``terrain`` and the class areas ``low_pct`` .. ``high_pct``."""
+    summary: pd.DataFrame
+    """Per D: terrains, median class areas (percent) and their change from the previous D (pp)."""
+    paper_changes_pp: pd.DataFrame
+    """Majhor & Bos 2023, Sec. 3.1: the changes of the median areas the paper reports (pp)."""
+
+
+def run_roughness_study(
+    recipe: Recipe,
+    dims: Sequence[float],
+    terrains: int,
+    seed: int,
+    *,
+    dim_key: str = "layers.base.D_high",
+    roughness: RoughnessConfig = RoughnessConfig(),
+    progress: ProgressFn | None = None,
+) -> RoughnessStudy:
+    """The paper's Fig. 5 study: :func:`roughness_study`, its summary and the paper's figures."""
+    table = roughness_study(recipe, dims, terrains, seed, dim_key=dim_key, roughness=roughness, progress=progress)
+    paper = pd.DataFrame(
+        {
+            "class": list(PAPER_FIG5_CHANGES_PP),
+            "paper_2.3_to_2.45_pp": [v[0] for v in PAPER_FIG5_CHANGES_PP.values()],
+            "paper_2.45_to_2.6_pp": [v[1] for v in PAPER_FIG5_CHANGES_PP.values()],
+        }
+    )
+    return RoughnessStudy(terrains=table, summary=summarise_roughness_study(table), paper_changes_pp=paper)

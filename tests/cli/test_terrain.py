@@ -79,9 +79,15 @@ def test_bad_input_one_line_exit_2_no_file(tmp_path, capsys, argv, match):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_unwritable_output(tmp_path, capsys):
-    code, _, err = run(capsys, "generate", "paper-d2.45", "-o", str(tmp_path / "nodir" / "o.png"), *SMALL)
-    assert code == 2 and "does not exist" in err and err.count("\n") == 1
+def test_output_parents_are_created_but_unwritable_places_refused(tmp_path, capsys):
+    code, _, err = run(capsys, "generate", "paper-d2.45", "-o", str(tmp_path / "new" / "dir" / "o.png"), *SMALL)
+    assert code == 0, err
+    assert (tmp_path / "new" / "dir" / "o.json").is_file()
+    (tmp_path / "file").write_text("x")
+    code, _, err = run(capsys, "generate", "paper-d2.45", "-o", str(tmp_path / "file" / "o.png"), *SMALL)
+    assert code == 2 and "is a file, not a directory" in err and err.count("\n") == 1
+    code, _, err = run(capsys, "generate", "paper-d2.45", "-o", "/proc/offroadbench/o.png", *SMALL)
+    assert code == 2 and "cannot write into /proc" in err and err.count("\n") == 1
     code, _, err = run(capsys, "generate", "paper-d2.45", "-o", str(tmp_path), *SMALL)
     assert code == 2 and err.count("\n") == 1
 

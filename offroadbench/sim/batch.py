@@ -1,0 +1,126 @@
+"""A batch of missions on one terrain: classify, sample, drive, summarise (``offroadbench drive``).
+
+:func:`drive_missions` is the whole ``drive`` command as a library call: it classifies the
+terrain and closes its rough areas (Majhor & Bos 2023, Sec. 2.3-2.4), samples ``n`` straight
+missions on the closed map, drives them in one PyBullet World and returns a :class:`DriveRun`
+with the missions, one :class:`~offroadbench.sim.runner.TrialResult` per mission, each trial's
+20 Hz telemetry (in memory) and the summary of Eq. 5. It writes no file and prints nothing.
+
+Importing this module does not import pybullet; calling :func:`drive_missions` does.
+
+Seeds. The missions come from the second child of ``SeedSequence(seed)``
+(:func:`mission_rng`), apart from the terrain's stream, so the same seed gives the same
+missions and the same table.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
+from offroadbench.heightmap import Heightmap
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.progress import ProgressFn, report
+from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
+
+__all__ = ["DriveRun", "drive_missions", "mission_rng", "SUMMARY_MEDIANS"]
+
+#: metrics whose median over the successful trials the summary reports
+SUMMARY_MEDIANS = ("traversal_time_s", "rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
+
+
+def mission_rng(seed: int) -> np.random.Generator:
+    """The missions' generator: the second child of ``SeedSequence(seed)`` (the first is the terrain's)."""
+    return np.random.default_rng(np.random.SeedSequence(seed).spawn(2)[1])
+
+
+@dataclass(frozen=True, eq=False)
+class DriveRun:
+    """The missions driven on one terrain and what happened on each."""
+
+    heightmap: Heightmap
+    """The terrain."""
+    closed: np.ndarray
+    """Closed class map the missions were drawn on (0 low, 1 semi, 2 high)."""
+    mission_config: MissionConfig
+    """How the missions were drawn."""
+    vehicle_name: str
+    """Name of the vehicle driven."""
+    sim: SimConfig
+    """Physics settings used."""
+    missions: tuple[Mission, ...]
+    """The missions, in sampling order."""
+    results: tuple = ()
+    """One TrialResult per mission, same order."""
+    telemetry: Mapping[int, Mapping[str, np.ndarray]] = field(default_factory=dict)
+    """Mission index -> telemetry columns (offroadbench.sim.runner.TELEMETRY_COLUMNS)."""
+
+    @property
+    def summary(self) -> dict[str, float]:
+        """``trials``, ``successes``, ``success_rate_pct`` (Majhor & Bos 2023, Eq. 5) and the
+        median of each of :data:`SUMMARY_MEDIANS` over the successful trials (NaN if none)."""
+        from offroadbench.navigation.metrics import success_rate
+
+        ok = [r for r in self.results if r.success]
+        out = {
+            "trials": float(len(self.results)),
+            "successes": float(len(ok)),
+            "success_rate_pct": success_rate([r.success for r in self.results]),
+        }
+        for col in SUMMARY_MEDIANS:
+            out[f"median_{col}"] = float(np.median([getattr(r, col) for r in ok])) if ok else math.nan
+        return out
+
+    def rows(self) -> list[dict]:
+        """One flat row per trial (``TrialResult.as_row()``)."""
+        return [r.as_row() for r in self.results]
+
+
+def drive_missions(
+    hm: Heightmap,
+    n: int,
+    seed: int,
+    *,
+    length_m: float = 35.0,
+    vehicle="husky",
+    sim: SimConfig = SimConfig(),
+    controller: ControllerConfig = ControllerConfig(),
+    rules: FailureRules = FailureRules(),
+    roughness: RoughnessConfig = RoughnessConfig(),
+    progress: ProgressFn | None = None,
+) -> DriveRun:
+    """Sample ``n`` missions of ``length_m`` on ``hm`` with ``seed`` and drive them all.
+
+    ``vehicle`` is a VehicleSpec or a vehicle name / ``vehicle.toml`` path. An impossible
+    request (a map too small for the mission length, no low-roughness start) is an InputError
+    raised before any physics runs.
+    """
+    from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    closed = classify_terrain(hm, roughness).closed
+    mcfg = MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m)
+    missions = tuple(sample_missions(hm, closed, mcfg, mission_rng(seed)))
+    results, telemetry = _drive(hm, missions, spec, sim, controller, rules, progress)
+    return DriveRun(
+        heightmap=hm, closed=closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
+        missions=missions, results=tuple(results), telemetry=telemetry,
+    )
+
+
+def _drive(hm, missions: Sequence[Mission], vehicle, sim, controller, rules, progress):
+    from offroadbench.sim.runner import run_mission
+    from offroadbench.sim.world import World
+
+    results, telemetry = [], {}
+    with World(hm, vehicle, sim) as world:
+        for i, mission in enumerate(missions):
+            result, tel = run_mission(world, mission, controller=controller, rules=rules)
+            results.append(result)
+            telemetry[mission.index] = tel
+            report(progress, i + 1, len(missions))
+    return results, telemetry
