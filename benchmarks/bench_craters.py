@@ -15,6 +15,7 @@ import argparse
 import numpy as np
 from _timing import best_of
 
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.craters import CraterTable, StampOptions, inverse_cdf_diameters, stamp_craters
 from offroadbench.terrain.fractal.diamond_square import DiamondSquareConfig, generate_diamond_square
 from offroadbench.terrain.enhance import RMDExpandConfig, SpectralRestoreConfig, fill_gaps, rmd_expand, spectral_restore
@@ -35,7 +36,7 @@ def main() -> None:
     ap.add_argument("--count", type=int, default=10_000)
     args = ap.parse_args()
     rng = np.random.default_rng(0)
-    base = generate_fbm(FBMConfig(rows=1009, cols=1009, D=2.2, relief_m=0.8), rng)
+    base = generate_fbm(FBMConfig(D=2.2, relief_m=0.8), GridConfig(rows=1009, cols=1009), rng)
 
     rows = []
     for profile in ("martin2014", "yoshikawa", "li_fresh"):
@@ -47,11 +48,11 @@ def main() -> None:
     t = best_of(lambda: stamp_craters(base, table, np.random.default_rng(2), opts), args.repeats)
     rows.append((f"{args.count} martin2014 craters, irregular rims + zone roughness", f"{t:.2f} s"))
 
-    t = best_of(lambda: generate_fbm(FBMConfig(rows=1009, cols=1009), np.random.default_rng(0)), args.repeats)
+    t = best_of(lambda: generate_fbm(FBMConfig(), GridConfig(rows=1009, cols=1009), np.random.default_rng(0)), args.repeats)
     rows.append(("fBm 1009^2 (Fourier filtering)", f"{t:.3f} s"))
-    t = best_of(lambda: generate_diamond_square(DiamondSquareConfig(), np.random.default_rng(0)), args.repeats)
+    t = best_of(lambda: generate_diamond_square(DiamondSquareConfig(), GridConfig(), np.random.default_rng(0)), args.repeats)
     rows.append(("diamond-square 1009^2 (from 1025^2)", f"{t:.3f} s"))
-    coarse = generate_fbm(FBMConfig(rows=127, cols=127, cell_size_m=0.4), np.random.default_rng(0))
+    coarse = generate_fbm(FBMConfig(), GridConfig(rows=127, cols=127, cell_size_m=0.4), np.random.default_rng(0))
     t = best_of(lambda: rmd_expand(RMDExpandConfig(levels=3), coarse, np.random.default_rng(0)), args.repeats)
     rows.append(("RMD expansion 127^2 -> 1009^2 (3 levels)", f"{t:.3f} s"))
     t = best_of(lambda: spectral_restore(SpectralRestoreConfig(cutoff_wavelength_m=1.0), base, np.random.default_rng(0)), args.repeats)

@@ -21,7 +21,10 @@ from _timing import best_of
 
 from offroadbench.analysis.roughness import classify
 from offroadbench.terrain.fractal.multifractal import MultifractalConfig, generate_multifractal, layer_configs
-from offroadbench.terrain.fractal.wm import draw_phases, kept_harmonics, wm_surface, wm_surface_direct
+from offroadbench.terrain.fractal.wm import draw_phases, kept_harmonics, n_max_effective, wm_surface, wm_surface_direct
+from offroadbench.terrain.grid import GridConfig
+
+PAPER = GridConfig()
 
 
 def main() -> None:
@@ -33,38 +36,39 @@ def main() -> None:
     results = {}
     for d in (2.3, 2.45, 2.6):
         cfg = MultifractalConfig(D_high=d)
-        terms = sum(kept_harmonics(c).size * c.M for c in layer_configs(cfg))
-        t = best_of(lambda: generate_multifractal(cfg, np.random.default_rng(0)), args.repeats)
+        terms = sum(kept_harmonics(c, PAPER).size * c.M for c in layer_configs(cfg))
+        t = best_of(lambda: generate_multifractal(cfg, PAPER, np.random.default_rng(0)), args.repeats)
         results[d] = (t, terms)
         print(f"fast multifractal 1009^2, D_high={d}: {t:.3f} s  ({terms} W-M terms kept)")
 
-    hm = generate_multifractal(MultifractalConfig(), np.random.default_rng(0))
+    hm = generate_multifractal(MultifractalConfig(), PAPER, np.random.default_rng(0))
     t_cls = best_of(lambda: classify(hm), args.repeats)
     print(f"roughness classes 1009^2: {t_cls * 1000:.1f} ms")
 
     # straightforward per-term evaluation, timed on 1009 x 101 rows and scaled up by grid cells x terms
     cfg = MultifractalConfig(D_high=2.45)
     t_direct_full = 0.0
+    strip = GridConfig(rows=101, cols=1009)
     for c in layer_configs(cfg):
-        sub = dataclasses.replace(c, rows=101, n_max=None)
-        n_terms = kept_harmonics(c).size * c.M
+        n_terms = kept_harmonics(c, PAPER).size * c.M
         # time a slice of harmonics, then scale by the number of terms
-        sub_few = dataclasses.replace(sub, n_max=min(8, c.n_max_effective))
-        few_terms = kept_harmonics(sub_few).size * c.M
-        ph = draw_phases(sub_few, np.random.default_rng(0))
-        t = best_of(lambda: wm_surface_direct(sub_few, ph), 1)
+        sub_few = dataclasses.replace(c, n_max=min(8, n_max_effective(c, PAPER)))
+        few_terms = kept_harmonics(sub_few, strip).size * c.M
+        ph = draw_phases(sub_few, strip, np.random.default_rng(0))
+        t = best_of(lambda: wm_surface_direct(sub_few, strip, ph), 1)
         t_direct_full += t * (n_terms / few_terms) * (1009 / 101)
     t_fast = results[2.45][0]
     print(f"straightforward per-term numpy, scaled to 1009^2 and all kept terms: {t_direct_full:.1f} s")
     print(f"speed-up of the fast multifractal over straightforward: {t_direct_full / t_fast:.0f}x")
 
     # a direct measured ratio on one W-M layer at a size that finishes
-    c = dataclasses.replace(layer_configs(cfg)[0], rows=201, cols=201, n_max=None)
-    ph = draw_phases(c, np.random.default_rng(1))
-    t_fast_small = best_of(lambda: wm_surface(c, ph), args.repeats)
-    t_slow_small = best_of(lambda: wm_surface_direct(c, ph), 1)
+    c = dataclasses.replace(layer_configs(cfg)[0], n_max=None)
+    small = GridConfig(rows=201, cols=201)
+    ph = draw_phases(c, small, np.random.default_rng(1))
+    t_fast_small = best_of(lambda: wm_surface(c, small, ph), args.repeats)
+    t_slow_small = best_of(lambda: wm_surface_direct(c, small, ph), 1)
     print(
-        f"measured on 201^2, M=16, {kept_harmonics(c).size * 16} terms: fast {t_fast_small * 1000:.1f} ms, "
+        f"measured on 201^2, M=16, {kept_harmonics(c, small).size * 16} terms: fast {t_fast_small * 1000:.1f} ms, "
         f"straightforward {t_slow_small:.2f} s, ratio {t_slow_small / t_fast_small:.0f}x"
     )
 

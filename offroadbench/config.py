@@ -104,29 +104,74 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
     return value
 
 
-def from_dict(cls: type[T], data: dict[str, Any], where: str | None = None) -> T:
+def _dataclass_type(annotation: Any) -> type | None:
+    """The config class of a field annotated ``SomeConfig`` or ``SomeConfig | None``, else None."""
+    if dataclasses.is_dataclass(annotation) and isinstance(annotation, type):
+        return annotation
+    if typing.get_origin(annotation) in (types.UnionType, typing.Union):
+        classes = [a for a in typing.get_args(annotation) if dataclasses.is_dataclass(a) and isinstance(a, type)]
+        if len(classes) == 1:
+            return classes[0]
+    return None
+
+
+def _field_default(f: dataclasses.Field) -> Any:
+    if f.default is not dataclasses.MISSING:
+        return f.default
+    if f.default_factory is not dataclasses.MISSING:
+        return f.default_factory()
+    return None
+
+
+def from_dict(
+    cls: type[T], data: dict[str, Any], where: str | None = None, *, key: str = "", base: T | None = None
+) -> T:
     """Build a frozen config from a plain dict, refusing unknown keys with the known ones listed.
 
-    ``where`` names the place the dict came from (a file or TOML table) for the error message.
+    A field annotated with a config class (``population: PopulationConfig``) is built from a
+    nested table, recursively. A nested table changes only the keys it names: the others keep the
+    field's default (so ``[layers.craters.population] k = 2`` keeps the default ``c``).
+    ``base`` is such a starting value for the whole of ``cls``.
+
+    ``where`` names the place the dict came from (a file) and ``key`` the dotted path of the table
+    in it (``layers.craters``); errors name both, e.g. ``unknown key layers.craters.population.kk``.
     """
+    place = ": ".join(p for p in (where, key) if p) or cls.__name__
     if not isinstance(data, dict):
-        raise InputError(f"{where or cls.__name__}: expected a table of settings, got {type(data).__name__}")
+        raise InputError(f"{place}: expected a table of settings, got {type(data).__name__}")
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     unknown = sorted(set(data) - set(fields))
     if unknown:
+        dotted = ", ".join(f"{key}.{k}" if key else k for k in unknown)
         raise InputError(
-            f"{where or cls.__name__}: unknown key(s) {', '.join(unknown)}; known keys: {', '.join(sorted(fields))}"
+            f"{where or cls.__name__}: unknown key(s) {dotted}; known keys{' of ' + key if key else ''}: "
+            f"{', '.join(sorted(fields))}"
         )
     hints = typing.get_type_hints(cls)
-    kwargs = {k: _coerce(v, hints.get(k, Any), k) for k, v in data.items()}
+    kwargs: dict[str, Any] = {}
+    for name, value in data.items():
+        sub = _dataclass_type(hints.get(name, Any))
+        dotted = f"{key}.{name}" if key else name
+        if sub is not None and isinstance(value, dict):
+            start = getattr(base, name) if base is not None else _field_default(fields[name])
+            kwargs[name] = from_dict(sub, value, where, key=dotted, base=start if isinstance(start, sub) else None)
+        elif sub is not None and value is not None and not isinstance(value, sub):
+            raise InputError(f"{where or cls.__name__}: {dotted} must be a table of {sub.__name__} settings, got {value!r}")
+        else:
+            kwargs[name] = _coerce(value, hints.get(name, Any), name)
     try:
+        if base is not None:
+            return dataclasses.replace(base, **kwargs)
         return cls(**kwargs)
     except TypeError as exc:  # e.g. a missing required field
-        raise InputError(f"{where or cls.__name__}: {exc}") from None
+        raise InputError(f"{place}: {exc}") from None
     except InputError as exc:
-        if where is None:
+        if where is None and not key:
             raise
-        raise InputError(f"{where}: {exc}") from None
+        msg = str(exc)
+        if key and msg.startswith(f"{cls.__name__}."):  # "PopulationConfig.k = 9 ..." -> "layers.craters.population.k = 9 ..."
+            msg = key + msg[len(cls.__name__) :]
+        raise InputError(f"{where}: {msg}" if where else msg) from None
 
 
 def to_dict(cfg: Any) -> dict[str, Any]:
@@ -177,19 +222,22 @@ def parse_set_value(text: str) -> Any:
 def set_dotted(data: dict[str, Any], dotted_key: str, value: Any) -> dict[str, Any]:
     """Return a deep copy of ``data`` with ``a.b.c`` set to ``value``.
 
-    Every table on the path must already exist, so a typo is an error that lists the
-    keys that do exist there; the leaf key itself may be new (the config loader then checks it).
+    Missing tables on the path are created (``layers.craters.stamp.roughness`` works on a recipe
+    that leaves ``stamp`` at its defaults); the config loader then refuses a key or table that
+    does not exist, naming its full dotted path. A value that is not a table cannot hold a key.
     """
     import copy
 
     out = copy.deepcopy(data)
     parts = dotted_key.split(".")
+    if not all(parts):
+        raise InputError(f"--set {dotted_key}: not a dotted key (a.b.c)")
     node = out
     for i, part in enumerate(parts[:-1]):
-        if not isinstance(node, dict) or part not in node or not isinstance(node[part], dict):
-            here = ".".join(parts[:i]) or "the top level"
-            known = ", ".join(sorted(k for k, v in node.items() if isinstance(v, dict))) if isinstance(node, dict) else ""
-            raise InputError(f"--set {dotted_key}: no table {part!r} at {here}; tables there: {known or 'none'}")
-        node = node[part]
+        child = node.setdefault(part, {})
+        if not isinstance(child, dict):
+            here = ".".join(parts[: i + 1])
+            raise InputError(f"--set {dotted_key}: {here} is a value ({child!r}), not a table")
+        node = child
     node[parts[-1]] = value
     return out

@@ -67,7 +67,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     print(f"{recipe.name} seed {args.seed}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s")
     for layer in recipe.layers:
         if hasattr(layer.config, "describe"):
-            print(f"  layer {layer.name}: {layer.config.describe()}")
+            print(f"  layer {layer.name}: {layer.config.describe(recipe.grid)}")
     print(f"wrote {out} and {sidecar_path(out)}")
     print(f"Unreal import scale: X {meta['ue_scale_x']:g}  Y {meta['ue_scale_y']:g}  Z {meta['ue_scale_z']:.4g}")
     return 0

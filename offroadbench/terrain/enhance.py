@@ -27,6 +27,7 @@ from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.fractal.diamond_square import diamond_phase, scale_factor, square_phase
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import register
 
 log = logging.getLogger(__name__)
@@ -245,16 +246,11 @@ def fill_gaps(
 # --------------------------------------------------------------------------- DEM import
 @dataclass(frozen=True, kw_only=True)
 class DEMConfig:
-    """An imported DEM sampled onto the recipe's grid (gaps filled first)."""
+    """An imported DEM sampled onto the recipe's grid (gaps filled first; bilinear resampling
+    where the grid's cell size or origin differ from the DEM's)."""
 
     path: str | None = None
     """A 16-bit PNG (with sidecar), .npy or GeoTIFF DEM (offroadbench.io.dem); None = the bundled synthetic sample with gaps."""
-    rows: int = 1009
-    """Grid rows of the output."""
-    cols: int = 1009
-    """Grid columns of the output."""
-    cell_size_m: float = 0.05
-    """Grid spacing of the output, metres; the DEM is resampled (bilinear) if it differs."""
     source_cell_size_m: float | None = None
     """The file's cell size, metres, if it has no sidecar."""
     source_relief_m: float | None = None
@@ -269,9 +265,6 @@ class DEMConfig:
     """Gap-fill noise: a unit Gaussian times this times the DEM cell (Martin et al. 2014, Sec. IV.B)."""
 
     def __post_init__(self) -> None:
-        check_int(self, "rows", self.rows, lo=3)
-        check_int(self, "cols", self.cols, lo=3)
-        check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
         if self.source_cell_size_m is not None:
             check_range(self, "source_cell_size_m", self.source_cell_size_m, lo=0, lo_open=True)
         if self.source_relief_m is not None:
@@ -281,14 +274,14 @@ class DEMConfig:
         check_range(self, "fill_roughness", self.fill_roughness, lo=0)
 
 
-def _resample(z: np.ndarray, src_cell: float, cfg: DEMConfig) -> np.ndarray:
+def _resample(z: np.ndarray, src_cell: float, cfg: DEMConfig, grid: GridConfig) -> np.ndarray:
     src_rows, src_cols = z.shape
-    x = cfg.origin_x_m + np.arange(cfg.cols) * cfg.cell_size_m
-    y = cfg.origin_y_m + np.arange(cfg.rows) * cfg.cell_size_m
+    x = cfg.origin_x_m + np.arange(grid.cols) * grid.cell_size_m
+    y = cfg.origin_y_m + np.arange(grid.rows) * grid.cell_size_m
     tol = 1e-9 * src_cell
     if x[-1] > (src_cols - 1) * src_cell + tol or y[-1] > (src_rows - 1) * src_cell + tol:
         raise InputError(
-            f"dem: the grid ({cfg.cols} x {cfg.rows} at {cfg.cell_size_m:g} m from ({cfg.origin_x_m:g}, "
+            f"dem: the grid ({grid.cols} x {grid.rows} at {grid.cell_size_m:g} m from ({cfg.origin_x_m:g}, "
             f"{cfg.origin_y_m:g}) m) reaches beyond the DEM ({(src_cols - 1) * src_cell:g} x "
             f"{(src_rows - 1) * src_cell:g} m at {src_cell:g} m)"
         )
@@ -304,8 +297,9 @@ def _resample(z: np.ndarray, src_cell: float, cfg: DEMConfig) -> np.ndarray:
 
 
 @register("dem", DEMConfig, summary="Imported DEM (16-bit PNG + sidecar, .npy or GeoTIFF), gaps filled, resampled to the grid")
-def generate_dem(cfg: DEMConfig, rng: np.random.Generator) -> Heightmap:
-    """Read the DEM, fill its gaps (Martin et al. 2014, Sec. IV.B) and sample it onto the grid."""
+def generate_dem(cfg: DEMConfig, grid: GridConfig, rng: np.random.Generator) -> Heightmap:
+    """Read the DEM, fill its gaps (Martin et al. 2014, Sec. IV.B) and sample it onto the grid
+    (bilinear where the grid's cells or origin differ from the DEM's)."""
     from offroadbench.io.dem import read_dem
 
     path = Path(cfg.path) if cfg.path is not None else SAMPLE_DEM
@@ -315,8 +309,8 @@ def generate_dem(cfg: DEMConfig, rng: np.random.Generator) -> Heightmap:
         log.info("dem: filling %d gap pixel(s) of %s", raw.gap_count, path)
         z = fill_gaps(z, raw.cell_size_m, cfg.fill_roughness, rng)
     same_grid = (
-        math.isclose(raw.cell_size_m, cfg.cell_size_m) and cfg.origin_x_m == 0 and cfg.origin_y_m == 0
-        and z.shape[0] >= cfg.rows and z.shape[1] >= cfg.cols
+        math.isclose(raw.cell_size_m, grid.cell_size_m) and cfg.origin_x_m == 0 and cfg.origin_y_m == 0
+        and z.shape[0] >= grid.rows and z.shape[1] >= grid.cols
     )
-    out = z[: cfg.rows, : cfg.cols] if same_grid else _resample(z, raw.cell_size_m, cfg)
-    return Heightmap(z=out, cell_size_m=cfg.cell_size_m)
+    out = z[: grid.rows, : grid.cols] if same_grid else _resample(z, raw.cell_size_m, cfg, grid)
+    return Heightmap(z=out, cell_size_m=grid.cell_size_m)

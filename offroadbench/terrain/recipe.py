@@ -20,8 +20,9 @@ Format (``terrains/*.toml``)::
 Layer keys besides the config: ``generator`` (required, a name in the terrain registry),
 ``combine`` (``replace`` | ``sum`` | ``product`` for generators, ``apply`` for modifiers; the
 first layer must be a generator and defaults to ``replace``, later generators to ``sum``) and
-``weight`` (factor on a ``sum`` layer, default 1). Generator configs get ``rows``, ``cols`` and
-``cell_size_m`` from ``[grid]`` unless the layer sets them.
+``weight`` (factor on a ``sum`` layer, default 1). A nested table sets a nested config
+(``[layers.craters.population]``, ``--set layers.craters.population.k=2``). Every generator
+draws on the recipe's ``[grid]`` (a :class:`~offroadbench.terrain.grid.GridConfig`).
 
 Randomness: each layer's generator is seeded from (seed, layer name) with ``SeedSequence``, so
 adding, removing or reordering layers never changes another layer's random numbers.
@@ -42,6 +43,7 @@ import numpy as np
 from offroadbench.config import config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import get_spec
 
 __all__ = [
@@ -62,8 +64,6 @@ COMBINE_MODES = ("replace", "sum", "product", "apply")
 _LAYER_KEYS = ("generator", "combine", "weight")
 _TOP_KEYS = ("recipe", "grid", "layers")
 _RECIPE_KEYS = ("name", "description", "relief_m", "crs")
-_GRID_KEYS = ("rows", "cols", "cell_size_m")
-GRID_FIELDS = _GRID_KEYS
 
 
 @dataclass(frozen=True)
@@ -84,6 +84,7 @@ class Recipe:
     name: str
     description: str
     relief_m: float | None
+    grid: GridConfig
     layers: tuple[Layer, ...]
     data: Mapping[str, Any]
     source: str = ""
@@ -91,10 +92,6 @@ class Recipe:
     def terrain_id(self, seed: int | None) -> str:
         """Stable id of (recipe data, seed): same recipe and seed, same id."""
         return config_id(self.data, seed)
-
-    @property
-    def grid(self) -> Mapping[str, Any]:
-        return self.data["grid"]
 
 
 # --------------------------------------------------------------------------- presets
@@ -139,7 +136,7 @@ def _check_keys(table: Mapping[str, Any], allowed, where: str) -> None:
         raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known keys: {', '.join(allowed)}")
 
 
-def _build_layer(lname: str, table: Mapping[str, Any], grid: Mapping[str, Any], first: bool, where: str) -> Layer:
+def _build_layer(lname: str, table: Mapping[str, Any], first: bool, where: str) -> Layer:
     if not isinstance(table, dict):
         raise InputError(f"{where}: layers.{lname} must be a table")
     if "generator" not in table:
@@ -160,11 +157,7 @@ def _build_layer(lname: str, table: Mapping[str, Any], grid: Mapping[str, Any], 
     if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not np.isfinite(weight):
         raise InputError(f"{where}: layers.{lname}.weight must be a finite number, got {weight!r}")
     params = {k: v for k, v in table.items() if k not in _LAYER_KEYS}
-    field_names = {f.name for f in dataclasses.fields(spec.config_cls)}
-    for key in _GRID_KEYS:
-        if key in field_names and key not in params:
-            params[key] = grid[key]
-    cfg = from_dict(spec.config_cls, params, where=f"{where}: layers.{lname} ({spec.name})")
+    cfg = from_dict(spec.config_cls, params, where=where, key=f"layers.{lname}")
     return Layer(name=lname, generator=spec.name, combine=combine, weight=float(weight), config=cfg)
 
 
@@ -174,19 +167,14 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
     _check_keys(data, _TOP_KEYS, where)
     meta = data.get("recipe", {})
     _check_keys(meta, _RECIPE_KEYS, f"{where}: [recipe]")
-    grid = data.get("grid")
-    if not isinstance(grid, dict):
-        raise InputError(f"{where}: missing [grid] table with {', '.join(_GRID_KEYS)}")
-    _check_keys(grid, _GRID_KEYS, f"{where}: [grid]")
-    missing = [k for k in _GRID_KEYS if k not in grid]
+    grid_keys = [f.name for f in dataclasses.fields(GridConfig)]
+    table = data.get("grid")
+    if not isinstance(table, dict):
+        raise InputError(f"{where}: missing [grid] table with {', '.join(grid_keys)}")
+    missing = [k for k in grid_keys if k not in table]
     if missing:
         raise InputError(f"{where}: [grid] is missing {', '.join(missing)}")
-    for k in ("rows", "cols"):
-        if isinstance(grid[k], bool) or not isinstance(grid[k], int) or grid[k] < 3:
-            raise InputError(f"{where}: grid.{k} = {grid[k]!r}; must be an integer >= 3")
-    cell = grid["cell_size_m"]
-    if isinstance(cell, bool) or not isinstance(cell, (int, float)) or not cell > 0 or not np.isfinite(cell):
-        raise InputError(f"{where}: grid.cell_size_m = {cell!r}; must be a number > 0 (metres)")
+    grid = from_dict(GridConfig, table, where=where, key="grid")
     relief = meta.get("relief_m")
     if relief is not None and (isinstance(relief, bool) or not isinstance(relief, (int, float)) or not relief > 0):
         raise InputError(f"{where}: recipe.relief_m = {relief!r}; must be a number > 0 (metres)")
@@ -196,13 +184,14 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
     if not isinstance(layers_tbl, dict) or not layers_tbl:
         raise InputError(f"{where}: needs at least one [layers.NAME] table")
     layers = tuple(
-        _build_layer(lname, tbl, grid, i == 0, where) for i, (lname, tbl) in enumerate(layers_tbl.items())
+        _build_layer(lname, tbl, i == 0, where) for i, (lname, tbl) in enumerate(layers_tbl.items())
     )
     name = str(meta.get("name", Path(source).stem if source else "recipe"))
     return Recipe(
         name=name,
         description=str(meta.get("description", "")),
         relief_m=None if relief is None else float(relief),
+        grid=grid,
         layers=layers,
         data=copy.deepcopy(dict(data)),
         source=source,
@@ -210,9 +199,17 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
 
 
 def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:
-    """A new recipe with dotted TOML keys replaced, e.g. ``{"layers.base.D_high": 2.6}``."""
+    """A new recipe with dotted TOML keys replaced, e.g. ``{"layers.base.D_high": 2.6}``.
+
+    A key into a layer that the recipe does not have is refused with the layer names listed;
+    any other unknown key is refused by the loader, naming its dotted path.
+    """
     data = dict(recipe.data)
+    layers = data.get("layers", {})
     for key, value in overrides.items():
+        parts = key.split(".")
+        if parts[0] == "layers" and len(parts) > 2 and parts[1] not in layers:
+            raise InputError(f"--set {key}: the recipe has no layer {parts[1]!r}; layers: {', '.join(layers)}")
         data = set_dotted(data, key, value)
     return recipe_from_dict(data, source=recipe.source)
 
@@ -237,8 +234,7 @@ def layer_rng(root: np.random.SeedSequence, layer_name: str) -> np.random.Genera
 def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heightmap:
     """Run the recipe's layers in order and return the Heightmap (pure: no I/O)."""
     root = seed_sequence(seed)
-    grid = recipe.grid
-    shape = (grid["rows"], grid["cols"])
+    shape = recipe.grid.shape
     hm: Heightmap | None = None
     for layer in recipe.layers:
         spec = get_spec(layer.generator)
@@ -246,7 +242,7 @@ def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heig
         if spec.kind == "modifier":
             hm = spec.fn(layer.config, hm, rng)
             continue
-        new = spec.fn(layer.config, rng)
+        new = spec.fn(layer.config, recipe.grid, rng)
         if new.shape != shape and layer.combine != "replace":
             raise InputError(
                 f"{recipe.source or recipe.name}: layer {layer.name} made a {new.shape} grid, the recipe's grid is {shape}"

@@ -2,16 +2,16 @@
 
 Two kinds of entry:
 
-* ``generator``: ``fn(cfg, rng) -> Heightmap``. Pure: no I/O, no globals, randomness only from
-  the ``np.random.Generator`` passed in. Its config has the grid fields ``rows``, ``cols`` and
-  ``cell_size_m`` (a recipe fills them in from its ``[grid]`` table).
+* ``generator``: ``fn(cfg, grid, rng) -> Heightmap`` on the
+  :class:`~offroadbench.terrain.grid.GridConfig` ``grid`` (a recipe's ``[grid]`` table). Pure: no
+  I/O, no globals, randomness only from the ``np.random.Generator`` passed in.
 * ``modifier``: ``fn(cfg, heightmap, rng) -> Heightmap``: works on an existing terrain
   (e.g. stamping craters, filling gaps, fractal expansion).
 
 Register with the decorator::
 
     @register("wm", WMConfig, summary="3D Weierstrass-Mandelbrot surface (Majhor & Bos 2023, Eq. 1-2)")
-    def generate_wm(cfg: WMConfig, rng: np.random.Generator) -> Heightmap: ...
+    def generate_wm(cfg: WMConfig, grid: GridConfig, rng: np.random.Generator) -> Heightmap: ...
 """
 
 from __future__ import annotations

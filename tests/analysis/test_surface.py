@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.analysis.surface import (
     cumulative_counts,
     cumulative_slope_distribution,
@@ -35,7 +36,7 @@ def test_cumulative_slope_distribution_counts_steeper_pixels():
 
 
 def test_spectral_fit_recovers_a_known_power_law():
-    hm = generate_fbm(FBMConfig(rows=256, cols=256, H=0.5), np.random.default_rng(0))
+    hm = generate_fbm(FBMConfig(H=0.5), GridConfig(rows=256, cols=256), np.random.default_rng(0))
     fit = fit_spectral_slope(radial_power_spectrum(hm))
     assert fit.beta == pytest.approx(3.0, abs=0.15)  # 2H + 2 (Yoshikawa & Nishiguchi 2001, Eq. 3)
     assert fit.dimension == pytest.approx(4.0 - fit.beta / 2.0)
@@ -62,7 +63,7 @@ def test_sfd_fit_on_an_exact_power_law_sample():
 
 
 def test_surface_summary_and_figure():
-    hm = generate_fbm(FBMConfig(rows=128, cols=128, cell_size_m=0.05, D=2.3, relief_m=0.5), np.random.default_rng(1))
+    hm = generate_fbm(FBMConfig(D=2.3, relief_m=0.5), GridConfig(rows=128, cols=128, cell_size_m=0.05), np.random.default_rng(1))
     s = surface_summary(hm)
     assert {"slope_p50_deg", "slope_p90_deg", "slope_p99_deg", "psd_slope_beta", "fractal_dimension"} <= set(s)
     assert s["slope_p50_deg"] <= s["slope_p90_deg"] <= s["slope_p99_deg"]

@@ -62,11 +62,11 @@ def test_roughness_study_small(tmp_path, capsys):
     [
         (["generate", "paper-d2.45", "--set", "layers.base.D_high=3.5"], "D_high = 3.5 is out of range; allowed: (2, 3)"),
         (["generate", "paper-d2.45", "--set", "layers.base.D_high=2.0"], "D_high = 2.0 is out of range"),
-        (["generate", "paper-d2.45", "--set", "layers.base.gamma=1.0"], "gamma = 1.0 is out of range"),
+        (["generate", "paper-d2.45", "--set", "layers.base.wm.gamma=1.0"], "layers.base.wm.gamma = 1.0 is out of range"),
         (["generate", "paper-d2.45", "--set", "layers.base.M=[16, 0, 64]"], "M[1] = 0 is out of range"),
         (["generate", "paper-d2.45", "--set", "grid.rows=0"], "grid.rows = 0"),
         (["generate", "no-such-preset"], "unknown terrain preset 'no-such-preset'"),
-        (["generate", "paper-d2.45", "--set", "layers.base.Dhigh=2.5"], "unknown key(s) Dhigh"),
+        (["generate", "paper-d2.45", "--set", "layers.base.Dhigh=2.5"], "unknown key(s) layers.base.Dhigh"),
         (["generate", "paper-d2.45", "--set", "novalue"], "expected KEY=VALUE"),
     ],
 )

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.craters import (
@@ -136,7 +137,7 @@ def test_li_complex_has_a_central_uplift():
 def test_new_crater_rim_meets_rough_terrain_without_a_step():
     # the interior sits on a plane, the ejecta on the terrain; T_r - P_r (Martin et al. 2014, Eq. 5-8) joins them
     n = 201
-    base = generate_fbm(FBMConfig(rows=n, cols=n, cell_size_m=CELL, D=2.3, relief_m=0.4), np.random.default_rng(3))
+    base = generate_fbm(FBMConfig(D=2.3, relief_m=0.4), GridConfig(rows=n, cols=n, cell_size_m=CELL), np.random.default_rng(3))
     c = (n - 1) * CELL / 2
     d = 2.0
     out = stamp_craters(base, one_crater(c, c, d, 0.4), np.random.default_rng(0))

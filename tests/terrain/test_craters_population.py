@@ -15,6 +15,7 @@ from offroadbench.terrain.craters import (
     CraterConfig,
     CraterTable,
     PopulationConfig,
+    StampOptions,
     apply_craters,
     degradation_from_age,
     expected_count,
@@ -129,14 +130,19 @@ def test_same_crater_file_goes_on_different_base_terrains(tmp_path):
 
 
 def test_crater_config_from_toml_table_and_errors():
-    cfg = from_dict(CraterConfig, {"profile": "li_fresh", "k": 2, "c": 0.1, "d_max_m": 5})
-    assert cfg.population().k == 2.0 and cfg.stamp_options().roughness == 0.0
-    with pytest.raises(InputError, match="unknown key"):
+    cfg = from_dict(CraterConfig, {"population": {"profile": "li_fresh", "k": 2, "c": 0.1, "d_max_m": 5}})
+    assert cfg.population == PopulationConfig(profile="li_fresh", k=2.0, c=0.1, d_max_m=5.0)
+    assert cfg.stamp == StampOptions()
+    with pytest.raises(InputError, match=r"unknown key\(s\) craters_per_m2; known keys: crater_file, degradation, population, stamp"):
         from_dict(CraterConfig, {"craters_per_m2": 1})
-    with pytest.raises(InputError, match="d_max_m"):
-        CraterConfig(d_min_m=2.0, d_max_m=1.0)
+    with pytest.raises(InputError, match=r"unknown key\(s\) population\.kk; known keys of population: .*d_max_m"):
+        from_dict(CraterConfig, {"population": {"kk": 1}})
+    with pytest.raises(InputError, match=r"population\.d_max_m = 1\.0 is out of range"):
+        from_dict(CraterConfig, {"population": {"d_min_m": 2.0, "d_max_m": 1.0}})
     with pytest.raises(InputError, match="profile"):
-        CraterConfig(profile="nope")
+        from_dict(CraterConfig, {"population": {"profile": "nope"}})
+    with pytest.raises(InputError, match=r"stamp\.rim_irregularity = 0\.9 is out of range"):
+        from_dict(CraterConfig, {"stamp": {"rim_irregularity": 0.9}})
 
 
 def test_more_density_means_more_crater_area_in_a_recipe():
@@ -146,7 +152,7 @@ def test_more_density_means_more_crater_area_in_a_recipe():
                 "grid": {"rows": 161, "cols": 161, "cell_size_m": 0.05},
                 "layers": {
                     "base": {"generator": "fbm", "D": 2.2, "relief_m": 0.2},
-                    "craters": {"generator": "craters", "c": c, "d_min_m": 0.3, "d_max_m": 3.0},
+                    "craters": {"generator": "craters", "population": {"c": c, "d_min_m": 0.3, "d_max_m": 3.0}},
                 },
             }
         )
@@ -163,7 +169,7 @@ def test_recipe_craters_are_the_craters_in_the_generated_terrain():
 
     full = apply_overrides(
         load_recipe("lunar-mare"),
-        {"grid.rows": 161, "grid.cols": 161, "layers.craters.rim_irregularity": 0.0, "layers.craters.roughness": 0.0},
+        {"grid.rows": 161, "grid.cols": 161, "layers.craters.stamp.rim_irregularity": 0.0, "layers.craters.stamp.roughness": 0.0},
     )
     data = dict(full.data)
     data["layers"] = {"base": data["layers"]["base"]}

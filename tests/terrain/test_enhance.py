@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.dem import read_dem
@@ -25,7 +26,7 @@ from offroadbench.terrain.fractal.fbm import FBMConfig, generate_fbm
 
 
 def coarse(n=33, cell=1.0, seed=0):
-    return generate_fbm(FBMConfig(rows=n, cols=n, cell_size_m=cell, D=2.2, relief_m=5.0), np.random.default_rng(seed))
+    return generate_fbm(FBMConfig(D=2.2, relief_m=5.0), GridConfig(rows=n, cols=n, cell_size_m=cell), np.random.default_rng(seed))
 
 
 @pytest.mark.parametrize("levels", [1, 3])
@@ -63,7 +64,7 @@ def _lowpass(z, cell, wavelength):
 def test_spectral_restoration_keeps_the_low_pass_and_restores_the_spectrum():
     # a smooth DEM (wavelengths < 4 m removed) gets fBm detail back above the cutoff
     n, cell, cutoff = 256, 0.25, 4.0
-    truth = generate_fbm(FBMConfig(rows=n, cols=n, cell_size_m=cell, H=0.8, relief_m=3.0), np.random.default_rng(4))
+    truth = generate_fbm(FBMConfig(H=0.8, relief_m=3.0), GridConfig(rows=n, cols=n, cell_size_m=cell), np.random.default_rng(4))
     smooth = truth.with_z(_lowpass(truth.z, cell, cutoff))
     out = spectral_restore(SpectralRestoreConfig(cutoff_wavelength_m=cutoff, H=0.8), smooth, np.random.default_rng(9))
     np.testing.assert_allclose(_lowpass(out.z, cell, cutoff), smooth.z, atol=1e-9)
@@ -125,13 +126,13 @@ def test_dem_import_npy_with_sidecar_fills_gaps_and_resamples(tmp_path):
     (tmp_path / "dem.json").write_text(json.dumps({"cell_size_m": 1.0}))
     raw = read_dem(p)
     assert raw.cell_size_m == 1.0 and raw.gap_count > 0
-    hm = generate_dem(DEMConfig(path=str(p), rows=65, cols=65, cell_size_m=0.5), np.random.default_rng(0))
+    hm = generate_dem(DEMConfig(path=str(p)), GridConfig(rows=65, cols=65, cell_size_m=0.5), np.random.default_rng(0))
     known = ~np.isnan(with_holes(base.z))
     np.testing.assert_allclose(hm.z[::2, ::2][known], base.z[known], atol=1e-12)
-    same = generate_dem(DEMConfig(path=str(p), rows=33, cols=20, cell_size_m=1.0), np.random.default_rng(0))
+    same = generate_dem(DEMConfig(path=str(p)), GridConfig(rows=33, cols=20, cell_size_m=1.0), np.random.default_rng(0))
     np.testing.assert_array_equal(same.z[known[:, :20]], base.z[:, :20][known[:, :20]])
     with pytest.raises(InputError, match="beyond the DEM"):
-        generate_dem(DEMConfig(path=str(p), rows=40, cols=40, cell_size_m=1.0), np.random.default_rng(0))
+        generate_dem(DEMConfig(path=str(p)), GridConfig(rows=40, cols=40, cell_size_m=1.0), np.random.default_rng(0))
 
 
 def test_dem_import_png16_round_trip(tmp_path):
@@ -164,7 +165,7 @@ def test_recipe_layers_an_imported_dem_with_restoration_and_craters():
             "layers": {
                 "base": {"generator": "dem"},  # the bundled sample DEM (0.5 m, with gaps)
                 "detail": {"generator": "spectral_restore", "cutoff_wavelength_m": 1.0},
-                "craters": {"generator": "craters", "c": 0.05, "d_min_m": 0.5, "d_max_m": 3.0},
+                "craters": {"generator": "craters", "population": {"c": 0.05, "d_min_m": 0.5, "d_max_m": 3.0}},
             },
         }
     )

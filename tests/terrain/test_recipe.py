@@ -49,7 +49,7 @@ def test_relief_and_grid_injection():
 def test_overrides_and_ids():
     r = load_recipe("paper-d2.45")
     r2 = apply_overrides(r, {"layers.base.D_high": 2.6, "grid.rows": 50, "grid.cols": 50})
-    assert r2.layers[0].config.D_high == 2.6 and r2.layers[0].config.rows == 50
+    assert r2.layers[0].config.D_high == 2.6 and r2.grid.rows == 50
     assert r.layers[0].config.D_high == 2.45  # original untouched
     assert r2.terrain_id(1) == apply_overrides(r, {"layers.base.D_high": 2.6, "grid.rows": 50, "grid.cols": 50}).terrain_id(1)
     assert r2.terrain_id(1) != r2.terrain_id(2) != r.terrain_id(1)
@@ -85,3 +85,60 @@ def test_unknown_preset_lists_known():
 def test_bad_seed():
     with pytest.raises(InputError, match="seed"):
         generate_terrain(recipe_from_dict(_wm_recipe()), -1)
+
+
+def test_nested_tables_build_nested_configs_and_keep_the_other_defaults():
+    from offroadbench.terrain.craters import PopulationConfig, StampOptions
+    from offroadbench.terrain.fractal.multifractal import PAPER_WM
+
+    data = _wm_recipe(
+        cr={"generator": "craters", "population": {"k": 2.0, "profile": "yoshikawa"}, "stamp": {"roughness": 0.1}}
+    )
+    cfg = recipe_from_dict(data).layers[1].config
+    assert cfg.population == PopulationConfig(k=2.0, profile="yoshikawa")
+    assert cfg.stamp == StampOptions(roughness=0.1)
+    # a nested table starts from the field's default, not the nested class's
+    mf = recipe_from_dict(
+        {"grid": {"rows": 30, "cols": 40, "cell_size_m": 0.1}, "layers": {"m": {"generator": "multifractal", "wm": {"L": 50.0}}}}
+    ).layers[0].config
+    assert mf.wm.L == 50.0 and mf.wm.smoothing_sigma_px == PAPER_WM.smoothing_sigma_px == 0.5
+
+
+def test_dotted_overrides_reach_nested_configs_and_create_their_tables():
+    r = load_recipe("lunar-mare")
+    r2 = apply_overrides(r, {"layers.craters.population.k": 2, "layers.craters.stamp.min_diameter_cells": 4})
+    cfg = r2.layers[1].config
+    assert cfg.population.k == 2.0 and isinstance(cfg.population.k, float)
+    assert cfg.stamp.min_diameter_cells == 4.0
+    assert cfg.population.c == r.layers[1].config.population.c  # untouched keys stay
+    r3 = apply_overrides(load_recipe("paper-d2.45"), {"layers.base.wm.origin_offset_px": 300})
+    assert r3.layers[0].config.wm.origin_offset_px == 300.0
+
+
+@pytest.mark.parametrize(
+    "key, match",
+    [
+        ("layers.craters.population.kk", r"unknown key\(s\) layers\.craters\.population\.kk; known keys of layers\.craters\.population: .*\bk\b"),
+        ("layers.craters.populaton.k", r"unknown key\(s\) layers\.craters\.populaton;"),
+        ("layers.craters.population.k", r"layers\.craters\.population\.k = 9\.0 is out of range"),
+        ("layers.crater.population.k", r"no layer 'crater'; layers: base, craters"),
+        ("layers.craters.population.k.x", r"layers\.craters\.population\.k is a value"),
+        ("grid.rows", r"grid\.rows must be an integer"),
+    ],
+)
+def test_bad_nested_overrides_name_the_dotted_path(key, match):
+    value = 9.0 if key.endswith(".k") else 9.5
+    with pytest.raises(InputError, match=match):
+        apply_overrides(load_recipe("lunar-mare"), {key: value})
+
+
+def test_multifractal_refuses_per_layer_fields_in_the_shared_wm_table():
+    data = {"grid": {"rows": 30, "cols": 40, "cell_size_m": 0.1}, "layers": {"m": {"generator": "multifractal", "wm": {"D": 2.3}}}}
+    with pytest.raises(InputError, match=r"layers\.m\.wm\.D = 2\.3 is not used.*D_low, D_mid, D_high"):
+        recipe_from_dict(data)
+
+
+def test_a_value_where_a_nested_table_belongs_is_refused():
+    data = _wm_recipe(cr={"generator": "craters", "population": 3})
+    with pytest.raises(InputError, match=r"layers\.cr\.population must be a table of PopulationConfig settings"):
+        recipe_from_dict(data)

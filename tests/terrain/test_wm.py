@@ -12,24 +12,28 @@ from offroadbench.terrain.fractal.wm import (
     draw_phases,
     generate_wm,
     kept_harmonics,
+    n_max_effective,
     wm_amplitude,
     wm_surface,
     wm_surface_direct,
 )
+from offroadbench.terrain.grid import GridConfig
 
 
 @pytest.mark.parametrize("coordinates", ["pixels", "metres", "span_L"])
 @pytest.mark.parametrize("D", [2.2, 2.6])
 def test_fast_matches_literal_eq1(coordinates, D):
-    cfg = WMConfig(rows=23, cols=31, cell_size_m=0.05, M=7, n_max=24, D=D, coordinates=coordinates, amplitude_tol=0.0)
-    phases = draw_phases(cfg, np.random.default_rng(3))
-    fast = wm_surface(cfg, phases)
-    slow = wm_surface_direct(cfg, phases)
+    cfg = WMConfig(M=7, n_max=24, D=D, coordinates=coordinates, amplitude_tol=0.0)
+    grid = GridConfig(rows=23, cols=31, cell_size_m=0.05)
+    phases = draw_phases(cfg, grid, np.random.default_rng(3))
+    fast = wm_surface(cfg, grid, phases)
+    slow = wm_surface_direct(cfg, grid, phases)
     assert np.max(np.abs(fast - slow)) <= 1e-9 * np.max(np.abs(slow))
 
 
 def test_literal_matches_hand_written_single_term():
-    cfg = WMConfig(rows=5, cols=6, M=1, n_min=1, n_max=1, D=2.5, L=10.0, G=0.01, coordinates="pixels", amplitude_tol=0.0)
+    cfg = WMConfig(M=1, n_min=1, n_max=1, D=2.5, L=10.0, G=0.01, coordinates="pixels", amplitude_tol=0.0)
+    grid = GridConfig(rows=5, cols=6)
     phi = 0.7
     phases = np.array([[phi]])
     x = np.arange(6.0)[None, :]
@@ -38,8 +42,8 @@ def test_literal_matches_hand_written_single_term():
     ang = np.arctan2(y, x)
     A = 10.0 * (0.01 / 10.0) ** 0.5 * math.sqrt(math.log(1.5) / 1)
     expect = A * 1.5 ** (-0.5) * (np.cos(phi) - np.cos(2 * np.pi * 1.5 * r / 10.0 * np.cos(ang - np.pi) + phi))
-    np.testing.assert_allclose(wm_surface(cfg, phases), expect, atol=1e-12)
-    np.testing.assert_allclose(wm_surface_direct(cfg, phases), expect, atol=1e-12)
+    np.testing.assert_allclose(wm_surface(cfg, grid, phases), expect, atol=1e-12)
+    np.testing.assert_allclose(wm_surface_direct(cfg, grid, phases), expect, atol=1e-12)
 
 
 def test_amplitude_eq2():
@@ -48,28 +52,30 @@ def test_amplitude_eq2():
 
 
 def test_tolerance_drops_small_terms_and_default_nmax_is_grid_length():
-    cfg = WMConfig(rows=50, cols=80, D=2.5, amplitude_tol=1e-3)
-    assert cfg.n_max_effective == 80
-    n = kept_harmonics(cfg)
+    cfg = WMConfig(D=2.5, amplitude_tol=1e-3)
+    grid = GridConfig(rows=50, cols=80)
+    assert n_max_effective(cfg, grid) == 80
+    n = kept_harmonics(cfg, grid)
     # gamma^((D-3)(n-1)) >= 1e-3  <=>  n - 1 <= ln(1e3) / (0.5 ln 1.5)
     assert n.max() == 1 + math.floor(math.log(1e3) / (0.5 * math.log(1.5)))
-    assert kept_harmonics(dataclasses.replace(cfg, amplitude_tol=0.0)).size == 80
+    assert kept_harmonics(dataclasses.replace(cfg, amplitude_tol=0.0), grid).size == 80
 
 
 def test_band_limit_drops_aliased_terms():
-    cfg = WMConfig(rows=64, cols=64, D=2.5, amplitude_tol=0.0, band_limited=True, coordinates="pixels", L=100.9)
-    n = kept_harmonics(cfg)
+    cfg = WMConfig(D=2.5, amplitude_tol=0.0, band_limited=True, coordinates="pixels", L=100.9)
+    n = kept_harmonics(cfg, GridConfig(rows=64, cols=64))
     assert np.all(1.5 ** n / 100.9 <= 0.5)
     assert 1.5 ** (n.max() + 1) / 100.9 > 0.5
 
 
 def test_rougher_with_higher_D():
     """Higher D puts more amplitude in the high harmonics: steeper slopes for the same phases."""
-    base = WMConfig(rows=64, cols=64, M=16, D=2.2)
+    base = WMConfig(M=16, D=2.2)
+    grid = GridConfig(rows=64, cols=64)
     slopes = []
     for D in (2.2, 2.5, 2.8):
         cfg = dataclasses.replace(base, D=D)
-        z = wm_surface(cfg, draw_phases(cfg, np.random.default_rng(1)))
+        z = wm_surface(cfg, grid, draw_phases(cfg, grid, np.random.default_rng(1)))
         z = (z - z.mean()) / z.std()
         slopes.append(np.abs(np.diff(z, axis=1)).mean())
     assert slopes[0] < slopes[1] < slopes[2]
@@ -82,7 +88,7 @@ def test_rougher_with_higher_D():
         ("D", 3.0, "D"),
         ("gamma", 1.0, "gamma"),
         ("M", 0, "M"),
-        ("rows", 0, "rows"),
+        ("n_max", 0, "n_max"),
         ("coordinates", "furlongs", "coordinates"),
     ],
 )
@@ -92,11 +98,12 @@ def test_bad_config(field, value, match):
 
 
 def test_generator_contract():
-    cfg = WMConfig(rows=40, cols=50, M=8, cell_size_m=0.1)
+    cfg = WMConfig(M=8)
+    grid = GridConfig(rows=40, cols=50, cell_size_m=0.1)
     before = dataclasses.asdict(cfg)
-    a = generate_wm(cfg, np.random.default_rng(5))
-    b = generate_wm(cfg, np.random.default_rng(5))
-    c = generate_wm(cfg, np.random.default_rng(6))
+    a = generate_wm(cfg, grid, np.random.default_rng(5))
+    b = generate_wm(cfg, grid, np.random.default_rng(5))
+    c = generate_wm(cfg, grid, np.random.default_rng(6))
     assert a.shape == (40, 50) and a.cell_size_m == 0.1
     assert np.isfinite(a.z).all()
     assert np.array_equal(a.z, b.z)
@@ -112,8 +119,9 @@ def test_bits_do_not_depend_on_blas_threads():
     code = (
         "import numpy as np, hashlib;"
         "from offroadbench.terrain.fractal.wm import WMConfig, draw_phases, wm_surface;"
-        "c = WMConfig(rows=300, cols=290, M=32, D=2.6);"
-        "print(hashlib.sha256(wm_surface(c, draw_phases(c, np.random.default_rng(3))).tobytes()).hexdigest())"
+        "from offroadbench.terrain.grid import GridConfig;"
+        "c = WMConfig(M=32, D=2.6); g = GridConfig(rows=300, cols=290);"
+        "print(hashlib.sha256(wm_surface(c, g, draw_phases(c, g, np.random.default_rng(3))).tobytes()).hexdigest())"
     )
     import os
 
@@ -126,17 +134,19 @@ def test_bits_do_not_depend_on_blas_threads():
 
 
 def test_origin_offset_matches_literal_and_moves_the_coherent_extreme_off_the_map():
-    cfg = WMConfig(rows=21, cols=26, M=6, n_max=20, D=2.4, amplitude_tol=0.0, origin_offset_px=37.5)
-    phases = draw_phases(cfg, np.random.default_rng(8))
-    fast = wm_surface(cfg, phases)
-    slow = wm_surface_direct(cfg, phases)
+    cfg = WMConfig(M=6, n_max=20, D=2.4, amplitude_tol=0.0, origin_offset_px=37.5)
+    grid = GridConfig(rows=21, cols=26)
+    phases = draw_phases(cfg, grid, np.random.default_rng(8))
+    fast = wm_surface(cfg, grid, phases)
+    slow = wm_surface_direct(cfg, grid, phases)
     assert np.max(np.abs(fast - slow)) <= 1e-9 * np.max(np.abs(slow))
     # with phases in [0, pi] the paper's corner origin is where the terms pile up
-    big = WMConfig(rows=200, cols=200, M=32, D=2.45)
-    ph = draw_phases(big, np.random.default_rng(2))
-    corner = wm_surface(big, ph)
+    big = WMConfig(M=32, D=2.45)
+    big_grid = GridConfig(rows=200, cols=200)
+    ph = draw_phases(big, big_grid, np.random.default_rng(2))
+    corner = wm_surface(big, big_grid, ph)
     corner = np.abs(corner - corner.mean())
-    shifted = wm_surface(dataclasses.replace(big, origin_offset_px=300.0), ph)
+    shifted = wm_surface(dataclasses.replace(big, origin_offset_px=300.0), big_grid, ph)
     shifted = np.abs(shifted - shifted.mean())
     assert corner[:10, :10].max() == pytest.approx(corner.max())
     assert shifted[:10, :10].max() < 0.6 * shifted.max()

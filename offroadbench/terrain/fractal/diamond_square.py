@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from offroadbench.config import check_int, check_range
+from offroadbench.config import check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import register
 
 __all__ = [
@@ -116,12 +117,6 @@ def diamond_square(size_px: int, dimension: float, sigma0: float, rng: np.random
 class DiamondSquareConfig:
     """A diamond-square RMD surface (Martin et al. 2014, Sec. IV.A), cropped from the next 2^n + 1 square."""
 
-    rows: int = 1009
-    """Grid rows (y samples)."""
-    cols: int = 1009
-    """Grid columns (x samples)."""
-    cell_size_m: float = 0.05
-    """Grid spacing, metres (D_r of Eq. 15)."""
     D: float = 2.2
     """Fractal dimension F in (2, 3) (Martin et al. 2014 uses 2.2 for lunar terrain)."""
     height_scale: float = 0.05
@@ -130,9 +125,6 @@ class DiamondSquareConfig:
     """If set, rescale to min 0 .. relief_m; otherwise heights are Eq. (15)'s metres."""
 
     def __post_init__(self) -> None:
-        check_int(self, "rows", self.rows, lo=3)
-        check_int(self, "cols", self.cols, lo=3)
-        check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
         check_range(self, "D", self.D, lo=2, hi=3, lo_open=True, hi_open=True)
         check_range(self, "height_scale", self.height_scale, lo=0, lo_open=True)
         if self.relief_m is not None:
@@ -140,11 +132,13 @@ class DiamondSquareConfig:
 
 
 @register("diamond_square", DiamondSquareConfig, summary="Diamond-square random midpoint displacement (Martin et al. 2014, Sec. IV.A)")
-def generate_diamond_square(cfg: DiamondSquareConfig, rng: np.random.Generator) -> Heightmap:
-    """RMD surface of the grid's size (the top-left corner of the enclosing 2^n + 1 square)."""
-    side = max(cfg.rows, cfg.cols) - 1
+def generate_diamond_square(cfg: DiamondSquareConfig, grid: GridConfig, rng: np.random.Generator) -> Heightmap:
+    """RMD surface of the grid's size (the top-left corner of the enclosing 2^n + 1 square).
+
+    The grid's cell size is D_r of Martin et al. 2014, Eq. (15)."""
+    side = max(grid.rows, grid.cols) - 1
     size = 2 ** max(1, math.ceil(math.log2(side))) + 1
-    sigma0 = initial_scale(cfg.D, cfg.height_scale, cfg.cell_size_m, size - 1)
-    z = diamond_square(size, cfg.D, sigma0, rng)[: cfg.rows, : cfg.cols]
-    hm = Heightmap(z=z, cell_size_m=cfg.cell_size_m)
+    sigma0 = initial_scale(cfg.D, cfg.height_scale, grid.cell_size_m, size - 1)
+    z = diamond_square(size, cfg.D, sigma0, rng)[: grid.rows, : grid.cols]
+    hm = Heightmap(z=z, cell_size_m=grid.cell_size_m)
     return hm.rescaled(cfg.relief_m) if cfg.relief_m is not None else hm

@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from offroadbench.config import check_int, check_range
+from offroadbench.config import check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import register
 
 __all__ = ["FBMConfig", "hurst_from_dimension", "fbm_coefficients", "fbm_surface", "generate_fbm"]
@@ -38,12 +39,6 @@ def hurst_from_dimension(dimension: float) -> float:
 class FBMConfig:
     """An fBm surface. Give the fractal dimension D or the Hurst exponent H (not both)."""
 
-    rows: int = 1009
-    """Grid rows (y samples)."""
-    cols: int = 1009
-    """Grid columns (x samples)."""
-    cell_size_m: float = 0.05
-    """Grid spacing, metres."""
     D: float | None = None
     """Fractal dimension in (2, 3); 2.2 if neither D nor H is given (lunar DEMs, Yoshikawa & Nishiguchi 2001, Sec. 5.1)."""
     H: float | None = None
@@ -52,9 +47,6 @@ class FBMConfig:
     """The surface is shifted to min 0 and scaled to this relief (max - min), metres."""
 
     def __post_init__(self) -> None:
-        check_int(self, "rows", self.rows, lo=3)
-        check_int(self, "cols", self.cols, lo=3)
-        check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
         if self.D is not None and self.H is not None:
             raise InputError(f"FBMConfig: give D or H, not both (got D = {self.D}, H = {self.H})")
         if self.D is not None:
@@ -98,7 +90,7 @@ def fbm_surface(rows: int, cols: int, hurst: float, rng: np.random.Generator) ->
 
 
 @register("fbm", FBMConfig, summary="fBm surface by Fourier filtering, given D or H (Yoshikawa & Nishiguchi Eq. 3-7)")
-def generate_fbm(cfg: FBMConfig, rng: np.random.Generator) -> Heightmap:
-    """An fBm Heightmap scaled to ``relief_m``."""
-    z = fbm_surface(cfg.rows, cfg.cols, cfg.hurst, rng)
-    return Heightmap(z=z, cell_size_m=cfg.cell_size_m).rescaled(cfg.relief_m)
+def generate_fbm(cfg: FBMConfig, grid: GridConfig, rng: np.random.Generator) -> Heightmap:
+    """An fBm Heightmap on ``grid`` scaled to ``relief_m``."""
+    z = fbm_surface(grid.rows, grid.cols, cfg.hurst, rng)
+    return Heightmap(z=z, cell_size_m=grid.cell_size_m).rescaled(cfg.relief_m)

@@ -39,6 +39,7 @@ import numpy as np
 
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.heightmap import Heightmap
+from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import register
 
 log = logging.getLogger(__name__)
@@ -47,6 +48,7 @@ __all__ = [
     "WMConfig",
     "COORDINATES",
     "wm_amplitude",
+    "n_max_effective",
     "kept_harmonics",
     "draw_phases",
     "grid_coordinates",
@@ -72,12 +74,6 @@ _ROW_BLOCK = 128  # fixed row partition of the product: the bits do not depend o
 class WMConfig:
     """One 3D W-M surface. Defaults are Majhor & Bos 2023, Table 1, high-frequency DEM at D = 2.45."""
 
-    rows: int = 1009
-    """Grid rows (y samples)."""
-    cols: int = 1009
-    """Grid columns (x samples)."""
-    cell_size_m: float = 0.05
-    """Grid spacing of the output Heightmap, metres."""
     M: int = 64
     """Number of ridges (angular directions), Eq. (1)."""
     n_max: int | None = None
@@ -111,9 +107,6 @@ class WMConfig:
     and the surface has its extreme there; an offset of a few hundred pixels moves that outside."""
 
     def __post_init__(self) -> None:
-        check_int(self, "rows", self.rows, lo=3)
-        check_int(self, "cols", self.cols, lo=3)
-        check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
         check_int(self, "M", self.M, lo=1)
         check_int(self, "n_min", self.n_min, lo=0)
         if self.n_max is not None:
@@ -129,16 +122,16 @@ class WMConfig:
         check_range(self, "smoothing_sigma_px", self.smoothing_sigma_px, lo=0)
         check_range(self, "origin_offset_px", self.origin_offset_px, lo=0)
 
-    def describe(self) -> str:
-        """One line on the evaluated terms, e.g. for the CLI."""
-        n = kept_harmonics(self)
-        total = self.n_max_effective - self.n_min + 1
+    def describe(self, grid: GridConfig) -> str:
+        """One line on the terms evaluated on ``grid``, e.g. for the CLI."""
+        n = kept_harmonics(self, grid)
+        total = n_max_effective(self, grid) - self.n_min + 1
         return f"W-M D={self.D:g}: {n.size} of {total} harmonics x M={self.M} = {n.size * self.M} terms kept"
 
-    @property
-    def n_max_effective(self) -> int:
-        """n_max, or the grid length in pixels when n_max is None (paper Sec. 2.1)."""
-        return self.n_max if self.n_max is not None else max(self.rows, self.cols)
+
+def n_max_effective(cfg: WMConfig, grid: GridConfig) -> int:
+    """n_max, or the grid length in pixels when n_max is None (Majhor & Bos 2023, Sec. 2.1)."""
+    return cfg.n_max if cfg.n_max is not None else max(grid.rows, grid.cols)
 
 
 def wm_amplitude(cfg: WMConfig) -> float:
@@ -146,47 +139,47 @@ def wm_amplitude(cfg: WMConfig) -> float:
     return cfg.L * (cfg.G / cfg.L) ** (cfg.D - 2.0) * math.sqrt(math.log(cfg.gamma) / cfg.M)
 
 
-def grid_step(cfg: WMConfig) -> float:
+def grid_step(cfg: WMConfig, grid: GridConfig) -> float:
     """Distance between neighbouring samples in the units of Eq. (1)."""
     if cfg.coordinates == "pixels":
         return 1.0
     if cfg.coordinates == "metres":
-        return cfg.cell_size_m
-    return cfg.L / max(cfg.rows, cfg.cols)  # span_L
+        return grid.cell_size_m
+    return cfg.L / max(grid.rows, grid.cols)  # span_L
 
 
-def grid_coordinates(cfg: WMConfig) -> tuple[np.ndarray, np.ndarray]:
+def grid_coordinates(cfg: WMConfig, grid: GridConfig) -> tuple[np.ndarray, np.ndarray]:
     """(x of each column, y of each row) in the units of Eq. (1); both start at the origin offset."""
-    step = grid_step(cfg)
+    step = grid_step(cfg, grid)
     x0 = cfg.origin_offset_px * step
-    return x0 + np.arange(cfg.cols) * step, x0 + np.arange(cfg.rows) * step
+    return x0 + np.arange(grid.cols) * step, x0 + np.arange(grid.rows) * step
 
 
-def kept_harmonics(cfg: WMConfig) -> np.ndarray:
-    """The frequency indices n that are evaluated, after the tolerance and band-limit cuts."""
-    n = np.arange(cfg.n_min, cfg.n_max_effective + 1)
+def kept_harmonics(cfg: WMConfig, grid: GridConfig) -> np.ndarray:
+    """The frequency indices n that are evaluated on ``grid``, after the tolerance and band-limit cuts."""
+    n = np.arange(cfg.n_min, n_max_effective(cfg, grid) + 1)
     if cfg.amplitude_tol > 0:
         rel = float(cfg.gamma) ** ((cfg.D - 3.0) * (n - cfg.n_min))
         n = n[rel >= cfg.amplitude_tol]
     if cfg.band_limited:
         # spatial frequency gamma^n / L cycles per unit; Nyquist is 1 / (2 step)
-        nyquist = 0.5 / grid_step(cfg)
+        nyquist = 0.5 / grid_step(cfg, grid)
         n = n[float(cfg.gamma) ** n.astype(float) / cfg.L <= nyquist]
     return n
 
 
-def draw_phases(cfg: WMConfig, rng: np.random.Generator) -> np.ndarray:
+def draw_phases(cfg: WMConfig, grid: GridConfig, rng: np.random.Generator) -> np.ndarray:
     """Uniform random phases phi[m-1, n-n_min] for every (m, n) of Eq. (1), shape (M, n_count).
 
     All phases are drawn, kept or not, so the tolerance never changes the phases of kept terms.
     """
-    count = cfg.n_max_effective - cfg.n_min + 1
+    count = n_max_effective(cfg, grid) - cfg.n_min + 1
     return rng.uniform(cfg.phase_min, cfg.phase_max, size=(cfg.M, count))
 
 
-def _term_table(cfg: WMConfig, phases: np.ndarray):
+def _term_table(cfg: WMConfig, grid: GridConfig, phases: np.ndarray):
     """Flattened per-term (u, v, amplitude, phase) for the kept (m, n)."""
-    n = kept_harmonics(cfg)
+    n = kept_harmonics(cfg, grid)
     m = np.arange(1, cfg.M + 1)
     theta = np.pi * m / cfg.M
     k = 2.0 * np.pi * np.power(float(cfg.gamma), n.astype(float)) / cfg.L
@@ -207,24 +200,24 @@ def _exp_table(freq: np.ndarray, count: int, step: float) -> np.ndarray:
     return full[:count]
 
 
-def wm_surface(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
+def wm_surface(cfg: WMConfig, grid: GridConfig, phases: np.ndarray) -> np.ndarray:
     """Eq. (1) on the grid by the separable matrix product; heights in Eq. (1)'s units.
 
     Returns z[r, c] at x = c * step, y = r * step (see :func:`grid_coordinates`).
     """
-    u, v, amp, phi = _term_table(cfg, phases)
-    step = grid_step(cfg)
+    u, v, amp, phi = _term_table(cfg, grid, phases)
+    step = grid_step(cfg, grid)
     x0 = cfg.origin_offset_px * step
-    z = np.zeros((cfg.rows, cfg.cols))
+    z = np.zeros((grid.rows, grid.cols))
     const = 0.0
-    blocks = [slice(r, r + _ROW_BLOCK) for r in range(0, cfg.rows, _ROW_BLOCK)]
+    blocks = [slice(r, r + _ROW_BLOCK) for r in range(0, grid.rows, _ROW_BLOCK)]
     with _single_threaded_blas(), ThreadPoolExecutor(max_workers=_threads()) as pool:
         for lo in range(0, u.size, _CHUNK_TERMS):
             sl = slice(lo, lo + _CHUNK_TERMS)
             # the origin offset x0 shifts every plane wave's phase by u x0 + v x0
             w = amp[sl] * np.exp(1j * (phi[sl] + (u[sl] + v[sl]) * x0))
-            ex = _exp_table(u[sl], cfg.cols, step) * w  # (cols, j)
-            ey = _exp_table(v[sl], cfg.rows, step)  # (rows, j)
+            ex = _exp_table(u[sl], grid.cols, step) * w  # (cols, j)
+            ey = _exp_table(v[sl], grid.rows, step)  # (rows, j)
             left = np.concatenate([ey.real, -ey.imag], axis=1)
             right_t = np.ascontiguousarray(np.concatenate([ex.real, ex.imag], axis=1).T)
 
@@ -252,17 +245,17 @@ def _single_threaded_blas():
         yield
 
 
-def wm_surface_direct(cfg: WMConfig, phases: np.ndarray) -> np.ndarray:
+def wm_surface_direct(cfg: WMConfig, grid: GridConfig, phases: np.ndarray) -> np.ndarray:
     """Eq. (1) evaluated literally, term by term (slow; for tests and the benchmark).
 
     ``atan(y/x)`` is evaluated as ``arctan2(y, x)``, equal for x > 0 and defined at x = 0.
     """
-    x, y = grid_coordinates(cfg)
+    x, y = grid_coordinates(cfg, grid)
     xx, yy = np.meshgrid(x, y)
     r = np.hypot(xx, yy)
     ang = np.arctan2(yy, xx)
     z = np.zeros_like(xx)
-    for n in kept_harmonics(cfg):
+    for n in kept_harmonics(cfg, grid):
         a = float(cfg.gamma) ** ((cfg.D - 3.0) * n)
         kr = 2.0 * np.pi * float(cfg.gamma) ** float(n) * r / cfg.L
         for m in range(1, cfg.M + 1):
@@ -285,12 +278,12 @@ def gaussian_smooth(z: np.ndarray, sigma_px: float) -> np.ndarray:
 
 
 @register("wm", WMConfig, summary="3D Weierstrass-Mandelbrot surface (Majhor & Bos 2023, Eq. 1-2)")
-def generate_wm(cfg: WMConfig, rng: np.random.Generator) -> Heightmap:
+def generate_wm(cfg: WMConfig, grid: GridConfig, rng: np.random.Generator) -> Heightmap:
     """One W-M surface as a Heightmap. Heights are Eq. (1)'s values taken as metres.
 
     Eq. (1) gives heights in the units of L; a recipe usually rescales to a relief.
     """
-    phases = draw_phases(cfg, rng)
-    log.info(cfg.describe())
-    z = gaussian_smooth(wm_surface(cfg, phases), cfg.smoothing_sigma_px)
-    return Heightmap(z=z, cell_size_m=cfg.cell_size_m)
+    phases = draw_phases(cfg, grid, rng)
+    log.info(cfg.describe(grid))
+    z = gaussian_smooth(wm_surface(cfg, grid, phases), cfg.smoothing_sigma_px)
+    return Heightmap(z=z, cell_size_m=grid.cell_size_m)
