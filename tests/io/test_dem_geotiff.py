@@ -30,13 +30,13 @@ def test_export_then_dem_layer_gives_the_same_heightmap(hm, tmp_path):
     from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
 
     export_heightmap(hm, "geotiff", tmp_path, name="site", meta={"crs": "IAU_2015:30110"})
-    raw = read_dem(tmp_path / "site.tif")
+    raw = read_dem(tmp_path / "site.geo.tif")
     assert raw.cell_size_m == hm.cell_size_m and raw.gap_count == 0
     assert np.array_equal(raw.z, hm.z)
     recipe = recipe_from_dict({
         "recipe": {"name": "site"},
         "grid": {"rows": hm.rows, "cols": hm.cols, "cell_size_m": hm.cell_size_m},
-        "layers": {"base": {"generator": "dem", "path": str(tmp_path / "site.tif")}},
+        "layers": {"base": {"generator": "dem", "path": str(tmp_path / "site.geo.tif")}},
     })
     out = generate_terrain(recipe, 0)
     assert out.cell_size_m == hm.cell_size_m and np.array_equal(out.z, hm.z)
@@ -80,7 +80,7 @@ def test_cli_exports_a_lunar_preset_with_its_crs(tmp_path, capsys):
     code = main(["export", "lunar-mare", "--format", "geotiff", "-o", str(tmp_path), "--name", "m",
                  "--set", "grid.rows=33", "--set", "grid.cols=33"])
     assert code == 0, capsys.readouterr().err
-    with rasterio.open(tmp_path / "m.tif") as src:
+    with rasterio.open(tmp_path / "m.geo.tif") as src:
         assert "Moon" in src.crs.to_wkt() and src.res == (0.05, 0.05)
         assert src.tags()["recipe_name"] == "lunar-mare"
 

@@ -4,6 +4,7 @@ test_exporters.py) does not cover. These tests re-implement each simulator's doc
 from file to world (cited in offroadbench/io/export/<format>.py); tests/io/test_export_readers.py
 loads the files with the real tools."""
 
+import importlib.util
 import json
 import logging
 import os
@@ -454,3 +455,15 @@ def test_text_numbers_are_exact_and_free_of_float_noise(tmp_path):
     for text in [(tmp_path / "m.xml").read_text(), (tmp_path / "g" / "model.sdf").read_text(), wbt, (tmp_path / "u_unreal.txt").read_text()]:
         for token in re.findall(r"-?\d+\.\d+(?:e-?\d+)?", text):
             assert repr(float(token)) == token or token.endswith(".0")  # the shortest text of its double
+
+
+def test_every_format_shares_a_directory_with_every_other(tmp_path):
+    """All formats under one name in one directory: no file of one is overwritten by another."""
+    z = np.add.outer(np.linspace(0, 1, 17), np.linspace(0, 2, 17))
+    hm = Heightmap(z, 0.1)
+    written = {}
+    for fmt in EXPORTERS.names():
+        if all(importlib.util.find_spec(m) for m in EXPORTERS.get(fmt).requires):
+            written[fmt] = export_heightmap(hm, fmt, tmp_path, name="t").files
+    paths = [p for files in written.values() for p in files]
+    assert len(paths) == len(set(paths)), "two formats write the same file"

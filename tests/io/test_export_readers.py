@@ -52,7 +52,7 @@ def test_rasterio_reads_transform_values_and_crs(hm, tmp_path):
     rasterio = pytest.importorskip("rasterio")
     export_heightmap(hm, "geotiff", tmp_path / "a", name="t")
     export_heightmap(hm, "geotiff", tmp_path / "b", name="t", meta={"crs": "IAU_2015:30110"})
-    with rasterio.open(tmp_path / "a" / "t.tif") as src:
+    with rasterio.open(tmp_path / "a" / "t.geo.tif") as src:
         assert src.crs.to_wkt().startswith("LOCAL_CS") and 'UNIT["metre",1' in src.crs.to_wkt()  # no body, metres
         assert src.dtypes == ("float32",) and (src.height, src.width) == hm.shape
         assert src.res == (hm.cell_size_m, hm.cell_size_m)
@@ -64,7 +64,7 @@ def test_rasterio_reads_transform_values_and_crs(hm, tmp_path):
             assert band[src.index(x, y)] == np.float32(hm.z[r, c])
         assert src.bounds.left == pytest.approx(-hm.cell_size_m / 2) and src.bounds.bottom == pytest.approx(-hm.cell_size_m / 2)
         assert src.tags()["AREA_OR_POINT"] == "Point"
-    with rasterio.open(tmp_path / "b" / "t.tif") as src:
+    with rasterio.open(tmp_path / "b" / "t.geo.tif") as src:
         assert "Equirectangular" in src.crs.to_wkt() and "Moon" in src.crs.to_wkt()
         assert src.crs.linear_units == "metre"
 

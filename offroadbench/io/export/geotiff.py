@@ -1,4 +1,7 @@
-"""GeoTIFF: ``NAME.tif``, float32 heights in metres with a geotransform (and a CRS if given).
+"""GeoTIFF: ``NAME.geo.tif``, float32 heights in metres with a geotransform and a CRS.
+
+(Not ``NAME.tif``: that is the plain ``tiff`` export, whose rows are not flipped; exporting both under
+one name into one directory must not pair one's pixels with the other's sidecar.)
 
 Layout (GDAL's north-up convention). A GIS draws raster row 0 at the top, i.e. at the largest y,
 while our row 0 is y = 0. The raster is therefore written last row first (raster row i is z[rows - 1
@@ -62,7 +65,7 @@ def write_geotiff(hm: Heightmap, d: Path, name: str, meta: dict[str, Any]) -> li
         driver="GTiff", width=hm.cols, height=hm.rows, count=1, dtype="float32", crs=crs,
         transform=geotransform(hm), compress="deflate", predictor=3,
     )
-    with rasterio.open(d / f"{name}.tif", "w", **profile) as dst:
+    with rasterio.open(d / f"{name}.geo.tif", "w", **profile) as dst:
         dst.write(z32, 1)
         dst.update_tags(AREA_OR_POINT="Point", units="metres", **{k: str(meta[k]) for k in PROVENANCE_KEYS if k in meta})
         dst.update_tags(1, units="metres")
@@ -77,9 +80,9 @@ def read_geotiff(d: Path, name: str) -> Heightmap:
     """The export read back through the DEM importer (:func:`offroadbench.io.dem.read_dem`)."""
     from offroadbench.io.dem import read_dem
 
-    raw = read_dem(d / f"{name}.tif")
+    raw = read_dem(d / f"{name}.geo.tif")
     if raw.gap_count:
-        raise InputError(f"{d / name}.tif: has {raw.gap_count} nodata samples")
+        raise InputError(f"{d / name}.geo.tif: has {raw.gap_count} nodata samples")
     return Heightmap(raw.z, raw.cell_size_m)
 
 
@@ -87,7 +90,7 @@ EXPORTERS.register(
     "geotiff",
     Exporter(
         name="geotiff",
-        summary="GeoTIFF NAME.tif: float32 metres, north-up geotransform (pixel = cell, sample (0, 0) at 0, 0), CRS if the recipe gives one",
+        summary="GeoTIFF NAME.geo.tif: float32 metres, north-up geotransform (pixel = cell, sample (0, 0) at 0, 0), the recipe's CRS or a local metric one",
         reader="GDAL / rasterio / QGIS; offroadbench's dem layer",
         write=write_geotiff,
         read=read_geotiff,
