@@ -1,4 +1,4 @@
-"""``offroadbench drive TERRAIN.png|PRESET``: run random straight-line missions on one terrain.
+"""``offroadbench drive TERRAIN.png|PRESET``: run random missions on one terrain with a planner or policy.
 
 The work is :func:`offroadbench.sim.batch.drive_missions`; this module parses, checks the
 output directory, formats the :class:`~offroadbench.sim.batch.DriveRun` and writes its files.
@@ -48,7 +48,7 @@ def format_drive_run(run, label: str) -> str:
     medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
         f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
-        f"physics {run.sim.physics_rate_hz} Hz",
+        f"planner {run.planner}, physics {run.sim.physics_rate_hz} Hz",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
         f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
@@ -75,7 +75,8 @@ def write_drive_run(run, out: Path, label: str, plot: bool) -> list[str]:
             save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
                         out / "missions.png")
             save_figure(plot_trajectories(hm, closed, run.missions, run.telemetry, run.results, border_m=border,
-                                          title=f"{label}: trajectories"), out / "trajectories.png")
+                                          paths=run.paths, title=f"{label}: trajectories ({run.planner})"),
+                        out / "trajectories.png")
             shown = next((r for r in run.results if r.success), run.results[0])
             save_figure(plot_timeseries(run.telemetry[shown.mission_index], title=f"{label}: mission "
                                         f"{shown.mission_index} ({shown.failure_reason or 'success'})"),
@@ -95,7 +96,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     hm, label, _ = load_heightmap_arg(args.terrain, args.seed, sets=args.set, force=args.force)
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, length_m=args.length_m, vehicle=vehicle, sim=sim,
-                             progress=progress)
+                             planner=args.planner, progress=progress)
     print(format_drive_run(run, label))
     if out is not None:
         written = write_drive_run(run, out, label, args.plot)
@@ -115,6 +116,8 @@ def register(sub) -> None:
     p.add_argument("--plot", action="store_true", help="write missions.png, trajectories.png, timeseries.png")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
+    p.add_argument("--planner", default="straight",
+                   help="planner or policy (built-in: straight, astar, lattice, reactive; installed plug-ins too)")
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.add_argument("--force", action="store_true",
                    help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")

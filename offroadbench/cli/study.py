@@ -41,6 +41,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
     rep.set_defaults(func=cmd_report)
 
+    rpl = sub.add_parser("replay", help="re-run one stored trial bit for bit and draw it")
+    rpl.add_argument("run_dir", help="run directory of a study")
+    rpl.add_argument("--cell", type=int, required=True, help="grid cell index")
+    rpl.add_argument("--terrain", type=int, required=True, help="terrain index within the cell")
+    rpl.add_argument("--mission", type=int, required=True, help="mission index on the terrain")
+    rpl.add_argument("--plot", action="store_true", help="write the figure (class map, paths, time series)")
+    rpl.add_argument("--out", help="folder for the figure and telemetry (default: RUN_DIR/replays)")
+    rpl.set_defaults(func=cmd_replay)
+
 
 def _run_dir(path: str) -> Path:
     p = Path(path)
@@ -142,3 +151,33 @@ def cmd_report(args: argparse.Namespace) -> int:
     path = write_report(run_dir, out, _parse_fig4(args.fig4))
     print(f"report: {path}")
     return 0
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    """Replay one trial; exit 1 if it does not reproduce the stored row."""
+    from offroadbench.study.tasks import replay_trial
+
+    run_dir = _run_dir(args.run_dir)
+    rep = replay_trial(run_dir, args.cell, args.terrain, args.mission)
+    r = rep.record.result
+    name = f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}"
+    print(f"{name}: {r.failure_reason or 'success'} after {r.sim_time_s:.2f} s, {r.final_distance_to_goal_m:.2f} m from the goal; "
+          f"identical to the stored row: {'yes' if rep.identical else 'NO'}")
+    if not rep.identical:
+        diff = [k for k in rep.stored if str(rep.stored[k]) != str(r.as_row().get(k))]
+        print(f"differs in: {', '.join(diff)}", file=sys.stderr)
+    if args.plot:
+        from offroadbench.io.telemetry import save_telemetry
+        from offroadbench.plots.study import fig_replay
+
+        out = Path(args.out) if args.out else run_dir / "replays"
+        out.mkdir(parents=True, exist_ok=True)
+        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
+                 f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
+        fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
+                         rep.record.telemetry, title=title)
+        with atomic_path(out / f"{name}.png") as tmp:
+            fig.savefig(tmp, format="png", dpi=110)
+        save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
+        print(f"wrote {out / (name + '.png')}, {out / (name + '.parquet')}")
+    return 0 if rep.identical else 1

@@ -28,7 +28,7 @@ import numpy as np
 
 from offroadbench.config import check_int, check_range
 from offroadbench.navigation.observation import ObservationConfig
-from offroadbench.navigation.planners import PLANNERS, NoConfig, PlanningProblem, VehicleEnvelope
+from offroadbench.navigation.planners import NoConfig, PlanningProblem, VehicleEnvelope
 from offroadbench.registry import Registry
 
 __all__ = ["Policy", "PolicyContext", "PolicySpec", "POLICIES", "register_policy", "make_policy",
@@ -73,11 +73,10 @@ POLICIES: Registry[PolicySpec] = Registry("policy", entry_point_group="offroadbe
 
 
 def register_policy(name: str, *, config: type = NoConfig, summary: str = ""):
-    """Decorator: register a class (or factory) ``make(cfg, context)`` as policy ``name``."""
+    """Decorator: register a class (or factory) ``make(cfg, context)`` as policy ``name``. Policy and
+    planner names share the ``[planner] name`` namespace; a planner of the same name wins."""
 
     def deco(make):
-        if name in PLANNERS:
-            raise ValueError(f"policy {name!r}: the name is a planner's")
         doc = (make.__doc__ or "").strip().splitlines()
         POLICIES.add(name, PolicySpec(make, config, summary or (doc[0] if doc else "")))
         return make
@@ -103,7 +102,7 @@ class ReactiveConfig:
     """Tightest arc among the candidates, 1/m."""
     candidates: int = 11
     """Arcs compared per control tick (evenly spread in curvature, plus the pure-pursuit arc)."""
-    roughness_weight: float = 1.0
+    roughness_weight: float = 8.0
     """Weight of the terrain term against the heading term (0: pure pursuit to the goal)."""
     slow_down: float = 0.5
     """Fraction of the speed given up on the roughest arc (roughness 1 = the vehicle's max slope)."""
@@ -124,9 +123,10 @@ class ReactivePolicy:
     Each tick it compares arcs of several curvatures (plus the pure-pursuit arc to a point
     ``lookahead_m`` toward the goal, curvature ``2 y / (x^2 + y^2)``, Coulter 1992). Along each arc,
     as far as the height patch reaches, it reads the heights under the left and right wheel tracks
-    and takes the arc's roughness ``r`` as the steepest along-track step or cross-slope, over the
-    vehicle's max slope. It drives the arc minimising ``(heading error over the lookahead)^2 +
-    roughness_weight * r^2`` at ``cruise * (1 - slow_down * min(r, 1))``, slowing to stop at the goal
+    and takes the arc's roughness ``r`` as the larger of the mean along-track slope (per track) and
+    the mean cross slope, each over the vehicle's max slope and clipped at 2 (the patch's samples
+    beyond its edge read the nearest edge sample). It drives the arc minimising ``(heading change
+    against the pure-pursuit arc over the patch's reach)^2 + roughness_weight * r^2`` at ``cruise * (1 - slow_down * min(r, 1))``, slowing to stop at the goal
     within the vehicle's acceleration. A goal behind the vehicle is turned toward on the tightest arc.
 
     Optimises: progress toward the goal with the gentlest ground under the wheels in the next metre.
@@ -142,7 +142,7 @@ class ReactivePolicy:
         self._ds = obs.patch_spacing_m
         self._centre = (obs.patch_cells - 1) / 2.0
         reach = self._centre * self._ds
-        self._s = np.linspace(0.0, max(reach - 0.5 * context.track_m, self._ds), 8)
+        self._s = np.linspace(0.0, max(reach, self._ds), 10)
         self._half_track = 0.5 * context.track_m
 
     def reset(self, problem: PlanningProblem) -> None:
@@ -165,9 +165,10 @@ class ReactivePolicy:
         zl = self._heights(patch, x + h * nx, y + h * ny)
         zr = self._heights(patch, x - h * nx, y - h * ny)
         step = s[1] - s[0]
-        along = max(np.max(np.abs(np.diff(zl))), np.max(np.abs(np.diff(zr)))) / step
-        cross = float(np.max(np.abs(zl - zr))) / (2.0 * h)
-        return max(along, cross) / self.ctx.vehicle.max_slope
+        m = self.ctx.vehicle.max_slope
+        along = np.minimum(np.abs(np.diff(np.stack([zl, zr]), axis=1)) / (step * m), 2.0)
+        cross = np.minimum(np.abs(zl - zr) / (2.0 * h * m), 2.0)
+        return float(max(along.mean(axis=1).max(), cross.mean()))
 
     def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
         cfg, veh = self.cfg, self.ctx.vehicle
@@ -187,7 +188,7 @@ class ReactivePolicy:
         best = (math.inf, k_star, 0.0)
         for k in (k_star, *np.linspace(-k_max, k_max, cfg.candidates)):
             r = self._roughness(patch, float(k)) if cfg.roughness_weight > 0 else 0.0
-            score = ((k - k_star) * cfg.lookahead_m) ** 2 + cfg.roughness_weight * r * r
+            score = ((k - k_star) * self._s[-1]) ** 2 + cfg.roughness_weight * r * r
             if score < best[0]:
                 best = (score, float(k), r)
         _, k, r = best

@@ -12,7 +12,7 @@ from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, draw_border, draw_classes, new_figure
 from offroadbench.study import stats
 
-__all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "short_label"]
+__all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "short_label"]
 
 
 def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
@@ -94,6 +94,49 @@ def fig_missions(hm, classes: np.ndarray, closed: np.ndarray, border_m: float, t
         axes[2].plot([r.start_x_m, r.goal_x_m], [r.start_y_m, r.goal_y_m], color=colour, lw=1)
         axes[2].plot(r.start_x_m, r.start_y_m, "o", color="limegreen", ms=5, mec="black", mew=0.5)
         axes[2].plot(r.goal_x_m, r.goal_y_m, "o", color="red", ms=5, mec="black", mew=0.5)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel: dict, *, title: str = ""):
+    """One trial: the closed class map with the planned path (white, dashed) and the driven path
+    (black, ending in a cross), and its time series (height, roll and pitch, commands, distance
+    made good along the path)."""
+    fig = new_figure(figsize=(13, 6.0))[0]
+    fig.clear()
+    grid = fig.add_gridspec(4, 2, width_ratios=(1.15, 1.0))
+    ax = fig.add_subplot(grid[:, 0])
+    draw_classes(ax, closed, hm.extent_m)
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
+    ax.plot(path_xy[:, 0], path_xy[:, 1], color="white", lw=1.5, ls="--", label="planned")
+    ax.plot(tel["x_m"], tel["y_m"], color="black", lw=1.5, label="driven")
+    ax.plot(tel["x_m"][-1], tel["y_m"][-1], "X", color="red", mec="black", ms=9)
+    ax.plot(*path_xy[0], "o", color="limegreen", mec="black", ms=7)
+    ax.plot(*path_xy[-1], "o", color="red", mec="black", ms=7)
+    pad = 3.0
+    xs = np.concatenate([path_xy[:, 0], tel["x_m"]])
+    ys = np.concatenate([path_xy[:, 1], tel["y_m"]])
+    ax.set_xlim(max(xs.min() - pad, 0), min(xs.max() + pad, hm.width_m))
+    ax.set_ylim(max(ys.min() - pad, 0), min(ys.max() + pad, hm.height_m))
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    t = tel["t_s"]
+    series = (
+        (("z_m", "z (m)", 1.0),),
+        (("roll_rad", "roll (deg)", 180 / np.pi), ("pitch_rad", "pitch (deg)", 180 / np.pi)),
+        (("cmd_v_m_s", "v cmd (m/s)", 1.0), ("cmd_omega_rad_s", "omega cmd (rad/s)", 1.0)),
+        (("progress_m", "progress (m)", 1.0),),
+    )
+    for i, group in enumerate(series):
+        sub = fig.add_subplot(grid[i, 1])
+        for col, label, scale in group:
+            sub.plot(t, tel[col] * scale, label=label, lw=1)
+        sub.legend(fontsize=7, loc="upper left")
+        sub.grid(alpha=0.3)
+        if i == len(series) - 1:
+            sub.set_xlabel("t (s)")
     if title:
         fig.suptitle(title, fontsize=10)
     return fig

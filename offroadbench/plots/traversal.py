@@ -42,15 +42,19 @@ def plot_missions(hm: Heightmap, closed_classes: np.ndarray, missions, *, border
 
 
 def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telemetry: dict, results, *,
-                      border_m: float | None = None, title: str = "trajectories"):
+                      border_m: float | None = None, title: str = "trajectories", paths: dict | None = None):
     """Driven paths over the class map; each ends in a marker coloured by the outcome.
 
-    ``telemetry`` maps mission index -> telemetry columns; ``results`` are the TrialResults.
+    ``telemetry`` maps mission index -> telemetry columns; ``results`` are the TrialResults;
+    ``paths`` (optional) maps mission index -> planned waypoints (N, 2), drawn dotted (default:
+    the start-goal line).
     """
     fig, ax = _class_axes(hm, closed_classes, border_m, title)
     for m, r in zip(missions, results):
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
-        ax.plot([sx, gx], [sy, gy], color="k", linewidth=0.5, linestyle=":")
+        wp = (paths or {}).get(m.index)
+        px, py = ([sx, gx], [sy, gy]) if wp is None else (wp[:, 0], wp[:, 1])
+        ax.plot(px, py, color="k", linewidth=0.7, linestyle=":")
         ax.plot(sx, sy, "o", color="limegreen", markeredgecolor="k", markersize=5)
         ax.plot(gx, gy, "o", color="red", markeredgecolor="k", markersize=5)
         tel = telemetry.get(m.index)

@@ -58,6 +58,10 @@ class DriveRun:
     """One TrialResult per mission, same order."""
     telemetry: Mapping[int, Mapping[str, np.ndarray]] = field(default_factory=dict)
     """Mission index -> telemetry columns (offroadbench.sim.runner.TELEMETRY_COLUMNS)."""
+    planner: str = "straight"
+    """Name of the planner or policy that drove."""
+    paths: Mapping[int, np.ndarray] = field(default_factory=dict)
+    """Mission index -> planned waypoints (N, 2), map metres (a policy's: start and goal)."""
 
     @property
     def summary(self) -> dict[str, float]:
@@ -91,36 +95,43 @@ def drive_missions(
     controller: ControllerConfig = ControllerConfig(),
     rules: FailureRules = FailureRules(),
     roughness: RoughnessConfig = RoughnessConfig(),
+    planner="straight",
     progress: ProgressFn | None = None,
 ) -> DriveRun:
     """Sample ``n`` missions of ``length_m`` on ``hm`` with ``seed`` and drive them all.
 
-    ``vehicle`` is a VehicleSpec or a vehicle name / ``vehicle.toml`` path. An impossible
+    ``vehicle`` is a VehicleSpec or a vehicle name / ``vehicle.toml`` path; ``planner`` a planner or
+    policy name (offroadbench.navigation) or a PlannerChoice, planning on the closed map inside the
+    mission border. An impossible
     request (a map too small for the mission length, no low-roughness start) is an InputError
     raised before any physics runs.
     """
+    from offroadbench.navigation.planners import PlannerChoice, planner_from_table
     from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
+    choice = planner if isinstance(planner, PlannerChoice) else planner_from_table({"name": planner}, where="planner")
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     closed = classify_terrain(hm, roughness).closed
     mcfg = MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m)
     missions = tuple(sample_missions(hm, closed, mcfg, mission_rng(seed)))
-    results, telemetry = _drive(hm, missions, spec, sim, controller, rules, progress)
+    kwargs = dict(planner=choice, classes=closed, border_m=mcfg.border_m, controller=controller, rules=rules)
+    results, telemetry, paths = _drive(hm, missions, spec, sim, kwargs, progress)
     return DriveRun(
         heightmap=hm, closed=closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
-        missions=missions, results=tuple(results), telemetry=telemetry,
+        missions=missions, results=tuple(results), telemetry=telemetry, planner=choice.name, paths=paths,
     )
 
 
-def _drive(hm, missions: Sequence[Mission], vehicle, sim, controller, rules, progress):
-    from offroadbench.sim.runner import run_mission
+def _drive(hm, missions: Sequence[Mission], vehicle, sim, kwargs, progress):
+    from offroadbench.sim.runner import drive_mission
     from offroadbench.sim.world import World
 
-    results, telemetry = [], {}
+    results, telemetry, paths = [], {}, {}
     with World(hm, vehicle, sim) as world:
         for i, mission in enumerate(missions):
-            result, tel = run_mission(world, mission, controller=controller, rules=rules)
-            results.append(result)
-            telemetry[mission.index] = tel
+            rec = drive_mission(world, mission, **kwargs)
+            results.append(rec.result)
+            telemetry[mission.index] = rec.telemetry
+            paths[mission.index] = rec.path_xy
             report(progress, i + 1, len(missions))
-    return results, telemetry
+    return results, telemetry, paths
