@@ -170,7 +170,7 @@ def available_memory_bytes() -> int | None:
 
 def check_recipe_memory(recipe, force: bool = False) -> None:
     """Refuse a recipe whose grid would not fit in memory (see :func:`check_memory`)."""
-    rows, cols = int(recipe.grid["rows"]), int(recipe.grid["cols"])
+    rows, cols = int(recipe.grid.rows), int(recipe.grid.cols)
     check_memory(grid_bytes(rows, cols), f"{recipe.name}: a {rows}x{cols} grid", force)
 
 
