@@ -17,8 +17,10 @@ from _timing import best_of
 
 from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.craters import CraterTable, StampOptions, inverse_cdf_diameters, stamp_craters
-from offroadbench.terrain.fractal.diamond_square import DiamondSquareConfig, generate_diamond_square
-from offroadbench.terrain.enhance import RMDExpandConfig, SpectralRestoreConfig, fill_gaps, rmd_expand, spectral_restore
+from offroadbench.terrain.fractal.rmd import DiamondSquareConfig, generate_diamond_square
+from offroadbench.terrain.fractal.rmd import RMDExpandConfig, rmd_expand
+from offroadbench.terrain.fractal.spectral import SpectralRestoreConfig, spectral_restore
+from offroadbench.terrain.gaps import fill_gaps
 from offroadbench.terrain.fractal.fbm import FBMConfig, generate_fbm
 
 

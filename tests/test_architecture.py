@@ -112,3 +112,16 @@ def test_pybullet_only_in_sim_and_print_only_in_cli():
                     assert m.startswith("offroadbench.sim."), f"{m} imports pybullet"
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "print":
                 assert m.startswith("offroadbench.cli"), f"{m} calls print()"
+
+
+def test_io_does_not_import_terrain():
+    """Files are read at the edge (recipe loading calls io) and io knows file formats only, so
+    the dependency runs terrain -> io and never back (no terrain <-> io cycle, even in functions)."""
+    offenders = []
+    for path in (PKG / "io").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            if isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            offenders += [f"{path.relative_to(PKG)}: {n}" for n in names if n.startswith("offroadbench.terrain")]
+    assert offenders == []

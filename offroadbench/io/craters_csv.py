@@ -3,6 +3,10 @@
 Columns (header required, this order not required): ``x_m, y_m, diameter_m, age, degradation,
 profile``. ``age`` or ``degradation`` may be empty (not both): a crater without degradation gets
 it from its age when it is stamped (Martin et al. 2014, Eq. 11). The same file can be stamped on any base terrain.
+
+This module knows the file format only: :func:`read_craters` returns the columns, which the
+recipe loader turns into a :class:`offroadbench.terrain.craters.CraterTable` (so ``io`` does not
+depend on ``terrain``); :func:`write_craters` takes any object with these columns as attributes.
 """
 
 from __future__ import annotations
@@ -10,22 +14,25 @@ from __future__ import annotations
 import csv
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path
-from offroadbench.terrain.craters.table import COLUMNS, CraterTable
+__all__ = ["COLUMNS", "write_craters", "read_craters"]
 
-__all__ = ["write_craters", "read_craters"]
+#: Column order of the crater CSV.
+COLUMNS = ("x_m", "y_m", "diameter_m", "age", "degradation", "profile")
 
 
 def _fmt(v: float) -> str:
     return "" if math.isnan(v) else repr(float(v))
 
 
-def write_craters(table: CraterTable, path: str | Path) -> Path:
-    """Write ``table`` to ``path`` as CSV (atomically); returns the path."""
+def write_craters(table, path: str | Path) -> Path:
+    """Write ``table`` (a CraterTable, or anything with the COLUMNS as attributes) to ``path`` as CSV
+    (atomically); returns the path."""
     with atomic_path(path) as tmp:
         with tmp.open("w", newline="") as fh:
             w = csv.writer(fh)
@@ -56,8 +63,9 @@ def _number(text: str, col: str, line: int, path: Path, allow_empty: bool) -> fl
         raise InputError(f"{path}:{line}: column {col} = {text!r} is not a number") from None
 
 
-def read_craters(path: str | Path) -> CraterTable:
-    """Read a crater CSV; errors name the file, line and column."""
+def read_craters(path: str | Path) -> dict[str, Any]:
+    """Read a crater CSV into {column: values} (arrays of floats, NaN where empty; a tuple of
+    profile names); errors name the file, line and column."""
     p = Path(path)
     try:
         fh = p.open(newline="")
@@ -81,14 +89,11 @@ def read_craters(path: str | Path) -> CraterTable:
             cols["age"].append(age)
             cols["degradation"].append(deg)
             cols["profile"].append(row["profile"].strip())
-    try:
-        return CraterTable(
-            x_m=np.array(cols["x_m"]),
-            y_m=np.array(cols["y_m"]),
-            diameter_m=np.array(cols["diameter_m"]),
-            age=np.array(cols["age"]),
-            degradation=np.array(cols["degradation"]),
-            profile=tuple(cols["profile"]),
-        )
-    except InputError as exc:
-        raise InputError(f"{p}: {exc}") from None
+    return {
+        "x_m": np.array(cols["x_m"]),
+        "y_m": np.array(cols["y_m"]),
+        "diameter_m": np.array(cols["diameter_m"]),
+        "age": np.array(cols["age"]),
+        "degradation": np.array(cols["degradation"]),
+        "profile": tuple(cols["profile"]),
+    }

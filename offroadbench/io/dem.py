@@ -15,7 +15,7 @@ Formats:
   the ``geotiff`` export exactly (:mod:`offroadbench.io.export.geotiff`).
 
 The result is a :class:`RawDEM`: heights that may contain NaN (a ``Heightmap`` may not), to be
-gap-filled (:func:`offroadbench.terrain.enhance.fill_gaps`) before use.
+gap-filled (:func:`offroadbench.terrain.gaps.fill_gaps`) before use.
 """
 
 from __future__ import annotations

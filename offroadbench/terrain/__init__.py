@@ -1,8 +1,7 @@
 """Terrain generators and modifiers. Importing this package registers every one of them."""
 
-from offroadbench.terrain.fractal import diamond_square, fbm, multifractal, wm  # noqa: F401
-from offroadbench.terrain import craters  # noqa: F401
-from offroadbench.terrain import enhance  # noqa: F401
+from offroadbench.terrain.fractal import fbm, multifractal, rmd, spectral, wm  # noqa: F401
+from offroadbench.terrain import craters, dem  # noqa: F401
 from offroadbench.terrain.registry import TERRAIN_REGISTRY, get_spec, register
 
 __all__ = ["TERRAIN_REGISTRY", "get_spec", "register"]

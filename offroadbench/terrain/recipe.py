@@ -24,6 +24,12 @@ first layer must be a generator and defaults to ``replace``, later generators to
 (``[layers.craters.population]``, ``--set layers.craters.population.k=2``). Every generator
 draws on the recipe's ``[grid]`` (a :class:`~offroadbench.terrain.grid.GridConfig`).
 
+Files. Generators never read files: a layer that names one (``crater_file`` of a ``craters``
+layer; ``path``, ``source_cell_size_m``, ``source_relief_m`` and ``nodata_level`` of a ``dem``
+layer) has it read here, through :mod:`offroadbench.io`, when the recipe is built, and its config
+holds the data (``CraterConfig.craters``, ``DEMConfig.dem``). Relative paths are relative to the
+working directory.
+
 Randomness: each layer's generator is seeded from (seed, layer name) with ``SeedSequence``, so
 adding, removing or reordering layers never changes another layer's random numbers.
 """
@@ -40,9 +46,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from offroadbench.config import config_id, from_dict, load_toml, set_dotted
+from offroadbench.config import check_int, check_range, config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.io.craters_csv import read_craters
+from offroadbench.io.dem import read_dem
+from offroadbench.terrain.craters.table import CraterTable
 from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import get_spec
 
@@ -129,6 +138,55 @@ def load_recipe(name_or_path: str | Path) -> Recipe:
     return recipe_from_dict(load_toml(preset), source=str(preset))
 
 
+# --------------------------------------------------------------------------- files
+#: The bundled synthetic sample DEM with gaps (diamond-square + craters; for demos and tests),
+#: what a ``dem`` layer without ``path`` imports.
+SAMPLE_DEM = Path(__file__).resolve().parents[2] / "terrains" / "data" / "sample-dem.npy"
+
+
+def _crater_file(params: dict[str, Any], where: str, key: str) -> dict[str, Any]:
+    """``crater_file = PATH`` -> ``craters``: the CraterTable read from the CSV."""
+    if "craters" in params:
+        raise InputError(f"{where}: {key}.craters cannot be written in a recipe; name a crater CSV with crater_file")
+    path = params.pop("crater_file", None)
+    if path is None:
+        return params
+    if not isinstance(path, str):
+        raise InputError(f"{where}: {key}.crater_file must be a path string, got {path!r}")
+    try:
+        params["craters"] = CraterTable(**read_craters(path))
+    except InputError as exc:
+        raise InputError(f"{where}: {key}.crater_file = {path!r}: {exc}") from None
+    return params
+
+
+def _dem_file(params: dict[str, Any], where: str, key: str) -> dict[str, Any]:
+    """``path`` (+ read options) -> ``dem``: the RawDEM read from the file (the sample without a path)."""
+    if "dem" in params:
+        raise InputError(f"{where}: {key}.dem cannot be written in a recipe; name the DEM file with path")
+    path = params.pop("path", None)
+    opts = {name: params.pop(name, None) for name in ("source_cell_size_m", "source_relief_m", "nodata_level")}
+    if path is not None and not isinstance(path, str):
+        raise InputError(f"{where}: {key}.path must be a path string, got {path!r}")
+    if opts["source_cell_size_m"] is not None:
+        check_range(None, f"{key}.source_cell_size_m", opts["source_cell_size_m"], lo=0, lo_open=True)
+    if opts["source_relief_m"] is not None:
+        check_range(None, f"{key}.source_relief_m", opts["source_relief_m"], lo=0)
+    if opts["nodata_level"] is not None:
+        check_int(None, f"{key}.nodata_level", opts["nodata_level"], lo=0, hi=65535)
+    params["dem"] = read_dem(
+        Path(path) if path is not None else SAMPLE_DEM,
+        cell_size_m=opts["source_cell_size_m"],
+        relief_m=opts["source_relief_m"],
+        nodata_level=opts["nodata_level"],
+    )
+    return params
+
+
+#: generator name -> reader of the files its layer names (params, where, key) -> params
+_FILE_READERS = {"craters": _crater_file, "dem": _dem_file}
+
+
 # --------------------------------------------------------------------------- validation
 def _check_keys(table: Mapping[str, Any], allowed, where: str) -> None:
     unknown = sorted(set(table) - set(allowed))
@@ -157,6 +215,8 @@ def _build_layer(lname: str, table: Mapping[str, Any], first: bool, where: str) 
     if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not np.isfinite(weight):
         raise InputError(f"{where}: layers.{lname}.weight must be a finite number, got {weight!r}")
     params = {k: v for k, v in table.items() if k not in _LAYER_KEYS}
+    if spec.name in _FILE_READERS:
+        params = _FILE_READERS[spec.name](params, where, f"layers.{lname}")
     cfg = from_dict(spec.config_cls, params, where=where, key=f"layers.{lname}")
     return Layer(name=lname, generator=spec.name, combine=combine, weight=float(weight), config=cfg)
 

@@ -91,7 +91,7 @@ def test_crater_csv_round_trip(tmp_path):
         degradation=[np.nan, 0.4], profile=("martin2014", "li_fresh"),
     )
     p = write_craters(t, tmp_path / "c.csv")
-    back = read_craters(p)
+    back = CraterTable(**read_craters(p))
     for col in ("x_m", "y_m", "diameter_m", "age", "degradation"):
         np.testing.assert_array_equal(getattr(back, col), getattr(t, col))
     assert back.profile == t.profile
@@ -111,14 +111,16 @@ def test_crater_csv_round_trip(tmp_path):
 def test_bad_crater_files_are_input_errors(tmp_path, body, match):
     p = tmp_path / "bad.csv"
     p.write_text(body)
-    with pytest.raises(InputError, match=match):
-        read_craters(p)
+    layers = {"base": {"generator": "fbm"}, "cr": {"generator": "craters", "crater_file": str(p)}}
+    with pytest.raises(InputError, match=match) as err:
+        recipe_from_dict({"grid": {"rows": 9, "cols": 9, "cell_size_m": 0.5}, "layers": layers})
+    assert "bad.csv" in str(err.value)
 
 
 def test_same_crater_file_goes_on_different_base_terrains(tmp_path):
     t = CraterTable(x_m=[2.0], y_m=[2.0], diameter_m=[1.5], age=[0.0], degradation=[np.nan], profile=("martin2014",))
     path = write_craters(t, tmp_path / "one.csv")
-    cfg = CraterConfig(crater_file=str(path))
+    cfg = CraterConfig(craters=CraterTable(**read_craters(path)))
     flat = Heightmap.flat(201, 201, 0.02)
     y, x = np.mgrid[0:201, 0:201] * 0.02
     tilted = Heightmap(0.1 * x, 0.02)
@@ -133,7 +135,7 @@ def test_crater_config_from_toml_table_and_errors():
     cfg = from_dict(CraterConfig, {"population": {"profile": "li_fresh", "k": 2, "c": 0.1, "d_max_m": 5}})
     assert cfg.population == PopulationConfig(profile="li_fresh", k=2.0, c=0.1, d_max_m=5.0)
     assert cfg.stamp == StampOptions()
-    with pytest.raises(InputError, match=r"unknown key\(s\) craters_per_m2; known keys: crater_file, degradation, population, stamp"):
+    with pytest.raises(InputError, match=r"unknown key\(s\) craters_per_m2; known keys: craters, degradation, population, stamp"):
         from_dict(CraterConfig, {"craters_per_m2": 1})
     with pytest.raises(InputError, match=r"unknown key\(s\) population\.kk; known keys of population: .*d_max_m"):
         from_dict(CraterConfig, {"population": {"kk": 1}})

@@ -1,5 +1,5 @@
 """DEM enhancement: RMD expansion (Martin et al. 2014, Eq. 13-16), spectral restoration (Yoshikawa & Nishiguchi 2001, Sec. 3.4), gap filling
-(Martin et al. 2014, Sec. IV.B), DEM import."""
+(Martin et al. 2014, Sec. IV.B), DEM import and the ``dem`` layer."""
 
 import json
 
@@ -12,16 +12,10 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.io.dem import read_dem
 from offroadbench.io.png16 import write_png16
 from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
-from offroadbench.terrain.enhance import (
-    DEMConfig,
-    RMDExpandConfig,
-    SpectralRestoreConfig,
-    fill_gaps,
-    generate_dem,
-    known_neighbour_count,
-    rmd_expand,
-    spectral_restore,
-)
+from offroadbench.terrain.dem import DEMConfig, generate_dem
+from offroadbench.terrain.fractal.rmd import RMDExpandConfig, rmd_expand
+from offroadbench.terrain.fractal.spectral import SpectralRestoreConfig, spectral_restore
+from offroadbench.terrain.gaps import fill_gaps, known_neighbour_count
 from offroadbench.terrain.fractal.fbm import FBMConfig, generate_fbm
 
 
@@ -126,13 +120,18 @@ def test_dem_import_npy_with_sidecar_fills_gaps_and_resamples(tmp_path):
     (tmp_path / "dem.json").write_text(json.dumps({"cell_size_m": 1.0}))
     raw = read_dem(p)
     assert raw.cell_size_m == 1.0 and raw.gap_count > 0
-    hm = generate_dem(DEMConfig(path=str(p)), GridConfig(rows=65, cols=65, cell_size_m=0.5), np.random.default_rng(0))
+    hm = generate_dem(DEMConfig(dem=raw), GridConfig(rows=65, cols=65, cell_size_m=0.5), np.random.default_rng(0))
     known = ~np.isnan(with_holes(base.z))
     np.testing.assert_allclose(hm.z[::2, ::2][known], base.z[known], atol=1e-12)
-    same = generate_dem(DEMConfig(path=str(p)), GridConfig(rows=33, cols=20, cell_size_m=1.0), np.random.default_rng(0))
+    same = generate_dem(DEMConfig(dem=raw), GridConfig(rows=33, cols=20, cell_size_m=1.0), np.random.default_rng(0))
     np.testing.assert_array_equal(same.z[known[:, :20]], base.z[:, :20][known[:, :20]])
     with pytest.raises(InputError, match="beyond the DEM"):
-        generate_dem(DEMConfig(path=str(p)), GridConfig(rows=40, cols=40, cell_size_m=1.0), np.random.default_rng(0))
+        generate_dem(DEMConfig(dem=raw), GridConfig(rows=40, cols=40, cell_size_m=1.0), np.random.default_rng(0))
+    # the recipe names the file; loading the recipe reads it
+    recipe = recipe_from_dict(
+        {"grid": {"rows": 65, "cols": 65, "cell_size_m": 0.5}, "layers": {"base": {"generator": "dem", "path": str(p)}}}
+    )
+    np.testing.assert_array_equal(generate_terrain(recipe, 0).z[::2, ::2][known], base.z[known])
 
 
 def test_dem_import_png16_round_trip(tmp_path):
@@ -172,3 +171,47 @@ def test_recipe_layers_an_imported_dem_with_restoration_and_craters():
     a = generate_terrain(recipe, 3)
     b = generate_terrain(recipe, 3)
     assert a.shape == (129, 129) and np.array_equal(a.z, b.z)
+
+
+def test_generation_reads_no_file_the_recipe_loader_reads_them(tmp_path, monkeypatch):
+    """Generators are pure: the DEM and the crater CSV are read when the recipe is built, never after."""
+    import builtins
+    import io as stdlib_io
+    import pathlib
+
+    from offroadbench.io.craters_csv import write_craters
+    from offroadbench.terrain.craters import CraterTable
+
+    craters = CraterTable(x_m=[5.0], y_m=[6.0], diameter_m=[3.0], age=[0.5], degradation=[np.nan], profile=("martin2014",))
+    path = write_craters(craters, tmp_path / "c.csv")
+    recipe = recipe_from_dict(
+        {
+            "grid": {"rows": 65, "cols": 65, "cell_size_m": 0.25},
+            "layers": {"base": {"generator": "dem"}, "cr": {"generator": "craters", "crater_file": str(path)}},
+        }
+    )
+    assert recipe.layers[1].config.craters.diameter_m.tolist() == [3.0]
+
+    def no_files(*args, **kwargs):
+        raise AssertionError("a generator opened a file")
+
+    monkeypatch.setattr(builtins, "open", no_files)
+    monkeypatch.setattr(stdlib_io, "open", no_files)
+    monkeypatch.setattr(pathlib.Path, "open", no_files)
+    monkeypatch.setattr(np, "load", no_files)
+    hm = generate_terrain(recipe, 1)
+    assert hm.shape == (65, 65) and np.isfinite(hm.z).all()
+
+
+@pytest.mark.parametrize(
+    "layer, match",
+    [
+        ({"generator": "dem", "path": 3}, r"layers\.base\.path must be a path string"),
+        ({"generator": "dem", "source_cell_size_m": -1.0}, r"layers\.base\.source_cell_size_m = -1\.0 is out of range"),
+        ({"generator": "dem", "path": "/no/such/dem.npy"}, "does not exist"),
+        ({"generator": "dem", "dem": 1}, r"layers\.base\.dem cannot be written in a recipe"),
+    ],
+)
+def test_bad_dem_layers_name_the_key(layer, match):
+    with pytest.raises(InputError, match=match):
+        recipe_from_dict({"grid": {"rows": 9, "cols": 9, "cell_size_m": 0.5}, "layers": {"base": layer}})

@@ -8,7 +8,7 @@ import pytest
 from offroadbench.terrain.grid import GridConfig
 from offroadbench.analysis.surface import fractal_dimension
 from offroadbench.errors import InputError
-from offroadbench.terrain.fractal.diamond_square import (
+from offroadbench.terrain.fractal.rmd import (
     DiamondSquareConfig,
     diamond_square,
     generate_diamond_square,

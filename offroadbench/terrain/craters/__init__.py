@@ -23,10 +23,9 @@ from offroadbench.terrain.craters.profiles import (
     profile_height,
 )
 from offroadbench.terrain.craters.stamp import StampOptions, stamp_craters, stamp_one
-from offroadbench.terrain.craters.table import COLUMNS, CraterTable
+from offroadbench.terrain.craters.table import CraterTable
 
 __all__ = [
-    "COLUMNS",
     "PROFILES",
     "CraterConfig",
     "CraterProfile",

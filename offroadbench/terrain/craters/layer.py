@@ -1,4 +1,9 @@
-"""The ``craters`` terrain modifier: sample a population (or read a crater file) and stamp it."""
+"""The ``craters`` terrain modifier: sample a population (or take a given crater list) and stamp it.
+
+The modifier never reads a file: a recipe names a crater CSV with ``crater_file`` and
+:mod:`offroadbench.terrain.recipe` reads it (through :mod:`offroadbench.io.craters_csv`) when the
+recipe is loaded, handing the :class:`CraterTable` to the layer as ``craters``.
+"""
 
 from __future__ import annotations
 
@@ -22,39 +27,38 @@ class CraterConfig:
     """A crater layer: a power-law population (Martin et al. 2014, Eq. 11-12, Yoshikawa & Nishiguchi 2001, Eq. 9, Li et al. 2022, Eq. 17-21) or a
     crater file (Parkes & Martin 1999, Sec. 3), stamped with a profile (Martin et al. 2014, Eq. 1-10, Yoshikawa & Nishiguchi 2001, Eq. 10-11, Li et al. 2022, Eq. 3-16).
 
-    In a recipe: ``[layers.NAME.population]`` and ``[layers.NAME.stamp]`` tables; keys they leave
-    out keep their defaults.
+    In a recipe: ``[layers.NAME.population]`` and ``[layers.NAME.stamp]`` tables (keys they leave
+    out keep their defaults), and ``crater_file = "PATH"`` for craters from a file (read into
+    ``craters`` when the recipe is loaded; a relative path is relative to the working directory).
     """
 
     population: PopulationConfig = field(default_factory=PopulationConfig)
-    """The sizes, places, ages and profile of the sampled craters. With a crater file only its
-    Eq. (11) parameters are used, for craters of the file that have no degradation."""
+    """The sizes, places, ages and profile of the sampled craters. With given ``craters`` only its
+    Eq. (11) parameters are used, for craters that have no degradation."""
     stamp: StampOptions = field(default_factory=StampOptions)
     """How each crater is stamped (rim irregularity, roughness overlay, smallest crater)."""
-    crater_file: str | None = None
-    """A crater CSV (x_m, y_m, diameter_m, age, degradation, profile) used instead of sampling;
-    a relative path is relative to the working directory."""
+    craters: CraterTable | None = None
+    """Craters to stamp instead of sampling (e.g. from a crater file, Parkes & Martin 1999, Sec. 3);
+    None samples the population."""
     degradation: float | None = None
     """If set, every crater gets this degradation (0 fresh .. 1) instead of one derived from age."""
 
     def __post_init__(self) -> None:
         if self.degradation is not None:
             check_range(self, "degradation", self.degradation, lo=0, hi=1)
-        if self.crater_file is not None and not isinstance(self.crater_file, str):
-            raise InputError(f"CraterConfig.crater_file must be a path string, got {self.crater_file!r}")
+        if self.craters is not None and not isinstance(self.craters, CraterTable):
+            raise InputError(f"CraterConfig.craters must be a CraterTable, got {type(self.craters).__name__}")
 
 
 def crater_table_for(cfg: CraterConfig, width_m: float, height_m: float, rng: np.random.Generator) -> CraterTable:
-    """The craters the layer places, oldest first: read from ``crater_file`` or sampled on a
-    width x height map.
+    """The craters the layer places, oldest first: the given ``craters`` or a population sampled
+    on a width x height map.
 
-    Craters from a file with an empty degradation get it from their age (Martin et al. 2014, Eq. 11).
+    Given craters with an empty degradation get it from their age (Martin et al. 2014, Eq. 11).
     """
     pop = cfg.population
-    if cfg.crater_file is not None:
-        from offroadbench.io.craters_csv import read_craters
-
-        table = read_craters(cfg.crater_file).oldest_first()
+    if cfg.craters is not None:
+        table = cfg.craters.oldest_first()
         missing = np.isnan(table.degradation)
         if missing.any():
             derived = degradation_from_age(pop, np.nan_to_num(table.age), table.diameter_m)
@@ -73,7 +77,7 @@ def crater_table_for(cfg: CraterConfig, width_m: float, height_m: float, rng: np
     summary="Crater population stamped on the terrain (Martin et al. 2014; Yoshikawa; Li et al. 2022)",
 )
 def apply_craters(cfg: CraterConfig, hm: Heightmap, rng: np.random.Generator) -> Heightmap:
-    """Sample (or read) the craters and stamp them onto ``hm``, oldest first."""
+    """Sample (or take the given) craters and stamp them onto ``hm``, oldest first."""
     table = crater_table_for(cfg, hm.width_m, hm.height_m, rng)
     return stamp_craters(hm, table, rng, cfg.stamp)
 

@@ -14,10 +14,7 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.terrain.craters.profiles import PROFILES
 
-__all__ = ["CraterTable", "COLUMNS"]
-
-#: Column order of the crater CSV.
-COLUMNS = ("x_m", "y_m", "diameter_m", "age", "degradation", "profile")
+__all__ = ["CraterTable"]
 
 
 def _column(values, name: str, n: int | None) -> np.ndarray:

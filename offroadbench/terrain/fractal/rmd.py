@@ -1,4 +1,4 @@
-"""Diamond-square random midpoint displacement (RMD), Martin et al. 2014, Sec. IV.A.
+"""Random midpoint displacement (RMD), Martin et al. 2014, Sec. IV.A: diamond-square surfaces and DEM expansion.
 
 A square grid of side ``W = 2^(M+1)`` (+1 samples here, Martin et al. 2014, Eq. 13) is refined level by level:
 the *square* phase sets each cell centre to the mean of its four corners, the *diamond* phase
@@ -9,7 +9,11 @@ phases) it has shrunk by ``2^-(3-F) = 2^-H`` as fBm requires (Peitgen & Saupe). 
 is Martin et al. 2014, Eq. (15): ``S = S_f H_s D_r W sqrt(1 - 2^(2(3-F) - 2))`` with H_s the height-range factor
 and D_r the horizontal resolution. Border midpoints use their two parents along the border.
 
-The phases are also used by :mod:`offroadbench.terrain.enhance` for the fractal expansion of a DEM.
+Fractal expansion of a DEM (``rmd_expand``, Martin et al. 2014, Sec. IV.A, Eq. 13-16, Fig. 5) uses
+the same two phases: each level doubles the resolution. The old samples are copied to the even
+pixels of a (2R-1) x (2C-1) grid and the new ones are interpolated in a square phase and a diamond
+phase and displaced by Gaussians whose scale shrinks by S_f (Eq. 14) per phase. The original
+samples are kept exactly.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from offroadbench.config import check_range
+from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.terrain.grid import GridConfig
@@ -33,7 +37,13 @@ __all__ = [
     "diamond_phase",
     "diamond_square",
     "generate_diamond_square",
+    "RMDExpandConfig",
+    "estimate_displacement_scale",
+    "rmd_expand",
 ]
+
+#: Largest grid (pixels) an expansion may produce.
+MAX_PIXELS = 1 << 26
 
 
 def scale_factor(dimension: float) -> float:
@@ -142,3 +152,63 @@ def generate_diamond_square(cfg: DiamondSquareConfig, grid: GridConfig, rng: np.
     z = diamond_square(size, cfg.D, sigma0, rng)[: grid.rows, : grid.cols]
     hm = Heightmap(z=z, cell_size_m=grid.cell_size_m)
     return hm.rescaled(cfg.relief_m) if cfg.relief_m is not None else hm
+
+
+@dataclass(frozen=True, kw_only=True)
+class RMDExpandConfig:
+    """Fractal expansion of a DEM by 2^levels with RMD (Martin et al. 2014, Sec. IV.A, Eq. 13-16)."""
+
+    levels: int = 1
+    """Number of doublings k: the grid becomes ((R-1) 2^k + 1) x ((C-1) 2^k + 1), cell / 2^k."""
+    D: float = 2.2
+    """Fractal dimension F of the new detail (Martin et al. 2014, Eq. 14)."""
+    displacement_scale_m: float | None = None
+    """S_e of Martin et al. 2014, Eq. (16), the scale of the first new square phase, metres. None: estimated from
+    the DEM (see :func:`estimate_displacement_scale`), since Eq. (15)'s height factor is unknown
+    for real data."""
+
+    def __post_init__(self) -> None:
+        check_int(self, "levels", self.levels, lo=1, hi=12)
+        check_range(self, "D", self.D, lo=2, hi=3, lo_open=True, hi_open=True)
+        if self.displacement_scale_m is not None:
+            check_range(self, "displacement_scale_m", self.displacement_scale_m, lo=0)
+
+
+def estimate_displacement_scale(z: np.ndarray, dimension: float) -> float:
+    """S_e for the first new square phase, from the DEM's finest detail.
+
+    The residual of each pixel from the mean of its 4 diagonal neighbours is what the last square
+    phase would have added had the DEM been made by RMD; one diamond phase and one square phase
+    later (two factors S_f, Martin et al. 2014, Eq. 14) comes the first new phase.
+    """
+    if min(z.shape) < 3:
+        return 0.0
+    resid = z[1:-1, 1:-1] - 0.25 * (z[:-2, :-2] + z[:-2, 2:] + z[2:, :-2] + z[2:, 2:])
+    return float(resid.std()) * scale_factor(dimension) ** 2
+
+
+@register(
+    "rmd_expand",
+    RMDExpandConfig,
+    kind="modifier",
+    summary="RMD fractal expansion by 2^k keeping the original samples (Martin et al. 2014, Eq. 13-16)",
+)
+def rmd_expand(cfg: RMDExpandConfig, hm: Heightmap, rng: np.random.Generator) -> Heightmap:
+    """Double the resolution ``levels`` times; ``result.z[::2^k, ::2^k] == hm.z`` exactly."""
+    rows = (hm.rows - 1) * 2**cfg.levels + 1
+    cols = (hm.cols - 1) * 2**cfg.levels + 1
+    if rows * cols > MAX_PIXELS:
+        raise InputError(
+            f"RMDExpandConfig.levels = {cfg.levels} would make a {rows} x {cols} grid (> {MAX_PIXELS} pixels); use fewer levels"
+        )
+    sf = scale_factor(cfg.D)
+    sigma = cfg.displacement_scale_m if cfg.displacement_scale_m is not None else estimate_displacement_scale(hm.z, cfg.D)
+    z = np.array(hm.z, dtype=np.float64)
+    for _ in range(cfg.levels):
+        new = np.zeros((2 * z.shape[0] - 1, 2 * z.shape[1] - 1))
+        new[::2, ::2] = z
+        square_phase(new, 2, sigma, rng)
+        diamond_phase(new, 2, sigma * sf, rng)
+        sigma *= sf * sf
+        z = new
+    return Heightmap(z=z, cell_size_m=hm.cell_size_m / 2**cfg.levels)
