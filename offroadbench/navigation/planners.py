@@ -38,7 +38,8 @@ Eq. 3-4), so the vehicle's sides stay clear of it. Every other cell costs, per m
 averaged over a square as long as the vehicle (so a path does not weave between rough patches
 smaller than the vehicle). The cells round the start and goal that are forbidden only by the
 clearance (not by the border or a high pixel) are opened, so a mission that starts next to a
-rough patch can leave it.
+rough patch can leave it. When no path keeps clear of the high cells, the search is repeated on a
+relaxed grid where they cost ``high_cost`` more per metre instead (the border stays forbidden).
 """
 
 from __future__ import annotations
@@ -274,12 +275,17 @@ class CostConfig:
     """Extra cost per metre of an all-semi cell (times the fraction of semi pixels in the cell)."""
     clearance_cost: float = 4.0
     """Extra cost per metre of a cell within half the vehicle's diagonal of a high pixel."""
+    high_cost: float = 20.0
+    """When no path keeps clear of the high cells, the search is repeated with those cells allowed at
+    this extra cost per metre (the border stays forbidden), so the path crosses as little of them as
+    it can. Rough terrains (D_high 2.7 and above) often have no clear path at all."""
     fallback_to_straight: bool = True
-    """With no path round the high cells: True returns the straight line (logged), False raises."""
+    """With no path even so (the border cuts start from goal): True returns the straight line
+    (logged), False raises."""
 
     def __post_init__(self) -> None:
         check_range(self, "grid_m", self.grid_m, lo=0, lo_open=True)
-        for name in ("gradient_weight", "semi_cost", "clearance_cost"):
+        for name in ("gradient_weight", "semi_cost", "clearance_cost", "high_cost"):
             check_range(self, name, getattr(self, name), lo=0)
 
 
@@ -322,8 +328,9 @@ def _blocks(a: np.ndarray, f: int, reduce) -> np.ndarray:
     return reduce(p.reshape(p.shape[0] // f, f, p.shape[1] // f, f), axis=(1, 3))
 
 
-def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig()) -> CostGrid:
-    """The planning cost grid of ``problem`` (see the module docstring)."""
+def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig(), relaxed: bool = False) -> CostGrid:
+    """The planning cost grid of ``problem`` (see the module docstring). ``relaxed``: cells near or on
+    high pixels cost ``high_cost`` more per metre instead of being forbidden."""
     from scipy.ndimage import binary_dilation, uniform_filter
 
     hm, classes, veh = problem.hm, problem.classes, problem.vehicle
@@ -342,7 +349,8 @@ def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig()) -> CostG
     if size > 1:
         cost = uniform_filter(cost, size=size, mode="nearest")
     outside = ~border_mask(hm.shape, problem.border_m, cell)
-    hard = _blocks(high | outside, f, np.any)
+    outside_cells = _blocks(outside, f, np.any)
+    hard = _blocks(high, f, np.any) | outside_cells
     soft = _blocks(blocked, f, np.any) & ~hard
     # open the clearance-only cells round the start and the goal, so the vehicle can leave them
     grid = CostGrid(cost, f, f * cell)
@@ -350,7 +358,12 @@ def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig()) -> CostG
     rr, cc = np.mgrid[0 : cost.shape[0], 0 : cost.shape[1]]
     for xy in (problem.start_xy, problem.goal_xy):
         soft &= np.hypot(cc * grid.step_m - xy[0], rr * grid.step_m - xy[1]) > reach
-    cost[hard | soft] = np.inf
+    if relaxed:
+        cost[hard & ~outside_cells] += cfg.high_cost
+        cost[soft] += cfg.high_cost
+        cost[outside_cells] = np.inf
+    else:
+        cost[hard | soft] = np.inf
     for xy in (problem.start_xy, problem.goal_xy):  # the mission's own ends are always usable
         rc = grid.cell_of(xy)
         if not math.isfinite(cost[rc]):
@@ -360,7 +373,7 @@ def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig()) -> CostG
 
 def _no_path(name: str, problem: PlanningProblem, cfg: CostConfig) -> np.ndarray:
     (sx, sy), (gx, gy) = problem.start_xy, problem.goal_xy
-    msg = f"{name}: no path from ({sx:.2f}, {sy:.2f}) to ({gx:.2f}, {gy:.2f}) m avoids the high-roughness cells"
+    msg = f"{name}: no path from ({sx:.2f}, {sy:.2f}) to ({gx:.2f}, {gy:.2f}) m inside the mission border"
     if not cfg.fallback_to_straight:
         raise InputError(msg)
     log.warning("%s; following the straight line", msg)
@@ -458,8 +471,12 @@ def plan_astar(problem: PlanningProblem, cfg: AStarConfig = AStarConfig()) -> np
     sideways or turn on the spot), slopes as such (only the local Moore gradient), anything the
     class map and the cell size blur out.
     """
-    grid = cost_grid(problem, cfg)
-    cells = _astar(grid.cost, grid.cell_of(problem.start_xy), grid.cell_of(problem.goal_xy))
+    for relaxed in (False, True):
+        grid = cost_grid(problem, cfg, relaxed)
+        cells = _astar(grid.cost, grid.cell_of(problem.start_xy), grid.cell_of(problem.goal_xy))
+        if cells is not None:
+            break
+        log.debug("astar: no path clear of high cells; crossing them at high_cost")
     if cells is None:
         return _no_path("astar", problem, cfg)
     centres = np.array(cells, dtype=float)[:, ::-1] * grid.step_m + 0.5 * (grid.f - 1) * problem.hm.cell_size_m
@@ -535,16 +552,25 @@ def plan_lattice(problem: PlanningProblem, cfg: LatticeConfig = LatticeConfig())
     Optimises: the integral of the cost grid along a path the vehicle can follow without turning
     tighter than ``turn_radius_m``, plus ``turn_weight`` per radian turned. Cannot see: slopes as
     such (only the local Moore gradient and the classes), wheel slip and the tracker's own
-    errors; its heuristic is a little optimistic-or-pessimistic (8-connected), so the path is near
-    but not provably optimal.
+    errors; its heuristic (8-connected cell steps, turning ignored) is not exact, so the path is
+    near-optimal, not provably optimal.
     """
-    grid = cost_grid(problem, cfg)
+    for relaxed in (False, True):
+        found = _lattice_search(problem, cfg, relaxed)
+        if found is not None:
+            return found
+    return _no_path("lattice", problem, cfg)
+
+
+def _lattice_search(problem: PlanningProblem, cfg: LatticeConfig, relaxed: bool) -> np.ndarray | None:
+    """One hybrid A* search on the strict or the relaxed cost grid; None if it finds no path."""
+    grid = cost_grid(problem, cfg, relaxed)
     sx, sy = problem.start_xy
     gx, gy = problem.goal_xy
     goal_cell = grid.cell_of(problem.goal_xy)
     h2d = _cost_to_go(grid, goal_cell)
     if not math.isfinite(h2d[grid.cell_of(problem.start_xy)]):
-        return _no_path("lattice", problem, cfg)
+        return None
     nb = cfg.headings
     kappas = (0.0, 1.0 / cfg.turn_radius_m, -1.0 / cfg.turn_radius_m)
     n_sub = max(2, int(math.ceil(cfg.step_m / (0.25 * grid.step_m))))
@@ -597,7 +623,7 @@ def plan_lattice(problem: PlanningProblem, cfg: LatticeConfig = LatticeConfig())
             nodes.append((nx, ny, nth, i, pts))
             heapq.heappush(heap, (g2 + h(nx, ny), g2, len(nodes) - 1))
     if found is None:
-        return _no_path("lattice", problem, cfg)
+        return None
     pieces = []
     i = found
     while nodes[i][3] != -1:

@@ -12,7 +12,8 @@ from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, draw_border, draw_classes, new_figure
 from offroadbench.study import stats
 
-__all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "short_label"]
+__all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "fig_success_vs_level",
+           "fig_paths", "short_label"]
 
 
 def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
@@ -139,4 +140,53 @@ def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel
             sub.set_xlabel("t (s)")
     if title:
         fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def fig_success_vs_level(by: pd.DataFrame, group: str, level: str):
+    """Success rate against the difficulty axis, one line per planner, with 95 % Wilson intervals."""
+    fig, ax = new_figure(figsize=(6.4, 4.2))
+    for g, t in by.groupby(group, sort=True):
+        x = t[level].to_numpy(dtype=float)
+        y = 100 * t["success_rate"].to_numpy()
+        err = np.vstack([y - 100 * t["ci95_low"].to_numpy(), 100 * t["ci95_high"].to_numpy() - y])
+        ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=str(g))
+    ax.axhline(50, color="grey", lw=0.8, ls=":")
+    ax.set_xlabel(level)
+    ax.set_ylabel("success (%)")
+    ax.set_ylim(-3, 103)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Success rate per planner (95 % Wilson intervals)", fontsize=10)
+    return fig
+
+
+def fig_paths(hm, closed: np.ndarray, border_m: float, mission, drawn, *, title: str = ""):
+    """Planned (dashed) and driven (solid) paths of several planners on one mission over the closed
+    class map. ``drawn``: (label, planned (N, 2) or None, driven (M, 2) or None, outcome) tuples."""
+    fig, ax = new_figure(figsize=(7.5, 6.8))
+    draw_classes(ax, closed, hm.extent_m)
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
+    colours = ("white", "black", "magenta", "cyan", "lime", "red")
+    pts = [np.array([mission.start_xy_m, mission.goal_xy_m])]
+    for (label, planned, driven, outcome), colour in zip(drawn, colours):
+        if planned is not None:
+            ax.plot(planned[:, 0], planned[:, 1], color=colour, lw=1.2, ls="--")
+            pts.append(planned)
+        if driven is not None:
+            ax.plot(driven[:, 0], driven[:, 1], color=colour, lw=1.8, label=f"{label}: {outcome}")
+            ax.plot(driven[-1, 0], driven[-1, 1], "X", color=colour, mec="black", ms=8)
+            pts.append(driven)
+        else:
+            ax.plot([], [], color=colour, lw=1.8, label=f"{label}: {outcome} (no telemetry)")
+    ax.plot(*mission.start_xy_m, "o", color="limegreen", mec="black", ms=8)
+    ax.plot(*mission.goal_xy_m, "o", color="red", mec="black", ms=8)
+    allp = np.vstack(pts)
+    ax.set_xlim(max(allp[:, 0].min() - 3, 0), min(allp[:, 0].max() + 3, hm.width_m))
+    ax.set_ylim(max(allp[:, 1].min() - 3, 0), min(allp[:, 1].max() + 3, hm.height_m))
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(fontsize=8, loc="best", framealpha=0.9)
+    if title:
+        ax.set_title(title, fontsize=9)
     return fig

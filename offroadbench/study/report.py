@@ -10,7 +10,14 @@ writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023
 * Fig. 4: one terrain's class map, closed class map, and its missions;
 * tables of medians, IQR, counts and 1.5 IQR outliers, median changes between groups, failure
   reasons, run sessions (wall time, machine, version);
-* if the study has a ``[reference]`` table: the published numbers beside ours.
+* if the study has a ``[reference]`` table: the published numbers beside ours;
+* if the grid has a ``planner.name`` axis (a planner stress test, see offroadbench.study.stress):
+  success against the numeric axis per planner with Wilson intervals, breaking points with
+  bootstrap intervals, exact McNemar tests on the same missions, outcomes per planner with replay
+  commands for failures, medians of the traversal metrics of successes, and a figure of planned
+  and driven paths on one mission over the class map.
+
+Categorical grid axes (planner, vehicle) get no "change between consecutive groups" table.
 
 ``[reference]`` keys: ``source`` (text), ``trials`` and ``successes`` (lists, one per cell),
 ``median_change.<quantity> = [[change, change_pct], ...]`` (one pair per step between
@@ -275,7 +282,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(tabs["metrics"]),
         "",
     ]
-    if len(labels) > 1 and len(study["grid"]) == 1:
+    if len(labels) > 1 and len(study["grid"]) == 1 and _numeric(study["grid"][0]["values"]):
+        # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
         tables["median_changes.csv"] = changes
@@ -289,7 +297,146 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "Classes: low (blue), semi (orange), high (yellow). Starts green, goals red.",
         "",
     ]
+    stress_lines, stress_figures, stress_tables = planner_sections(meta, trials, run_dir)
+    lines += stress_lines
+    figures.update(stress_figures)
+    tables.update(stress_tables)
     ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary)
     lines += ref_lines
     tables.update(ref_tables)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
+
+
+# ---------------------------------------------------------------------------- planner stress test
+def _numeric(values) -> bool:
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+
+
+def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None]:
+    """(planner column, the one numeric grid column or None) of a study with a planner axis."""
+    columns = meta["columns"]
+    axes = meta["study"]["grid"]
+    planner = columns.get("planner.name")
+    numeric = [columns[a["key"]] for a in axes if _numeric(a["values"])]
+    return planner, (numeric[0] if len(numeric) == 1 else None)
+
+
+def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason: int = 2) -> pd.DataFrame:
+    rows = []
+    failed = trials[~trials["success"].astype(bool)]
+    for (g, reason), t in failed.groupby([group, "failure_reason"], sort=True):
+        for r in t.head(per_reason).itertuples(index=False):
+            rows.append({group: g, "failure": reason, "trials": len(t),
+                         "replay": f"`offroadbench study replay {run_dir} --cell {r.cell} --terrain {r.terrain} "
+                                   f"--mission {r.mission} --plot`"})
+    return pd.DataFrame(rows)
+
+
+def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None):
+    """Planned and driven paths of every planner on one mission (the one whose outcomes differ most
+    between planners, at the middle level), over the closed class map."""
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.io.telemetry import load_telemetry
+    from offroadbench.plots.study import fig_paths
+    from offroadbench.study.runner import telemetry_paths
+    from offroadbench.study.spec import CellPlan
+    from offroadbench.study.tasks import sample_mission
+    from offroadbench.terrain.recipe import generate_terrain
+
+    t = trials
+    if level is not None:
+        levels = sorted(t[level].unique())
+        t = t[t[level] == levels[len(levels) // 2]]
+    spread = t.groupby(["terrain", "mission"])["success"].agg(lambda s: s.astype(float).std(ddof=0))
+    terrain, mission = spread.sort_values(ascending=False, kind="stable").index[0]
+    rows = t[(t["terrain"] == terrain) & (t["mission"] == mission)]
+    first = rows.iloc[0]
+    info = meta["cells"][int(first["cell"])]
+    plan = CellPlan(index=int(first["cell"]), values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
+                    settings=info["settings"])
+    hm = generate_terrain(plan.recipe(), int(first["terrain_seed"]))
+    closed = classify_terrain(hm, plan.section("roughness")).closed
+    m = sample_mission(hm, closed, plan.section("missions"), int(mission), int(first["mission_seed"]))
+    drawn = []
+    for r in rows.itertuples(index=False):
+        tel_p, path_p = telemetry_paths(run_dir, r.cell, r.terrain, r.mission)
+        path = driven = None
+        if path_p.is_file():
+            xy = load_telemetry(path_p)
+            path = np.column_stack([xy["x_m"], xy["y_m"]])
+        if tel_p.is_file():
+            tel = load_telemetry(tel_p)
+            driven = np.column_stack([tel["x_m"], tel["y_m"]])
+        drawn.append((str(getattr(r, group)), path, driven, r.failure_reason or "success"))
+    where = f"{level} = {first[level]}, " if level else ""
+    title = f"Terrain {terrain}, mission {mission} ({where}seed {first['terrain_seed']}): planned (dashed) and driven paths"
+    return fig_paths(hm, closed, plan.section("missions").border_m, m, drawn, title=title)
+
+
+def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path
+                     ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
+    """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
+    from offroadbench.plots.study import fig_success_vs_level
+    from offroadbench.study import stress
+
+    group, level = _stress_axes(meta)
+    if group is None:
+        return [], {}, {}
+    planners = sorted(trials[group].unique())
+    baseline = "straight" if "straight" in planners else planners[0]
+    lines = ["## Planner stress test", "",
+             f"Planners: {', '.join(f'`{p}`' for p in planners)}; every planner drove the same missions "
+             "(same terrain and mission seeds). Intervals are 95 %: Wilson score intervals for success rates, "
+             "percentile bootstrap over terrains (2000 resamples) for breaking points; paired comparisons are "
+             f"exact McNemar tests against `{baseline}` on the missions where exactly one of the two succeeded.",
+             ""]
+    figures: dict[str, Any] = {}
+    tables: dict[str, pd.DataFrame] = {}
+    if level is not None:
+        by = stress.success_by_level(trials, group, level)
+        tables["planner_success.csv"] = by
+        figures["planner_success.png"] = fig_success_vs_level(by, group, level)
+        shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low": 100 * by["ci95_low"],
+                             "95 % CI high": 100 * by["ci95_high"]})[[group, level, "successes", "trials", "success (%)",
+                                                                     "95 % CI low", "95 % CI high"]]
+        bp = stress.breaking_points(trials, group, level)
+        tables["breaking_points.csv"] = bp
+        lo_lv, hi_lv = min(trials[level]), max(trials[level])
+
+        def fmt(v: float) -> str:
+            return f"> {hi_lv:g}" if v == math.inf else (f"< {lo_lv:g}" if v == -math.inf else f"{v:.3f}")
+
+        bp_shown = pd.DataFrame({group: bp[group], f"{level} at 50 % success": [fmt(v) for v in bp["breaking_point"]],
+                                 "95 % interval": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])]})
+        lines += ["### Success against " + level, "", "![success](planner_success.png)", "",
+                  markdown_table(shown), "",
+                  "### Breaking points", "",
+                  f"The {level} at which the success rate first falls below 50 % (linear interpolation between "
+                  f"the studied values; `> {hi_lv:g}`: not within the studied range).", "",
+                  markdown_table(bp_shown), ""]
+    paired = stress.paired_table(trials, group, level, baseline)
+    if not paired.empty:
+        tables["paired_tests.csv"] = paired
+        lines += ["### Paired comparisons on the same missions", "", markdown_table(paired), ""]
+    reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
+    reasons.columns.name = None
+    tables["planner_failures.csv"] = reasons.reset_index()
+    lines += ["### Outcomes per planner", "", markdown_table(reasons.reset_index()), ""]
+    examples = _replay_examples(trials, group, str(run_dir))
+    if not examples.empty:
+        tables["replay_examples.csv"] = examples
+        lines += ["### Failures to replay", "",
+                  "Each command re-runs one trial bit for bit from the run directory and draws it "
+                  "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
+    ok = trials[trials["success"].astype(bool)]
+    keys = [group] + ([level] if level else [])
+    rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
+        f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
+    tables["planner_metrics.csv"] = rms
+    lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
+    try:
+        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level)
+        lines += ["### Planned and driven paths", "", "![paths](planner_paths.png)", ""]
+    except (OSError, KeyError, IndexError) as exc:  # a partial run without telemetry: say so, do not fail
+        lines += [f"(No path figure: {exc}.)", ""]
+    return lines, figures, tables

@@ -152,8 +152,8 @@ def test_paths_stay_inside_the_mission_border(planner):
     classes = np.full(FLAT.shape, LOW, dtype=np.uint8)
     classes[int(1.5 / CELL):, 118:123] = HIGH  # the wall reaches down to y = 1.5 m; the border is 2 m
     problem = _problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0)
-    with pytest.raises(InputError, match="no path"):
-        planner(problem, type(planner.__defaults__[0])(fallback_to_straight=False))
+    wp = planner(problem)  # the gap is in the border strip: crossing the wall is the only way left
+    assert np.all(problem.inside_border(_dense(wp)))
     classes[: int(6.5 / CELL)] = LOW
     classes[int(6.5 / CELL):, 118:123] = HIGH  # now a gap at y < 6.5 m, inside the border
     wp = planner(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0))
@@ -183,14 +183,16 @@ def test_astar_goes_round_a_semi_patch_but_crosses_a_semi_band():
     assert _length(wp) == pytest.approx(8.0, abs=0.1)
 
 
-def test_astar_without_a_way_round_falls_back_or_raises(caplog):
-    classes = _wall_classes(gap=False)
+@pytest.mark.parametrize("planner", [plan_astar, plan_lattice])
+def test_without_a_way_round_the_planners_cross_as_little_high_ground_as_they_can(planner, caplog):
+    classes = _wall_classes(gap=False)  # 0.25 m thick, from edge to edge
     problem = _problem(classes, (2.0, 2.5), (10.0, 2.5))
     with caplog.at_level(logging.WARNING, logger="offroadbench.navigation.planners"):
-        wp = plan_astar(problem)
-    assert np.array_equal(wp, [[2.0, 2.5], [10.0, 2.5]]) and "no path" in caplog.text
-    with pytest.raises(InputError, match="no path"):
-        plan_astar(problem, AStarConfig(fallback_to_straight=False))
+        wp = planner(problem)
+    assert "no path" not in caplog.text  # no fallback to the straight line: a planned crossing
+    d = _dense(wp)
+    on_high = classes[np.rint(d[:, 1] / CELL).astype(int), np.rint(d[:, 0] / CELL).astype(int)] == HIGH
+    assert 0 < on_high.sum() * 0.01 < 0.6  # across the wall, not along it
 
 
 def test_lattice_leaves_along_the_heading_and_never_turns_tighter_than_its_radius():
