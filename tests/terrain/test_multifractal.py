@@ -106,3 +106,11 @@ def test_layers_share_the_wm_settings_and_differ_by_m_d_g():
     low, mid, high = layer_configs(cfg)
     for c, m, d, g in zip((low, mid, high), cfg.M, (2.2, 2.45, 2.6), cfg.G):
         assert c == dataclasses.replace(cfg.wm, M=m, D=d, G=g)
+
+
+def test_nufft_method_reaches_every_layer_and_matches_gemm():
+    cfg = MultifractalConfig(wm=dataclasses.replace(PAPER_WM, method="nufft"), D_high=2.6)
+    assert {c.method for c in layer_configs(cfg)} == {"nufft"}
+    fast = generate_multifractal(cfg, SMALL, np.random.default_rng(3))
+    ref = generate_multifractal(MultifractalConfig(D_high=2.6), SMALL, np.random.default_rng(3))
+    assert np.max(np.abs(fast.z - ref.z)) <= 1e-5 * ref.relief_m

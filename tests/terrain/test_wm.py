@@ -90,6 +90,7 @@ def test_rougher_with_higher_D():
         ("M", 0, "M"),
         ("n_max", 0, "n_max"),
         ("coordinates", "furlongs", "coordinates"),
+        ("method", "fft", r"method = 'fft' is not known; allowed: gemm, nufft"),
     ],
 )
 def test_bad_config(field, value, match):
@@ -150,3 +151,40 @@ def test_origin_offset_matches_literal_and_moves_the_coherent_extreme_off_the_ma
     shifted = np.abs(shifted - shifted.mean())
     assert corner[:10, :10].max() == pytest.approx(corner.max())
     assert shifted[:10, :10].max() < 0.6 * shifted.max()
+
+
+@pytest.mark.parametrize("rows, cols, coordinates, offset", [
+    (23, 31, "pixels", 0.0), (3, 5, "metres", 0.0), (64, 80, "span_L", 0.0), (50, 41, "pixels", 37.5),
+])
+def test_nufft_matches_literal_eq1_within_its_tolerance(rows, cols, coordinates, offset):
+    """The NUFFT asks finufft for 1e-9 relative accuracy: documented tolerance 1e-8 of the range."""
+    cfg = WMConfig(M=7, n_max=24, D=2.5, coordinates=coordinates, amplitude_tol=0.0,
+                   origin_offset_px=offset, method="nufft")
+    grid = GridConfig(rows=rows, cols=cols, cell_size_m=0.05)
+    phases = draw_phases(cfg, grid, np.random.default_rng(4))
+    slow = wm_surface_direct(cfg, grid, phases)
+    assert np.max(np.abs(wm_surface(cfg, grid, phases) - slow)) <= 1e-8 * np.ptp(slow)
+
+
+def test_nufft_agrees_with_gemm_on_a_paper_layer():
+    """The paper's high layer at D = 2.6 keeps terms up to n ~ 85, whose arguments (~1e13 rad)
+    float64 cannot phase: there both methods hold different rounding, ~1e-6 of the range."""
+    cfg = WMConfig(M=64, D=2.6)
+    grid = GridConfig(rows=257, cols=257)
+    phases = draw_phases(cfg, grid, np.random.default_rng(1))
+    gemm = wm_surface(cfg, grid, phases)
+    nufft = wm_surface(dataclasses.replace(cfg, method="nufft"), grid, phases)
+    assert np.max(np.abs(nufft - gemm)) <= 1e-5 * np.ptp(gemm)
+
+
+def test_nufft_bits_do_not_depend_on_the_thread_count(monkeypatch):
+    import offroadbench.terrain.fractal.wm as wm
+
+    cfg = WMConfig(M=16, D=2.45, method="nufft")
+    grid = GridConfig(rows=101, cols=90)
+    phases = draw_phases(cfg, grid, np.random.default_rng(2))
+    out = []
+    for threads in (1, 2, 3):
+        monkeypatch.setattr(wm, "_threads", lambda t=threads: t)
+        out.append(wm_surface(cfg, grid, phases))
+    assert all(np.array_equal(out[0], z) for z in out[1:])
