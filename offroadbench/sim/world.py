@@ -12,6 +12,16 @@ what ran before it. Facts this relies on (measured, shared/DESIGN.md):
   (seconds and hundreds of MB per 1009^2 terrain).
 - Heightfields are never removed and recreated (that leaks ~600 MB per terrain): one World, one
   terrain; closing the World disconnects the client, which frees everything.
+- Building a heightfield from data walks every triangle into a render mesh that the shape keeps
+  (about 2-3 s and 600 MB for 1009^2, even in DIRECT mode). The walk skips triangles outside the
+  shape's height range, so the shape is first created empty with the map's height range
+  (:func:`_empty_heights`: almost no walk), and the heights are then written in place with
+  ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept; a transient
+  of ~0.7 GB remains). Replacing never updates a shape's height range, so the range is set at
+  creation. The shape, and so every result, is bit for bit the one built from the data directly.
+- Reusing one World for another terrain (replacing its heights) was measured and rejected: the
+  results then differ in the last digits from a fresh World (solver and contact state carried
+  over), and it would save only ~0.2 s per terrain once the build above is cheap.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
 """
 
@@ -21,6 +31,7 @@ import logging
 import math
 import time
 
+import numpy as np
 import pybullet as pb
 
 from offroadbench.errors import InputError
@@ -84,19 +95,29 @@ class World:
 
     def _build_terrain(self) -> int:
         hm = self.hm
-        shape = pb.createCollisionShape(
-            pb.GEOM_HEIGHTFIELD,
-            meshScale=[hm.cell_size_m, hm.cell_size_m, 1.0],
-            heightfieldData=hm.z.ravel(),
-            numHeightfieldRows=hm.cols,
-            numHeightfieldColumns=hm.rows,
-            physicsClientId=self._cid,
-        )
+        self._terrain_shape = self._heightfield(_empty_heights(hm))
+        self._heightfield(hm.z.ravel(), replace=self._terrain_shape)
         dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=self._cid)
         centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
-        body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=self._cid)
+        body = pb.createMultiBody(0, self._terrain_shape, dummy_visual, basePosition=centre, physicsClientId=self._cid)
         pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=self._cid)
+        lo, hi = pb.getAABB(body, physicsClientId=self._cid)
+        if abs(lo[2] - hm.z_min_m) > 1e-5 or abs(hi[2] - hm.z_max_m) > 1e-5:  # pragma: no cover - a pybullet change
+            raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
+                               f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
         return body
+
+    def _heightfield(self, data: np.ndarray, replace: int = -1) -> int:
+        hm = self.hm
+        return pb.createCollisionShape(
+            pb.GEOM_HEIGHTFIELD,
+            meshScale=[hm.cell_size_m, hm.cell_size_m, 1.0],
+            heightfieldData=data,
+            numHeightfieldRows=hm.cols,
+            numHeightfieldColumns=hm.rows,
+            replaceHeightfieldIndex=replace,
+            physicsClientId=self._cid,
+        )
 
     def _load_vehicle(self) -> int:
         spec = self.spec
@@ -209,3 +230,16 @@ class World:
         if hit[0] != self.terrain_body:
             return float("nan")
         return float(hit[3][2])
+
+
+def _empty_heights(hm: Heightmap) -> np.ndarray:
+    """Heights for an 'empty' heightfield with the map's height range.
+
+    Bullet scans the data for its min and max with ``a < b ? a : b``, which a NaN restarts, so
+    ``[+inf, ..., +inf, NaN, z_min, z_max]`` gives the range (z_min, z_max); every triangle made only
+    of +inf samples lies above that range and is skipped by the render-mesh walk, so creating the
+    shape costs almost nothing. The heights are then written with ``replaceHeightfieldIndex``.
+    """
+    data = np.full(hm.rows * hm.cols, np.inf)
+    data[-3:] = (np.nan, hm.z_min_m, hm.z_max_m)
+    return data

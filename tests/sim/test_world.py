@@ -119,3 +119,46 @@ def test_sim_config_validation():
         SimConfig(physics_rate_hz=50, telemetry_rate_hz=20)
     with pytest.raises(InputError, match="physics_rate_hz"):
         SimConfig(physics_rate_hz=10)
+
+
+class _DirectBuildWorld(World):
+    """The heightfield built straight from the data (pybullet's plain way, which keeps a render mesh)."""
+
+    def _build_terrain(self) -> int:
+        import pybullet as pb
+
+        hm = self.hm
+        shape = pb.createCollisionShape(
+            pb.GEOM_HEIGHTFIELD, meshScale=[hm.cell_size_m, hm.cell_size_m, 1.0], heightfieldData=hm.z.ravel(),
+            numHeightfieldRows=hm.cols, numHeightfieldColumns=hm.rows, physicsClientId=self._cid,
+        )
+        visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=self._cid)
+        centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
+        body = pb.createMultiBody(0, shape, visual, basePosition=centre, physicsClientId=self._cid)
+        pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=self._cid)
+        return body
+
+
+def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_the_data():
+    """World builds its heightfield empty and writes the heights in place (no render mesh kept);
+    the collision shape, and so a rough-terrain trial, must be exactly the plain build's."""
+    import pybullet as pb
+
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim import run_mission
+
+    rng = np.random.default_rng(11)
+    y, x = np.mgrid[0:121, 0:241] * CELL
+    z = 0.5 + 0.2 * np.sin(x / 1.7) * np.cos(y / 2.3) + rng.uniform(0, 0.03, x.shape)
+    hm = Heightmap(z, CELL)
+    mission = Mission.between(0, (2.0, 3.0), (10.0, 3.5))
+    results = []
+    for cls in (World, _DirectBuildWorld):
+        with cls(hm) as world:
+            aabb = pb.getAABB(world.terrain_body, physicsClientId=world.client_id)
+            result, tel = run_mission(world, mission)
+            results.append((aabb, result, tel["z_m"]))
+    (aabb_a, res_a, z_a), (aabb_b, res_b, z_b) = results
+    assert aabb_a == aabb_b
+    assert res_a == res_b and np.array_equal(z_a, z_b)
+    assert res_a.success and res_a.rms_pitch_rate_deg_s > 2.0  # it really drove over the rough map
