@@ -11,11 +11,17 @@ import os
 import sys
 
 from offroadbench.errors import InputError
+from offroadbench.study.executors import StudyError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "drive", "export")
 
 EXIT_BAD_INPUT = 2
+EXIT_FAILED = 1
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 class _Parser(argparse.ArgumentParser):
@@ -40,19 +46,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     # process-wide choices belong to the application, not the library: the figure backend
-    # (the library draws on Figure objects and never picks one) and pybullet's exit banner
+    # (the library draws on Figure objects and never picks one) and pybullet's banner
     os.environ.setdefault("MPLBACKEND", "Agg")
-    from offroadbench.sim._banner import hide_pybullet_banner
+    from offroadbench.sim._banner import import_pybullet_quietly
 
-    hide_pybullet_banner()
+    import_pybullet_quietly()
     parser = build_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    level = logging.INFO if args.verbose else logging.WARNING
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    # Dask reads its log level when distributed is imported (here and in the workers it starts)
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "info" if args.verbose else "warning")
+    logging.getLogger("distributed").setLevel(level)
     try:
         return int(args.func(args) or 0)
     except InputError as exc:
-        sys.stderr.write(f"offroadbench: error: {exc}\n")
+        sys.stderr.write(f"offroadbench: error: {_one_line(exc)}\n")
         return EXIT_BAD_INPUT
+    except StudyError as exc:
+        sys.stderr.write(f"offroadbench: study stopped: {_one_line(exc)}\n")
+        return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")
         return 130

@@ -181,12 +181,12 @@ def check_memory(estimate_bytes: int, what: str, force: bool = False) -> None:
     avail = available_memory_bytes()
     if avail is not None and estimate_bytes > avail:
         raise InputError(
-            f"{what} needs about {_gib(estimate_bytes)} of memory, more than the {_gib(avail)} available; "
+            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available; "
             f"make it smaller, or pass --force (or set {NO_MEMORY_CHECK_ENV}=1) to try anyway"
         )
 
 
-def _gib(n: int) -> str:
+def format_bytes(n: int) -> str:
     return f"{n / 2**30:.1f} GB" if n >= 2**27 else f"{n / 2**20:.0f} MB"
 
 

@@ -13,7 +13,7 @@ EXPORT_FORMATS = ("parquet", "csv")
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
-    from offroadbench.cli._common import int_at_least
+    from offroadbench.cli._common import float_at_least, int_at_least
     from offroadbench.study.executors import EXECUTORS
 
     p = subparsers.add_parser("study", help="run, export and report Monte Carlo studies")
@@ -27,6 +27,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
+    run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
+                     help="dask: stop the study (and restart the worker) when one trial runs longer than this, s")
+    run.add_argument("--force", action="store_true",
+                     help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     run.set_defaults(func=cmd_run)
 
     exp = sub.add_parser("export", help="write the trial and terrain tables of a run directory")
@@ -58,6 +62,26 @@ def _run_dir(path: str) -> Path:
     return p
 
 
+def _workers(args: argparse.Namespace, plans) -> int | None:
+    """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
+    import os
+
+    from offroadbench.cli._common import format_bytes, available_memory_bytes, check_memory
+    from offroadbench.study.runner import worker_memory_bytes
+
+    if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
+        return args.workers  # one process here, or a cluster whose memory is not ours to judge
+    per_worker = worker_memory_bytes(plans)
+    workers = args.workers
+    if workers is None:
+        avail = available_memory_bytes()
+        workers = os.cpu_count() or 1
+        if avail is not None:
+            workers = max(1, min(workers, avail // per_worker))
+    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
+    return workers
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.io.inputs import check_input_file
@@ -66,8 +90,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
+    if args.trial_timeout_s is not None and args.executor != "dask":
+        raise InputError("--trial-timeout-s applies to --executor dask only")
     study, plans = load_study(path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
+    workers = _workers(args, plans)
+    options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
     text = path.read_text()
     counts = {"new": 0, "ok": 0}
 
@@ -79,8 +107,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         counts["ok"] += bool(row["success"])
 
     with bar(study.name, unit="trial", postfix=success) as progress:
-        summary = run_study(study, plans, out, executor=args.executor, workers=args.workers,
-                            scheduler=args.scheduler, source_text=text, progress=progress, on_trial=on_trial)
+        summary = run_study(study, plans, out, executor=args.executor, workers=workers,
+                            scheduler=args.scheduler, executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
     if summary.done == summary.total and not args.no_report:

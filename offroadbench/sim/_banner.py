@@ -1,36 +1,66 @@
 """Keep pybullet's "pybullet build time: ..." banner out of the program's output.
 
-The pybullet extension writes its banner through C stdio when the process exits, after every
-line the program printed, so it ends up at the bottom of tables and piped output. Python's
-atexit handlers run before the C library's exit handlers: this one flushes Python's stdout and
-then points file descriptor 1 at /dev/null for the few C-level writes that follow.
+The pybullet extension prints its banner through C stdio when it is imported (on stderr in
+3.2.7; builds that print to stdout leave it in the C buffer, which is flushed when the process
+exits, below everything the program printed). :func:`import_pybullet_quietly` imports pybullet
+with file descriptors 1 and 2 pointed at /dev/null and flushes C stdio before it restores them,
+so the banner goes nowhere whichever stream a build uses.
+
+Only application entry points call this: the CLI's ``main`` and the study workers' bootstrap
+(``offroadbench.study.executors``). A library import never touches the process's descriptors.
 """
 
 from __future__ import annotations
 
-import atexit
+import contextlib
+import ctypes
 import os
 import sys
+from typing import Iterator
 
-_installed = False
+__all__ = ["import_pybullet_quietly", "silenced_fds"]
 
 
-def _silence_stdout_at_exit() -> None:
+def _flush_c_stdio() -> None:
     try:
-        sys.stdout.flush()
-    except (OSError, ValueError):
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # pragma: no cover - no C library handle
         pass
+
+
+@contextlib.contextmanager
+def silenced_fds(fds: tuple[int, ...] = (1, 2)) -> Iterator[None]:
+    """Point ``fds`` at /dev/null for the block (C-level writes included), then restore them."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            stream.flush()
+    saved: list[tuple[int, int]] = []
+    devnull = os.open(os.devnull, os.O_WRONLY)
     try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, 1)
+        for fd in fds:
+            try:
+                saved.append((fd, os.dup(fd)))
+            except OSError:  # closed descriptor: nothing to hide
+                continue
+            os.dup2(devnull, fd)
+        yield
+    finally:
+        _flush_c_stdio()
+        for fd, copy in saved:
+            os.dup2(copy, fd)
+            os.close(copy)
         os.close(devnull)
-    except OSError:
-        pass
 
 
-def hide_pybullet_banner() -> None:
-    """Install the exit handler once per process."""
-    global _installed
-    if not _installed:
-        atexit.register(_silence_stdout_at_exit)
-        _installed = True
+def import_pybullet_quietly() -> bool:
+    """Import pybullet without its banner; False if pybullet is not installed."""
+    if "pybullet" in sys.modules:
+        return True
+    with silenced_fds():
+        try:
+            import pybullet  # noqa: F401
+        except ImportError:
+            return False
+    return True
+
+

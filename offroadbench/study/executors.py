@@ -11,11 +11,13 @@ executor, a task's results depend only on the task, so all of them give the same
 * ``inline``: runs in the calling process (debugging, profiling).
 * ``dask``: one Dask task per terrain on a ``distributed`` cluster (``scheduler`` address, or a
   ``LocalCluster`` of ``workers`` processes when no address is given). A task's trials arrive
-  when its terrain is done, so a killed coordinator loses the terrains in flight.
+  when its terrain is done, so a killed coordinator loses the terrains in flight. Killed or
+  hung workers and a lost scheduler: see :class:`DaskExecutor`.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import queue
 import signal
@@ -26,9 +28,11 @@ from typing import Callable, Sequence
 from offroadbench.errors import InputError
 from offroadbench.study.tasks import TerrainTask, TrialFn, collect_terrain, run_terrain
 
-__all__ = ["EXECUTORS", "get_executor", "StudyError", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
+__all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 
 Handle = Callable[[tuple], None]
+
+log = logging.getLogger(__name__)
 
 
 class StudyError(RuntimeError):
@@ -62,9 +66,29 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(1)
 
 
+def _worker_bootstrap() -> None:
+    """What every worker process does first: import pybullet without its banner."""
+    from offroadbench.sim._banner import import_pybullet_quietly
+
+    import_pybullet_quietly()
+
+
+def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
+    """An ("error", ...) message that survives pickling, whatever the exception."""
+    import pickle
+
+    try:
+        pickle.dumps(exc)
+        carried = exc
+    except Exception:  # an unpicklable exception: keep its text
+        carried = None
+    return ("error", key, carried, f"{type(exc).__name__}: {exc}", tb)
+
+
 def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None:
     _die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _worker_bootstrap()
     while True:
         task = task_q.get()
         if task is None:
@@ -75,10 +99,21 @@ def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None
                 if os.getppid() != parent_pid:
                     os._exit(1)
                 result_q.put(msg)
-        except BaseException:  # report and stop: the coordinator decides
-            result_q.put(("error", key, traceback.format_exc()))
+        except BaseException as exc:  # report and stop: the coordinator decides
+            result_q.put(_error_message(key, exc, traceback.format_exc()))
             return
         result_q.put(("done", key))
+
+
+def task_failure(key: tuple[int, int], exc: BaseException | None, text: str, tb: str = "") -> Exception:
+    """The error the coordinator raises for a failed terrain task: bad input stays an InputError
+    (naming the terrain), anything else is a one-line StudyError; the traceback goes to the log."""
+    if tb:
+        log.info("terrain %d of cell %d failed:\n%s", key[1], key[0], tb)
+    where = f"cell {key[0]}, terrain {key[1]}"
+    if isinstance(exc, InputError):
+        return InputError(f"{where}: {exc}")
+    return StudyError(f"{where} failed in a worker: {' '.join(text.split())}")
 
 
 class LocalExecutor:
@@ -126,7 +161,7 @@ class LocalExecutor:
                 if kind == "done":
                     pending -= 1
                 elif kind == "error":
-                    raise StudyError(f"terrain {msg[1]} failed in a worker:\n{msg[2]}")
+                    raise task_failure(msg[1], msg[2], msg[3], msg[4])
                 else:
                     handle(msg)
         finally:
@@ -144,53 +179,189 @@ class LocalExecutor:
 
 
 # ---------------------------------------------------------------------------- dask
-class DaskExecutor:
-    """One Dask task per terrain on a ``distributed`` cluster (``pip install offroadbench[dask]``)."""
+class TrialTimeout(RuntimeError):
+    """A trial (or a terrain build) ran longer than the per-trial wall-clock limit on a Dask worker."""
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+
+def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list[tuple]:
+    """A terrain task on a Dask worker: quiet bootstrap, then every message of :func:`run_terrain`.
+
+    With ``limit_s`` the work runs in a helper thread and every message (the terrain build, then
+    each trial) must arrive within ``limit_s`` seconds; otherwise TrialTimeout names the worker,
+    whose process the coordinator then restarts (a hung trial cannot be interrupted from Python).
+    """
+    _worker_bootstrap()
+    if limit_s is None:
+        return collect_terrain(task, trial_fn)
+    import threading
+
+    q: queue.Queue = queue.Queue()
+
+    def work() -> None:
+        try:
+            for msg in run_terrain(task, trial_fn):
+                q.put(("msg", msg))
+            q.put(("end", None))
+        except BaseException as exc:  # handed to the task thread below
+            q.put(("exc", exc))
+
+    threading.Thread(target=work, daemon=True, name="offroadbench-trials").start()
+    out = []
+    while True:
+        try:
+            kind, value = q.get(timeout=limit_s)
+        except queue.Empty:
+            from distributed import get_worker
+
+            raise TrialTimeout(
+                f"cell {task.cell.index}, terrain {task.terrain}: a trial ran longer than {limit_s:g} s "
+                f"on Dask worker {get_worker().address}"
+            ) from None
+        if kind == "end":
+            return out
+        if kind == "exc":
+            raise value
+        out.append(value)
+
+
+class DaskExecutor:
+    """One Dask task per terrain on a ``distributed`` cluster (``pip install offroadbench[dask]``).
+
+    Faults. A worker that dies mid-task (SIGKILL, out of memory) loses only its task, which Dask
+    runs again elsewhere (tasks are pure: the same rows come back); a task that killed
+    ``distributed.scheduler.allowed-failures`` workers stops the study. A trial that runs longer
+    than ``trial_timeout_s`` stops the study and its worker is restarted. A lost scheduler, or no
+    worker for ``no_worker_timeout_s``, stops the study. Every stop is a one-line StudyError;
+    the trials committed so far stay, and running the study again resumes it.
+    """
+
+    poll_s = 0.5
+    no_worker_timeout_s = 120.0
+    connect_timeout_s = 20.0
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None,
+                 trial_timeout_s: float | None = None) -> None:
         try:
             import distributed  # noqa: F401
         except ImportError:  # pragma: no cover
             raise InputError("--executor dask needs dask and distributed: pip install 'offroadbench[dask]'") from None
         self.workers = workers or os.cpu_count() or 1
         self.scheduler = scheduler
+        if trial_timeout_s is not None and not trial_timeout_s > 0:
+            raise InputError(f"trial_timeout_s = {trial_timeout_s!r}; must be > 0 seconds")
+        self.trial_timeout_s = trial_timeout_s
+
+    def _connect(self):
+        from distributed import Client, LocalCluster
+
+        if self.scheduler:
+            try:
+                return Client(self.scheduler, timeout=self.connect_timeout_s), None
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise InputError(f"--scheduler {self.scheduler}: cannot connect to a Dask scheduler there ({exc})") from None
+        cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        return Client(cluster), cluster
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
-        from distributed import Client, LocalCluster, as_completed
+        import time
+
+        from distributed import wait
+        from distributed.client import FuturesCancelledError
 
         if not tasks:
             return
-        cluster = None
-        if self.scheduler:
-            client = Client(self.scheduler)
-        else:
-            cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True, dashboard_address=None)
-            client = Client(cluster)
-        futures = []
+        client, cluster = self._connect()
+        where = self.scheduler or "the local Dask cluster"
+        futures: dict = {}
+        lost = False
         try:
-            futures = [client.submit(collect_terrain, task, trial_fn, pure=False) for task in tasks]
-            for fut in as_completed(futures):
+            futures = {
+                client.submit(_dask_task, task, trial_fn, self.trial_timeout_s, pure=False): task for task in tasks
+            }
+            pending = set(futures)
+            no_workers_since = None
+            while pending:
                 try:
-                    messages = fut.result()
-                except Exception as exc:
-                    raise StudyError(f"a terrain failed on the Dask cluster: {exc!r}") from exc
-                for msg in messages:
-                    handle(msg)
+                    done, pending = wait(pending, timeout=self.poll_s, return_when="FIRST_COMPLETED")
+                except (TimeoutError, FuturesCancelledError) as exc:
+                    if isinstance(exc, FuturesCancelledError) or client.status != "running":
+                        lost = client.status != "running"
+                        if lost:
+                            raise StudyError(f"lost the Dask scheduler at {where}") from None
+                        raise StudyError(f"the Dask tasks were cancelled ({' '.join(str(exc).split())[:200]})") from None
+                    done = set()
+                for fut in done:
+                    self._collect(client, fut, futures[fut], handle)
+                if pending:
+                    no_workers_since = self._check_workers(client, where, no_workers_since, time.monotonic())
         finally:
-            client.cancel(futures)
-            client.close()
+            self._close(client, cluster, list(futures), lost)
+
+    def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> None:
+        from distributed import KilledWorker
+
+        key = (task.cell.index, task.terrain)
+        if fut.status == "cancelled":
+            raise StudyError(f"lost the Dask scheduler, or the task of cell {key[0]}, terrain {key[1]} was cancelled")
+        if fut.status == "error":
+            exc = fut.exception()
+            if isinstance(exc, KilledWorker):
+                raise StudyError(f"cell {key[0]}, terrain {key[1]} killed every Dask worker that ran it ({exc})")
+            if isinstance(exc, TrialTimeout):
+                worker = str(exc).rsplit(" ", 1)[-1]
+                try:
+                    client.restart_workers([worker], timeout=30)
+                except Exception as rexc:  # best effort: the stop below is what matters
+                    log.warning("could not restart the hung Dask worker %s: %s", worker, rexc)
+                raise StudyError(str(exc))
+            tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
+            raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)
+        for msg in fut.result():
+            handle(msg)
+
+    def _check_workers(self, client, where: str, since: float | None, now: float) -> float | None:
+        try:
+            n = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+        except Exception:  # noqa: BLE001 - the next wait() reports a lost scheduler
+            return since
+        if n:
+            return None
+        since = now if since is None else since
+        if now - since > self.no_worker_timeout_s:
+            raise StudyError(f"no Dask worker at {where} for {self.no_worker_timeout_s:g} s")
+        return since
+
+    @staticmethod
+    def _close(client, cluster, futures, lost: bool) -> None:
+        # a client that lost its scheduler logs a reconnect traceback as it closes: keep it quiet
+        quiet = logging.getLogger("distributed")
+        old = quiet.level
+        if lost:
+            quiet.setLevel(logging.CRITICAL + 1)
+        try:
+            if not lost:
+                try:
+                    client.cancel(futures)
+                except Exception:  # noqa: BLE001
+                    pass
+            client.close(timeout=10)
             if cluster is not None:
                 cluster.close()
+        except Exception:  # noqa: BLE001 - closing a broken connection may fail; the study already stopped
+            pass
+        finally:
+            quiet.setLevel(old)
 
 
 #: executor name -> class(workers, scheduler)
 EXECUTORS = {"local": LocalExecutor, "inline": InlineExecutor, "dask": DaskExecutor}
 
 
-def get_executor(name: str, workers: int | None = None, scheduler: str | None = None):
-    """An executor by name; an unknown name lists the known ones."""
+def get_executor(name: str, workers: int | None = None, scheduler: str | None = None, **options):
+    """An executor by name; an unknown name lists the known ones. ``options`` go to the executor
+    (``trial_timeout_s`` for dask)."""
     if name not in EXECUTORS:
         raise InputError(f"--executor {name!r} is not known; known: {', '.join(EXECUTORS)}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise InputError(f"--workers = {workers!r}; must be an integer >= 1")
-    return EXECUTORS[name](workers, scheduler)
+    return EXECUTORS[name](workers, scheduler, **options)

@@ -18,13 +18,21 @@ from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench.study import seeds
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
-from offroadbench.study.executors import get_executor
-from offroadbench.study.store import Store
+from offroadbench.errors import InputError
+from offroadbench.study.executors import StudyError, get_executor
+from offroadbench.study.store import Store, remove_store
 from offroadbench.study.tasks import TerrainTask, TrialFn
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry"]
+__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry",
+           "worker_memory_bytes"]
+
+#: resident memory of one trial worker per terrain cell (the PyBullet heightfield with its
+#: render mesh, the heights and class maps): a 1009^2 world holds about 1 GB (DESIGN.md)
+WORKER_BYTES_PER_CELL = 1000
+#: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes
+WORKER_BASE_BYTES = 200 * 2**20
 
 
 def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
@@ -78,6 +86,12 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
     return tasks
 
 
+def worker_memory_bytes(plans: list[CellPlan]) -> int:
+    """Peak memory estimate of one trial worker of the study: its largest terrain's world."""
+    cells = max(int(p.recipe_data["grid"]["rows"]) * int(p.recipe_data["grid"]["cols"]) for p in plans)
+    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * cells
+
+
 def code_version() -> str:
     """The package version, plus the git commit (and ``-dirty``) when run from a git checkout."""
     import subprocess
@@ -128,6 +142,7 @@ def run_study(
     executor: str = "local",
     workers: int | None = None,
     scheduler: str | None = None,
+    executor_options: Mapping[str, Any] | None = None,
     trial_fn: TrialFn | None = None,
     source_text: str = "",
     progress: ProgressFn | None = None,
@@ -137,19 +152,26 @@ def run_study(
 
     ``progress(done, total)`` counts stored trials of the whole study; ``on_trial(row)`` sees
     every new trial's row (e.g. for a success-rate display). Ctrl-C stops the workers and
-    re-raises KeyboardInterrupt; what was committed stays.
+    re-raises KeyboardInterrupt; what was committed stays. A run that fails before its first
+    trial removes the store (and the directories) it created; one that fails later keeps every
+    committed trial and its error says how to resume. ``executor_options`` go to the executor
+    (e.g. ``trial_timeout_s`` for dask).
     """
-    ex = get_executor(executor, workers, scheduler)
+    ex = get_executor(executor, workers, scheduler, **dict(executor_options or {}))
     version = code_version()
     t0 = time.perf_counter()
-    with Store(run_dir, create=True) as store:
+    run_dir = Path(run_dir)
+    made_dirs = _missing_dirs(run_dir)
+    store = Store(run_dir, create=True)
+    ran = 0
+    running = False
+    try:
         store.init_meta(study_meta(study, plans, source_text, version))
         tasks = plan_tasks(study, plans, store.done_trials())
         total = study.n_trials
         done, _ = store.counts()
         report(progress, done, total)
         run_id = store.start_run(executor, ex.workers, version)
-        ran = 0
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
         def handle(msg: tuple) -> None:
@@ -170,6 +192,7 @@ def run_study(
                 report(progress, done, total)
 
         status = "interrupted"
+        running = True
         try:
             ex.run(tasks, trial_fn, handle)
             status = "finished"
@@ -181,6 +204,35 @@ def run_study(
         finally:
             store.finish_run(run_id, ran, status)
         done, successes = store.counts()
+    except BaseException as exc:
+        stored = store.counts()[0]
+        store.close()
+        if store.created and stored == 0:
+            # failed before any trial: leave no store (and no directory) behind
+            remove_store(run_dir)
+            for d in made_dirs:
+                try:
+                    d.rmdir()
+                except OSError:
+                    break
+            raise
+        if running and isinstance(exc, (StudyError, InputError)) and stored:
+            # keep every finished trial and say how to go on
+            hint = (f"{stored} of {study.n_trials} trials are saved in {run_dir}; "
+                    "fix the cause and run the same command again to resume")
+            raise type(exc)(f"{exc}; {hint}") from None
+        raise
+    store.close()
     return RunSummary(
-        run_dir=Path(run_dir), total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
+        run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
     )
+
+
+def _missing_dirs(path: Path) -> list[Path]:
+    """The directories of ``path`` (itself included) that do not exist yet, deepest first."""
+    out = []
+    q = path
+    while not q.exists() and q.parent != q:
+        out.append(q)
+        q = q.parent
+    return out

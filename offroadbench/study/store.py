@@ -35,9 +35,16 @@ from offroadbench.errors import InputError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["STORE_NAME", "Store", "store_path"]
+__all__ = ["STORE_NAME", "SCHEMA_VERSION", "Store", "store_path", "remove_store"]
 
 STORE_NAME = "study.sqlite"
+
+#: schema version written to ``PRAGMA user_version``; a store with a higher one is refused
+SCHEMA_VERSION = 1
+#: ``PRAGMA application_id`` of an offroadbench store ("ORB1"); stores made before it was set have 0
+APPLICATION_ID = 0x4F524231
+_TABLES = ("meta", "terrains", "trials", "runs")
+_SQLITE_MAGIC = b"SQLite format 3\x00"
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -60,22 +67,40 @@ def store_path(run_dir: str | Path) -> Path:
 
 
 class Store:
-    """The SQLite store of one run directory. Use as a context manager."""
+    """The SQLite store of one run directory. Use as a context manager.
+
+    An existing ``study.sqlite`` is checked before anything is written to it: a file that is not
+    an SQLite database, a corrupt one, an SQLite database of some other program and a store
+    written by a newer schema are each refused with one InputError, and the file is left as it
+    was. ``created`` tells whether this object made the file (see :func:`remove_store`).
+    """
 
     def __init__(self, run_dir: str | Path, *, create: bool = False) -> None:
         self.run_dir = Path(run_dir)
         path = store_path(self.run_dir)
+        self.path = path
+        self.created = False
+        if path.is_dir():
+            raise InputError(f"{path}: is a directory, not a study store")
         if not path.exists():
             if not create:
                 raise InputError(f"{self.run_dir}: no study results here (no {STORE_NAME})")
             if self.run_dir.exists() and not self.run_dir.is_dir():
                 raise InputError(f"--out {self.run_dir} is a file; give a directory")
             self.run_dir.mkdir(parents=True, exist_ok=True)
-        self.path = path
-        self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
-        self.con.execute("PRAGMA journal_mode=WAL")
-        self.con.execute("PRAGMA synchronous=NORMAL")
-        self.con.executescript(_SCHEMA)
+            self.created = True
+        else:
+            _check_existing(path)
+        try:
+            self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+            if self.created:
+                self.con.execute(f"PRAGMA application_id={APPLICATION_ID}")
+                self.con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+                self.con.execute("PRAGMA journal_mode=WAL")
+                self.con.executescript(_SCHEMA)
+            self.con.execute("PRAGMA synchronous=NORMAL")
+        except sqlite3.DatabaseError as exc:
+            raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
 
     def __enter__(self) -> "Store":
         return self
@@ -178,6 +203,52 @@ class Store:
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
         names = [d[0] for d in cur.description]
         return [dict(zip(names, r)) for r in cur.fetchall()]
+
+
+def _check_existing(path: Path) -> None:
+    """Refuse, without writing to it, a ``study.sqlite`` that is not a readable store of ours."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(len(_SQLITE_MAGIC))
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror})") from None
+    if not head:
+        raise InputError(f"{path}: is empty, not a study store; remove it or use another --out directory")
+    if head != _SQLITE_MAGIC:
+        raise InputError(f"{path}: is not an SQLite database, so not a study store; use another --out directory")
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30.0)
+    except sqlite3.Error as exc:
+        raise InputError(f"{path}: cannot be opened ({exc})") from None
+    try:
+        app_id = con.execute("PRAGMA application_id").fetchone()[0]
+        version = con.execute("PRAGMA user_version").fetchone()[0]
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if app_id not in (0, APPLICATION_ID) or not set(_TABLES) <= tables:
+            raise InputError(
+                f"{path}: is an SQLite database of another program (tables: {', '.join(sorted(tables)) or 'none'}), "
+                "not a study store; use another --out directory"
+            )
+        if version > SCHEMA_VERSION:
+            raise InputError(
+                f"{path}: was written by a newer offroadbench (store schema {version}; this one reads up to "
+                f"{SCHEMA_VERSION}); upgrade offroadbench to use it"
+            )
+        check = con.execute("PRAGMA quick_check").fetchone()[0]
+        if check != "ok":
+            raise InputError(f"{path}: is corrupt ({check}); restore it or use another --out directory")
+        con.execute("SELECT COUNT(*) FROM trials").fetchone()
+    except sqlite3.DatabaseError as exc:
+        raise InputError(f"{path}: is corrupt or not a study store ({exc})") from None
+    finally:
+        con.close()
+
+
+def remove_store(run_dir: str | Path) -> None:
+    """Delete ``study.sqlite`` and its WAL files (for a study that failed before any trial)."""
+    p = store_path(run_dir)
+    for q in (p, p.with_name(p.name + "-wal"), p.with_name(p.name + "-shm"), p.with_name(p.name + "-journal")):
+        q.unlink(missing_ok=True)
 
 
 def machine_description() -> str:
