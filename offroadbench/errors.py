@@ -4,3 +4,8 @@ the CLI turns it into one line on stderr and exit status 2."""
 
 class InputError(ValueError):
     """Bad input that the user can fix: the message names the input and what is allowed."""
+
+
+class StudyError(RuntimeError):
+    """A study stopped for a reason other than bad input (a worker failed or died, a lost Dask
+    scheduler, a hung trial); the trials committed so far stay in the store."""

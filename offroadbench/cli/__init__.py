@@ -10,8 +10,7 @@ import logging
 import os
 import sys
 
-from offroadbench.errors import InputError
-from offroadbench.study.executors import StudyError
+from offroadbench.errors import InputError, StudyError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "drive", "export")

@@ -104,10 +104,12 @@ def load_heightmap_arg(
     (``force`` skips that check).
     """
     if source.lower().endswith(".png"):
-        from offroadbench.io.png16 import read_png16
+        from offroadbench.io.png16 import png_shape, read_png16
 
         if sets:
             raise InputError("--set applies to presets and recipes, not to a PNG heightmap")
+        rows, cols = png_shape(source)
+        check_memory(grid_bytes(rows, cols), f"{source}: a {rows}x{cols} heightmap", force)
         return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem, None
     from offroadbench.terrain.recipe import generate_terrain
 

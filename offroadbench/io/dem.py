@@ -52,11 +52,14 @@ def _sidecar_cell(path: Path, side: Path | None = None) -> float | None:
         return None
     try:
         meta = json.loads(side.read_text())
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{side}: not valid JSON ({exc})") from None
-    if "cell_size_m" not in meta:
+    if not isinstance(meta, dict) or "cell_size_m" not in meta:
         raise InputError(f"{side}: has no cell_size_m")
-    return float(meta["cell_size_m"])
+    cell = meta["cell_size_m"]
+    if isinstance(cell, bool) or not isinstance(cell, (int, float)) or not np.isfinite(cell) or not cell > 0:
+        raise InputError(f"{side}: cell_size_m = {cell!r} is not allowed; allowed: a finite number > 0 (metres)")
+    return float(cell)
 
 
 def read_dem(
@@ -67,9 +70,9 @@ def read_dem(
     nodata_level: int | None = None,
 ) -> RawDEM:
     """Read a DEM file (see the module docstring). ``cell_size_m`` overrides a missing sidecar."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"DEM file {p} does not exist")
+    from offroadbench.io.inputs import check_input_file
+
+    p = check_input_file(path, "DEM file")
     suffix = p.suffix.lower()
     if suffix == ".png":
         from offroadbench.io.png16 import read_png16
@@ -85,7 +88,7 @@ def read_dem(
     if suffix == ".npy":
         try:
             z = np.load(p, allow_pickle=False)
-        except ValueError as exc:
+        except (ValueError, EOFError, OSError) as exc:
             raise InputError(f"{p}: not a plain .npy array ({exc})") from None
         if z.ndim != 2 or not np.issubdtype(z.dtype, np.number):
             raise InputError(f"{p}: must hold a 2-D numeric array of heights, got shape {z.shape} dtype {z.dtype}")

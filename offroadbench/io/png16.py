@@ -43,6 +43,7 @@ __all__ = [
     "png_metadata",
     "write_png16",
     "read_png16",
+    "png_shape",
     "ue_z_range_m",
     "ue_landscape_settings",
     "ue_heights_m",
@@ -140,13 +141,18 @@ def png_metadata(hm: Heightmap, extra: Mapping[str, Any] | None = None) -> dict[
 
 def _read_ihdr(path: Path) -> tuple[int, int, int, int]:
     """(width, height, bit depth, colour type) from a PNG header, or InputError if not a PNG."""
+    from offroadbench.io.inputs import check_input_file
+
+    check_input_file(path, "heightmap PNG")
     try:
         with path.open("rb") as fh:
             head = fh.read(33)
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    if len(head) < 33 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
-        raise InputError(f"{path}: not a PNG file")
+    except OSError as exc:
+        raise InputError(f"heightmap PNG {path}: cannot be read ({exc.strerror})") from None
+    if head[:8] != b"\x89PNG\r\n\x1a\n":
+        raise InputError(f"{path}: not a PNG file (no PNG signature)")
+    if len(head) < 33 or head[12:16] != b"IHDR":
+        raise InputError(f"{path}: truncated PNG file (no complete header)")
     width, height, depth, ctype = struct.unpack(">IIBB", head[16:26])
     return width, height, depth, ctype
 
@@ -207,14 +213,28 @@ def read_png16(
             f"{p}: is {'an' if depth == 8 else 'a'} {depth}-bit grayscale PNG; a heightmap must be 16-bit "
             f"({2 ** depth} levels cannot resolve terrain heights)"
         )
-    with Image.open(p) as img:
-        q = np.asarray(img, dtype=np.uint16) if img.mode != "I" else np.asarray(img).astype(np.uint16)
-        text = dict(getattr(img, "text", {}) or {})
+    try:
+        with Image.open(p) as img:
+            img.load()
+            q = np.asarray(img, dtype=np.uint16) if img.mode != "I" else np.asarray(img).astype(np.uint16)
+            text = dict(getattr(img, "text", {}) or {})
+    except MemoryError:
+        raise InputError(f"{p}: a {height}x{width} PNG does not fit in memory") from None
+    except Exception as exc:  # PIL reports a damaged file as OSError, SyntaxError, ValueError, ...
+        raise InputError(f"{p}: cannot decode the PNG, the file is truncated or damaged ({' '.join(str(exc).split())})") from None
     if q.shape != (height, width):
         raise InputError(f"{p}: decoded shape {q.shape} does not match the PNG header {height}x{width}")
     meta = _metadata_for(p, text)
     if meta is not None:
-        return decode_png16(q, float(meta["cell_size_m"]), float(meta["z_min_m"]), float(meta["z_max_m"]))
+        source, meta = meta
+        cell = _number(meta, "cell_size_m", source, positive=True)
+        z_min, z_max = _number(meta, "z_min_m", source), _number(meta, "z_max_m", source)
+        if z_max < z_min:
+            raise InputError(f"{source}: z_max_m = {z_max} is below z_min_m = {z_min}; allowed: z_max_m >= z_min_m")
+        for key, n in (("rows", height), ("cols", width)):
+            if key in meta and meta[key] != n:
+                raise InputError(f"{source}: {key} = {meta[key]!r} does not match the PNG's {n}")
+        return decode_png16(q, cell, z_min, z_max)
     if cell_size_m is None or relief_m is None:
         raise InputError(
             f"{p}: has no sidecar {sidecar_path(p).name} and no offroadbench metadata; "
@@ -225,13 +245,17 @@ def read_png16(
     return decode_png16(q, cell_size_m, z_min_m, z_min_m + relief_m)
 
 
-def _metadata_for(png: Path, text: Mapping[str, str]) -> dict[str, Any] | None:
+def _metadata_for(png: Path, text: Mapping[str, str]) -> tuple[str, dict[str, Any]] | None:
     side = sidecar_path(png)
     if side.is_file():
         try:
             meta = json.loads(side.read_text())
-        except json.JSONDecodeError as exc:
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InputError(f"{side}: not valid JSON ({exc})") from None
+        except OSError as exc:
+            raise InputError(f"{side}: cannot be read ({exc.strerror})") from None
+        if not isinstance(meta, dict):
+            raise InputError(f"{side}: must hold a JSON object with cell_size_m, z_min_m and z_max_m")
         source = str(side)
     elif text.get("format") == FORMAT:
         meta = {k: _maybe_json(v) for k, v in text.items()}
@@ -241,7 +265,22 @@ def _metadata_for(png: Path, text: Mapping[str, str]) -> dict[str, Any] | None:
     missing = [k for k in ("cell_size_m", "z_min_m", "z_max_m") if k not in meta]
     if missing:
         raise InputError(f"{source}: missing {', '.join(missing)}")
-    return meta
+    return source, meta
+
+
+def _number(meta: Mapping[str, Any], key: str, source: str, positive: bool = False) -> float:
+    """A finite number from sidecar metadata, or InputError naming the key and what is allowed."""
+    v = meta[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v) or (positive and not v > 0):
+        allowed = "a finite number > 0" if positive else "a finite number"
+        raise InputError(f"{source}: {key} = {v!r} is not allowed; allowed: {allowed} (metres)")
+    return float(v)
+
+
+def png_shape(path: str | Path) -> tuple[int, int]:
+    """(rows, cols) of a PNG from its header, without decoding it (InputError if not a PNG)."""
+    width, height, _, _ = _read_ihdr(Path(path))
+    return height, width
 
 
 def _maybe_json(v: str) -> Any:

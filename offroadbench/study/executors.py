@@ -25,7 +25,7 @@ import sys
 import traceback
 from typing import Callable, Sequence
 
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, StudyError
 from offroadbench.study.tasks import TerrainTask, TrialFn, collect_terrain, run_terrain
 
 __all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
@@ -33,10 +33,6 @@ __all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExe
 Handle = Callable[[tuple], None]
 
 log = logging.getLogger(__name__)
-
-
-class StudyError(RuntimeError):
-    """A worker failed (an exception in a trial, or a worker process died)."""
 
 
 class InlineExecutor:

@@ -206,42 +206,56 @@ class Store:
 
 
 def _check_existing(path: Path) -> None:
-    """Refuse, without writing to it, a ``study.sqlite`` that is not a readable store of ours."""
+    """Refuse, without writing to it, a ``study.sqlite`` that is not a readable store of ours.
+
+    The schema version and application id are read from the file header (SQLite file format:
+    big-endian integers at offsets 60 and 68), so a newer or foreign store is refused without
+    opening it. The tables and a quick integrity check need a read-only connection, which may
+    create the ``-wal``/``-shm`` side files; those it created are removed again.
+    """
     try:
         with path.open("rb") as fh:
-            head = fh.read(len(_SQLITE_MAGIC))
+            head = fh.read(100)
     except OSError as exc:
         raise InputError(f"{path}: cannot be read ({exc.strerror})") from None
     if not head:
         raise InputError(f"{path}: is empty, not a study store; remove it or use another --out directory")
-    if head != _SQLITE_MAGIC:
+    if not head.startswith(_SQLITE_MAGIC):
         raise InputError(f"{path}: is not an SQLite database, so not a study store; use another --out directory")
+    if len(head) < 100:
+        raise InputError(f"{path}: is a truncated SQLite database; restore it or use another --out directory")
+    version = int.from_bytes(head[60:64], "big")
+    app_id = int.from_bytes(head[68:72], "big")
+    if app_id not in (0, APPLICATION_ID):
+        raise InputError(f"{path}: is an SQLite database of another program, not a study store; use another --out directory")
+    if version > SCHEMA_VERSION:
+        raise InputError(
+            f"{path}: was written by a newer offroadbench (store schema {version}; this one reads up to "
+            f"{SCHEMA_VERSION}); upgrade offroadbench to use it"
+        )
+    sides = [path.with_name(path.name + suffix) for suffix in ("-wal", "-shm")]
+    existed = [q.exists() for q in sides]
     try:
         con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30.0)
-    except sqlite3.Error as exc:
-        raise InputError(f"{path}: cannot be opened ({exc})") from None
-    try:
-        app_id = con.execute("PRAGMA application_id").fetchone()[0]
-        version = con.execute("PRAGMA user_version").fetchone()[0]
-        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-        if app_id not in (0, APPLICATION_ID) or not set(_TABLES) <= tables:
-            raise InputError(
-                f"{path}: is an SQLite database of another program (tables: {', '.join(sorted(tables)) or 'none'}), "
-                "not a study store; use another --out directory"
-            )
-        if version > SCHEMA_VERSION:
-            raise InputError(
-                f"{path}: was written by a newer offroadbench (store schema {version}; this one reads up to "
-                f"{SCHEMA_VERSION}); upgrade offroadbench to use it"
-            )
-        check = con.execute("PRAGMA quick_check").fetchone()[0]
-        if check != "ok":
-            raise InputError(f"{path}: is corrupt ({check}); restore it or use another --out directory")
-        con.execute("SELECT COUNT(*) FROM trials").fetchone()
+        try:
+            tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+            if not set(_TABLES) <= tables:
+                raise InputError(
+                    f"{path}: is an SQLite database of another program (tables: {', '.join(sorted(tables)) or 'none'}), "
+                    "not a study store; use another --out directory"
+                )
+            check = con.execute("PRAGMA quick_check").fetchone()[0]
+            if check != "ok":
+                raise InputError(f"{path}: is corrupt ({check}); restore it or use another --out directory")
+            con.execute("SELECT COUNT(*) FROM trials").fetchone()
+        finally:
+            con.close()
     except sqlite3.DatabaseError as exc:
         raise InputError(f"{path}: is corrupt or not a study store ({exc})") from None
     finally:
-        con.close()
+        for q, was in zip(sides, existed):
+            if not was:
+                q.unlink(missing_ok=True)
 
 
 def remove_store(run_dir: str | Path) -> None:

@@ -128,8 +128,6 @@ def load_recipe(name_or_path: str | Path) -> Recipe:
     text = str(name_or_path)
     p = Path(text)
     if text.endswith(".toml") or p.exists():
-        if not p.is_file():
-            raise InputError(f"recipe file {p} does not exist")
         return recipe_from_dict(load_toml(p), source=str(p))
     preset = presets_dir() / f"{text}.toml"
     if not preset.is_file():

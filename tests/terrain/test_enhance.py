@@ -148,7 +148,7 @@ def test_dem_import_png16_round_trip(tmp_path):
         (lambda d: (d / "x.npy", np.save(d / "x.npy", np.zeros((4, 4)))), "cell_size_m"),
         (lambda d: (d / "y.npy", np.save(d / "y.npy", np.zeros(4))), "2-D"),
         (lambda d: (d / "z.xyz", (d / "z.xyz").write_text("x")), "unknown format"),
-        (lambda d: (d / "missing.npy", None), "does not exist"),
+        (lambda d: (d / "missing.npy", None), "no such file"),
     ],
 )
 def test_dem_import_errors(tmp_path, setup, match):
