@@ -22,15 +22,27 @@ from __future__ import annotations
 import difflib
 import logging
 from importlib import metadata
-from typing import Callable, Generic, Iterator, TypeVar
+from typing import Callable, Generic, Iterable, Iterator, TypeVar
 
 from offroadbench.errors import InputError
 
-__all__ = ["Registry"]
+__all__ = ["Registry", "unknown_name"]
 
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
+
+
+def unknown_name(kind: str, name: object, known: Iterable[str], *, extra: str = "") -> InputError:
+    """The error for an unknown ``name`` of ``kind``: the closest known names, then all of them.
+
+    ``extra`` is appended (e.g. "(or give a path to a .toml)").
+    """
+    known = sorted(known)
+    close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
+    hint = f"did you mean {' or '.join(repr(c) for c in close)}? " if close else ""
+    tail = f" {extra}" if extra else ""
+    return InputError(f"unknown {kind} {name!r}; {hint}known: {', '.join(known) or '(none)'}{tail}")
 
 
 class Registry(Generic[T]):
@@ -110,10 +122,7 @@ class Registry(Generic[T]):
             return self._entries[name]
         except (KeyError, TypeError):
             pass
-        known = sorted(self._entries)
-        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
-        hint = f"did you mean {' or '.join(repr(c) for c in close)}? " if close else ""
-        raise InputError(f"unknown {self.kind} {name!r}; {hint}known: {', '.join(known) or '(none)'}")
+        raise unknown_name(self.kind, name, self._entries) from None
 
     def names(self) -> list[str]:
         """Every registered name, sorted."""

@@ -33,11 +33,12 @@ log = logging.getLogger(__name__)
 
 # --------------------------------------------------------------------------- commands
 def cmd_terrains(args: argparse.Namespace) -> int:
-    from offroadbench.terrain.recipe import list_presets, presets_dir
+    from offroadbench import resources
+    from offroadbench.terrain.recipe import list_presets
     from offroadbench.terrain.registry import TERRAIN_REGISTRY, get_spec
 
-    presets = list_presets()
-    print(f"Terrain presets ({presets_dir()}):")
+    presets = list_presets()  # none found: InputError, exit 2
+    print(f"Terrain presets ({', '.join(str(r) for r in resources.roots('terrains'))}):")
     width = max((len(n) for n in presets), default=10)
     for name, desc in presets.items():
         print(f"  {name:<{width}}  {desc}")

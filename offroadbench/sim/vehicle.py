@@ -1,8 +1,9 @@
 """Vehicle descriptions: a URDF plus a TOML table of limits, chosen by name or by path.
 
-``load_vehicle("husky")`` reads ``vehicles/husky/vehicle.toml`` of the repository; any other
-``vehicle.toml`` path works too, so new vehicles are added as files. The TOML's ``[vehicle]``
-table maps one-to-one onto :class:`VehicleSpec`.
+``load_vehicle("husky")`` reads the ``husky/vehicle.toml`` found through
+:mod:`offroadbench.resources` (the shipped vehicles, and ``vehicles/`` folders on the
+``OFFROADBENCH_PATH`` search path); any other ``vehicle.toml`` path works too, so new vehicles are
+added as files. The TOML's ``[vehicle]`` table maps one-to-one onto :class:`VehicleSpec`.
 """
 
 from __future__ import annotations
@@ -12,13 +13,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
+from offroadbench import resources
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
+from offroadbench.registry import unknown_name
 
-__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "vehicle_from_table", "VEHICLES_DIR"]
-
-#: the repository's vehicle folder: one sub-folder per vehicle holding vehicle.toml + URDF
-VEHICLES_DIR = Path(__file__).resolve().parents[2] / "vehicles"
+__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "vehicle_from_table"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -81,8 +81,8 @@ class VehicleSpec:
 
 
 def list_vehicles() -> list[str]:
-    """Names of the vehicles shipped in the repository's ``vehicles/`` folder."""
-    return sorted(p.parent.name for p in VEHICLES_DIR.glob("*/vehicle.toml"))
+    """Names of the vehicles found through :func:`offroadbench.resources.vehicle_files`."""
+    return list(resources.vehicle_files())
 
 
 def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
@@ -93,12 +93,10 @@ def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
     text = str(name_or_path)
     path = Path(text)
     if not (path.suffix == ".toml" or path.is_file()):
-        path = VEHICLES_DIR / text / "vehicle.toml"
-        if not path.is_file():
-            raise InputError(
-                f"vehicle {text!r} is not known; known vehicles: {', '.join(list_vehicles()) or 'none'} "
-                "(or give the path of a vehicle.toml)"
-            )
+        found = resources.vehicle_files()
+        if text not in found:
+            raise unknown_name("vehicle", text, found, extra="(or give the path of a vehicle.toml)")
+        path = found[text]
     data = load_toml(path)
     if "vehicle" not in data:
         raise InputError(f"{path}: no [vehicle] table")

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from offroadbench import resources
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench.study import seeds
@@ -93,19 +94,24 @@ def worker_memory_bytes(plans: list[CellPlan]) -> int:
 
 
 def code_version() -> str:
-    """The package version, plus the git commit (and ``-dirty``) when run from a git checkout."""
+    """The package version, plus the git commit (and ``-dirty``) when the package is a git checkout."""
     import subprocess
 
     from offroadbench import __version__
 
-    src = Path(__file__).resolve().parents[2]
+    src = resources.package_dir()
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["git", "-C", str(src), *args], capture_output=True, text=True, timeout=10)
+
     try:
-        head = subprocess.run(["git", "-C", str(src), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, timeout=10)
+        # an installed copy inside some other checkout (e.g. a .venv in it) is not that checkout's code
+        if git("ls-files", "--error-unmatch", "__init__.py").returncode != 0:
+            return __version__
+        head = git("rev-parse", "--short", "HEAD")
         if head.returncode != 0:
             return __version__
-        dirty = subprocess.run(["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no", "--", "offroadbench"],
-                               capture_output=True, text=True, timeout=10)
+        dirty = git("status", "--porcelain", "--untracked-files=no", "--", ".")
         return f"{__version__}+git.{head.stdout.strip()}{'-dirty' if dirty.stdout.strip() else ''}"
     except (OSError, subprocess.SubprocessError):
         return __version__

@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import os
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,11 +45,13 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from offroadbench import resources
 from offroadbench.config import check_int, check_range, config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.craters_csv import read_craters
 from offroadbench.io.dem import read_dem
+from offroadbench.registry import unknown_name
 from offroadbench.terrain.craters.table import CraterTable
 from offroadbench.terrain.grid import GridConfig
 from offroadbench.terrain.registry import get_spec
@@ -59,7 +60,6 @@ __all__ = [
     "Recipe",
     "Layer",
     "COMBINE_MODES",
-    "presets_dir",
     "list_presets",
     "load_recipe",
     "recipe_from_dict",
@@ -104,23 +104,17 @@ class Recipe:
 
 
 # --------------------------------------------------------------------------- presets
-def presets_dir() -> Path:
-    """Where named presets live: $OFFROADBENCH_TERRAINS, else the repository's ``terrains/``."""
-    env = os.environ.get("OFFROADBENCH_TERRAINS")
-    if env:
-        return Path(env)
-    return Path(__file__).resolve().parents[2] / "terrains"
-
-
 def list_presets() -> dict[str, str]:
-    """{preset name: description} of every ``*.toml`` in :func:`presets_dir`."""
-    out = {}
-    d = presets_dir()
-    if d.is_dir():
-        for p in sorted(d.glob("*.toml")):
-            data = load_toml(p)
-            out[p.stem] = str(data.get("recipe", {}).get("description", ""))
-    return out
+    """{preset name: description} of every preset on the search path (:mod:`offroadbench.resources`).
+
+    Finding none is an InputError: the installation lacks its data or ``OFFROADBENCH_PATH`` hides it.
+    """
+    found = resources.terrain_presets()
+    if not found:
+        where = ", ".join(str(r) for r in resources.roots("terrains"))
+        raise InputError(f"no terrain presets found (searched {where}); "
+                         f"add <dir>/terrains/*.toml to {resources.ENV_VAR} or reinstall offroadbench")
+    return {name: str(load_toml(p).get("recipe", {}).get("description", "")) for name, p in found.items()}
 
 
 def load_recipe(name_or_path: str | Path) -> Recipe:
@@ -129,19 +123,13 @@ def load_recipe(name_or_path: str | Path) -> Recipe:
     p = Path(text)
     if text.endswith(".toml") or p.exists():
         return recipe_from_dict(load_toml(p), source=str(p))
-    preset = presets_dir() / f"{text}.toml"
-    if not preset.is_file():
-        known = ", ".join(list_presets()) or "none found"
-        raise InputError(f"unknown terrain preset {text!r}; known presets: {known} (or give a path to a .toml)")
-    return recipe_from_dict(load_toml(preset), source=str(preset))
+    presets = resources.terrain_presets()
+    if text not in presets:
+        raise unknown_name("terrain preset", text, presets, extra="(or give a path to a .toml)")
+    return recipe_from_dict(load_toml(presets[text]), source=str(presets[text]))
 
 
 # --------------------------------------------------------------------------- files
-#: The bundled synthetic sample DEM with gaps (diamond-square + craters; for demos and tests),
-#: what a ``dem`` layer without ``path`` imports.
-SAMPLE_DEM = Path(__file__).resolve().parents[2] / "terrains" / "data" / "sample-dem.npy"
-
-
 def _crater_file(params: dict[str, Any], where: str, key: str) -> dict[str, Any]:
     """``crater_file = PATH`` -> ``craters``: the CraterTable read from the CSV."""
     if "craters" in params:
@@ -173,7 +161,7 @@ def _dem_file(params: dict[str, Any], where: str, key: str) -> dict[str, Any]:
     if opts["nodata_level"] is not None:
         check_int(None, f"{key}.nodata_level", opts["nodata_level"], lo=0, hi=65535)
     params["dem"] = read_dem(
-        Path(path) if path is not None else SAMPLE_DEM,
+        Path(path) if path is not None else resources.sample_dem(),
         cell_size_m=opts["source_cell_size_m"],
         relief_m=opts["source_relief_m"],
         nodata_level=opts["nodata_level"],

@@ -33,5 +33,5 @@ def test_drive_bad_input_exits_2_without_output(tmp_path, capsys):
     assert not out.exists()
     assert main(["drive", "paper-d2.3", *SMALL, "--plot"]) == 2
     assert main(["drive", "paper-d2.3", *SMALL, "--vehicle", "tank", "--out", str(out)]) == 2
-    assert "known vehicles" in capsys.readouterr().err
+    assert "unknown vehicle 'tank'" in capsys.readouterr().err
     assert not out.exists()

@@ -58,7 +58,7 @@ def test_vehicle_by_name_or_path_and_errors(tmp_path):
     assert spec.max_speed_m_s == 1.0 and spec.wheel_radius_m == 0.165
     by_path = load_vehicle(Path(spec.urdf).parent / "vehicle.toml")
     assert by_path == spec
-    with pytest.raises(InputError, match="known vehicles: .*husky"):
+    with pytest.raises(InputError, match="unknown vehicle .*known: .*husky"):
         load_vehicle("tank")
     bad = tmp_path / "vehicle.toml"
     bad.write_text('[vehicle]\nname = "x"\nurdf = "missing.urdf"\n' + "\n".join(

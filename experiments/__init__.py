@@ -1,0 +1,1 @@
+"""Study TOMLs, shipped as ``offroadbench.data.experiments`` (``results/`` stays in the repository)."""

@@ -1,0 +1,1 @@
+"""Terrain presets (``*.toml``) and sample data, shipped as ``offroadbench.data.terrains``."""

@@ -1,0 +1,1 @@
+"""Vehicles (one folder each: ``vehicle.toml`` + URDF), shipped as ``offroadbench.data.vehicles``."""
