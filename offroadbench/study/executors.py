@@ -220,6 +220,17 @@ def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | Non
         out.append(value)
 
 
+class _DropWhileDisconnected(logging.Filter):
+    """Drop a client's log records while it is not connected to its scheduler."""
+
+    def __init__(self, client) -> None:
+        super().__init__()
+        self.client = client
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return self.client.status == "running"
+
+
 class DaskExecutor:
     """One Dask task per terrain on a ``distributed`` cluster (``pip install offroadbench[dask]``).
 
@@ -269,7 +280,11 @@ class DaskExecutor:
         client, cluster = self._connect()
         where = self.scheduler or "the local Dask cluster"
         futures: dict = {}
-        lost = False
+        failed = False
+        # while the scheduler is unreachable the client logs its reconnect attempts as errors with
+        # tracebacks; the study reports a lost scheduler itself, in one line
+        quiet = _DropWhileDisconnected(client)
+        logging.getLogger("distributed.client").addFilter(quiet)
         try:
             futures = {
                 client.submit(_dask_task, task, trial_fn, self.trial_timeout_s, pure=False): task for task in tasks
@@ -277,21 +292,28 @@ class DaskExecutor:
             pending = set(futures)
             no_workers_since = None
             while pending:
+                if client.status in ("closing", "closed"):
+                    raise StudyError(f"lost the Dask scheduler at {where}")
                 try:
                     done, pending = wait(pending, timeout=self.poll_s, return_when="FIRST_COMPLETED")
+                except ValueError:  # "No clients found": the client gave up reconnecting and closed
+                    raise StudyError(f"lost the Dask scheduler at {where}") from None
                 except (TimeoutError, FuturesCancelledError) as exc:
-                    if isinstance(exc, FuturesCancelledError) or client.status != "running":
-                        lost = client.status != "running"
-                        if lost:
-                            raise StudyError(f"lost the Dask scheduler at {where}") from None
+                    if client.status != "running" or "connection" in str(exc).lower():
+                        raise StudyError(f"lost the Dask scheduler at {where}") from None
+                    if isinstance(exc, FuturesCancelledError):
                         raise StudyError(f"the Dask tasks were cancelled ({' '.join(str(exc).split())[:200]})") from None
                     done = set()
                 for fut in done:
                     self._collect(client, fut, futures[fut], handle)
                 if pending:
                     no_workers_since = self._check_workers(client, where, no_workers_since, time.monotonic())
+        except BaseException:
+            failed = True
+            raise
         finally:
-            self._close(client, cluster, list(futures), lost)
+            self._close(client, cluster, list(futures), failed)
+            logging.getLogger("distributed.client").removeFilter(quiet)
 
     def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> None:
         from distributed import KilledWorker
@@ -328,14 +350,15 @@ class DaskExecutor:
         return since
 
     @staticmethod
-    def _close(client, cluster, futures, lost: bool) -> None:
-        # a client that lost its scheduler logs a reconnect traceback as it closes: keep it quiet
+    def _close(client, cluster, futures, failed: bool) -> None:
+        # a client that lost its scheduler logs a reconnect traceback as it closes: the study's
+        # one-line error already says what happened, so Dask stays quiet while it shuts down
         quiet = logging.getLogger("distributed")
         old = quiet.level
-        if lost:
+        if failed:
             quiet.setLevel(logging.CRITICAL + 1)
         try:
-            if not lost:
+            if client.status == "running":
                 try:
                     client.cancel(futures)
                 except Exception:  # noqa: BLE001
