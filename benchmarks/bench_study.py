@@ -1,33 +1,78 @@
-"""Study throughput: store commits, and the paper study (experiments/majhor2023.toml) with 1 and 2 workers.
+"""Study throughput: where the time and memory of the paper study go, and variants side by side.
 
-    .venv/bin/python benchmarks/bench_study.py [--terrains 2] [--missions 20] [--workers 1 2]
+    .venv/bin/python benchmarks/bench_study.py profile [--terrains 1] [--missions 4]
+    .venv/bin/python benchmarks/bench_study.py compare [--terrains 1] [--missions 20] \
+        [--variant NAME[:executor=local,workers=2,tree=PATH,KEY=VALUE...]] ...
 
-Runs the paper study cut to ``--terrains`` terrains per D (same seeds, same first terrains as
-the full study) with each worker count, and prints wall time, trials per second and the wall
-time of the full 1200-trial study extrapolated from it (the study is a sum of independent
-terrain tasks, so time grows with their number). The full study itself records its wall time
-in its report (experiments/results/majhor2023/).
+``profile`` runs paper-study terrains in this process and prints, per terrain, the seconds of
+the terrain (W-M layers), its classes and missions, the PyBullet heightfield and world, and per
+trial the vehicle spawn (settling), the physics steps and everything else in Python per tick
+(control, telemetry, end rules, metrics), plus the RSS and the peak RSS of each phase (the peak
+is reset between phases through /proc/self/clear_refs) and the cost of committing one row.
+
+``compare`` runs the paper study cut to ``--terrains`` terrains per D (the same seeds and first
+terrains as the full study) once per variant, each in a fresh process, one after the other in
+this one run, and prints wall time, trials/s, the peak RSS of the largest worker (the
+children's ``ru_maxrss``) and a digest of the trial table, so variants that must give identical
+results can be checked. A variant is ``NAME`` or ``NAME:k=v,k=v``: ``executor`` (local, dask,
+inline), ``workers``, ``tree`` (another checkout of offroadbench, e.g. a git worktree of an
+older commit, to compare with the old code), and dotted study keys such as
+``recipe.layers.base.wm.method=nufft`` or ``sim.solver_iterations=30``. Machines here are
+shared: compare the ratios of one run, not absolute figures across runs.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
+import hashlib
+import json
+import os
+import resource
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from offroadbench.study import load, load_study, run_study  # noqa: E402
-from offroadbench.study.spec import plan_cells  # noqa: E402
-from offroadbench.study.store import Store, machine_description  # noqa: E402
+STUDY = ROOT / "experiments" / "majhor2023.toml"
 
 
+# ---------------------------------------------------------------------------- memory
+def _status_mb(key: str) -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(key + ":"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def _reset_peak() -> None:
+    """Reset VmHWM (peak RSS) of this process (Linux >= 4.0)."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        pass
+
+
+class Phase:
+    """Wall seconds and peak RSS (MB) of a block: ``with Phase() as p: ...; p.s, p.peak_mb``."""
+
+    def __enter__(self) -> "Phase":
+        _reset_peak()
+        self.t0 = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.s = time.perf_counter() - self.t0
+        self.peak_mb = _status_mb("VmHWM")
+        self.rss_mb = _status_mb("VmRSS")
+
+
+# ---------------------------------------------------------------------------- profile
 def bench_store(n: int = 5000) -> float:
     """Seconds per committed trial row (one transaction each)."""
+    from offroadbench.study.store import Store
+
     row = {"mission_index": 0, "success": True, "failure_reason": "", **{f"m{i}": 1.2345 for i in range(16)}}
     with tempfile.TemporaryDirectory() as d, Store(d, create=True) as store:
         t0 = time.perf_counter()
@@ -36,34 +81,181 @@ def bench_store(n: int = 5000) -> float:
         return (time.perf_counter() - t0) / n
 
 
-def bench_paper(terrains: int, missions: int, workers: int) -> tuple[float, int, int, int]:
-    study, _ = load_study(ROOT / "experiments" / "majhor2023.toml")
-    full = study.n_trials
+def profile(terrains: int, missions: int) -> None:
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.sim import World, run_mission
+    from offroadbench.study import load_study
+    from offroadbench.study.runner import plan_tasks
+    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.tasks import sample_mission
+    from offroadbench.terrain.recipe import generate_terrain
+
+    study, _ = load_study(STUDY)
+    import dataclasses
+
     study = dataclasses.replace(study, terrains_per_cell=terrains, missions_per_terrain=missions)
-    cells = plan_cells(study)
+    tasks = plan_tasks(study, plan_cells(study), set())
+    print(f"python baseline: RSS {_status_mb('VmRSS'):.0f} MB")
+    print("terrain | terrain s | classes+missions s | world build s | build peak MB | RSS after build MB | "
+          "trials | spawn s/trial | steps s/trial | python s/trial | steps/trial | us/step | us python/tick")
+    tot = {"terrain": 0.0, "classes": 0.0, "build": 0.0, "spawn": 0.0, "step": 0.0, "python": 0.0}
+    n_trials = 0
+    for task in tasks:
+        cell = task.cell
+        with Phase() as p_terrain:
+            hm = generate_terrain(cell.recipe(), task.terrain_seed)
+        with Phase() as p_classes:
+            maps = classify_terrain(hm, cell.section("roughness"))
+            mcfg = cell.section("missions")
+            ms = [sample_mission(hm, maps.closed, mcfg, k, seed) for k, seed in task.missions]
+        with Phase() as p_build:
+            world = World(hm, cell.section("vehicle"), cell.section("sim"))
+        spawn_s = step_s = trial_s = 0.0
+        steps = ticks = 0
+        controller, rules = cell.section("controller"), cell.section("rules")
+        with world:
+            plain_step, plain_spawn = world.step, world.spawn
+
+            def timed_step() -> None:
+                nonlocal step_s, steps
+                t = time.perf_counter()
+                plain_step()
+                step_s += time.perf_counter() - t
+                steps += 1
+
+            def timed_spawn(*a, **kw) -> None:
+                nonlocal spawn_s
+                t = time.perf_counter()
+                plain_spawn(*a, **kw)
+                spawn_s += time.perf_counter() - t
+
+            world.step, world.spawn = timed_step, timed_spawn
+            for m in ms:
+                t = time.perf_counter()
+                _, tel = run_mission(world, m, controller=controller, rules=rules)
+                trial_s += time.perf_counter() - t
+                ticks += len(tel["t_s"])
+        python_s = trial_s - spawn_s - step_s
+        k = len(ms)
+        print(
+            f"D={cell.values.get('recipe.layers.base.D_high')} j={task.terrain} | {p_terrain.s:.2f} | {p_classes.s:.2f} | "
+            f"{p_build.s:.2f} | {p_build.peak_mb:.0f} | {p_build.rss_mb:.0f} | {k} | {spawn_s / k:.3f} | {step_s / k:.3f} | "
+            f"{python_s / k:.3f} | {steps / k:.0f} | {step_s / max(steps, 1) * 1e6:.0f} | {python_s / max(ticks, 1) * 1e6:.0f}"
+        )
+        for key, v in (("terrain", p_terrain.s), ("classes", p_classes.s), ("build", p_build.s),
+                       ("spawn", spawn_s), ("step", step_s), ("python", python_s)):
+            tot[key] += v
+        n_trials += k
+    store_s = bench_store() * n_trials
+    tot["store"] = store_s
+    total = sum(tot.values())
+    print(f"share of the time of {len(tasks)} terrains x {missions} trials: " +
+          ", ".join(f"{k} {v / total * 100:.0f} %" for k, v in tot.items()))
+    print(f"store: {store_s / n_trials * 1e6:.0f} us per committed trial; peak RSS of this process "
+          f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+
+
+# ---------------------------------------------------------------------------- compare
+def parse_variant(text: str) -> dict:
+    name, _, rest = text.partition(":")
+    spec = {"name": name, "executor": "local", "workers": 2, "tree": str(ROOT), "sets": {}}
+    for item in filter(None, rest.split(",")):
+        k, _, v = item.partition("=")
+        if k in ("executor", "tree"):
+            spec[k] = v
+        elif k == "workers":
+            spec[k] = int(v)
+        else:
+            from offroadbench.config import parse_set_value
+
+            spec["sets"][k] = parse_set_value(v)
+    return spec
+
+
+def child(spec: dict) -> dict:
+    """Run one variant of the cut paper study in this (fresh) process."""
+    import dataclasses
+
+    from offroadbench.study import load, load_study, run_study
+    from offroadbench.study.spec import plan_cells
+
+    study, _ = load_study(STUDY)
+    overrides = dict(study.recipe_overrides)
+    settings = {k: dict(v) for k, v in study.settings.items()}
+    for key, value in spec["sets"].items():
+        target, _, rest = key.partition(".")
+        if target == "recipe":
+            overrides[rest] = value
+        else:
+            settings.setdefault(target, {})[rest] = value
+    study = dataclasses.replace(study, terrains_per_cell=spec["terrains"], missions_per_terrain=spec["missions"],
+                                recipe_overrides=overrides, settings=settings)
+    plans = plan_cells(study)
     with tempfile.TemporaryDirectory() as d:
         t0 = time.perf_counter()
-        run_study(study, cells, d, executor="local", workers=workers)
+        run_study(study, plans, d, executor=spec["executor"], workers=spec["workers"])
         wall = time.perf_counter() - t0
-        ok = int(load(d)["success"].sum())
-    return wall, study.n_trials, full, ok
+        table = load(d).sort_values(["cell", "terrain", "mission"])
+    keep = [c for c in table.columns if c not in ("wall_s", "build_s", "finished_at")]
+    digest = hashlib.sha256(table[keep].to_csv(index=False).encode()).hexdigest()[:12]
+    return {
+        "wall_s": wall,
+        "trials": len(table),
+        "successes": int(table["success"].sum()),
+        "digest": digest,
+        "worker_peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+        "self_peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def compare(variants: list[str], terrains: int, missions: int) -> None:
+    rows = []
+    for text in variants:
+        spec = parse_variant(text) | {"terrains": terrains, "missions": missions}
+        code = (f"import sys, json; sys.path[:0] = [{spec['tree']!r}, {str(ROOT / 'benchmarks')!r}]; "
+                f"import bench_study; print('RESULT ' + json.dumps(bench_study.child(json.loads({json.dumps(spec)!r}))))")
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=spec["tree"])
+        line = [ln for ln in out.stdout.splitlines() if ln.startswith("RESULT ")]
+        if out.returncode or not line:
+            print(f"{spec['name']}: failed\n{out.stderr[-2000:]}")
+            continue
+        res = json.loads(line[0][7:])
+        rows.append((spec, res))
+        print(
+            f"{spec['name']} ({spec['executor']}, {spec['workers']} worker(s)): {res['trials']} trials in {res['wall_s']:.1f} s = "
+            f"{res['trials'] / res['wall_s']:.2f} trials/s, {res['successes']} successes, worker peak RSS "
+            f"{res['worker_peak_mb']:.0f} MB, coordinator {res['self_peak_mb']:.0f} MB, table {res['digest']}",
+            flush=True,
+        )
+    if rows:
+        base_spec, base = rows[0]
+        print(f"\nratios to {base_spec['name']} (wall time; efficiency = speed-up / workers x base workers):")
+        for spec, res in rows:
+            speed = base["wall_s"] / res["wall_s"]
+            eff = speed * base_spec["workers"] / spec["workers"]
+            print(f"  {spec['name']}: speed-up {speed:.2f}x, efficiency {eff * 100:.0f} %, "
+                  f"same table: {res['digest'] == base['digest']}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--terrains", type=int, default=2, help="terrains per D (full study: 20)")
-    ap.add_argument("--missions", type=int, default=20, help="missions per terrain (full study: 20)")
-    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    p = sub.add_parser("profile")
+    p.add_argument("--terrains", type=int, default=1, help="terrains per D")
+    p.add_argument("--missions", type=int, default=4)
+    c = sub.add_parser("compare")
+    c.add_argument("--terrains", type=int, default=1, help="terrains per D (full study: 20)")
+    c.add_argument("--missions", type=int, default=20, help="missions per terrain (full study: 20)")
+    c.add_argument("--variant", action="append", default=[], help="NAME[:k=v,...] (repeat); the first is the base")
     args = ap.parse_args()
-    print(f"machine: {machine_description()}")
-    print(f"store: {bench_store() * 1e6:.0f} us per committed trial")
-    for w in args.workers:
-        wall, n, full, ok = bench_paper(args.terrains, args.missions, w)
-        print(
-            f"paper study, {args.terrains} terrains x 3 D x {args.missions} missions = {n} trials, {w} worker(s): "
-            f"{wall:.1f} s ({n / wall:.2f} trials/s, {ok} successes); full {full} trials extrapolated: "
-            f"{wall * full / n / 60:.1f} min"
-        )
+    sys.path.insert(0, str(ROOT))
+    from offroadbench.study.store import machine_description
+
+    print(f"machine: {machine_description()}; load average {os.getloadavg()[0]:.1f}")
+    if args.cmd == "profile":
+        profile(args.terrains, args.missions)
+    else:
+        compare(args.variant or ["local-2:workers=2", "local-1:workers=1"], args.terrains, args.missions)
 
 
 if __name__ == "__main__":
