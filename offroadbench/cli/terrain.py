@@ -103,14 +103,20 @@ def format_terrain_report(rep, label: str) -> str:
 
 def cmd_analyze(args: argparse.Namespace) -> int:
     from offroadbench.analysis.describe import describe_terrain
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile, tail_report
     from offroadbench.analysis.roughness import RoughnessConfig
 
     rcfg = RoughnessConfig(border_m=args.border_m, closing_radius_m=args.closing_radius_m)
+    check_clip_percentile(args.clip_percentile)
     plot = None
     if args.plot:
         plot = check_output_file(args.plot, "--plot", suffixes=(".png", ".pdf", ".svg"))
         check_output_file(_surface_plot_path(plot), "--plot")
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
+    hm = clip_percentile(hm, args.clip_percentile)  # P = 0 (the default) keeps every height
+    tails = tail_report(hm)
+    if tails.dominated:
+        log.warning("%s: %s", label, tails.message())
     rep = describe_terrain(hm, rcfg, crater_diameters_m=crater_diameters(recipe, args.seed))
     print(format_terrain_report(rep, label))
     if plot is not None:
@@ -180,6 +186,8 @@ def register(sub) -> None:
     p.add_argument("--plot", help="write a figure: hillshade beside the class map (paper Fig. 4a)")
     p.add_argument("--border-m", type=float_at_least(0, "--border-m"), default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--closing-radius-m", type=float_at_least(0, "--closing-radius-m"), default=0.25, help="closing disk radius, m (default 0.25)")
+    p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
+                   help="clip heights to the P..100-P percentiles first (not in the paper; default 0 = keep every height)")
     p.add_argument("--cell-size-m", type=positive_float, help="cell size for a PNG without sidecar, m")
     p.add_argument("--relief-m", type=nonnegative_float, help="relief of a PNG without sidecar, m")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key (presets only)")

@@ -110,3 +110,26 @@ def test_bad_seed_and_counts_exit_2(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["roughness-study", "--terrains", "0"])
     assert exc.value.code == 2
+
+
+def test_analyze_warns_about_a_spire_and_clips_on_request(tmp_path, capsys, caplog):
+    import logging
+
+    from offroadbench import Heightmap
+    from offroadbench.io.png16 import write_png16
+
+    y, x = np.mgrid[0:120, 0:120] * 0.05
+    z = 0.6 + 0.2 * np.sin(3 * x) * np.cos(2 * y)
+    z[0, 0] = 3.84  # one corner sample holds most of the relief, as on the paper presets
+    write_png16(Heightmap(z, 0.05), tmp_path / "spire.png")
+    with caplog.at_level(logging.WARNING, logger="offroadbench.cli.terrain"):
+        code, out, err = run(capsys, "analyze", str(tmp_path / "spire.png"), "--border-m", "0.5")
+    assert code == 0, err
+    assert "top 0.1 % of samples span" in caplog.text and "relief 3.440 m" in out
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="offroadbench.cli.terrain"):
+        code, out, err = run(capsys, "analyze", str(tmp_path / "spire.png"), "--border-m", "0.5", "--clip-percentile", "0.1")
+    assert code == 0, err
+    assert "span" not in caplog.text and "relief 0.39" in out
+    code, _, err = run(capsys, "analyze", str(tmp_path / "spire.png"), "--clip-percentile", "-1")
+    assert code == 2 and "--clip-percentile -1.0 is out of range" in err
