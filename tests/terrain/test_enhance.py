@@ -208,7 +208,7 @@ def test_generation_reads_no_file_the_recipe_loader_reads_them(tmp_path, monkeyp
     [
         ({"generator": "dem", "path": 3}, r"layers\.base\.path must be a path string"),
         ({"generator": "dem", "source_cell_size_m": -1.0}, r"layers\.base\.source_cell_size_m = -1\.0 is out of range"),
-        ({"generator": "dem", "path": "/no/such/dem.npy"}, "does not exist"),
+        ({"generator": "dem", "path": "/no/such/dem.npy"}, "no such file"),
         ({"generator": "dem", "dem": 1}, r"layers\.base\.dem cannot be written in a recipe"),
     ],
 )
