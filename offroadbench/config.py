@@ -90,6 +90,8 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
     origin = typing.get_origin(annotation)
     if annotation is float and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
+    if origin is tuple and not isinstance(value, (list, tuple)):
+        raise InputError(f"{name} = {value!r:.60}: expected a list")
     if origin is tuple and isinstance(value, list):
         args = typing.get_args(annotation)
         if len(args) == 2 and args[1] is Ellipsis:

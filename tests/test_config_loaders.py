@@ -84,3 +84,50 @@ def test_flat_configs_load_or_raise_input_error(cls, data):
 def test_any_toml_value_as_a_whole_table(whole):
     for cls in CLASSES:
         _assert_loads_or_input_error(lambda d: from_dict(cls, d), whole)
+def _leaves(d, prefix=()):
+    for k, v in d.items():
+        if isinstance(v, dict):
+            yield from _leaves(v, (*prefix, k))
+        yield (*prefix, k)
+
+
+def _mutate(base: dict, data) -> dict:
+    out = copy.deepcopy(base)
+    paths = list(_leaves(out))
+    for _ in range(data.draw(st.integers(1, 3))):
+        path = data.draw(st.sampled_from(paths))
+        node = out
+        for p in path[:-1]:
+            node = node.get(p) if isinstance(node, dict) else None
+            if not isinstance(node, dict):
+                break
+        else:
+            if data.draw(st.booleans()):
+                node[path[-1]] = data.draw(TOML)
+            else:
+                node.pop(path[-1], None)
+    return out
+
+
+@SETTINGS
+@given(data=st.data())
+def test_recipes_load_or_raise_input_error(data):
+    from offroadbench.terrain.recipe import load_recipe, recipe_from_dict
+
+    base = dict(load_recipe(data.draw(st.sampled_from(["paper-d2.45", "lunar-mare"]))).data)
+    _assert_loads_or_input_error(recipe_from_dict, _mutate(base, data))
+
+
+@SETTINGS
+@given(data=st.data())
+def test_studies_load_or_raise_input_error(data):
+    from offroadbench.config import load_toml
+    from offroadbench.study.spec import plan_cells, study_from_dict
+
+    base = load_toml(SMOKE)
+
+    def load(d):
+        study = study_from_dict(d)
+        return study, plan_cells(study)
+
+    _assert_loads_or_input_error(load, _mutate(base, data))

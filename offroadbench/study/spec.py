@@ -331,6 +331,9 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
     bad = sorted(set(head) - set(_STUDY_KEYS))
     if bad:
         raise InputError(f"{where}: [study]: unknown key(s) {', '.join(bad)}; known keys: {', '.join(_STUDY_KEYS)}")
+    for name in ("grid", "recipe_overrides", "reference"):
+        if not isinstance(data.get(name, {}), dict):
+            raise InputError(f"{where}: [{name}] must be a table")
     grid = []
     for key, values in _flatten(data.get("grid", {})).items():
         if not isinstance(values, list):

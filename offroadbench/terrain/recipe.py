@@ -175,6 +175,8 @@ _FILE_READERS = {"craters": _crater_file, "dem": _dem_file}
 
 # --------------------------------------------------------------------------- validation
 def _check_keys(table: Mapping[str, Any], allowed, where: str) -> None:
+    if not isinstance(table, Mapping):
+        raise InputError(f"{where}: expected a table, got {type(table).__name__} {table!r:.40}")
     unknown = sorted(set(table) - set(allowed))
     if unknown:
         raise InputError(f"{where}: unknown key(s) {', '.join(unknown)}; known keys: {', '.join(allowed)}")
