@@ -93,10 +93,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out, "--out") if args.out else None
     vehicle = load_vehicle(args.vehicle)
     sim = SimConfig() if args.physics_rate_hz is None else SimConfig(physics_rate_hz=args.physics_rate_hz)
-    hm, label, _ = load_heightmap_arg(args.terrain, args.seed, sets=args.set, force=args.force)
+    from offroadbench.seeding import terrain_seed
+
+    tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
+    hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=args.set, force=args.force)
     with bar("missions", unit="mission") as progress:
-        run = drive_missions(hm, args.missions, args.seed, length_m=args.length_m, vehicle=vehicle, sim=sim,
-                             planner=args.planner, progress=progress)
+        run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
+                             length_m=args.length_m, vehicle=vehicle, sim=sim, planner=args.planner, progress=progress)
     print(format_drive_run(run, label))
     if out is not None:
         written = write_drive_run(run, out, label, args.plot)
@@ -109,7 +112,9 @@ def register(sub) -> None:
                        description="Sample missions on one terrain (paper Sec. 2.3), drive them with the "
                        "vehicle and print a per-mission table and a summary.")
     p.add_argument("terrain", help="a 16-bit PNG heightmap (with its .json sidecar) or a preset / recipe TOML")
-    p.add_argument("--seed", type=seed_arg, default=0, help="terrain seed (presets) and mission seed (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0,
+                   help="root seed (default 0): a preset's terrain is terrain 0 of it, shown as 'seed N' "
+                   "(generate --seed N rebuilds it), and mission k has seed mission_seed(seed, 0, k)")
     p.add_argument("--missions", type=positive_int, default=20, help="number of missions (default 20)")
     p.add_argument("--length-m", type=positive_float, default=35.0, help="start-goal distance, m (default 35, paper)")
     p.add_argument("--out", help="directory for trials.csv, telemetry/ and figures (created if missing)")

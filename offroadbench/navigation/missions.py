@@ -20,7 +20,7 @@ from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["MissionConfig", "Mission", "sample_missions"]
+__all__ = ["MissionConfig", "Mission", "sample_missions", "sample_mission"]
 
 #: candidates drawn per vectorised batch while sampling
 _BATCH = 256
@@ -145,3 +145,15 @@ def sample_missions(
             )
         missions.append(found)
     return missions
+
+
+def sample_mission(hm: Heightmap, closed_classes: np.ndarray, cfg: MissionConfig, index: int, seed: int) -> Mission:
+    """Mission ``index`` drawn alone from its own seed (:func:`offroadbench.seeding.mission_seed`),
+    so it does not depend on which other missions are drawn, pending or done."""
+    import dataclasses
+
+    from offroadbench.seeding import mission_rng
+
+    (mission,) = sample_missions(hm, closed_classes, dataclasses.replace(cfg, count=1), mission_rng(seed))
+    return dataclasses.replace(mission, index=index)
+

@@ -8,9 +8,11 @@ with the missions, one :class:`~offroadbench.sim.runner.TrialResult` per mission
 
 Importing this module does not import pybullet; calling :func:`drive_missions` does.
 
-Seeds. The missions come from the second child of ``SeedSequence(seed)``
-(:func:`mission_rng`), apart from the terrain's stream, so the same seed gives the same
-missions and the same table.
+Seeds (:mod:`offroadbench.seeding`). ``seed`` is a root seed, as a study's ``root_seed``: the
+run is terrain 0 of it (whose integer seed :func:`~offroadbench.seeding.terrain_seed` gives;
+``offroadbench drive`` builds its preset terrains from it) and mission k is drawn alone from
+``mission_seed(seed, 0, k)``. So ``drive --seed s`` drives the missions of terrain 0 of a paired
+study with ``root_seed = s``, and the same seed gives the same missions and the same table.
 """
 
 from __future__ import annotations
@@ -23,19 +25,15 @@ import numpy as np
 
 from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
 from offroadbench.heightmap import Heightmap
-from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_mission
 from offroadbench.progress import ProgressFn, report
+from offroadbench.seeding import mission_seed
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
 
-__all__ = ["DriveRun", "drive_missions", "mission_rng", "SUMMARY_MEDIANS"]
+__all__ = ["DriveRun", "drive_missions", "SUMMARY_MEDIANS"]
 
 #: metrics whose median over the successful trials the summary reports
 SUMMARY_MEDIANS = ("traversal_time_s", "rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
-
-
-def mission_rng(seed: int) -> np.random.Generator:
-    """The missions' generator: the second child of ``SeedSequence(seed)`` (the first is the terrain's)."""
-    return np.random.default_rng(np.random.SeedSequence(seed).spawn(2)[1])
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +52,11 @@ class DriveRun:
     """Physics settings used."""
     missions: tuple[Mission, ...]
     """The missions, in sampling order."""
+    mission_seeds: tuple[int, ...] = ()
+    """Each mission's seed (offroadbench.seeding.mission_seed), same order."""
+    terrain_seed: int | None = None
+    """The terrain's seed (what ``offroadbench generate --seed`` takes), None for a terrain not
+    generated from a seed (e.g. read from a PNG)."""
     results: tuple = ()
     """One TrialResult per mission, same order."""
     telemetry: Mapping[int, Mapping[str, np.ndarray]] = field(default_factory=dict)
@@ -80,8 +83,11 @@ class DriveRun:
         return out
 
     def rows(self) -> list[dict]:
-        """One flat row per trial (``TrialResult.as_row()``)."""
-        return [r.as_row() for r in self.results]
+        """One flat row per trial: the terrain and mission seeds, then ``TrialResult.as_row()``."""
+        return [
+            {"terrain_seed": self.terrain_seed, "mission_seed": mseed, **r.as_row()}
+            for r, mseed in zip(self.results, self.mission_seeds)
+        ]
 
 
 def drive_missions(
@@ -89,6 +95,7 @@ def drive_missions(
     n: int,
     seed: int,
     *,
+    terrain_seed: int | None = None,
     length_m: float = 35.0,
     vehicle="husky",
     sim: SimConfig = SimConfig(),
@@ -98,7 +105,10 @@ def drive_missions(
     planner="straight",
     progress: ProgressFn | None = None,
 ) -> DriveRun:
-    """Sample ``n`` missions of ``length_m`` on ``hm`` with ``seed`` and drive them all.
+    """Sample ``n`` missions of ``length_m`` on ``hm`` from the root ``seed`` and drive them all.
+
+    Mission k is drawn alone from ``mission_seed(seed, 0, k)`` (see the module docstring);
+    ``terrain_seed`` is only recorded (the seed ``hm`` was generated from, if any).
 
     ``vehicle`` is a VehicleSpec or a vehicle name / ``vehicle.toml`` path; ``planner`` a planner or
     policy name (offroadbench.navigation) or a PlannerChoice, planning on the closed map inside the
@@ -113,12 +123,13 @@ def drive_missions(
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     closed = classify_terrain(hm, roughness).closed
     mcfg = MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m)
-    missions = tuple(sample_missions(hm, closed, mcfg, mission_rng(seed)))
+    mseeds = tuple(mission_seed(seed, 0, k) for k in range(n))
+    missions = tuple(sample_mission(hm, closed, mcfg, k, s) for k, s in enumerate(mseeds))
     kwargs = dict(planner=choice, classes=closed, border_m=mcfg.border_m, controller=controller, rules=rules)
     results, telemetry, paths = _drive(hm, missions, spec, sim, kwargs, progress)
     return DriveRun(
         heightmap=hm, closed=closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
-        missions=missions, results=tuple(results), telemetry=telemetry, planner=choice.name, paths=paths,
+        missions=missions, mission_seeds=mseeds, terrain_seed=terrain_seed, results=tuple(results), telemetry=telemetry, planner=choice.name, paths=paths,
     )
 
 

@@ -2,7 +2,8 @@
 
 Each episode is one mission drawn by :func:`offroadbench.navigation.missions.sample_missions` (Majhor & Bos
 Sec. 2.3) on the closed roughness-class map of the terrain (Eq. 3-4), with the generator Gymnasium
-seeds in ``reset(seed=...)``: the same seed gives the same mission and, because
+seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's seed follows
+:mod:`offroadbench.seeding`): the same seed gives the same mission and, because
 :meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
 
 - **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
@@ -123,7 +124,9 @@ class TraverseEnv(gym.Env):
     """Drive sampled missions on one terrain with (v, omega) commands; see the module docstring.
 
     ``terrain`` is a preset name, a recipe TOML path or a :class:`Heightmap`. A preset or recipe is
-    generated with ``terrain_seed`` after ``overrides`` (dotted recipe keys; default
+    generated with ``terrain_seed``, the integer ``offroadbench generate --seed`` takes and every
+    terrain table shows (terrain j of a root seed s is ``offroadbench.seeding.terrain_seed(s, j)``),
+    after ``overrides`` (dotted recipe keys; default
     :data:`DEFAULT_OVERRIDES`, a 12 m map; pass ``{}`` for the recipe's own size). The terrain and
     its PyBullet world are built once, in the constructor; call :meth:`close` to free them.
     """

@@ -80,12 +80,12 @@ def _pm(med: float, iqr: float) -> str:
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
     from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.study.seeds import terrain_seed
+    from offroadbench.seeding import terrain_seed
     from offroadbench.study.spec import build_section
     from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
 
     info = meta["cells"][cell]
-    seed = terrain_seed(meta["study"]["root_seed"], info["seed_key"], terrain)
+    seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=info["seed_key"])
     hm = generate_terrain(recipe_from_dict(info["recipe"]), seed)
     rcfg = build_section("roughness", info["settings"].get("roughness", {}), "report")
     maps = classify_terrain(hm, rcfg)

@@ -3,9 +3,11 @@
 For each high-frequency fractal dimension D, generate N terrains and measure the area fraction of
 the low / semi / high roughness classes inside the 5 m border, before the morphological closing.
 
-Seeds: terrain j of every D uses the j-th child of ``SeedSequence(seed)``, so the D values are
-compared on the same random phases (common random numbers): the differences between D groups come
-from D, not from which phases each group happened to draw. Results do not depend on run order.
+Seeds (:mod:`offroadbench.seeding`): terrain j of every D is built from ``terrain_seed(seed, j)``,
+the seed of terrain j of a paired study with ``root_seed = seed``, so the D values are compared on
+the same random phases (common random numbers): the differences between D groups come from D, not
+from which phases each group happened to draw. Results do not depend on run order. The table shows
+each terrain's seed: ``offroadbench generate --seed <terrain_seed> --set <dim_key>=<D>`` rebuilds it.
 """
 
 from __future__ import annotations
@@ -13,12 +15,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-import numpy as np
 import pandas as pd
 
 from offroadbench.analysis.roughness import RoughnessConfig, class_fractions, classify
 from offroadbench.errors import InputError
 from offroadbench.progress import ProgressFn, report
+from offroadbench.seeding import terrain_seed
 from offroadbench.terrain.recipe import Recipe, apply_overrides, generate_terrain
 
 __all__ = ["RoughnessStudy", "run_roughness_study", "roughness_study", "summarise_roughness_study", "PAPER_FIG5_CHANGES_PP"]
@@ -38,20 +40,22 @@ def roughness_study(
     roughness: RoughnessConfig = RoughnessConfig(),
     progress: ProgressFn | None = None,
 ) -> pd.DataFrame:
-    """One row per (D, terrain): class area fractions in percent, plus the terrain seed index."""
+    """One row per (D, terrain): ``D``, ``terrain`` (index j), ``terrain_seed`` and the class area
+    fractions in percent."""
     if terrains < 1:
         raise InputError(f"terrains must be >= 1, got {terrains}")
     if not dims:
         raise InputError("dims: give at least one fractal dimension")
     recipes = [apply_overrides(recipe, {dim_key: float(d)}) for d in dims]  # validates every D first
-    children = np.random.SeedSequence(seed).spawn(terrains)
+    seeds = [terrain_seed(seed, j) for j in range(terrains)]
     rows = []
     total = len(dims) * terrains
     for i, (d, rec) in enumerate(zip(dims, recipes)):
-        for j, child in enumerate(children):
-            hm = generate_terrain(rec, child)
+        for j, tseed in enumerate(seeds):
+            hm = generate_terrain(rec, tseed)
             frac = class_fractions(classify(hm, roughness), hm.cell_size_m, roughness.border_m)
-            rows.append({"D": float(d), "terrain": j, **{f"{k}_pct": 100.0 * v for k, v in frac.items()}})
+            rows.append({"D": float(d), "terrain": j, "terrain_seed": tseed,
+                         **{f"{k}_pct": 100.0 * v for k, v in frac.items()}})
             report(progress, i * terrains + j + 1, total)
     return pd.DataFrame(rows)
 
@@ -72,7 +76,8 @@ class RoughnessStudy:
     """The result of :func:`run_roughness_study`."""
 
     terrains: pd.DataFrame
-    """One row per (D, terrain): ``D``, ``terrain`` and the class areas ``low_pct`` .. ``high_pct``."""
+    """One row per (D, terrain): ``D``, ``terrain``, ``terrain_seed`` (what ``generate --seed`` takes)
+    and the class areas ``low_pct`` .. ``high_pct``."""
     summary: pd.DataFrame
     """Per D: terrains, median class areas (percent) and their change from the previous D (pp)."""
     paper_changes_pp: pd.DataFrame

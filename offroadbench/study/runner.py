@@ -17,7 +17,7 @@ from typing import Any, Callable, Mapping
 from offroadbench import resources
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
-from offroadbench.study import seeds
+from offroadbench import seeding
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
 from offroadbench.study.executors import StudyError, get_executor
@@ -76,12 +76,12 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
     for j in range(study.terrains_per_cell):
         for plan in plans:
             pending = tuple(
-                (k, seeds.mission_seed(study.root_seed, plan.key, j, k))
+                (k, seeding.mission_seed(study.root_seed, j, k, cell=plan.key))
                 for k in range(study.missions_per_terrain)
                 if (plan.index, j, k) not in done
             )
             if pending:
-                tseed = seeds.terrain_seed(study.root_seed, plan.key, j)
+                tseed = seeding.terrain_seed(study.root_seed, j, cell=plan.key)
                 tasks.append(TerrainTask(cell=plan, terrain=j, terrain_seed=tseed, missions=pending,
                                          telemetry=study.telemetry))
     return tasks

@@ -8,7 +8,7 @@ File layout (every table but ``[study]`` is optional)::
     root_seed = 2023
     terrains_per_cell = 20
     missions_per_terrain = 20
-    paired_terrains = true          # see offroadbench.study.seeds
+    paired_terrains = true          # see offroadbench.seeding
     telemetry = "failed"            # keep telemetry of: none | failed | all trials (Parquet)
 
     [grid]                          # axes of the parameter grid: dotted key = [values]
@@ -51,7 +51,7 @@ from offroadbench.navigation.missions import MissionConfig
 from offroadbench.navigation.planners import planner_from_table
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
 from offroadbench.sim.vehicle import vehicle_from_table
-from offroadbench.study import seeds
+from offroadbench import seeding
 
 __all__ = [
     "SECTIONS",
@@ -138,7 +138,7 @@ class StudyConfig:
     description: str = ""
     """Free text shown in the report."""
     paired_terrains: bool = True
-    """Terrain j of every cell comes from the same seed (common random numbers); see seeds."""
+    """Terrain j of every cell comes from the same seed (common random numbers); see offroadbench.seeding."""
     telemetry: str = "failed"
     """Trials whose telemetry (20 Hz, Parquet, with the planned path) the run directory keeps:
     ``none``, ``failed`` (for ``study replay`` forensics) or ``all``."""
@@ -286,7 +286,7 @@ def plan_cells(study: StudyConfig, base_dir: Path | None = None, check_sections:
         plan = CellPlan(
             index=index,
             values=values,
-            key=seeds.cell_key(values, study.paired_terrains),
+            key=seeding.cell_key(values, study.paired_terrains),
             recipe_data=dict(recipe.data),
             settings={k: v for k, v in settings.items() if v},
         )

@@ -19,23 +19,22 @@ cell's own ``[roughness]`` config and plans inside the ``[missions]`` border.
 Replays. :func:`replay_trial` re-runs one stored trial from the run directory alone (its recipe,
 settings and seeds) and says whether the new row equals the stored one.
 
-Missions. Mission k of terrain j is drawn alone from ``default_rng(mission_seed(j, k))`` on the
+Seeds (:mod:`offroadbench.seeding`). The terrain is ``generate_terrain(recipe, terrain_seed)``;
+mission k of terrain j is drawn alone from its ``mission_seed`` on the
 closed class map (Majhor & Bos 2023, Sec. 2.3: start in low roughness, goal in low or semi, 35 m
 apart, 5 m border), so it does not depend on which other missions are drawn or pending.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping, Sequence
 
-import numpy as np
-
+from offroadbench.navigation.missions import sample_mission
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["TerrainTask", "TrialFn", "run_terrain", "collect_terrain", "sample_mission", "sim_trials", "keeps_telemetry",
+__all__ = ["TerrainTask", "TrialFn", "run_terrain", "collect_terrain", "sim_trials", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: ``trial_fn(hm, missions, cell) -> iterator of TrialResult.as_row() dicts, one per mission, in order``
@@ -57,15 +56,6 @@ class TerrainTask:
 def keeps_telemetry(setting: str, success: bool) -> bool:
     """Whether a trial's telemetry is kept under ``setting`` (none / failed / all)."""
     return setting == "all" or (setting == "failed" and not success)
-
-
-def sample_mission(hm, closed, mcfg, index: int, seed: int):
-    """Mission ``index`` drawn alone from its own seed (see the module docstring)."""
-    from offroadbench.navigation.missions import sample_missions
-
-    one = dataclasses.replace(mcfg, count=1)
-    (mission,) = sample_missions(hm, closed, one, np.random.default_rng(seed))
-    return dataclasses.replace(mission, index=index)
 
 
 def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[tuple]:

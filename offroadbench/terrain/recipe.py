@@ -30,15 +30,15 @@ layer) has it read here, through :mod:`offroadbench.io`, when the recipe is buil
 holds the data (``CraterConfig.craters``, ``DEMConfig.dem``). Relative paths are relative to the
 working directory.
 
-Randomness: each layer's generator is seeded from (seed, layer name) with ``SeedSequence``, so
-adding, removing or reordering layers never changes another layer's random numbers.
+Randomness: each layer's generator is seeded from (seed, layer name)
+(:func:`offroadbench.seeding.layer_rng`), so adding, removing or reordering layers never changes
+another layer's random numbers.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -49,6 +49,7 @@ from offroadbench import resources
 from offroadbench.config import check_int, check_range, config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.seeding import layer_rng, seed_sequence
 from offroadbench.io.craters_csv import read_craters
 from offroadbench.io.dem import read_dem
 from offroadbench.registry import unknown_name
@@ -65,8 +66,6 @@ __all__ = [
     "recipe_from_dict",
     "apply_overrides",
     "generate_terrain",
-    "seed_sequence",
-    "layer_rng",
 ]
 
 COMBINE_MODES = ("replace", "sum", "product", "apply")
@@ -263,22 +262,6 @@ def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:
 
 
 # --------------------------------------------------------------------------- generation
-def seed_sequence(seed: int | np.random.SeedSequence) -> np.random.SeedSequence:
-    """A SeedSequence from an int seed (>= 0) or pass one through."""
-    if isinstance(seed, np.random.SeedSequence):
-        return seed
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
-    return np.random.SeedSequence(int(seed))
-
-
-def layer_rng(root: np.random.SeedSequence, layer_name: str) -> np.random.Generator:
-    """The random stream of one layer: a child of ``root`` keyed by the layer's name."""
-    key = zlib.crc32(layer_name.encode())
-    child = np.random.SeedSequence(entropy=root.entropy, spawn_key=(*root.spawn_key, key))
-    return np.random.default_rng(child)
-
-
 def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heightmap:
     """Run the recipe's layers in order and return the Heightmap (pure: no I/O)."""
     root = seed_sequence(seed)

@@ -14,6 +14,12 @@ def test_drive_writes_csv_figures_and_prints_summary(tmp_path, capsys):
     assert "success rate" in text and "rms_pitch_rate" in text
     df = pd.read_csv(out / "trials.csv")
     assert list(df["mission_index"]) == [0, 1]
+    # the seeds of terrain 0 of root seed 2 (offroadbench.seeding), shown for every trial
+    from offroadbench.seeding import mission_seed, terrain_seed
+
+    assert list(df["terrain_seed"]) == [terrain_seed(2, 0)] * 2
+    assert list(df["mission_seed"]) == [mission_seed(2, 0, 0), mission_seed(2, 0, 1)]
+    assert f"paper-d2.3 seed {terrain_seed(2, 0)}" in text
     assert {"success", "failure_reason", "traversal_time_s", "rms_vertical_accel_m_s2"} <= set(df.columns)
     for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.npz"):
         assert (out / name).stat().st_size > 0

@@ -5,11 +5,9 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from offroadbench.errors import InputError
-from offroadbench.study import seeds
 from offroadbench.study.spec import load_study, plan_cells, study_from_dict, study_id
 from offroadbench.study.runner import plan_tasks
 
@@ -97,17 +95,6 @@ def test_study_file_errors_name_the_file(tmp_path):
     p.write_text('[study]\nname = "x"\nrecipe = "paper-d2.45"\nroot_seed = 1\n[grid]\n"recipe.layers.base.D_high" = [4.0]\n')
     with pytest.raises(InputError, match=r"s\.toml.*D_high"):
         load_study(p)
-
-
-def test_derived_seeds_equal_the_spawn_tree():
-    root = np.random.SeedSequence(11)
-    stream = root.spawn(2)[seeds.MISSION_STREAM]
-    cell = stream.spawn(1)[0]
-    terrain = cell.spawn(3)[2]
-    mission = terrain.spawn(5)[4]
-    expected = int(mission.generate_state(1, np.uint64)[0] >> np.uint64(1))
-    assert seeds.mission_seed(11, 0, 2, 4) == expected
-    assert 0 <= expected < 2**63
 
 
 def test_seeds_do_not_depend_on_counts_or_order():

@@ -14,6 +14,7 @@ import numpy as np
 from offroadbench.config import check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.seeding import layer_rng, seed_sequence
 from offroadbench.terrain.craters.population import PopulationConfig, degradation_from_age, sample_population
 from offroadbench.terrain.craters.stamp import StampOptions, stamp_craters
 from offroadbench.terrain.craters.table import CraterTable
@@ -90,8 +91,6 @@ def recipe_craters(recipe, seed) -> dict[str, CraterTable]:
     distribution). Craters are sampled over the recipe's grid extent, as in generation (every
     registered generator and modifier keeps that extent in metres).
     """
-    from offroadbench.terrain.recipe import layer_rng, seed_sequence
-
     root = seed_sequence(seed)
     grid = recipe.grid
     return {
