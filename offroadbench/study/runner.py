@@ -187,12 +187,11 @@ def run_study(
                 store.add_terrain(cell, terrain, tseed, stats)
                 return
             _, cell, terrain, mission, tseed, mseed, row, kept = msg
-            if store.add_trial(cell, terrain, mission, tseed, mseed, row):
+            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id):
                 if kept is not None:
                     save_trial_telemetry(run_dir, cell, terrain, mission, kept)
                 ran += 1
                 done += 1
-                store.note_progress(run_id, ran)
                 if on_trial is not None:
                     on_trial(row)
                 report(progress, done, total)
@@ -208,7 +207,7 @@ def run_study(
             status = "failed"
             raise
         finally:
-            store.finish_run(run_id, ran, status)
+            store.finish_run(run_id, status)
         done, successes = store.counts()
     except BaseException as exc:
         stored = store.counts()[0]

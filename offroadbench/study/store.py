@@ -146,14 +146,27 @@ class Store:
             (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)),
         )
 
-    def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping) -> bool:
-        """Commit one trial at once. Returns False (and stores nothing) if it was already there."""
+    def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping,
+                  run_id: int | None = None) -> bool:
+        """Commit one trial at once. Returns False (and stores nothing) if it was already there.
+
+        With ``run_id`` the session's ``trials_run`` counter is raised in the same transaction, so
+        a process killed at any instant leaves the counters summing to the stored trials.
+        """
         text = json.dumps(dict(row))
-        cur = self.con.execute(
-            "INSERT OR IGNORE INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?)",
-            (cell, terrain, mission, terrain_seed, mission_seed, int(bool(row["success"])), text),
-        )
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            cur = self.con.execute(
+                "INSERT OR IGNORE INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?)",
+                (cell, terrain, mission, terrain_seed, mission_seed, int(bool(row["success"])), text),
+            )
+            if cur.rowcount and run_id is not None:
+                self.con.execute("UPDATE runs SET finished=?, trials_run=trials_run+1 WHERE id=?", (time.time(), run_id))
+            self.con.execute("COMMIT")
+        except BaseException:
+            self.con.execute("ROLLBACK")
+            raise
         if cur.rowcount == 0:
             (old,) = self.con.execute(
                 "SELECT row FROM trials WHERE cell=? AND terrain=? AND mission=?", (cell, terrain, mission)
@@ -190,14 +203,9 @@ class Store:
         )
         return int(cur.lastrowid)
 
-    def finish_run(self, run_id: int, trials_run: int, status: str) -> None:
-        self.con.execute(
-            "UPDATE runs SET finished=?, trials_run=?, status=? WHERE id=?", (time.time(), trials_run, status, run_id)
-        )
-
-    def note_progress(self, run_id: int, trials_run: int) -> None:
-        """Keep the session row current, so a killed session still shows its work and end time."""
-        self.con.execute("UPDATE runs SET finished=?, trials_run=? WHERE id=?", (time.time(), trials_run, run_id))
+    def finish_run(self, run_id: int, status: str) -> None:
+        """Close a session. Its ``trials_run`` was counted by :meth:`add_trial`, trial by trial."""
+        self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
 
     def runs(self) -> list[dict[str, Any]]:
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
