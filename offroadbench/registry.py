@@ -50,18 +50,19 @@ class Registry(Generic[T]):
 
     Args:
         kind: what an entry is, for messages ("planner", "terrain generator", ...).
-        entry_point_group: the ``importlib.metadata`` entry-point group whose entries are added on
-            first read (None: no plug-ins).
+        entry_point_group: the ``importlib.metadata`` entry-point group (or tuple of groups) whose
+            entries are added on first read (None: no plug-ins).
         loader: called once before the first read, to import the modules that register the
             built-in entries (e.g. ``lambda: importlib.import_module("offroadbench.terrain")``).
-        adapt: turns an entry-point's loaded object into an entry (default: the object itself).
+        adapt: turns an entry-point's loaded object into an entry (default: the object itself); a
+            TypeError or ValueError from it skips that plug-in with a warning.
     """
 
     def __init__(
         self,
         kind: str,
         *,
-        entry_point_group: str | None = None,
+        entry_point_group: str | tuple[str, ...] | None = None,
         loader: Callable[[], object] | None = None,
         adapt: Callable[[str, object], T] | None = None,
     ) -> None:
@@ -104,7 +105,8 @@ class Registry(Generic[T]):
             self._load_entry_points()
 
     def _load_entry_points(self) -> None:
-        for ep in metadata.entry_points(group=self.entry_point_group):
+        groups = (self.entry_point_group,) if isinstance(self.entry_point_group, str) else self.entry_point_group
+        for ep in (ep for group in groups for ep in metadata.entry_points(group=group)):
             if ep.name in self._entries:
                 log.warning("%s %r from package entry point %s is ignored: the name is taken", self.kind, ep.name, ep.value)
                 continue
@@ -113,7 +115,12 @@ class Registry(Generic[T]):
             except Exception as exc:  # a broken plug-in must not break the tool
                 log.warning("%s plug-in %r (%s) failed to load: %s", self.kind, ep.name, ep.value, exc)
                 continue
-            self._entries[ep.name] = self._adapt(ep.name, obj) if self._adapt else obj
+            try:
+                entry = self._adapt(ep.name, obj) if self._adapt else obj
+            except (TypeError, ValueError) as exc:
+                log.warning("%s plug-in %r (%s) is not usable: %s", self.kind, ep.name, ep.value, exc)
+                continue
+            self._entries[ep.name] = entry
 
     def get(self, name: str) -> T:
         """The entry called ``name``; an unknown name is an InputError with close matches."""

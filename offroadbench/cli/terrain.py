@@ -35,14 +35,13 @@ log = logging.getLogger(__name__)
 def cmd_terrains(args: argparse.Namespace) -> int:
     from offroadbench import resources
     from offroadbench.terrain.recipe import list_presets
-    from offroadbench.terrain.registry import TERRAIN_REGISTRY, get_spec
+    from offroadbench.terrain.registry import TERRAIN_REGISTRY
 
     presets = list_presets()  # none found: InputError, exit 2
     print(f"Terrain presets ({', '.join(str(r) for r in resources.roots('terrains'))}):")
     width = max((len(n) for n in presets), default=10)
     for name, desc in presets.items():
         print(f"  {name:<{width}}  {desc}")
-    get_spec("wm")  # make sure every generator is registered
     print("\nGenerators and modifiers (use in recipe [layers.NAME] tables):")
     for name, spec in sorted(TERRAIN_REGISTRY.items()):
         print(f"  {name:<14} {spec.kind:<9}  {spec.summary}")

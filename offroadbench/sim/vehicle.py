@@ -9,6 +9,7 @@ added as files. The TOML's ``[vehicle]`` table maps one-to-one onto :class:`Vehi
 from __future__ import annotations
 
 import dataclasses
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -16,9 +17,9 @@ from typing import Any, Mapping
 from offroadbench import resources
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
-from offroadbench.registry import unknown_name
+from offroadbench.registry import Registry, unknown_name
 
-__all__ = ["VehicleSpec", "load_vehicle", "list_vehicles", "vehicle_from_table"]
+__all__ = ["VehicleSpec", "VEHICLES", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -80,9 +81,34 @@ class VehicleSpec:
         return self.left_wheel_joints + self.right_wheel_joints
 
 
+def _toml_of(name: str, obj: object) -> Path:
+    """An entry point names a vehicle.toml, or the folder holding one (a path or a Traversable)."""
+    if not isinstance(obj, (str, os.PathLike)) and not hasattr(obj, "joinpath"):
+        raise TypeError(f"entry point {name!r} must name a vehicle.toml path, got {type(obj).__name__}")
+    path = Path(str(obj))
+    path = path / "vehicle.toml" if path.is_dir() else path
+    if not path.is_file():
+        raise ValueError(f"vehicle {name!r}: {path} does not exist")
+    return path
+
+
+#: vehicles of installed packages: entry-point group ``offroadbench.vehicles``, each naming a
+#: vehicle.toml (or its folder)
+VEHICLES: Registry[Path] = Registry("vehicle", entry_point_group="offroadbench.vehicles", adapt=_toml_of)
+
+
+def vehicle_files() -> dict[str, Path]:
+    """{name: vehicle.toml} of every known vehicle: the search path and the shipped ones
+    (:func:`offroadbench.resources.vehicle_files`, read on every call), then installed packages'."""
+    found = resources.vehicle_files()
+    for name, path in VEHICLES.items():
+        found.setdefault(name, path)
+    return dict(sorted(found.items()))
+
+
 def list_vehicles() -> list[str]:
-    """Names of the vehicles found through :func:`offroadbench.resources.vehicle_files`."""
-    return list(resources.vehicle_files())
+    """Names of every known vehicle (:func:`vehicle_files`)."""
+    return list(vehicle_files())
 
 
 def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
@@ -93,7 +119,7 @@ def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
     text = str(name_or_path)
     path = Path(text)
     if not (path.suffix == ".toml" or path.is_file()):
-        found = resources.vehicle_files()
+        found = vehicle_files()
         if text not in found:
             raise unknown_name("vehicle", text, found, extra="(or give the path of a vehicle.toml)")
         path = found[text]

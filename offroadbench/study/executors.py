@@ -26,6 +26,7 @@ import traceback
 from typing import Callable, Sequence
 
 from offroadbench.errors import InputError, StudyError
+from offroadbench.registry import Registry
 from offroadbench.study.tasks import TerrainTask, TrialFn, collect_terrain, run_terrain
 
 __all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
@@ -372,15 +373,18 @@ class DaskExecutor:
             quiet.setLevel(old)
 
 
-#: executor name -> class(workers, scheduler)
-EXECUTORS = {"local": LocalExecutor, "inline": InlineExecutor, "dask": DaskExecutor}
+#: executor name -> class(workers, scheduler, **options); installed packages add executor classes
+#: through the entry-point group ``offroadbench.executors``
+EXECUTORS: Registry[type] = Registry("executor", entry_point_group="offroadbench.executors")
+EXECUTORS.register("local", LocalExecutor)
+EXECUTORS.register("inline", InlineExecutor)
+EXECUTORS.register("dask", DaskExecutor)
 
 
 def get_executor(name: str, workers: int | None = None, scheduler: str | None = None, **options):
     """An executor by name; an unknown name lists the known ones. ``options`` go to the executor
     (``trial_timeout_s`` for dask)."""
-    if name not in EXECUTORS:
-        raise InputError(f"--executor {name!r} is not known; known: {', '.join(EXECUTORS)}")
+    cls = EXECUTORS.get(name)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise InputError(f"--workers = {workers!r}; must be an integer >= 1")
-    return EXECUTORS[name](workers, scheduler, **options)
+    return cls(workers, scheduler, **options)

@@ -16,10 +16,11 @@ Register with the decorator::
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from offroadbench.errors import InputError
+from offroadbench.registry import Registry
 
 __all__ = ["TerrainSpec", "register", "get_spec", "TERRAIN_REGISTRY"]
 
@@ -36,8 +37,26 @@ class TerrainSpec:
     fn: Callable[..., Any]
     summary: str = ""
 
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
 
-TERRAIN_REGISTRY: dict[str, TerrainSpec] = {}
+
+def _from_entry_point(name: str, obj: object) -> TerrainSpec:
+    """An installed package's entry point names a :class:`TerrainSpec` (generator or modifier)."""
+    if not isinstance(obj, TerrainSpec):
+        raise TypeError(f"entry point {name!r} must name a TerrainSpec, got {type(obj).__name__}")
+    return obj if obj.name == name else TerrainSpec(name, obj.kind, obj.config_cls, obj.fn, obj.summary)
+
+
+#: every generator and modifier by name; installed packages add TerrainSpec objects through the
+#: entry-point groups ``offroadbench.generators`` and ``offroadbench.modifiers``
+TERRAIN_REGISTRY: Registry[TerrainSpec] = Registry(
+    "terrain generator",
+    entry_point_group=("offroadbench.generators", "offroadbench.modifiers"),
+    loader=lambda: importlib.import_module("offroadbench.terrain"),  # importing it registers the built-ins
+    adapt=_from_entry_point,
+)
 
 
 def register(name: str, config_cls: type, *, kind: str = "generator", summary: str = ""):
@@ -46,20 +65,12 @@ def register(name: str, config_cls: type, *, kind: str = "generator", summary: s
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
 
     def deco(fn):
-        if name in TERRAIN_REGISTRY:
-            raise ValueError(f"terrain {kind} {name!r} is registered twice")
-        TERRAIN_REGISTRY[name] = TerrainSpec(name=name, kind=kind, config_cls=config_cls, fn=fn, summary=summary)
+        TERRAIN_REGISTRY.add(name, TerrainSpec(name=name, kind=kind, config_cls=config_cls, fn=fn, summary=summary))
         return fn
 
     return deco
 
 
 def get_spec(name: str) -> TerrainSpec:
-    """The registry entry for ``name``; an unknown name lists the known ones."""
-    import offroadbench.terrain  # noqa: F401  (importing the package registers every generator)
-
-    try:
-        return TERRAIN_REGISTRY[name]
-    except KeyError:
-        known = ", ".join(sorted(TERRAIN_REGISTRY))
-        raise InputError(f"unknown terrain generator {name!r}; known: {known}") from None
+    """The registry entry for ``name``; an unknown name suggests the closest known ones."""
+    return TERRAIN_REGISTRY.get(name)

@@ -40,7 +40,7 @@ def _run(spec, cfg, seed):
 
 @pytest.mark.parametrize("name", sorted(TERRAIN_REGISTRY))
 def test_generator_contract(name):
-    spec = TERRAIN_REGISTRY[name]
+    spec = TERRAIN_REGISTRY.get(name)
     cfg = _example_cfg(spec)
     before = pickle.dumps(cfg)
     a = _run(spec, cfg, 1)

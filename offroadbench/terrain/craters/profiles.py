@@ -21,13 +21,14 @@ with no rim, Martin et al. 2014, Sec. I.C). How it maps to each profile's parame
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from offroadbench.errors import InputError
+from offroadbench.registry import Registry
 
 __all__ = [
     "CraterProfile",
@@ -67,7 +68,19 @@ class CraterProfile:
     summary: str
 
 
-PROFILES: dict[str, CraterProfile] = {}
+def _from_entry_point(name: str, obj: object) -> CraterProfile:
+    """An installed package's entry point names a :class:`CraterProfile`."""
+    if not isinstance(obj, CraterProfile):
+        raise TypeError(f"entry point {name!r} must name a CraterProfile, got {type(obj).__name__}")
+    if obj.mode not in MODES:
+        raise ValueError(f"profile {name!r}: mode must be one of {MODES}, got {obj.mode!r}")
+    return obj if obj.name == name else dataclasses.replace(obj, name=name)
+
+
+#: every crater profile by name; installed packages add CraterProfile objects through the
+#: entry-point group ``offroadbench.profiles``
+PROFILES: Registry[CraterProfile] = Registry("crater profile", entry_point_group="offroadbench.profiles",
+                                             adapt=_from_entry_point)
 
 
 def register_profile(name: str, *, mode: str, extent: float, summary: str):
@@ -76,20 +89,15 @@ def register_profile(name: str, *, mode: str, extent: float, summary: str):
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
 
     def deco(fn: HeightFn) -> HeightFn:
-        if name in PROFILES:
-            raise ValueError(f"crater profile {name!r} is registered twice")
-        PROFILES[name] = CraterProfile(name=name, mode=mode, extent=extent, height=fn, summary=summary)
+        PROFILES.add(name, CraterProfile(name=name, mode=mode, extent=extent, height=fn, summary=summary))
         return fn
 
     return deco
 
 
 def get_profile(name: str) -> CraterProfile:
-    """The registered profile ``name``; an unknown name lists the known ones."""
-    try:
-        return PROFILES[name]
-    except KeyError:
-        raise InputError(f"unknown crater profile {name!r}; known: {', '.join(sorted(PROFILES))}") from None
+    """The registered profile ``name``; an unknown name suggests the closest known ones."""
+    return PROFILES.get(name)
 
 
 def profile_height(name: str, r_m, diameter_m: float, degradation: float = 0.0) -> np.ndarray:
