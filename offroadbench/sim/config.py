@@ -12,7 +12,10 @@ from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
 
-__all__ = ["SimConfig", "ControllerConfig", "FailureRules"]
+__all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS"]
+
+#: values of SimConfig.tyre_model
+TYRE_MODELS = ("bullet", "coulomb")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -34,6 +37,10 @@ class SimConfig:
     """Magnitude of gravity, m/s^2."""
     terrain_friction: float = 1.0
     """Friction coefficient of the terrain; Bullet multiplies it with the vehicle's."""
+    tyre_model: str = "coulomb"
+    """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
+    the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
+    off; Coulomb forces against each contact's slip velocity, applied every step)."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -48,6 +55,7 @@ class SimConfig:
         check_range(self, "spawn_clearance_m", self.spawn_clearance_m, lo=0)
         check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
+        check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -58,6 +58,17 @@ class VehicleSpec:
     """Vertical contact stiffness of each tyre, N/m (None: Bullet's rigid contact)."""
     tyre_damping_n_s_m: float | None = None
     """Vertical contact damping of each tyre, N s/m (needed with tyre_stiffness_n_m)."""
+    wheel_spin_inertia_kg_m2: float | None = None
+    """Moment of inertia of each wheel about its axle as the motor sees it, kg m^2: the tyre's own
+    plus the gearbox's reflected motor inertia (rotor inertia x gear ratio^2). Set on the wheel links
+    after loading (None: the URDF's value). See offroadbench.sim.contact for why it matters."""
+    rated_climb_grade_deg: float | None = None
+    """Steepest grade the maker says the vehicle climbs, degrees (spec sheet; shown beside the
+    measured figure by offroadbench.sim.check, never used in the simulation)."""
+    rated_side_slope_deg: float | None = None
+    """Steepest side slope the maker says the vehicle traverses, degrees (spec sheet; as above)."""
+    rated_step_m: float | None = None
+    """Highest step the maker says the vehicle climbs, metres (spec sheet; as above)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "left_wheel_joints", tuple(self.left_wheel_joints))
@@ -70,6 +81,13 @@ class VehicleSpec:
         check_range(self, "skid_track_factor", self.skid_track_factor, lo=1.0)
         check_range(self, "wheel_friction", self.wheel_friction, lo=0, lo_open=True)
         check_range(self, "chassis_friction", self.chassis_friction, lo=0)
+        for name in ("rated_climb_grade_deg", "rated_side_slope_deg"):
+            if getattr(self, name) is not None:
+                check_range(self, name, getattr(self, name), lo=0, hi=90, lo_open=True)
+        if self.rated_step_m is not None:
+            check_range(self, "rated_step_m", self.rated_step_m, lo=0, lo_open=True)
+        if self.wheel_spin_inertia_kg_m2 is not None:
+            check_range(self, "wheel_spin_inertia_kg_m2", self.wheel_spin_inertia_kg_m2, lo=0, lo_open=True)
         if (self.tyre_stiffness_n_m is None) != (self.tyre_damping_n_s_m is None):
             raise InputError("vehicle: give both tyre_stiffness_n_m and tyre_damping_n_s_m, or neither")
         if self.tyre_stiffness_n_m is not None:

@@ -37,6 +37,7 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
+from offroadbench.sim.contact import CoulombTyres
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["World"]
@@ -137,12 +138,29 @@ class World:
         self.left_joints = [names[n] for n in spec.left_wheel_joints]
         self.right_joints = [names[n] for n in spec.right_wheel_joints]
         self.wheel_joints = self.left_joints + self.right_joints
-        pb.changeDynamics(body, -1, lateralFriction=spec.chassis_friction, physicsClientId=self._cid)
+        cid = self._cid
+        pb.changeDynamics(body, -1, lateralFriction=spec.chassis_friction, physicsClientId=cid)
         tyre = {}
         if spec.tyre_stiffness_n_m is not None:
             tyre = {"contactStiffness": spec.tyre_stiffness_n_m, "contactDamping": spec.tyre_damping_n_s_m}
+        coulomb = self.sim.tyre_model == "coulomb"
         for j in self.wheel_joints:
-            pb.changeDynamics(body, j, lateralFriction=spec.wheel_friction, **tyre, physicsClientId=self._cid)
+            pb.changeDynamics(body, j, lateralFriction=0.0 if coulomb else spec.wheel_friction, **tyre,
+                              physicsClientId=cid)
+            if spec.wheel_spin_inertia_kg_m2 is not None:
+                ixx, _, izz = pb.getDynamicsInfo(body, j, physicsClientId=cid)[2]
+                pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
+                                  physicsClientId=cid)
+        self._tyres = None
+        if coulomb:
+            n_links = pb.getNumJoints(body, physicsClientId=cid)
+            mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
+            share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
+            dt = self.dt_s
+            # bristle well inside the explicit step's stability bound (k dt^2/m < 1, c dt/m < 2)
+            self._tyres = CoulombTyres(cid, body, self.terrain_body, self.wheel_joints,
+                                       spec.wheel_friction * self.sim.terrain_friction, dt,
+                                       stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
         return body
 
     # ------------------------------------------------------------------ vehicle state
@@ -173,8 +191,10 @@ class World:
         z = ground + self._bottom_offset() + self.sim.spawn_clearance_m
         pb.resetBasePositionAndOrientation(body, [x_m, y_m, z], orn, physicsClientId=cid)
         self.command_wheels(0.0, 0.0)
+        if self._tyres is not None:
+            self._tyres.reset()
         for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
-            pb.stepSimulation(physicsClientId=cid)
+            self.step()
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), clipped to
@@ -201,6 +221,9 @@ class World:
         )
 
     def step(self) -> None:
+        """One physics step (with the Coulomb tyre forces first, if that model is on)."""
+        if self._tyres is not None:
+            self._tyres.apply()
         pb.stepSimulation(physicsClientId=self._cid)
 
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:

@@ -6,7 +6,7 @@ import pytest
 
 from offroadbench.sim import ControllerConfig, load_vehicle
 from offroadbench.sim.controller import LineTracker, SpeedProfile, pure_pursuit_omega
-from offroadbench.sim.skid_steer import wheel_speeds
+from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
 
 
 def test_pure_pursuit_curvature():
@@ -67,8 +67,23 @@ def test_line_tracker_steers_back_to_the_line():
 
 def test_skid_steer_wheel_speeds():
     spec = load_vehicle("husky")
+    r = spec.wheel_radius_m
     left, right = wheel_speeds(1.0, 0.0, spec)
-    assert left == right == pytest.approx(1.0 / 0.165)
+    assert left == right == pytest.approx(1.0 / r)
     left, right = wheel_speeds(0.0, 1.0, spec)  # turn in place, CCW
-    half = 0.5 * 1.875 * 0.571
-    assert left == pytest.approx(-half / 0.165) and right == pytest.approx(half / 0.165)
+    half = 0.5 * 1.875 * spec.track_m
+    assert left == pytest.approx(-half / r) and right == pytest.approx(half / r)
+
+
+def test_wheel_speeds_saturate_at_the_top_speed_keeping_the_curvature():
+    spec = load_vehicle("husky")
+    r, half = spec.wheel_radius_m, 0.5 * spec.skid_track_factor * spec.track_m
+    left, right = wheel_speeds(1.0, 0.5, spec)  # the outer side would need 1 + 0.5 * 0.535 m/s
+    assert max(abs(left), abs(right)) * r == pytest.approx(spec.max_speed_m_s)
+    assert (right - left) / (right + left) == pytest.approx(0.5 * half / 1.0)  # omega * half / v kept
+    v, w = achievable_twist(1.0, 0.5, spec)
+    assert w / v == pytest.approx(0.5) and v < 1.0
+    left, right = wheel_speeds(0.0, 2.0, spec)  # in place: 2 * 0.535 = 1.07 m/s > 1 m/s at the tyres
+    assert right * r == pytest.approx(spec.max_speed_m_s) and left == pytest.approx(-right)
+    assert achievable_twist(0.0, 2.0, spec)[1] == pytest.approx(spec.max_speed_m_s / half)
+    assert achievable_twist(0.5, 0.2, spec) == pytest.approx((0.5, 0.2))  # within the limit: unchanged

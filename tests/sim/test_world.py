@@ -55,7 +55,7 @@ def test_vehicle_by_name_or_path_and_errors(tmp_path):
     assert "husky" in list_vehicles()
     spec = load_vehicle("husky")
     assert isinstance(spec, VehicleSpec) and Path(spec.urdf).is_file()
-    assert spec.max_speed_m_s == 1.0 and spec.wheel_radius_m == 0.165
+    assert spec.max_speed_m_s == 1.0 and spec.wheel_radius_m == 0.1651
     by_path = load_vehicle(Path(spec.urdf).parent / "vehicle.toml")
     assert by_path == spec
     with pytest.raises(InputError, match="unknown vehicle .*known: .*husky"):
@@ -75,12 +75,14 @@ def test_urdf_has_real_masses_and_inertias():
     with World(Heightmap.flat(41, 41, CELL)) as world:
         cid, body = world.client_id, world.vehicle_id
         base = pb.getDynamicsInfo(body, -1, physicsClientId=cid)
-        assert base[0] == pytest.approx(46.0)
-        assert base[2] == pytest.approx((1.48369, 3.96818, 4.98414), rel=1e-4)  # box, not recomputed
+        assert base[0] == pytest.approx(46.034)  # Clearpath's URDF
+        assert base[2] == pytest.approx((0.6022, 1.7386, 2.0296), rel=1e-4)  # as written, not recomputed
+        assert base[3][2] == pytest.approx(-0.0618)  # centre of mass below the box centre
         for j in world.wheel_joints:
             info = pb.getDynamicsInfo(body, j, physicsClientId=cid)
-            assert info[0] == pytest.approx(2.6)
-            assert info[2][1] == pytest.approx(0.5 * 2.6 * 0.165**2, rel=1e-4)  # spin axis: m r^2 / 2
+            assert info[0] == pytest.approx(2.637)
+            assert info[2][0] == pytest.approx(0.02467, rel=1e-4)
+            assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)  # drive train added
 
 
 def test_close_is_clean_and_idempotent():

@@ -1,0 +1,417 @@
+"""Vehicle check: does the simulated vehicle do what its spec sheet and its geometry say?
+
+:func:`check_vehicle` builds small flat and stepped worlds and measures, with the same World,
+contact model and skid-steer drive the trials use:
+
+- **yaw-rate tracking**, in place and at cruise speed, at headings 0, 22.5 and 45 deg (Bullet's
+  friction directions sit on the world axes, so a heading-dependent contact shows here) for
+  commands 0.25-2 rad/s (capped at the vehicle's yaw-rate limit). The expected value is the
+  command after the wheel-speed saturation of :func:`offroadbench.sim.skid_steer.wheel_speeds`
+  (:func:`~offroadbench.sim.skid_steer.achievable_twist`); pass: 0.85-1.1x.
+- **straight-line drift**: lateral offset after 10 m driven open loop at cruise speed on flat
+  ground (expected 0; pass: under 1 % of the distance).
+- **stopping distance** from top speed when the wheels are commanded to stop, against
+  ``v^2 / (2 a)`` with ``a = min(max_accel, mu g)`` (the vehicle's rated deceleration, or what
+  the grip allows); pass: 0.5-1.5x. The drive train's spin inertia lengthens it.
+- **static tip angle** on a tilt table: the table (here: gravity, turned about the vehicle's long
+  axis; the same thing for a rigid vehicle on flat ground) tilts slowly, with a grippy surface
+  so the vehicle cannot slide, until the uphill wheels leave the ground. Expected: the
+  geometric ``atan((track / 2) / h)`` with ``h`` the height of the whole vehicle's centre of mass
+  above the ground, measured on the settled vehicle; pass: within 2 deg.
+- **steepest slope climbed from rest** (gravity turned about the lateral axis): bisection on the
+  grade at which the vehicle, started at rest, gains 1 m uphill. Expected: the quasi-static limit
+  of :func:`climb_limit_deg` (load transfer to the rear axle, each axle limited by its grip or its
+  motors' torque); pass: within 3 deg. A second row sets it beside the spec sheet's grade, if the
+  vehicle has one, and says what limits it when it falls short.
+- **side slope held** (gravity turned about the long axis, the vehicle's own friction): the
+  tilt at which the parked vehicle starts to slide or tip, against ``min(atan(mu), tip angle)``
+  (within 2 deg) and against the spec sheet's side slope.
+- **highest step climbed** at cruise speed from 1.5 m away (bisection on the height of a step
+  across a 2 cm grid). Expected: the geometric bound, the wheel radius, or the height of the
+  chassis belly if the chassis reaches past the tyres (it then strikes the step edge first);
+  pass: 0.6-1.05x.
+
+All measurements are in SI units; angles are reported in degrees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+import pybullet as pb
+
+from offroadbench.heightmap import Heightmap
+from offroadbench.progress import ProgressFn, report
+from offroadbench.sim.config import SimConfig
+from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.world import World
+
+__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG"]
+
+#: yaw-rate commands of the tracking checks, rad/s (capped at the vehicle's limit)
+YAW_COMMANDS_RAD_S = (0.25, 0.5, 1.0, 2.0)
+#: headings of the tracking checks, degrees from the world x axis
+HEADINGS_DEG = (0.0, 22.5, 45.0)
+
+_FLAT_CELL_M = 0.1
+_STEP_CELL_M = 0.02
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One figure of the vehicle check."""
+
+    name: str
+    """What was measured, e.g. ``yaw rate in place, heading 22.5 deg, command 1 rad/s``."""
+    measured: float
+    """The simulated figure, in ``unit``."""
+    expected: float
+    """The spec sheet's figure or the geometric/physical expectation, in ``unit``."""
+    unit: str
+    """Unit of ``measured`` and ``expected``."""
+    ok: bool
+    """True when ``measured`` is within ``tolerance`` of ``expected``."""
+    tolerance: str = ""
+    """The pass rule, in words."""
+    note: str = ""
+    """Where the expectation comes from, or why the figure falls short of it."""
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+# ---------------------------------------------------------------------------- helpers
+def _set_gravity(world: World, tilt_rad: float, about: str) -> None:
+    """Gravity turned by ``tilt_rad`` about the world x (``about="x"``, downhill toward -y) or y
+    axis (downhill toward -x): a flat world becomes a uniform slope of that angle."""
+    g = world.sim.gravity_m_s2
+    s, c = g * math.sin(tilt_rad), g * math.cos(tilt_rad)
+    vec = (0.0, -s, -c) if about == "x" else (-s, 0.0, -c)
+    pb.setGravity(*vec, physicsClientId=world.client_id)
+
+
+def _yaw(world: World) -> float:
+    _, q, _, _ = world.base_state()
+    r = world.rotation_matrix(q)
+    return math.atan2(r[3], r[0])
+
+
+def _run(world: World, seconds: float, each: Callable[[], None] | None = None) -> None:
+    for _ in range(int(round(seconds * world.sim.physics_rate_hz))):
+        world.step()
+        if each is not None:
+            each()
+
+
+def _mean_yaw_rate(world: World, v: float, omega: float, heading: float, seconds: float = 3.0) -> float:
+    """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega)."""
+    c = world.hm.width_m / 2.0
+    world.spawn(c, c, heading)
+    world.command_wheels(*wheel_speeds(v, omega, world.spec))
+    _run(world, seconds / 2.0)
+    yaws = []
+    _run(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
+    y = np.unwrap(yaws)
+    return float((y[-1] - y[0]) / ((len(y) - 1) / world.sim.physics_rate_hz))
+
+
+def _com_height(world: World) -> float:
+    """Height of the whole vehicle's centre of mass above the ground (flat map, z = 0), metres."""
+    cid, body = world.client_id, world.vehicle_id
+    total = pb.getDynamicsInfo(body, -1, physicsClientId=cid)[0]
+    z = total * world.base_state()[0][2]
+    for link in range(pb.getNumJoints(body, physicsClientId=cid)):
+        m = pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
+        z += m * pb.getLinkState(body, link, physicsClientId=cid)[0][2]
+        total += m
+    return z / total - world.hm.z_max_m
+
+
+def _total_mass(world: World) -> float:
+    cid, body = world.client_id, world.vehicle_id
+    return sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
+               for link in range(-1, pb.getNumJoints(body, physicsClientId=cid)))
+
+
+def _wheel_load(world: World, joints: Sequence[int]) -> float:
+    """Summed normal force on the given wheels in the last step, N."""
+    return sum(c[9] for c in pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_body,
+                                                physicsClientId=world.client_id) if c[3] in joints)
+
+
+def _ramp_tilt(world: World, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
+               end_deg: float = 80.0) -> float:
+    """Tilt gravity about x from ``start_deg`` at ``rate_deg_s`` until ``stop()``; the angle, deg."""
+    n = int(round((end_deg - start_deg) / rate_deg_s * world.sim.physics_rate_hz))
+    for k in range(n):
+        angle = start_deg + rate_deg_s * k / world.sim.physics_rate_hz
+        _set_gravity(world, math.radians(angle), "x")
+        world.step()
+        if stop():
+            return angle
+    return end_deg
+
+
+def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> float:
+    """Largest value in [lo, hi] for which ``ok`` holds (``ok(lo)`` assumed), to ``tol``."""
+    if ok(hi):
+        return hi
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _ratio_row(name, measured, expected, unit, lo, hi, note="") -> CheckResult:
+    ok = expected > 0 and lo <= measured / expected <= hi
+    return CheckResult(name, measured, expected, unit, bool(ok), f"{lo:g}-{hi:g} x expected", note)
+
+
+def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
+    return CheckResult(name, measured, expected, unit, bool(abs(measured - expected) <= tol), f"within {tol:g} {unit}", note)
+
+
+# ---------------------------------------------------------------------------- the checks
+def _yaw_tracking(world: World, headings_deg, commands) -> list[CheckResult]:
+    spec = world.spec
+    cruise = min(1.0, spec.max_speed_m_s)
+    rows = []
+    for mode, v in (("in place", 0.0), (f"at {cruise:g} m/s", cruise)):
+        for h in headings_deg:
+            for w in commands:
+                w = min(w, spec.max_yaw_rate_rad_s)
+                _, w_ach = achievable_twist(v, w, spec)
+                got = _mean_yaw_rate(world, v, w, math.radians(h))
+                note = "" if w_ach == w else f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s"
+                rows.append(_ratio_row(f"yaw rate {mode}, heading {h:g} deg, command {w:g} rad/s",
+                                       got, w_ach, "rad/s", 0.85, 1.1, note))
+    return rows
+
+
+def _drift(world: World) -> CheckResult:
+    spec = world.spec
+    v = min(1.0, spec.max_speed_m_s)
+    heading = math.radians(22.5)
+    x0, y0 = 2.0, 2.0
+    world.spawn(x0, y0, heading)
+    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    along = 0.0
+    pos = world.base_state()[0]
+    for _ in range(int(round(30.0 * world.sim.physics_rate_hz))):
+        world.step()
+        pos = world.base_state()[0]
+        along = (pos[0] - x0) * math.cos(heading) + (pos[1] - y0) * math.sin(heading)
+        if along >= 10.0:
+            break
+    lateral = -(pos[0] - x0) * math.sin(heading) + (pos[1] - y0) * math.cos(heading)
+    return _abs_row("straight-line drift over 10 m", abs(lateral), 0.0, "m", 0.1,
+                    f"open loop at {v:g} m/s, heading 22.5 deg; {along:.1f} m driven")
+
+
+def _stopping(world: World) -> CheckResult:
+    spec = world.spec
+    v = spec.max_speed_m_s
+    world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
+    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    _run(world, 2.0 + 3.0 * v / spec.max_accel_m_s2)
+    speed = math.hypot(*world.base_state()[2][:2])
+    start = world.base_state()[0]
+    world.command_wheels(0.0, 0.0)
+    for _ in range(int(round(5.0 * world.sim.physics_rate_hz))):
+        world.step()
+        if math.hypot(*world.base_state()[2][:2]) < 0.01:
+            break
+    end = world.base_state()[0]
+    dist = math.hypot(end[0] - start[0], end[1] - start[1])
+    mu = spec.wheel_friction * world.sim.terrain_friction
+    decel = min(spec.max_accel_m_s2, mu * world.sim.gravity_m_s2)
+    expected = speed * speed / (2.0 * decel)
+    return _ratio_row("stopping distance from top speed", dist, expected, "m", 0.5, 1.5,
+                      f"from {speed:.2f} m/s; expected v^2 / (2 min(max_accel, mu g)), a = {decel:.2f} m/s^2")
+
+
+def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckResult, float]:
+    grippy = dataclasses.replace(sim, terrain_friction=max(sim.terrain_friction, 5.0 / spec.wheel_friction))
+    with World(hm, spec, grippy) as world:
+        c = hm.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        h = _com_height(world)
+        expected = math.degrees(math.atan2(spec.track_m / 2.0, h))
+        # downhill toward -y: the right side; the left (uphill) wheels unload at the tip angle
+        left = world.left_joints
+        angle = _ramp_tilt(world, 1.0, lambda: _wheel_load(world, left) <= 0.0, start_deg=expected - 15.0)
+    row = _abs_row("static tip angle (tilt table)", angle, expected, "deg", 2.0,
+                   f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground; "
+                   "grippy table so the vehicle cannot slide")
+    return row, expected
+
+
+def _side_slope(world: World, tip_deg: float) -> list[CheckResult]:
+    spec = world.spec
+    c = world.hm.width_m / 2.0
+    world.spawn(c, c, 0.0)
+    y0 = world.base_state()[0][1]
+    left = world.left_joints
+
+    def moved() -> bool:
+        return abs(world.base_state()[0][1] - y0) > 0.02 or _wheel_load(world, left) <= 0.0
+
+    angle = _ramp_tilt(world, 1.0, moved, start_deg=20.0)
+    _set_gravity(world, 0.0, "x")
+    mu = spec.wheel_friction * world.sim.terrain_friction
+    slide = math.degrees(math.atan(mu))
+    expected = min(slide, tip_deg)
+    rows = [_abs_row("side slope held, parked", angle, expected, "deg", 2.0,
+                     f"slides at atan(mu) = {slide:.1f} deg (mu = {mu:g}) or tips at {tip_deg:.1f} deg")]
+    if spec.rated_side_slope_deg is not None:
+        rows.append(CheckResult("side slope held vs spec sheet", angle, spec.rated_side_slope_deg, "deg",
+                                angle >= spec.rated_side_slope_deg, "at least the spec sheet's"))
+    return rows
+
+
+def _climbs(world: World, grade_deg: float) -> bool:
+    """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 8 s."""
+    spec = world.spec
+    c = world.hm.width_m / 2.0
+    world.spawn(c - 3.0, c, 0.0)
+    _set_gravity(world, math.radians(grade_deg), "y")
+    x0 = world.base_state()[0][0]
+    world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
+    for _ in range(int(round(8.0 * world.sim.physics_rate_hz))):
+        world.step()
+        if world.base_state()[0][0] - x0 >= 1.0:
+            _set_gravity(world, 0.0, "y")
+            return True
+    _set_gravity(world, 0.0, "y")
+    return False
+
+
+def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float, wheels_per_axle: int,
+                    wheel_radius_m: float, torque_nm: float, mu: float, g: float = 9.81) -> float:
+    """Steepest grade a rigid two-axle vehicle climbs at constant speed, degrees (quasi-static).
+
+    On a grade ``theta`` the axle loads are ``m g (cos(theta) / 2 -+ sin(theta) h / (2 a))`` (front,
+    rear; ``h`` the centre-of-mass height, ``a`` half the wheelbase, the centre of mass midway), and
+    each axle pushes at most ``min(mu N_axle, n tau / r)``: its grip or its motors' torque. The
+    grade is the largest ``theta`` at which the two together still match ``m g sin(theta)``.
+    """
+
+    def margin(theta: float) -> float:
+        c, s = math.cos(theta), math.sin(theta)
+        shift = s * com_height_m / (2.0 * half_wheelbase_m)
+        push = sum(min(mu * mass_kg * g * max(0.0, 0.5 * c + sign * shift),
+                       wheels_per_axle * torque_nm / wheel_radius_m) for sign in (-1.0, 1.0))
+        return push - mass_kg * g * s
+
+    lo, hi = 0.0, 0.5 * math.pi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def _climb(world: World) -> list[CheckResult]:
+    spec = world.spec
+    grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+    mu = spec.wheel_friction * world.sim.terrain_friction
+    cid, body = world.client_id, world.vehicle_id
+    half_base = 0.5 * (max(pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints)
+                       - min(pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints))
+    per_axle = len(world.wheel_joints) // 2
+    expected = climb_limit_deg(_total_mass(world), _com_height(world), half_base, per_axle, spec.wheel_radius_m,
+                               spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2)
+    grip = math.degrees(math.atan(mu))
+    rows = [_abs_row("steepest grade climbed from rest", grade, expected, "deg", 3.0,
+                     f"quasi-static limit with load transfer to the rear axle, per-axle grip (mu = {mu:g}) "
+                     f"and motor torque ({spec.wheel_torque_limit_nm:g} N m per wheel); grip alone: {grip:.1f} deg")]
+    if spec.rated_climb_grade_deg is not None:
+        rated = spec.rated_climb_grade_deg
+        why = "" if grade >= rated - 3.0 else (
+            f"short of the sheet: the limit of this model is {expected:.1f} deg (load transfer unloads the "
+            f"front tyres; the rear motors reach their torque limit); the grip limit atan(mu) is {grip:.1f} deg")
+        rows.append(CheckResult("steepest grade climbed vs spec sheet", grade, rated, "deg", grade >= rated - 3.0,
+                                "at least the spec sheet's less 3 deg", why))
+    return rows
+
+
+def _step_world(height_m: float, spec: VehicleSpec) -> Heightmap:
+    length = 8.0
+    width = max(2.0, 4.0 * spec.track_m)
+    x = np.arange(int(round(length / _STEP_CELL_M)) + 1) * _STEP_CELL_M
+    z = np.where(x >= 4.0, height_m, 0.0)
+    return Heightmap(np.tile(z, (int(round(width / _STEP_CELL_M)) + 1, 1)), _STEP_CELL_M)
+
+
+def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float) -> bool:
+    hm = _step_world(height_m, spec)
+    with World(hm, spec, sim) as world:
+        world.spawn(2.5, hm.height_m / 2.0, 0.0)
+        world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
+        for _ in range(int(round(10.0 * sim.physics_rate_hz))):
+            world.step()
+            if world.base_state()[0][0] > 5.5:
+                return True
+    return False
+
+
+def _step(spec: VehicleSpec, sim: SimConfig, belly_m: float, overhang: bool) -> CheckResult:
+    top = 1.2 * spec.wheel_radius_m
+    height = _bisect(lambda h: _climbs_step(spec, sim, h), 0.0, top, 0.01)
+    expected = min(spec.wheel_radius_m, belly_m) if overhang else spec.wheel_radius_m
+    note = ("geometric bound: the belly height, the chassis reaches past the tyres" if overhang and belly_m < spec.wheel_radius_m
+            else "geometric bound: the wheel radius")
+    if spec.rated_step_m is not None:
+        expected, note = spec.rated_step_m, "spec sheet"
+    return _ratio_row("highest step climbed at cruise speed", height, expected, "m", 0.6, 1.05, note)
+
+
+def check_vehicle(
+    vehicle: VehicleSpec | str,
+    sim: SimConfig = SimConfig(),
+    *,
+    headings_deg: Sequence[float] = HEADINGS_DEG,
+    yaw_commands_rad_s: Sequence[float] = YAW_COMMANDS_RAD_S,
+    progress: ProgressFn | None = None,
+) -> list[CheckResult]:
+    """Measure the vehicle on small test worlds; one :class:`CheckResult` per figure (module docstring)."""
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    quick = dataclasses.replace(sim, settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    rows: list[CheckResult] = []
+    total = 6
+    tip_row, tip_deg = _tip_angle(spec, quick, flat)
+    report(progress, 1, total)
+    with World(flat, spec, quick) as world:
+        rows += _yaw_tracking(world, headings_deg, yaw_commands_rad_s)
+        report(progress, 2, total)
+        rows.append(_drift(world))
+        rows.append(_stopping(world))
+        report(progress, 3, total)
+        rows.append(tip_row)
+        rows += _side_slope(world, tip_deg)
+        rows += _climb(world)
+        report(progress, 4, total)
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        belly, overhang = _belly(world)
+    report(progress, 5, total)
+    rows.append(_step(spec, quick, belly, overhang))
+    report(progress, 6, total)
+    return rows
+
+
+def _belly(world: World) -> tuple[float, bool]:
+    """(height of the chassis' lowest point above the ground, whether the chassis reaches further
+    forward than the front of the tyres) for the settled vehicle on flat ground."""
+    cid, body = world.client_id, world.vehicle_id
+    lo, hi = pb.getAABB(body, -1, physicsClientId=cid)
+    front_tyre = max(pb.getAABB(body, j, physicsClientId=cid)[1][0] for j in world.wheel_joints)
+    return lo[2] - world.hm.z_max_m, hi[0] > front_tyre + 1e-3
