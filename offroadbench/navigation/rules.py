@@ -3,7 +3,9 @@ and the Gymnasium env.
 
 A trial ends, checked in this order at every telemetry sample:
 
-* ``tipped``: |roll| or |pitch| above ``tip_angle_deg`` (paper: 75 deg);
+* ``tipped``: |roll| or |pitch| above ``tip_angle_deg`` (paper: 75 deg), or the tilt of the body's
+  z axis from the vertical above it. For Z-Y-X Euler angles ``cos(tilt) = cos(roll) cos(pitch)``,
+  so the tilt catches a vehicle lying on a corner (roll and pitch both 60 deg: tilt 75.5 deg);
 * ``off_map``: the base left the map horizontally, or fell ``fall_depth_m`` below its lowest point;
 * success (end reason ``""``): the base within ``goal_tolerance_m`` of the goal (horizontal);
 * ``stuck``: the base stayed within ``stuck_distance_m`` of where it was one stuck window ago
@@ -43,7 +45,8 @@ class FailureRules:
     """When a trial ends, paper Sec. 2.4 (tip-over 75 deg; stuck = under 0.2 m in 30 s)."""
 
     tip_angle_deg: float = 75.0
-    """A trial fails as ``tipped`` once |roll| or |pitch| exceeds this, degrees."""
+    """A trial fails as ``tipped`` once |roll|, |pitch| or the tilt of the body z axis from the
+    vertical exceeds this, degrees."""
     stuck_distance_m: float = 0.2
     """A trial fails as ``stuck`` if the vehicle stays within this distance of where it was ..."""
     stuck_window_s: float = 30.0
@@ -97,7 +100,7 @@ def end_reason(rules: FailureRules, bounds: tuple[float, float, float], goal_xy,
     ``window`` the stuck window in samples.
     """
     tip = math.radians(rules.tip_angle_deg)
-    if abs(roll) > tip or abs(pitch) > tip:
+    if abs(roll) > tip or abs(pitch) > tip or math.cos(roll) * math.cos(pitch) < math.cos(tip):
         return "tipped"
     width, height, z_min = bounds
     if not (0.0 <= pos[0] <= width and 0.0 <= pos[1] <= height) or pos[2] < z_min - rules.fall_depth_m:

@@ -23,6 +23,11 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   over the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
   one of ``tipped``, ``stuck``, ``off_map``, ``timeout``; ``info["success"]`` says whether the goal
   was reached.
+- **Pose**: ``info["pose"]`` after ``reset`` and every ``step`` is the base's ground truth,
+  ``{"x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "yaw_rad"}``: the position of the base (its
+  centre of mass) on the map and the Z-Y-X Euler angles of the trial runner's telemetry (pitch
+  nose-up positive, as in :mod:`offroadbench.navigation.metrics`), so that
+  a user can check the dynamics against the commands (e.g. the yaw rate against ``omega``).
 - **Planner** (optional): ``planner="astar"`` (any registered planner, name or
   :class:`~offroadbench.navigation.planners.PlannerChoice`) plans each episode's mission on the class map;
   the waypoints are in ``info["path_xy"]`` after ``reset`` and drawn by ``render``.
@@ -278,6 +283,8 @@ class TraverseEnv(gym.Env):
             "t_s": self._ticks * self.dt_s,
             "mission": self.mission,
             "path_xy": None if self.path_xy is None else self.path_xy.copy(),
+            "pose": {"x_m": float(s["pos"][0]), "y_m": float(s["pos"][1]), "z_m": float(s["pos"][2]),
+                     "roll_rad": float(s["roll"]), "pitch_rad": float(s["pitch"]), "yaw_rad": float(s["yaw"])},
         }
 
     def render(self) -> np.ndarray | None:

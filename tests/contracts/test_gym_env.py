@@ -214,3 +214,29 @@ def test_reset_can_replay_a_given_mission():
         assert obs["state"][0] == pytest.approx(4.0, abs=0.05)  # spawned facing the goal
         with pytest.raises(InputError, match="mission"):
             env.reset(options={"mission": (2.0, 2.0)})
+
+
+def test_info_pose_is_the_ground_truth_at_reset_and_every_step():
+    import pybullet as pb
+
+    keys = {"x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "yaw_rad"}
+    with TraverseEnv(FLAT, config=QUIET) as env:
+        _, info = env.reset(seed=2)
+        assert set(info["pose"]) == keys
+        assert (info["pose"]["x_m"], info["pose"]["y_m"]) == pytest.approx(env.mission.start_xy_m, abs=0.02)
+        wrapped = (env.mission.heading_rad + np.pi) % (2 * np.pi) - np.pi
+        assert info["pose"]["yaw_rad"] == pytest.approx(wrapped, abs=0.02)
+        yaws = [info["pose"]["yaw_rad"]]
+        for _ in range(20):  # 1 s turning in place at 0.5 rad/s
+            _, _, _, _, info = env.step(np.array([0.0, 0.5], dtype=np.float32))
+            pos, quat = pb.getBasePositionAndOrientation(env._world.vehicle_id, physicsClientId=env._world.client_id)
+            pose = info["pose"]
+            assert set(pose) == keys and all(isinstance(v, float) for v in pose.values())
+            assert (pose["x_m"], pose["y_m"], pose["z_m"]) == pytest.approx(pos, abs=1e-12)
+            roll, pitch, yaw = pb.getEulerFromQuaternion(quat)
+            # the project's pitch is nose-up positive (navigation.metrics): minus Bullet's
+            assert (pose["roll_rad"], pose["pitch_rad"], pose["yaw_rad"]) == pytest.approx((roll, -pitch, yaw), abs=1e-9)
+            yaws.append(pose["yaw_rad"])
+    turned = np.unwrap(yaws)
+    # the commanded 0.5 rad/s, after the wheels spin up: the yaw rate of the last half second
+    assert (turned[-1] - turned[10]) / 0.5 == pytest.approx(0.5, rel=0.15)
