@@ -1,0 +1,62 @@
+"""``offroadbench vehicle check NAME [--json]``: measure a vehicle against its spec sheet.
+
+The work is :func:`offroadbench.sim.check.check_vehicle`; this module prints its rows as a table
+(or a JSON list) and exits 1 if any figure is outside its tolerance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from offroadbench.cli._common import bar
+
+EXIT_CHECK_FAILED = 1
+
+
+def format_checks(name: str, rows) -> str:
+    """A fixed-width table: figure, measured, expected, unit, pass/fail, tolerance, note."""
+    width = max(len(r.name) for r in rows)
+    lines = [f"vehicle check: {name}", "",
+             f"{'figure':<{width}}  {'measured':>9}  {'expected':>9}  {'unit':<5}  {'':4}  tolerance; note"]
+    for r in rows:
+        tail = "; ".join(t for t in (r.tolerance, r.note) if t)
+        lines.append(f"{r.name:<{width}}  {r.measured:9.3f}  {r.expected:9.3f}  {r.unit:<5}  "
+                     f"{'ok' if r.ok else 'FAIL':4}  {tail}")
+    failed = sum(not r.ok for r in rows)
+    lines += ["", f"{len(rows) - failed} of {len(rows)} figures within tolerance"]
+    return "\n".join(lines)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from offroadbench.sim import SimConfig, load_vehicle
+    from offroadbench.sim.check import check_vehicle
+
+    spec = load_vehicle(args.name)
+    sim = SimConfig() if args.tyre_model is None else SimConfig(tyre_model=args.tyre_model)
+    with bar("checking", unit="step") as progress:
+        rows = check_vehicle(spec, sim, progress=progress)
+    if args.json:
+        keys = ("name", "measured", "expected", "unit", "ok", "tolerance", "note")
+        print(json.dumps([{k: r.as_dict()[k] for k in keys} for r in rows], indent=1))
+    else:
+        print(format_checks(spec.name, rows))
+    return 0 if all(r.ok for r in rows) else EXIT_CHECK_FAILED
+
+
+def register(sub) -> None:
+    from offroadbench.sim.config import TYRE_MODELS
+
+    p = sub.add_parser("vehicle", help="vehicle tools: check a vehicle against its spec sheet",
+                       description="Vehicle tools.")
+    vsub = p.add_subparsers(dest="vehicle_command", required=True, parser_class=sub._parser_class)
+    c = vsub.add_parser("check", help="measure a vehicle on small test worlds and compare with its spec sheet",
+                        description="Measure yaw-rate tracking, straight-line drift, stopping distance, tilt-table "
+                        "tip angle, side slope, climb and step on small test worlds, each beside the spec "
+                        "sheet's or the geometric value. Exit status 1 if any figure is out of tolerance.")
+    c.add_argument("name", help="vehicle name (e.g. husky, jackal) or vehicle.toml path")
+    c.add_argument("--json", action="store_true",
+                   help='print a JSON list of {"name", "measured", "expected", "unit", "ok", ...}')
+    c.add_argument("--tyre-model", choices=TYRE_MODELS, default=None,
+                   help="override SimConfig.tyre_model (default: the package default)")
+    c.set_defaults(func=cmd_check)
