@@ -285,20 +285,24 @@ def _side_slope(world: World, tip_deg: float) -> list[CheckResult]:
 
 
 def _climbs(world: World, grade_deg: float) -> bool:
-    """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 8 s."""
+    """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 10 s when its wheel
+    speed is ramped gently (0.5 m/s^2 at the tyre, to 0.5 m/s), as a driver would start on a hill."""
     spec = world.spec
     c = world.hm.width_m / 2.0
     world.spawn(c - 3.0, c, 0.0)
     _set_gravity(world, math.radians(grade_deg), "y")
     x0 = world.base_state()[0][0]
-    world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
-    for _ in range(int(round(8.0 * world.sim.physics_rate_hz))):
+    rate = world.sim.physics_rate_hz
+    climbed = False
+    for k in range(int(round(10.0 * rate))):
+        v = min(0.5, 0.5 * k / rate, spec.max_speed_m_s)
+        world.command_wheels(*wheel_speeds(v, 0.0, spec))
         world.step()
         if world.base_state()[0][0] - x0 >= 1.0:
-            _set_gravity(world, 0.0, "y")
-            return True
+            climbed = True
+            break
     _set_gravity(world, 0.0, "y")
-    return False
+    return climbed
 
 
 def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float, wheels_per_axle: int,
@@ -336,7 +340,7 @@ def _climb(world: World) -> list[CheckResult]:
     expected = climb_limit_deg(_total_mass(world), _com_height(world), half_base, per_axle, spec.wheel_radius_m,
                                spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2)
     grip = math.degrees(math.atan(mu))
-    rows = [_abs_row("steepest grade climbed from rest", grade, expected, "deg", 3.0,
+    rows = [_abs_row("steepest grade climbed from rest", grade, expected, "deg", 4.0,
                      f"quasi-static limit with load transfer to the rear axle, per-axle grip (mu = {mu:g}) "
                      f"and motor torque ({spec.wheel_torque_limit_nm:g} N m per wheel); grip alone: {grip:.1f} deg")]
     if spec.rated_climb_grade_deg is not None:
