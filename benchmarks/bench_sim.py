@@ -7,6 +7,16 @@ pitch rate on flat ground (contact jitter). It also runs the physics sanity scen
 tests/test_sim_physics.py (15 deg ramp, wall, off the edge) at each rate.
 
     .venv/bin/python benchmarks/bench_sim.py [--preset paper-d2.45] [--seed 1] [--missions 5]
+
+``--contact`` instead compares the tyre-terrain contact models (offroadbench.sim.contact) in one
+run, at the default 60 Hz with sphere wheels: the old default (Bullet's friction, the URDF's
+light wheels), ``bullet`` (Bullet's friction with the drive train's spin inertia) and ``coulomb``
+(the new default). Per model it prints the RTF on the same missions (run in rounds: each
+terrain and planner runs every model in turn, so changes of machine load hit all alike) and its ratio to the old default, the successes of the straight
+and astar planners, the yaw-rate tracking on flat ground (achieved / commanded, 0.25-2 rad/s in
+place and at 1 m/s, headings 0 / 22.5 / 45 deg) and the median turn-in-place rate on rough ground.
+
+    .venv/bin/python benchmarks/bench_sim.py --contact [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
 """
 
 from __future__ import annotations
@@ -66,12 +76,89 @@ def flat_jitter(vehicle, sim) -> float:
     return r.rms_pitch_rate_deg_s
 
 
+CONTACT_MODELS = ("old default", "bullet", "coulomb")
+
+
+def contact_variant(name: str):
+    """(vehicle, SimConfig) of a contact model of CONTACT_MODELS."""
+    husky = load_vehicle("husky")
+    if name == "old default":
+        return dataclasses.replace(husky, wheel_spin_inertia_kg_m2=None), SimConfig(tyre_model="bullet")
+    return husky, SimConfig(tyre_model=name)
+
+
+def yaw_tracking(vehicle, sim) -> tuple[float, float]:
+    """(min, max) of achieved / commanded yaw rate on flat ground over the vehicle check's cases."""
+    from offroadbench.sim.check import _yaw_tracking
+
+    with World(Heightmap.flat(161, 161, 0.1), vehicle, sim) as w:
+        ratios = [r.measured / r.expected for r in _yaw_tracking(w, (0.0, 22.5, 45.0), (0.25, 0.5, 1.0, 2.0))]
+    return min(ratios), max(ratios)
+
+
+def rough_turn_rate(vehicle, sim) -> float:
+    """Median |yaw rate| of a 1 rad/s turn in place at 27 poses on a small rough D = 2.6 terrain, rad/s."""
+    from offroadbench.sim.check import _mean_yaw_rate
+    from offroadbench.terrain.recipe import apply_overrides
+
+    recipe = apply_overrides(load_recipe("paper-d2.6"), {"grid.rows": 241, "grid.cols": 241, "layers.base.relief_m": 1.5})
+    hm = generate_terrain(recipe, 11)
+    with World(hm, vehicle, sim) as w:
+        rates = [abs(_mean_yaw_rate(w, 0.0, 1.0, np.radians(h), seconds=4.0, at=(x, y)))
+                 for x in (3.0, 6.0, 9.0) for y in (3.0, 6.0, 9.0) for h in (0.0, 30.0, 60.0)]
+    return float(np.median(rates))
+
+
+def compare_contact(args) -> None:
+    from offroadbench.navigation.planners import planner_from_table
+
+    print(f"contact models, {args.preset} seeds {args.seeds}, {args.missions} missions of 35 m each, 60 Hz")
+    clock = {m: [0.0, 0.0] for m in CONTACT_MODELS}
+    wins = {(m, p): 0 for m in CONTACT_MODELS for p in ("straight", "astar")}
+    trials = 0
+    for seed in (int(s) for s in args.seeds.split(",")):
+        hm = generate_terrain(load_recipe(args.preset), seed)
+        rc = RoughnessConfig()
+        closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
+        missions = sample_missions(hm, closed, MissionConfig(count=args.missions), np.random.default_rng(seed))
+        trials += len(missions)
+        for planner in ("straight", "astar"):
+            choice = planner_from_table({"name": planner})
+            for model in CONTACT_MODELS:
+                vehicle, sim = contact_variant(model)
+                with World(hm, vehicle, sim) as world:
+                    for m in missions:
+                        tw = time.perf_counter()
+                        r, _ = run_mission(world, m, planner=choice, classes=closed, border_m=MissionConfig().border_m)
+                        clock[model][1] += time.perf_counter() - tw
+                        clock[model][0] += r.sim_time_s + sim.settle_time_s
+                        wins[model, planner] += r.success
+    old_rtf = clock["old default"][0] / clock["old default"][1]
+    print(f"{'model':12s} {'RTF':>6s} {'ratio':>6s} {'straight':>9s} {'astar':>7s} {'yaw min-max':>12s} {'rough turn':>10s}")
+    for model in CONTACT_MODELS:
+        vehicle, sim = contact_variant(model)
+        rtf = clock[model][0] / clock[model][1]
+        lo, hi = yaw_tracking(vehicle, sim)
+        print(f"{model:12s} {rtf:6.1f} {rtf / old_rtf:6.2f} {wins[model, 'straight']:>4d}/{trials:<4d} "
+              f"{wins[model, 'astar']:>3d}/{trials:<3d} {lo:5.2f}-{hi:<5.2f} {rough_turn_rate(vehicle, sim):10.2f}",
+              flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--preset", default="paper-d2.45")
+    ap.add_argument("--preset", default=None, help="terrain preset (default paper-d2.45; --contact: paper-d2.6)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--missions", type=int, default=5)
+    ap.add_argument("--seeds", default="1,2", help="--contact: terrain seeds")
+    ap.add_argument("--missions", type=int, default=None, help="missions per terrain (default 5; --contact: 10)")
+    ap.add_argument("--contact", action="store_true", help="compare the tyre-terrain contact models")
     args = ap.parse_args()
+    if args.contact:
+        args.preset = args.preset or "paper-d2.6"
+        args.missions = args.missions or 10
+        compare_contact(args)
+        return
+    args.preset = args.preset or "paper-d2.45"
+    args.missions = args.missions or 5
 
     t0 = time.perf_counter()
     hm = generate_terrain(load_recipe(args.preset), args.seed)

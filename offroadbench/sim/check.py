@@ -108,10 +108,12 @@ def _run(world: World, seconds: float, each: Callable[[], None] | None = None) -
             each()
 
 
-def _mean_yaw_rate(world: World, v: float, omega: float, heading: float, seconds: float = 3.0) -> float:
-    """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega)."""
+def _mean_yaw_rate(world: World, v: float, omega: float, heading: float, seconds: float = 3.0,
+                   at: tuple[float, float] | None = None) -> float:
+    """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega),
+    started at rest at ``at`` (default: the middle of the map)."""
     c = world.hm.width_m / 2.0
-    world.spawn(c, c, heading)
+    world.spawn(*(at or (c, c)), heading)
     world.command_wheels(*wheel_speeds(v, omega, world.spec))
     _run(world, seconds / 2.0)
     yaws = []
