@@ -346,9 +346,14 @@ def _climb(world: World) -> list[CheckResult]:
                      f"and motor torque ({spec.wheel_torque_limit_nm:g} N m per wheel); grip alone: {grip:.1f} deg")]
     if spec.rated_climb_grade_deg is not None:
         rated = spec.rated_climb_grade_deg
-        why = "" if grade >= rated - 3.0 else (
-            f"short of the sheet: the limit of this model is {expected:.1f} deg (load transfer unloads the "
-            f"front tyres; the rear motors reach their torque limit); the grip limit atan(mu) is {grip:.1f} deg")
+        if grade >= rated - 3.0:
+            why = ""
+        elif expected >= grip - 0.1:
+            why = (f"short of the sheet: grip-limited, atan(mu) = {grip:.1f} deg at mu = {mu:g}; "
+                   f"the sheet's {rated:g} deg needs mu >= {math.tan(math.radians(rated)):.2f}")
+        else:
+            why = (f"short of the sheet: the limit of this model is {expected:.1f} deg (load transfer unloads "
+                   f"the front tyres and the rear motors reach their torque limit; grip alone: {grip:.1f} deg)")
         rows.append(CheckResult("steepest grade climbed vs spec sheet", grade, rated, "deg", grade >= rated - 3.0,
                                 "at least the spec sheet's less 3 deg", why))
     return rows
