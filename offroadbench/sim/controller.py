@@ -119,7 +119,10 @@ class PathTracker:
     while the pure-pursuit point is behind the vehicle (|bearing| > 90 deg, where the arc's
     curvature ``2 sin(alpha) / l`` shrinks to 0), the bearing is taken as +-90 deg: the vehicle
     drives the tightest pure-pursuit arc (curvature 2 / l) round toward it. (Turning on the spot
-    is no remedy: the skid-steered vehicle barely turns in place on rough ground.)
+    is no remedy: the skid-steered vehicle barely turns in place on rough ground.) The speed profile
+    runs on ``min(progress, length - distance to the goal)``, so a vehicle that overshoots the end
+    of the path, or stands off a hairpin, is not told it has arrived while it is still away from the
+    goal.
     """
 
     def __init__(self, waypoints, spec: VehicleSpec, cfg: ControllerConfig) -> None:
@@ -177,7 +180,11 @@ class PathTracker:
     def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
         """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
         s = self.progress(pos_xy)
-        v = self.speed.command(s, float(np.dot(vel_xy, self._unit[self._seg])))
+        p = np.asarray(pos_xy, dtype=float)
+        to_goal = math.hypot(self.points[-1][0] - p[0], self.points[-1][1] - p[1])
+        # the speed profile plans to the goal, not to the foot of the projection: a vehicle that
+        # has run past the path's end (or cut a hairpin) away from the goal keeps driving back to it
+        v = self.speed.command(min(s, self.length_m - to_goal), float(np.dot(vel_xy, self._unit[self._seg])))
         target = self.point_at(max(s, 0.0) + self.cfg.lookahead_m)
         d = target - np.asarray(pos_xy, dtype=float)
         alpha = (math.atan2(d[1], d[0]) - yaw_rad + math.pi) % (2.0 * math.pi) - math.pi

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from offroadbench.sim import ControllerConfig, load_vehicle
-from offroadbench.sim.controller import LineTracker, SpeedProfile, pure_pursuit_omega
+from offroadbench.sim.controller import LineTracker, PathTracker, SpeedProfile, pure_pursuit_omega
 from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
 
 
@@ -63,6 +63,21 @@ def test_line_tracker_steers_back_to_the_line():
     assert w < 0  # left of the line: turn right
     v, w, _ = tr.command(np.array([2.0, -0.5]), 0.0, np.array([1.0, 0.0]))
     assert w > 0
+
+
+def test_path_tracker_past_the_path_end_but_away_from_the_goal_keeps_driving():
+    # an L-shaped path 10 m + 5 m: a vehicle that cut the corner and stands 2 m short of the goal on
+    # the final leg's line projects onto the end of the path (progress = length) but is not there
+    spec = load_vehicle("husky")
+    tr = PathTracker([(0.0, 0.0), (10.0, 0.0), (10.0, 5.0)], spec, ControllerConfig())
+    assert tr.length_m == pytest.approx(15.0)
+    for _ in range(40):
+        v, _, s = tr.command(np.array([10.0, 3.0]), np.pi / 2, np.array([0.0, 1.0]))
+    assert v > 0.5  # still driving: 2 m to go
+    v, _, _ = tr.command(np.array([10.0, 7.0]), np.pi / 2, np.array([0.0, 0.0]))  # overshot by 2 m
+    assert v > 0.0  # told to drive back toward the goal, not that it has arrived
+    v, _, _ = tr.command(np.array([10.0, 5.0]), np.pi / 2, np.array([0.0, 0.0]))
+    assert v == 0.0  # at the goal
 
 
 def test_skid_steer_wheel_speeds():
