@@ -114,6 +114,21 @@ RECIPES = {
         "dbb87cc62897f6bc90bcdc7c228bce024008ace00866ed2e0348bd5633ace245",
     ),
 }
+#: sha256 of the terrains with a W-M layer under the default ``method = "nufft"`` (same keys)
+NUFFT = {
+    ('multifractal-cratered', 0): "0a33f34c46b40b326d5bdaaecee6feff576a53821c1cd1e66c650473ce41eea7",
+    ('multifractal-cratered', 1): "9d834483a88ab7a66840e37a7da809e1850b6109c3b662c362f48bd5ae350765",
+    ('paper-d2.3', 0): "fa35cd20be7e5976b0775115cb5cb445d7292536cb73e4c9973d10a77e914a9c",
+    ('paper-d2.3', 1): "69f87ea50f3ac35320127ee1a79cf927ebc527233f3a18407680481b7004c7cf",
+    ('paper-d2.45', 0): "d7ebe94e1174d0435e56aa75e56d3ebbcf5d50af1c28b417976f9d729fa261bd",
+    ('paper-d2.45', 1): "19955865bf03e72301e27cf4b48bbf92ab546ee7a154dc2793c468c9b2c9f6a4",
+    ('paper-d2.6', 0): "1e50aa9163c396810182c39e7aa0fc93a4216bbc3ebce77f939d30ec9bb94782",
+    ('paper-d2.6', 1): "3d068500187e1457e216e5c47663cd869876b32f8c8aeb051685b337e5d9b3b3",
+    'full': "fa2fe9de43f58f7982cdc8e6b64979c1916d30776de7ab0581d2c5f31522d923",
+    'multifractal-product': "fb01e2b4d194926108c31a7a2edc68749d040bde7f4fe9ae9f39dff8502c917a",
+    'wm': "cedae6f2a76c96b5f34d1da6921b707afad41296e6b6e877eb4f268ea2a5f1f5",
+    'wm-metres': "d869afa7d942baa084836b72ca2133d5826567013696fcc344b8447b31ff1989",
+}
 CRATER_FILE_SHA = "68e8c099924714ca34dd07e2d333601f2edacb79786fcaf2a8025e59a79e1195"
 
 
@@ -121,10 +136,24 @@ def sha(hm) -> str:
     return hashlib.sha256(np.ascontiguousarray(hm.z, dtype=np.float64).tobytes()).hexdigest()
 
 
+def expected(key, table: dict, method: str) -> str:
+    return NUFFT.get(key, table[key]) if method == "nufft" else table[key]
+
+
+@pytest.fixture(params=["nufft", "gemm"])
+def method(request, monkeypatch) -> str:
+    """Run with the default W-M evaluation, or with the reference GEMM forced everywhere."""
+    import offroadbench.terrain.fractal.wm as wm
+
+    if request.param == "gemm":
+        monkeypatch.setattr(wm, "wm_surface_nufft", wm._wm_surface_gemm)
+    return request.param
+
+
 @pytest.mark.parametrize("name, seed", sorted(PRESETS))
-def test_every_preset_is_bit_identical(name, seed):
+def test_every_preset_is_bit_identical(name, seed, method):
     recipe = apply_overrides(load_recipe(name), SMALL)
-    assert sha(generate_terrain(recipe, seed)) == PRESETS[(name, seed)]
+    assert sha(generate_terrain(recipe, seed)) == expected((name, seed), PRESETS, method)
 
 
 def test_every_preset_is_covered():
@@ -133,17 +162,17 @@ def test_every_preset_is_covered():
     assert set(list_presets()) == {name for name, _ in PRESETS}
 
 
-def test_full_size_paper_terrain_is_bit_identical():
+def test_full_size_paper_terrain_is_bit_identical(method):
     hm = generate_terrain(load_recipe("paper-d2.45"), 0)
     assert hm.shape == (1009, 1009)
-    assert sha(hm) == FULL_PAPER_D245_SEED0
+    assert sha(hm) == expected("full", {"full": FULL_PAPER_D245_SEED0}, method)
 
 
 @pytest.mark.parametrize("name", sorted(RECIPES))
-def test_generator_recipes_are_bit_identical(name):
-    layers, grid, expected = RECIPES[name]
+def test_generator_recipes_are_bit_identical(name, method):
+    layers, grid, _ = RECIPES[name]
     recipe = recipe_from_dict({"grid": grid, "layers": layers}, source=name)
-    assert sha(generate_terrain(recipe, 3)) == expected
+    assert sha(generate_terrain(recipe, 3)) == expected(name, {k: v[2] for k, v in RECIPES.items()}, method)
 
 
 def test_crater_file_layer_is_bit_identical(tmp_path):

@@ -18,13 +18,16 @@ one real matrix product of inner size 2J (J kept terms). The exponential tables 
 two short tables per term (``c = B q + s``), so only about ``2 sqrt(N)`` sines and cosines are
 evaluated per term instead of N. This is ``method = "gemm"``, the reference.
 
-``method = "nufft"`` evaluates the same sum as a type-1 non-uniform FFT (the ``finufft``
+``method = "nufft"`` (the default) evaluates the same sum as a type-1 non-uniform FFT (the ``finufft``
 package): the terms are non-uniform "points" ``(u_j dx mod 2 pi, v_j dy mod 2 pi)`` with
 strengths ``a_j e^{i phi_j}`` and the grid is the uniform set of output "modes". Its cost is one
 FFT of a slightly enlarged grid plus a short kernel per term, instead of rows x cols x 2J for the
 product; it agrees with "gemm" to about 1e-9 of the surface's range (the tolerance the finufft
 call asks for, and the phase rounding of the fastest terms, which both methods share in kind).
-See :func:`wm_surface_nufft`.
+See :func:`wm_surface_nufft`. It is the default because it is 5-10x faster on the paper's
+1009^2 layers (benchmarks/RESULTS.md) and no less exact: both are checked against the literal
+term-by-term Eq. (1) (tests/terrain/test_wm.py); "gemm" remains selectable, and the presets'
+terrains under each method are pinned bit for bit (tests/terrain/test_bit_identical.py).
 
 Terms whose amplitude ``gamma^((D-3)(n - n_min))`` is below ``amplitude_tol`` of the first term
 are dropped (:func:`kept_harmonics`). Terms above the grid's Nyquist frequency alias; they are
@@ -122,9 +125,10 @@ class WMConfig:
     axes (the first sample is at x = y = offset). 0 = the paper's reading (origin on the corner).
     Not in the paper: with phases in [0, pi] the terms of Eq. (1) add coherently near the origin
     and the surface has its extreme there; an offset of a few hundred pixels moves that outside."""
-    method: str = "gemm"
-    """How the sum is evaluated, one of METHODS: "gemm" (separable matrix product, the reference)
-    or "nufft" (non-uniform FFT, several times faster, within ~1e-9 of the range of "gemm")."""
+    method: str = "nufft"
+    """How the sum is evaluated, one of METHODS: "nufft" (non-uniform FFT, the default) or "gemm"
+    (separable matrix product, the reference, 5-10x slower); they agree to ~1e-9 of the range
+    (1e-6 on layers whose fastest terms float64 cannot phase)."""
 
     def __post_init__(self) -> None:
         check_int(self, "M", self.M, lo=1)
