@@ -17,6 +17,13 @@ and astar planners, the yaw-rate tracking on flat ground (achieved / commanded, 
 place and at 1 m/s, headings 0 / 22.5 / 45 deg) and the median turn-in-place rate on rough ground.
 
     .venv/bin/python benchmarks/bench_sim.py --contact [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
+
+``--iterations 50,30,20`` instead compares Bullet solver iteration counts (``SimConfig.
+solver_iterations``) at the default contact model and rate: per count, the RTF on the same missions
+(in rounds, as above) and its ratio to the first count, successes, wheel penetration, flat-ground
+pitch jitter, the sanity scenarios and the rows of the vehicle check (``sim.check``) that fail.
+
+    .venv/bin/python benchmarks/bench_sim.py --iterations 50,30,20,12 [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
 """
 
 from __future__ import annotations
@@ -144,6 +151,43 @@ def compare_contact(args) -> None:
               flush=True)
 
 
+def compare_iterations(args) -> None:
+    from offroadbench.sim.check import check_vehicle
+
+    counts = [int(s) for s in args.iterations.split(",")]
+    husky = load_vehicle("husky")
+    print(f"solver iterations {counts}, {args.preset} seeds {args.seeds}, {args.missions} missions of 35 m each, 60 Hz")
+    clock = {n: [0.0, 0.0] for n in counts}
+    results = {n: [] for n in counts}
+    for seed in (int(s) for s in args.seeds.split(",")):
+        hm = generate_terrain(load_recipe(args.preset), seed)
+        rc = RoughnessConfig()
+        closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
+        missions = sample_missions(hm, closed, MissionConfig(count=args.missions), np.random.default_rng(seed))
+        for n in counts:
+            sim = SimConfig(solver_iterations=n)
+            with World(hm, husky, sim) as world:
+                for m in missions:
+                    tw = time.perf_counter()
+                    r, _ = run_mission(world, m)
+                    clock[n][1] += time.perf_counter() - tw
+                    clock[n][0] += r.sim_time_s + sim.settle_time_s
+                    results[n].append(r)
+    base = clock[counts[0]][0] / clock[counts[0]][1]
+    print(f"{'iters':>5s} {'RTF':>6s} {'ratio':>6s} {'success':>8s} {'pen_max_mm':>10s} {'flat_pitch':>10s} "
+          f"{'sanity':>8s}  vehicle-check rows failed")
+    for n in counts:
+        sim = SimConfig(solver_iterations=n)
+        rtf = clock[n][0] / clock[n][1]
+        rs = results[n]
+        failed = [f"{row.name} ({row.measured:.3g} vs {row.expected:.3g} {row.unit})"
+                  for row in check_vehicle(husky, sim) if not row.ok]
+        print(f"{n:5d} {rtf:6.1f} {rtf / base:6.2f} {sum(r.success for r in rs):>3d}/{len(rs):<4d} "
+              f"{1000 * max(r.max_penetration_m for r in rs):10.1f} {flat_jitter(husky, sim):10.2f} "
+              f"{sanity(husky, sim):>8s}  {'; '.join(failed) or 'none'}", flush=True)
+        print("      outcomes: " + " ".join(r.failure_reason or f"{r.sim_time_s:.0f}s" for r in rs))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default=None, help="terrain preset (default paper-d2.45; --contact: paper-d2.6)")
@@ -151,7 +195,13 @@ def main() -> None:
     ap.add_argument("--seeds", default="1,2", help="--contact: terrain seeds")
     ap.add_argument("--missions", type=int, default=None, help="missions per terrain (default 5; --contact: 10)")
     ap.add_argument("--contact", action="store_true", help="compare the tyre-terrain contact models")
+    ap.add_argument("--iterations", default=None, help="compare solver iteration counts, e.g. 50,30,20")
     args = ap.parse_args()
+    if args.iterations:
+        args.preset = args.preset or "paper-d2.6"
+        args.missions = args.missions or 10
+        compare_iterations(args)
+        return
     if args.contact:
         args.preset = args.preset or "paper-d2.6"
         args.missions = args.missions or 10
