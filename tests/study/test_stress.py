@@ -27,6 +27,16 @@ def test_wilson_interval_known_values():
     assert math.isnan(lo) and math.isnan(hi)
 
 
+def test_wilson_interval_contains_the_rate_exactly():
+    # 10 / 10 gave an upper end of 1 - 1.1e-16: a negative error bar, and the report's success
+    # figure (matplotlib's errorbar) refused it
+    for n in range(1, 60):
+        for k in range(n + 1):
+            lo, hi = wilson_interval(k, n)
+            assert 0.0 <= lo <= k / n <= hi <= 1.0
+    assert wilson_interval(10, 10)[1] == 1.0 and wilson_interval(0, 7)[0] == 0.0
+
+
 def test_breaking_point_interpolates_the_first_crossing():
     assert breaking_point([2.3, 2.5, 2.7], [0.9, 0.6, 0.2]) == pytest.approx(2.55)
     assert breaking_point([2.3, 2.5], [0.9, 0.8]) == math.inf
