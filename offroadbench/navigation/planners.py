@@ -54,7 +54,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from offroadbench.analysis.roughness import HIGH, SEMI, border_mask, disk, gradient_map
-from offroadbench.config import check_int, check_range, from_dict
+from offroadbench.config import check_choice, check_int, check_range, from_dict
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.registry import Registry
@@ -74,6 +74,8 @@ __all__ = [
     "LatticeConfig",
     "CostGrid",
     "cost_grid",
+    "footprint_hazard",
+    "HAZARDS",
     "plan_straight",
     "plan_astar",
     "plan_lattice",
@@ -97,9 +99,17 @@ class VehicleEnvelope:
     """Largest yaw rate command, rad/s."""
     max_slope: float = 0.8
     """Steepest climbable slope, rise/run (about the tyre friction coefficient on a slope)."""
+    max_step_m: float = 0.13
+    """Highest step the vehicle climbs, m (Husky: 0.13 m, the geometric bound of
+    offroadbench.sim.check.step_bound_m: the chassis nose strikes a step higher than the belly)."""
+    ground_clearance_m: float = 0.13
+    """Height of the belly above flat ground, m (Husky: 0.13 m, the spec sheet's and the URDF's)."""
+    wheel_radius_m: float = 0.1651
+    """Wheel radius, m (Husky: 0.1651 m): a wheel rides on the terrain's envelope at this radius."""
 
     def __post_init__(self) -> None:
-        for name in ("length_m", "width_m", "max_speed_m_s", "max_yaw_rate_rad_s", "max_slope"):
+        for name in ("length_m", "width_m", "max_speed_m_s", "max_yaw_rate_rad_s", "max_slope", "max_step_m",
+                     "ground_clearance_m", "wheel_radius_m"):
             check_range(self, name, getattr(self, name), lo=0, lo_open=True)
 
     @property
@@ -263,12 +273,24 @@ def plan_straight(problem: PlanningProblem, cfg: NoConfig = NoConfig()) -> np.nd
 
 
 # ---------------------------------------------------------------------------- cost grid
+#: the kinds of cost grid (CostConfig.hazard)
+HAZARDS = ("footprint", "classes")
+
+
 @dataclass(frozen=True, kw_only=True)
 class CostConfig:
     """The cost grid of the terrain-aware planners (see the module docstring)."""
 
     grid_m: float = 0.25
     """Size of the planning cells, m (rounded to a whole number of map cells)."""
+    hazard: str = "footprint"
+    """What the cost grid costs: ``footprint`` (the vehicle's own limits: slope, roughness and step
+    over a vehicle-sized patch, :func:`footprint_hazard`; ``hazard_weight`` applies) or ``classes``
+    (the paper's roughness classes and the mean gradient; ``gradient_weight``, ``semi_cost`` and
+    ``clearance_cost`` apply)."""
+    hazard_weight: float = 4.0
+    """``footprint``: extra cost per metre of a cell whose hazard is 1 (at one of the vehicle's
+    limits); the extra cost grows as the square of the hazard, so mild terrain costs little."""
     gradient_weight: float = 2.0
     """Extra cost per metre at a mean Moore gradient equal to the vehicle's max slope."""
     semi_cost: float = 2.0
@@ -285,7 +307,8 @@ class CostConfig:
 
     def __post_init__(self) -> None:
         check_range(self, "grid_m", self.grid_m, lo=0, lo_open=True)
-        for name in ("gradient_weight", "semi_cost", "clearance_cost", "high_cost"):
+        check_choice(self, "hazard", self.hazard, HAZARDS)
+        for name in ("hazard_weight", "gradient_weight", "semi_cost", "clearance_cost", "high_cost"):
             check_range(self, name, getattr(self, name), lo=0)
 
 
@@ -328,14 +351,77 @@ def _blocks(a: np.ndarray, f: int, reduce) -> np.ndarray:
     return reduce(p.reshape(p.shape[0] // f, f, p.shape[1] // f, f), axis=(1, 3))
 
 
-def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig(), relaxed: bool = False) -> CostGrid:
-    """The planning cost grid of ``problem`` (see the module docstring). ``relaxed``: cells near or on
-    high pixels cost ``high_cost`` more per metre instead of being forbidden."""
-    from scipy.ndimage import binary_dilation, uniform_filter
+def _patch_planes(z: np.ndarray, cell_m: float, radius_m: float, f: int, shape: tuple[int, int]):
+    """Least-squares planes over a disk of ``radius_m`` round the centre pixel of each ``f x f``
+    planning cell: (gradient magnitude, rise/run; largest absolute residual, m), each of ``shape``."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    k = disk(max(radius_m / cell_m, 1.0))
+    n = k.shape[0] // 2
+    yy, xx = np.mgrid[-n : n + 1, -n : n + 1] * cell_m
+    w = k.astype(float)
+    zp = np.pad(z, ((n, n + f), (n, n + f)), mode="edge")
+    c0 = f // 2
+    win = sliding_window_view(zp, k.shape)[c0 :: f, c0 :: f][: shape[0], : shape[1]]
+    # on a centred, symmetric disk the plane's three normal equations decouple
+    a = np.einsum("rcij,ij->rc", win, w * xx) / float((w * xx * xx).sum())
+    b = np.einsum("rcij,ij->rc", win, w * yy) / float((w * yy * yy).sum())
+    c = np.einsum("rcij,ij->rc", win, w) / float(w.sum())
+    res = win - (a[..., None, None] * xx + b[..., None, None] * yy + c[..., None, None])
+    return np.hypot(a, b), np.abs(np.where(k, res, 0.0)).max(axis=(2, 3))
+
+
+def footprint_hazard(hm: Heightmap, vehicle: VehicleEnvelope, f: int) -> dict[str, np.ndarray]:
+    """How close each planning cell (``f x f`` map cells) comes to one of the vehicle's limits, by
+    the terrain under a vehicle-sized patch round it; 1 = at the limit. Keys:
+
+    * ``slope``: gradient of the least-squares plane over a disk of the vehicle's half diagonal
+      (every heading of the footprint) / ``max_slope``;
+    * ``roughness``: the largest distance of the terrain from that plane / ``ground_clearance_m``
+      (a bump under the belly, or a hole a wheel drops into);
+    * ``step``: the largest rise of the wheel's path within a disk of half a wheel radius (rounded
+      up to whole pixels), anywhere within half the vehicle's width of the cell / ``max_step_m``.
+      A wheel rides on the terrain's envelope at its radius (the grey dilation of the heights by a
+      ball), so spikes narrower than a wheel count as the arc the wheel rolls over, not as cliffs.
+      A step ``h`` lifts the wheel over ``sqrt(2 r h - h^2)`` (0.16 m for the Husky at its limit),
+      which the window (0.2 m across on 5 cm pixels) holds whole. A plane's own rise across the
+      window counts too: on 5 cm pixels a slope steeper than 0.65 reads as a step at the limit;
+    * ``hazard``: the largest of the three, per cell; ``step`` is the largest over the cell's pixels.
+
+    The plane fit and its residual are the slope and roughness evaluations of GESTALT (Goldberg,
+    Maimone & Matthies 2002, Sec. 3: a rover-sized patch per grid cell, plane by least squares,
+    hazard from the plane's tilt and the residual against the rover's limits). The wheel envelope
+    for the step is ours (GESTALT's step hazard is the largest height difference in the patch).
+    """
+    from scipy.ndimage import grey_dilation, maximum_filter, minimum_filter
+
+    cell = hm.cell_size_m
+    shape = (-(-hm.rows // f), -(-hm.cols // f))
+    gradient, residual = _patch_planes(hm.z, cell, vehicle.half_diagonal_m, f, shape)
+    n = max(1, int(vehicle.wheel_radius_m / cell))
+    yy, xx = np.mgrid[-n : n + 1, -n : n + 1] * cell
+    d2 = xx * xx + yy * yy
+    inside = d2 <= vehicle.wheel_radius_m**2
+    ball = np.where(inside, np.sqrt(np.maximum(vehicle.wheel_radius_m**2 - d2, 0.0)), 0.0)
+    envelope = grey_dilation(hm.z, footprint=inside, structure=ball)
+    near = disk(max(math.ceil(0.5 * vehicle.wheel_radius_m / cell), 1))
+    rise = maximum_filter(envelope, footprint=near) - minimum_filter(envelope, footprint=near)
+    step = maximum_filter(rise, footprint=disk(max(0.5 * vehicle.width_m / cell, 1.0)))
+    out = {
+        "slope": gradient / vehicle.max_slope,
+        "roughness": residual / vehicle.ground_clearance_m,
+        "step": _blocks(step, f, np.max) / vehicle.max_step_m,
+    }
+    out["hazard"] = np.maximum(np.maximum(out["slope"], out["roughness"]), out["step"])
+    return out
+
+
+def _class_cost(problem: PlanningProblem, cfg: CostConfig, f: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``classes`` grid: (cost per metre, cells on a high pixel, cells within half a width of one)."""
+    from scipy.ndimage import binary_dilation
 
     hm, classes, veh = problem.hm, problem.classes, problem.vehicle
     cell = hm.cell_size_m
-    f = max(1, int(round(cfg.grid_m / cell)))
     high = classes == HIGH
     cost = 1.0 + cfg.gradient_weight * _blocks(gradient_map(hm), f, np.mean) / veh.max_slope
     cost += cfg.semi_cost * _blocks((classes == SEMI).astype(float), f, np.mean)
@@ -345,14 +431,31 @@ def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig(), relaxed:
         blocked = binary_dilation(high, structure=disk(max(0.5 * veh.width_m / cell, 1.0)))
     else:
         blocked = high
+    return cost, _blocks(high, f, np.any), _blocks(blocked, f, np.any)
+
+
+def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig(), relaxed: bool = False) -> CostGrid:
+    """The planning cost grid of ``problem`` (see the module docstring). ``relaxed``: hazardous
+    cells (or cells near or on high pixels) cost ``high_cost`` more per metre instead of being
+    forbidden."""
+    from scipy.ndimage import uniform_filter
+
+    hm, veh = problem.hm, problem.vehicle
+    cell = hm.cell_size_m
+    f = max(1, int(round(cfg.grid_m / cell)))
+    if cfg.hazard == "footprint":
+        hz = footprint_hazard(hm, veh, f)["hazard"]
+        cost = 1.0 + cfg.hazard_weight * np.minimum(hz, 1.0) ** 2
+        hard, soft = np.zeros(hz.shape, dtype=bool), hz >= 1.0
+    else:
+        cost, hard, soft = _class_cost(problem, cfg, f)
     size = int(round(veh.length_m / (f * cell)))
     if size > 1:
         cost = uniform_filter(cost, size=size, mode="nearest")
-    outside = ~border_mask(hm.shape, problem.border_m, cell)
-    outside_cells = _blocks(outside, f, np.any)
-    hard = _blocks(high, f, np.any) | outside_cells
-    soft = _blocks(blocked, f, np.any) & ~hard
-    # open the clearance-only cells round the start and the goal, so the vehicle can leave them
+    outside_cells = _blocks(~border_mask(hm.shape, problem.border_m, cell), f, np.any)
+    hard = hard | outside_cells
+    soft = soft & ~hard
+    # open the soft cells round the start and the goal, so the vehicle can leave them
     grid = CostGrid(cost, f, f * cell)
     reach = 0.5 * veh.width_m + 2 * grid.step_m
     rr, cc = np.mgrid[0 : cost.shape[0], 0 : cost.shape[1]]
@@ -367,7 +470,7 @@ def cost_grid(problem: PlanningProblem, cfg: CostConfig = CostConfig(), relaxed:
     for xy in (problem.start_xy, problem.goal_xy):  # the mission's own ends are always usable
         rc = grid.cell_of(xy)
         if not math.isfinite(cost[rc]):
-            cost[rc] = 1.0 + cfg.semi_cost + cfg.clearance_cost + cfg.gradient_weight
+            cost[rc] = 1.0 + cfg.semi_cost + cfg.clearance_cost + cfg.gradient_weight + cfg.hazard_weight
     return grid
 
 

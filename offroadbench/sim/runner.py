@@ -127,8 +127,13 @@ def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, floa
 
 def vehicle_envelope(world: World) -> VehicleEnvelope:
     """The footprint (overall length and width, from the links' bounding boxes at rest, heading +x)
-    and limits of ``world``'s vehicle, for planners. Moves the vehicle: call it before ``spawn``."""
+    and limits of ``world``'s vehicle, for planners: the belly's height above the wheels' bottoms,
+    and the step limit (the spec's ``rated_step_m``, else offroadbench.sim.check.step_bound_m of
+    that geometry, the bound ``offroadbench vehicle check`` tests). Moves the vehicle: call it
+    before ``spawn``."""
     import pybullet as pb
+
+    from offroadbench.sim.check import step_bound_m
 
     cid, body = world.client_id, world.vehicle_id
     pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
@@ -136,9 +141,17 @@ def vehicle_envelope(world: World) -> VehicleEnvelope:
     lo = np.min([b[0] for b in boxes], axis=0)
     hi = np.max([b[1] for b in boxes], axis=0)
     spec = world.spec
+    wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in world.wheel_joints]
+    wheels_x = [pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints]
+    belly = float(boxes[0][0][2] - min(w[0][2] for w in wheels))
+    overhang = boxes[0][1][0] > max(w[1][0] for w in wheels) + 1e-3
+    step = spec.rated_step_m
+    if step is None:
+        step = step_bound_m(spec.wheel_radius_m, belly, max(wheels_x) - min(wheels_x), overhang)
     return VehicleEnvelope(length_m=float(hi[0] - lo[0]), width_m=float(hi[1] - lo[1]),
                            max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
-                           max_slope=spec.wheel_friction * world.sim.terrain_friction)
+                           max_slope=spec.wheel_friction * world.sim.terrain_friction,
+                           max_step_m=float(step), ground_clearance_m=belly, wheel_radius_m=spec.wheel_radius_m)
 
 
 @dataclass(frozen=True, eq=False)

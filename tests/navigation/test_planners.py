@@ -20,6 +20,7 @@ from offroadbench.navigation.planners import (
     VehicleEnvelope,
     _astar,
     cost_grid,
+    footprint_hazard,
     plan,
     plan_astar,
     plan_lattice,
@@ -44,6 +45,14 @@ def _wall_classes(gap: bool = True) -> np.ndarray:
 def _problem(classes, start, goal, hm=None, border_m=0.0, vehicle=VehicleEnvelope()):
     return PlanningProblem(hm=hm or FLAT, classes=classes, start_xy=start, goal_xy=goal, border_m=border_m,
                            vehicle=vehicle)
+
+
+def _by_classes(planner):
+    """The planner's config with the paper's roughness-class cost grid (the class-map tests)."""
+    return (AStarConfig if planner is plan_astar else LatticeConfig)(hazard="classes")
+
+
+CLASSES = AStarConfig(hazard="classes")
 
 
 def _open():
@@ -129,7 +138,7 @@ def _clearance(points, classes):
 def test_terrain_aware_planners_go_through_the_gap_with_half_a_width_of_clearance(planner):
     classes = _wall_classes()
     veh = VehicleEnvelope()
-    wp = planner(_problem(classes, (2.0, 2.5), (10.0, 2.5)))
+    wp = planner(_problem(classes, (2.0, 2.5), (10.0, 2.5)), _by_classes(planner))
     assert np.array_equal(wp[0], [2.0, 2.5]) and np.array_equal(wp[-1], [10.0, 2.5])
     dense = _dense(wp)
     assert _clearance(dense, classes) >= 0.5 * veh.width_m - CELL
@@ -142,7 +151,7 @@ def test_terrain_aware_planners_go_through_the_gap_with_half_a_width_of_clearanc
 def test_a_wider_vehicle_keeps_further_from_high_cells():
     classes = _wall_classes()
     wide = VehicleEnvelope(width_m=1.4, length_m=1.4)
-    wp = plan_astar(_problem(classes, (2.0, 2.5), (10.0, 2.5), vehicle=wide))
+    wp = plan_astar(_problem(classes, (2.0, 2.5), (10.0, 2.5), vehicle=wide), CLASSES)
     assert _clearance(_dense(wp), classes) >= 0.7 - CELL
 
 
@@ -152,11 +161,11 @@ def test_paths_stay_inside_the_mission_border(planner):
     classes = np.full(FLAT.shape, LOW, dtype=np.uint8)
     classes[int(1.5 / CELL):, 118:123] = HIGH  # the wall reaches down to y = 1.5 m; the border is 2 m
     problem = _problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0)
-    wp = planner(problem)  # the gap is in the border strip: crossing the wall is the only way left
+    wp = planner(problem, _by_classes(planner))  # the gap is in the border strip: crossing the wall is the only way left
     assert np.all(problem.inside_border(_dense(wp)))
     classes[: int(6.5 / CELL)] = LOW
     classes[int(6.5 / CELL):, 118:123] = HIGH  # now a gap at y < 6.5 m, inside the border
-    wp = planner(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0))
+    wp = planner(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0), _by_classes(planner))
     assert np.all(_problem(classes, (3.0, 4.0), (9.0, 4.0), border_m=2.0).inside_border(_dense(wp)))
 
 
@@ -164,7 +173,7 @@ def test_astar_goes_round_a_semi_patch_but_crosses_a_semi_band():
     classes = _open()
     classes[60:101, 100:141] = SEMI  # 2 m square on the line y = 4 m
     problem = _problem(classes, (2.0, 4.0), (10.0, 4.0))
-    grid = cost_grid(problem)
+    grid = cost_grid(problem, CLASSES)
     assert grid.f == 5
     assert np.nanmin(grid.cost) == pytest.approx(1.0) and grid.cost.max() == pytest.approx(1.0 + AStarConfig().semi_cost)
 
@@ -173,13 +182,13 @@ def test_astar_goes_round_a_semi_patch_but_crosses_a_semi_band():
 
     straight = plan_straight(problem)
     assert path_cost(straight) == pytest.approx(8.0 + 2.0 * 2.0, rel=0.05)
-    wp = plan_astar(problem)
+    wp = plan_astar(problem, CLASSES)
     d = _dense(wp)  # 1 cm steps
     in_semi = classes[np.rint(d[:, 1] / CELL).astype(int), np.rint(d[:, 0] / CELL).astype(int)] == SEMI
     assert in_semi.sum() * 0.01 < 0.8  # a corner clipped at most, not 2 m through it
     assert _length(wp) < 8.8 and path_cost(wp) < 0.8 * path_cost(straight)
     classes[:, 100:141] = SEMI  # now a band across the whole map: semi is dear, not forbidden
-    wp = plan_astar(_problem(classes, (2.0, 4.0), (10.0, 4.0)))
+    wp = plan_astar(_problem(classes, (2.0, 4.0), (10.0, 4.0)), CLASSES)
     assert _length(wp) == pytest.approx(8.0, abs=0.1)
 
 
@@ -188,7 +197,7 @@ def test_without_a_way_round_the_planners_cross_as_little_high_ground_as_they_ca
     classes = _wall_classes(gap=False)  # 0.25 m thick, from edge to edge
     problem = _problem(classes, (2.0, 2.5), (10.0, 2.5))
     with caplog.at_level(logging.WARNING, logger="offroadbench.navigation.planners"):
-        wp = planner(problem)
+        wp = planner(problem, _by_classes(planner))
     assert "no path" not in caplog.text  # no fallback to the straight line: a planned crossing
     d = _dense(wp)
     on_high = classes[np.rint(d[:, 1] / CELL).astype(int), np.rint(d[:, 0] / CELL).astype(int)] == HIGH
@@ -198,7 +207,7 @@ def test_without_a_way_round_the_planners_cross_as_little_high_ground_as_they_ca
 def test_lattice_leaves_along_the_heading_and_never_turns_tighter_than_its_radius():
     classes = _wall_classes()
     start, goal = (2.0, 2.5), (10.0, 2.5)  # the wall ahead forces two turns
-    cfg = LatticeConfig(turn_radius_m=1.5)
+    cfg = LatticeConfig(turn_radius_m=1.5, hazard="classes")
     wp = plan_lattice(_problem(classes, start, goal), cfg)
     heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
     first = wp[1] - wp[0]
@@ -276,3 +285,65 @@ def test_astar_drives_round_a_wall_the_straight_line_is_stopped_by():
     assert tel_a["y_m"].max() > 5.3  # round the wall's end, which is at y = 5 m
     near_wall = np.abs(tel_a["x_m"] - 6.0) < 0.6
     assert np.all(tel_a["y_m"][near_wall] > 5.0)
+
+
+# ---------------------------------------------------------------------------- footprint hazard
+def _step_wall(height: float, gap: bool = True) -> Heightmap:
+    """A 0.3 m thick wall of ``height`` along x = 6 m, from y = 0 to 5 m (to the top edge without the gap)."""
+    z = np.zeros(FLAT.shape)
+    x = np.arange(FLAT.cols) * CELL
+    y = np.arange(FLAT.rows) * CELL
+    z[(y <= (5.0 if gap else 8.0))[:, None] & (np.abs(x - 6.0) <= 0.15)[None, :]] = height
+    return Heightmap(z, CELL)
+
+
+def test_footprint_hazard_of_a_tilted_plane_and_of_a_step():
+    veh = VehicleEnvelope()
+    x = np.arange(FLAT.cols) * CELL
+    plane = Heightmap(np.broadcast_to(0.2 * x, FLAT.shape).copy(), CELL)
+    hz = footprint_hazard(plane, veh, 5)
+    inner = (slice(4, -4), slice(4, -4))  # away from the edge padding
+    assert np.allclose(hz["slope"][inner], 0.2 / veh.max_slope)
+    assert np.allclose(hz["roughness"][inner], 0.0, atol=1e-9)
+    # the wheel's path on a plane rises with it across the window (half a wheel radius each way,
+    # rounded up to 2 pixels of 5 cm)
+    assert np.allclose(hz["step"][inner], 0.2 * 4 * CELL / veh.max_step_m)
+    row = 4  # y = 1 m, beside the wall
+    kerb = footprint_hazard(_step_wall(0.12), veh, 5)
+    cols = (np.arange(kerb["step"].shape[1]) * 5 + 2) * CELL  # planning-cell centres, m
+    # the window holds the wheel's whole climb onto a step just under its limit
+    assert kerb["step"][row, np.abs(cols - 6.0) < 0.2].max() == pytest.approx(0.12 / veh.max_step_m)
+    assert kerb["hazard"].max() < 1.0
+    far = np.abs(cols - 6.0) > 0.15 + 0.5 * veh.width_m + veh.wheel_radius_m + 0.25
+    assert np.all(kerb["step"][row, far] == 0.0)
+    wall = footprint_hazard(_step_wall(0.2), veh, 5)
+    assert wall["hazard"][row, np.abs(cols - 6.0) < 0.2].min() > 1.0
+
+
+@pytest.mark.parametrize("planner", [plan_astar, plan_lattice])
+def test_footprint_planners_go_round_a_step_above_the_limit_and_over_one_below_it(planner):
+    veh = VehicleEnvelope()
+    start, goal = (2.0, 2.5), (10.0, 2.5)
+    high = _step_wall(2.0 * veh.max_step_m)
+    problem = PlanningProblem(hm=high, classes=_open(), start_xy=start, goal_xy=goal, border_m=1.0)
+    wp = planner(problem)
+    dense = _dense(wp)
+    assert np.all(problem.inside_border(dense))
+    assert dense[:, 1].max() > 5.0 + 0.5 * veh.width_m  # round the wall's end (y = 5 m)
+    # half a width clear of every wall pixel
+    from scipy.ndimage import distance_transform_edt
+
+    d = distance_transform_edt(high.z == 0) * CELL
+    assert d[np.rint(dense[:, 1] / CELL).astype(int), np.rint(dense[:, 0] / CELL).astype(int)].min() >= 0.5 * veh.width_m
+    low = PlanningProblem(hm=_step_wall(0.4 * veh.max_step_m), classes=_open(), start_xy=start, goal_xy=goal,
+                          border_m=1.0)
+    assert _length(planner(low)) == pytest.approx(8.0, abs=0.05)  # a kerb it can climb: straight over it
+
+
+def test_classes_and_footprint_grids_see_different_things():
+    """The class grid sees the class map only; the footprint grid the heights only."""
+    problem = _problem(_wall_classes(), (2.0, 2.5), (10.0, 2.5))
+    assert np.isinf(cost_grid(problem, CLASSES).cost).any()
+    assert np.all(cost_grid(problem, AStarConfig()).cost == 1.0)
+    with pytest.raises(InputError, match="AStarConfig.hazard = 'slope' is not known; allowed: footprint, classes"):
+        AStarConfig(hazard="slope")
