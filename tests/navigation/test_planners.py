@@ -1,4 +1,4 @@
-"""Planner plug-ins: the registry, A* on the roughness cost grid, the path tracker and trials."""
+"""Planner plug-ins: the registry, A* and hybrid A* on the hazard and class cost grids, the path tracker and trials."""
 
 import logging
 import math
