@@ -16,9 +16,19 @@ what ran before it. Facts this relies on (measured, shared/DESIGN.md):
   (about 2-3 s and 600 MB for 1009^2, even in DIRECT mode). The walk skips triangles outside the
   shape's height range, so the shape is first created empty with the map's height range
   (:func:`_empty_heights`: almost no walk), and the heights are then written in place with
-  ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept; a transient
-  of ~0.7 GB remains). Replacing never updates a shape's height range, so the range is set at
-  creation. The shape, and so every result, is bit for bit the one built from the data directly.
+  ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept). Replacing
+  never updates a shape's height range, so the range is set at creation. The shape, and so
+  every result, is bit for bit the one built from the data directly.
+- The replace's transient is ~700 MiB for 1009^2 whatever the arguments (pybullet 3.2.7,
+  PhysicsServerCommandProcessor.cpp): its walk visits every triangle overlapping the shape's own
+  AABB (identity transform, fixed height range and scale, margin 0 that ``changeDynamics`` can
+  only raise), and the heights are written before the walk, so the final write visits all 2.03 M
+  triangles. Per triangle it appends 3 ``GLInstanceVertex`` (36 B) and 3 int indices to arrays
+  that double in capacity, and Bullet's allocator zero-fills every allocation (capacity, not
+  size, is resident); then one position and one normal ``btVector3`` (32 B, double precision)
+  per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the heights. A replace with fewer
+  samples writes only a prefix, and still walks everything in range. :func:`_lean_heap` keeps
+  glibc's heap from adding its freed blocks to that peak (~35 MiB).
 - Reusing one World for another terrain (replacing its heights) was measured and rejected: the
   results then differ in the last digits from a fresh World (solver and contact state carried
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
@@ -27,9 +37,14 @@ what ran before it. Facts this relies on (measured, shared/DESIGN.md):
 
 from __future__ import annotations
 
+import ctypes
+import functools
 import logging
 import math
+import platform
+import sys
 import time
+from contextlib import contextmanager
 
 import numpy as np
 import pybullet as pb
@@ -97,7 +112,8 @@ class World:
     def _build_terrain(self) -> int:
         hm = self.hm
         self._terrain_shape = self._heightfield(_empty_heights(hm))
-        self._heightfield(hm.z.ravel(), replace=self._terrain_shape)
+        with _lean_heap():
+            self._heightfield(hm.z.ravel(), replace=self._terrain_shape)
         dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=self._cid)
         centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
         body = pb.createMultiBody(0, self._terrain_shape, dummy_visual, basePosition=centre, physicsClientId=self._cid)
@@ -266,3 +282,51 @@ def _empty_heights(hm: Heightmap) -> np.ndarray:
     data = np.full(hm.rows * hm.cols, np.inf)
     data[-3:] = (np.nan, hm.z_min_m, hm.z_max_m)
     return data
+
+
+#: glibc's ``mallopt`` parameter number for the block size from which malloc maps each block on
+#: its own (``M_MMAP_THRESHOLD`` in malloc.h); such a block goes back to the OS when freed
+_M_MMAP_THRESHOLD = -3
+#: the threshold during the replace: every block of 1 MiB or more is mapped on its own
+_REPLACE_MMAP_THRESHOLD = 1 << 20
+#: the threshold after it: glibc's own ceiling for its adaptive threshold (64-bit), so blocks up
+#: to 32 MiB (map-sized numpy arrays) are served from the heap again without a page fault each
+_AFTER_MMAP_THRESHOLD = 32 << 20
+
+
+@functools.cache
+def _glibc():
+    """The process's C library if it is glibc (whose allocator has mallopt and malloc_trim), else None."""
+    if not sys.platform.startswith("linux") or platform.libc_ver()[0] != "glibc":
+        return None
+    try:
+        libc = ctypes.CDLL(None)
+        if not (hasattr(libc, "mallopt") and hasattr(libc, "malloc_trim")):
+            return None  # pragma: no cover - a glibc without them
+    except OSError:  # pragma: no cover - no symbols of the running process
+        return None
+    return libc
+
+
+@contextmanager
+def _lean_heap():
+    """Around the heightfield replace: hand the heap's free memory back to the OS, and map every
+    large block on its own so that the replace's growing arrays leave nothing behind in the heap.
+
+    Without this (glibc's adaptive threshold, raised to ~8-32 MiB by the map-sized arrays freed
+    before), the replace's intermediate arrays under the threshold land in the heap and stay
+    resident after they are freed, on top of its transient: ~35 MiB more peak RSS per worker.
+    Afterwards the process keeps a fixed 32 MiB threshold (glibc's adaptive one cannot be
+    restored). Results are unchanged (tests/sim/test_world.py drives with and without this).
+    Without glibc this does nothing.
+    """
+    libc = _glibc()
+    if libc is None:
+        yield
+        return
+    libc.malloc_trim(0)
+    libc.mallopt(_M_MMAP_THRESHOLD, _REPLACE_MMAP_THRESHOLD)
+    try:
+        yield
+    finally:
+        libc.mallopt(_M_MMAP_THRESHOLD, _AFTER_MMAP_THRESHOLD)
