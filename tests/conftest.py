@@ -20,3 +20,62 @@ def small_paper_recipe():
 @pytest.fixture
 def flat_map():
     return Heightmap.flat(21, 31, 0.1, z_m=1.5)
+
+
+#: A study small enough for executor and crash tests: two D values on 257^2 paper maps, 6 m missions.
+TINY_STUDY_TOML = """
+[study]
+name = "{name}"
+recipe = "paper-d2.45"
+root_seed = {root_seed}
+terrains_per_cell = {terrains}
+missions_per_terrain = {missions}
+
+[grid]
+"recipe.layers.base.D_high" = [2.3, 2.6]
+
+[recipe_overrides]
+"grid.rows" = 257
+"grid.cols" = 257
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 6.0
+border_m = 1.0
+"""
+
+
+@pytest.fixture(scope="session")
+def write_tiny_study():
+    """``write_tiny_study(directory, name=, root_seed=, terrains=, missions=)`` writes
+    ``directory/study.toml`` (2 x terrains x missions trials) and returns its path."""
+
+    def write(directory, *, name: str, root_seed: int, terrains: int, missions: int):
+        path = directory / "study.toml"
+        path.write_text(TINY_STUDY_TOML.format(name=name, root_seed=root_seed, terrains=terrains, missions=missions))
+        return path
+
+    return write
+
+
+@pytest.fixture(scope="session")
+def stored_trials():
+    """``stored_trials(run_dir)``: rows in a run's store so far (0 before it exists), read-only."""
+    import sqlite3
+
+    def count(run_dir) -> int:
+        db = run_dir / "study.sqlite"
+        if not db.exists():
+            return 0
+        try:
+            con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5)
+            try:
+                return con.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+            finally:
+                con.close()
+        except sqlite3.Error:  # tables not created yet
+            return 0
+
+    return count

@@ -7,35 +7,10 @@ import pytest
 from offroadbench.study import load, load_study, load_terrains, run_study
 from offroadbench.study.executors import EXECUTORS
 
-TINY = """
-[study]
-name = "contract"
-recipe = "paper-d2.45"
-root_seed = 5
-terrains_per_cell = 1
-missions_per_terrain = 2
-
-[grid]
-"recipe.layers.base.D_high" = [2.3, 2.6]
-
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
-
-
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
+def reference(tmp_path_factory, write_tiny_study):
     d = tmp_path_factory.mktemp("executors")
-    (d / "study.toml").write_text(TINY)
-    study, cells = load_study(d / "study.toml")
+    study, cells = load_study(write_tiny_study(d, name="contract", root_seed=5, terrains=1, missions=2))
     run_study(study, cells, d / "reference", executor="inline")
     return study, cells, load(d / "reference"), load_terrains(d / "reference")
 

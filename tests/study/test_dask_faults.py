@@ -23,28 +23,6 @@ pytest.importorskip("distributed")
 
 from offroadbench.study import load, load_study, run_study  # noqa: E402
 
-STUDY = """
-[study]
-name = "dask-faults"
-recipe = "paper-d2.45"
-root_seed = 5
-terrains_per_cell = 2
-missions_per_terrain = 2
-
-[grid]
-"recipe.layers.base.D_high" = [2.3, 2.6]
-
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
 TOTAL = 8
 BIN = Path(sys.executable).parent
 ENV = {**os.environ, "DASK_LOGGING__DISTRIBUTED": "warning", "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "5s"}
@@ -109,22 +87,6 @@ class Cluster:
         return any("pybullet build time" in log.read_text(errors="replace") for log in self.logs)
 
 
-def stored(run_dir: Path) -> int:
-    import sqlite3
-
-    db = run_dir / "study.sqlite"
-    if not db.exists():
-        return 0
-    try:
-        con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5)
-        try:
-            return con.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return 0
-
-
 def run_cli(study: Path, out: Path, address: str, *extra: str) -> subprocess.Popen:
     return subprocess.Popen([*CLI, "study", "run", str(study), "--out", str(out), "--executor", "dask",
                              "--scheduler", address, "--no-report", *extra],
@@ -132,10 +94,9 @@ def run_cli(study: Path, out: Path, address: str, *extra: str) -> subprocess.Pop
 
 
 @pytest.fixture(scope="module")
-def reference(tmp_path_factory):
+def reference(tmp_path_factory, write_tiny_study):
     tmp = tmp_path_factory.mktemp("dask-ref")
-    path = tmp / "study.toml"
-    path.write_text(STUDY)
+    path = write_tiny_study(tmp, name="dask-faults", root_seed=5, terrains=2, missions=2)
     study, cells = load_study(path)
     run_study(study, cells, tmp / "straight", executor="inline")
     return path, load(tmp / "straight")
@@ -173,7 +134,8 @@ def test_worker_sigkilled_mid_trial_then_resume_equals_uninterrupted(tmp_path, r
 
 
 @pytest.mark.timeout(400)
-def test_scheduler_gone_stops_cleanly_and_resume_completes(tmp_path, reference):
+def test_scheduler_gone_stops_cleanly_and_resume_completes(tmp_path, reference, stored_trials):
+    stored = stored_trials
     study, expected = reference
     out = tmp_path / "lost"
     cluster = Cluster(tmp_path)

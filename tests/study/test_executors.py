@@ -18,50 +18,7 @@ import pytest
 
 from offroadbench.study import load, load_meta, load_study, load_terrains, run_study
 
-STUDY_TOML = """
-[study]
-name = "kill-test"
-recipe = "paper-d2.45"
-root_seed = 11
-terrains_per_cell = {terrains}
-missions_per_terrain = {missions}
-
-[grid]
-"recipe.layers.base.D_high" = [2.3, 2.6]
-
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
-
 CLI = [sys.executable, "-c", "import sys; from offroadbench.cli import main; sys.exit(main())"]
-
-
-def write_study(tmp_path: Path, terrains: int, missions: int) -> Path:
-    p = tmp_path / "study.toml"
-    p.write_text(STUDY_TOML.format(terrains=terrains, missions=missions))
-    return p
-
-
-def stored(run_dir: Path) -> int:
-    db = run_dir / "study.sqlite"
-    if not db.exists():
-        return 0
-    try:
-        con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5)
-        try:
-            return con.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-        finally:
-            con.close()
-    except sqlite3.OperationalError:  # tables not created yet
-        return 0
 
 
 def processes_mentioning(text: str) -> list[int]:
@@ -87,7 +44,7 @@ def start_run(study: Path, out: Path) -> subprocess.Popen:
     )
 
 
-def wait_for(proc: subprocess.Popen, out: Path, at_least: int, timeout_s: float = 120) -> int:
+def wait_for(proc: subprocess.Popen, out: Path, at_least: int, stored, timeout_s: float = 120) -> int:
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
         n = stored(out)
@@ -107,13 +64,14 @@ def assert_no_orphans(marker: str) -> None:
 
 
 @pytest.mark.timeout(300)
-def test_sigkill_and_ctrl_c_then_resume_equal_an_uninterrupted_run(tmp_path):
-    study_path = write_study(tmp_path, terrains=3, missions=6)  # 36 trials
+def test_sigkill_and_ctrl_c_then_resume_equal_an_uninterrupted_run(tmp_path, write_tiny_study, stored_trials):
+    stored = stored_trials
+    study_path = write_tiny_study(tmp_path, name="kill-test", root_seed=11, terrains=3, missions=6)  # 36 trials
     out = tmp_path / "killed"
     total = 36
 
     proc = start_run(study_path, out)
-    n_kill = wait_for(proc, out, 4)
+    n_kill = wait_for(proc, out, 4, stored)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     assert proc.returncode == -signal.SIGKILL
@@ -124,7 +82,7 @@ def test_sigkill_and_ctrl_c_then_resume_equal_an_uninterrupted_run(tmp_path):
 
     # resume, and stop it with Ctrl-C (SIGINT) once it made progress
     proc = start_run(study_path, out)
-    n_int = wait_for(proc, out, after_kill + 3)
+    n_int = wait_for(proc, out, after_kill + 3, stored)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     if n_int < total:
@@ -155,9 +113,9 @@ def test_sigkill_and_ctrl_c_then_resume_equal_an_uninterrupted_run(tmp_path):
 
 
 @pytest.mark.timeout(300)
-def test_one_and_two_workers_and_a_dask_cluster_give_the_same_table(tmp_path):
+def test_one_and_two_workers_and_a_dask_cluster_give_the_same_table(tmp_path, write_tiny_study):
     distributed = pytest.importorskip("distributed")
-    study, cells = load_study(write_study(tmp_path, terrains=2, missions=3))  # 12 trials
+    study, cells = load_study(write_tiny_study(tmp_path, name="kill-test", root_seed=11, terrains=2, missions=3))  # 12 trials
     run_study(study, cells, tmp_path / "w1", executor="local", workers=1)
     run_study(study, cells, tmp_path / "w2", executor="local", workers=2)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
@@ -171,8 +129,8 @@ def test_one_and_two_workers_and_a_dask_cluster_give_the_same_table(tmp_path):
     assert [r["executor"] for r in load_meta(tmp_path / "dask")["runs"]] == ["dask"]
 
 
-def test_cli_run_export_and_report(tmp_path):
-    study_path = write_study(tmp_path, terrains=1, missions=2)
+def test_cli_run_export_and_report(tmp_path, write_tiny_study):
+    study_path = write_tiny_study(tmp_path, name="kill-test", root_seed=11, terrains=1, missions=2)
     out = tmp_path / "run"
     r = subprocess.run([*CLI, "study", "run", str(study_path), "--out", str(out), "--workers", "1"],
                        capture_output=True, text=True, timeout=240)
