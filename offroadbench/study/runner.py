@@ -29,11 +29,12 @@ log = logging.getLogger(__name__)
 __all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry",
            "worker_memory_bytes"]
 
-#: resident memory of one trial worker per terrain cell (the PyBullet heightfield with its
-#: render mesh, the heights and class maps): a 1009^2 world holds about 1 GB (DESIGN.md)
-WORKER_BYTES_PER_CELL = 1000
+#: peak memory of one trial worker per terrain cell: PyBullet's transient triangle copy while the
+#: heights are written (~690 B per cell, sim/world.py) plus the heights and class maps; a worker
+#: on a 1009^2 map peaks at ~0.85 GB (benchmarks/RESULTS.md, "Heightfield build")
+WORKER_BYTES_PER_CELL = 750
 #: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes
-WORKER_BASE_BYTES = 200 * 2**20
+WORKER_BASE_BYTES = 160 * 2**20
 
 
 def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
