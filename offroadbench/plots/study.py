@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from offroadbench.analysis.roughness import CLASS_NAMES
-from offroadbench.plots.style import CLASS_COLOURS, draw_border, draw_classes, new_figure
+from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
 from offroadbench.study import stats
 
 __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "fig_success_vs_level",
@@ -164,29 +164,33 @@ def fig_success_vs_level(by: pd.DataFrame, group: str, level: str):
 def fig_paths(hm, closed: np.ndarray, border_m: float, mission, drawn, *, title: str = ""):
     """Planned (dashed) and driven (solid) paths of several planners on one mission over the closed
     class map. ``drawn``: (label, planned (N, 2) or None, driven (M, 2) or None, outcome) tuples."""
-    fig, ax = new_figure(figsize=(7.5, 6.8))
+    pts = [np.array([mission.start_xy_m, mission.goal_xy_m])]
+    pts += [p for _, planned, driven, _ in drawn for p in (planned, driven) if p is not None]
+    allp = np.vstack(pts)
+    x0, x1 = max(allp[:, 0].min() - 3, 0), min(allp[:, 0].max() + 3, hm.width_m)
+    y0, y1 = max(allp[:, 1].min() - 3, 0), min(allp[:, 1].max() + 3, hm.height_m)
+    # the figure takes the crop's shape (equal axes), with room for the title and labels
+    fig, ax = new_figure(figsize=(9.5, float(np.clip(6.6 * (y1 - y0) / (x1 - x0) + 1.2, 3.2, 9.0))))
     draw_classes(ax, closed, hm.extent_m)
     draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
     colours = ("white", "black", "magenta", "cyan", "lime", "red")
-    pts = [np.array([mission.start_xy_m, mission.goal_xy_m])]
     for (label, planned, driven, outcome), colour in zip(drawn, colours):
         if planned is not None:
             ax.plot(planned[:, 0], planned[:, 1], color=colour, lw=1.2, ls="--")
-            pts.append(planned)
         if driven is not None:
             ax.plot(driven[:, 0], driven[:, 1], color=colour, lw=1.8, label=f"{label}: {outcome}")
             ax.plot(driven[-1, 0], driven[-1, 1], "X", color=colour, mec="black", ms=8)
-            pts.append(driven)
         else:
             ax.plot([], [], color=colour, lw=1.8, label=f"{label}: {outcome} (no telemetry)")
-    ax.plot(*mission.start_xy_m, "o", color="limegreen", mec="black", ms=8)
-    ax.plot(*mission.goal_xy_m, "o", color="red", mec="black", ms=8)
-    allp = np.vstack(pts)
-    ax.set_xlim(max(allp[:, 0].min() - 3, 0), min(allp[:, 0].max() + 3, hm.width_m))
-    ax.set_ylim(max(allp[:, 1].min() - 3, 0), min(allp[:, 1].max() + 3, hm.height_m))
+    ax.plot(*mission.start_xy_m, "o", color="limegreen", mec="black", ms=8, label="start")
+    ax.plot(*mission.goal_xy_m, "o", color="red", mec="black", ms=8, label="goal")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(fontsize=8, loc="best", framealpha=0.9)
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + class_legend_handles(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              framealpha=0.9, facecolor="0.8")  # the white line of the first planner shows
     if title:
         ax.set_title(title, fontsize=9)
     return fig
