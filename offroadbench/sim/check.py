@@ -142,8 +142,7 @@ def _total_mass(world: World) -> float:
 
 def _wheel_load(world: World, joints: Sequence[int]) -> float:
     """Summed normal force on the given wheels in the last step, N."""
-    return sum(c[9] for c in pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_body,
-                                                physicsClientId=world.client_id) if c[3] in joints)
+    return sum(c[9] for c in world.terrain_contacts() if c[3] in joints)
 
 
 def _ramp_tilt(world: World, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,

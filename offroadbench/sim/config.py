@@ -16,6 +16,8 @@ __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS"]
 
 #: values of SimConfig.tyre_model
 TYRE_MODELS = ("bullet", "coulomb")
+#: smallest tiled heightfield side, cells (smaller tiles only add bodies and seams)
+MIN_TILE_CELLS = 16
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,6 +42,14 @@ class SimConfig:
     """Magnitude of gravity, m/s^2."""
     terrain_friction: float = 1.0
     """Friction coefficient of the terrain; Bullet multiplies it with the vehicle's."""
+    heightfield_tile_cells: int = 256
+    """Largest side of one terrain heightfield, in map cells. The map is split into near-equal tiles
+    of at most this many cells, each its own Bullet heightfield; neighbouring tiles share their edge
+    samples, so the surface is the same, but a wheel on a seam touches two shapes. Bullet's build
+    of a heightfield holds a temporary render mesh of all its triangles (~0.7 GB for one 1009^2
+    map); tiles cap that at one tile's share (offroadbench.sim.world). ``0`` builds one heightfield
+    for the whole map (the build before 2026-11-23; results differ from tiled ones only through
+    the seams' contacts)."""
     tyre_model: str = "coulomb"
     """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
     the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
@@ -54,6 +64,12 @@ class SimConfig:
                 f"physics_rate_hz = {self.physics_rate_hz}"
             )
         check_int(self, "solver_iterations", self.solver_iterations, lo=1, hi=1000)
+        check_int(self, "heightfield_tile_cells", self.heightfield_tile_cells, lo=0)
+        if 0 < self.heightfield_tile_cells < MIN_TILE_CELLS:
+            raise InputError(
+                f"SimConfig.heightfield_tile_cells = {self.heightfield_tile_cells}: allowed 0 (one heightfield) "
+                f"or {MIN_TILE_CELLS} or more cells"
+            )
         check_range(self, "settle_time_s", self.settle_time_s, lo=0)
         check_range(self, "spawn_clearance_m", self.spawn_clearance_m, lo=0)
         check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)

@@ -66,7 +66,7 @@ class CoulombTyres:
     bristle's tangential stiffness and damping per contact; ``dt_s`` is the physics step.
     """
 
-    def __init__(self, cid: int, body: int, terrain: int, wheels: list[int], mu: float, dt_s: float,
+    def __init__(self, cid: int, body: int, terrain: frozenset[int], wheels: list[int], mu: float, dt_s: float,
                  stiffness_n_m: float, damping_n_s_m: float) -> None:
         self._cid = cid
         self._body = body
@@ -85,13 +85,14 @@ class CoulombTyres:
     def apply(self) -> None:
         """Apply one step's friction forces from the contacts of the last step."""
         cid, body = self._cid, self._body
-        contacts = pb.getContactPoints(bodyA=body, bodyB=self._terrain, physicsClientId=cid)
+        contacts = pb.getContactPoints(bodyA=body, physicsClientId=cid)
+        terrain = self._terrain
         # a sphere on a heightfield touches several triangles: sum each wheel's normal forces and
         # apply its friction at their force-weighted point, along their force-weighted normal
         by_wheel: dict[int, list[float]] = {}
         for c in contacts:
             fn = c[9]
-            if fn > 0.0 and c[3] in self._wheel_set:
+            if fn > 0.0 and c[3] in self._wheel_set and c[2] in terrain:
                 acc = by_wheel.setdefault(c[3], [0.0] * 7)
                 p, n = c[5], c[7]
                 acc[0] += fn

@@ -1,4 +1,4 @@
-"""A PyBullet DIRECT world holding one terrain heightfield and one vehicle.
+"""A PyBullet DIRECT world holding one terrain (a few heightfield tiles) and one vehicle.
 
 The terrain is built once per World and reused for all its missions; the vehicle is reset
 (pose, velocities, wheel joints) before each mission, so a mission's result does not depend on
@@ -19,16 +19,26 @@ what ran before it. Facts this relies on (measured, shared/DESIGN.md):
   ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept). Replacing
   never updates a shape's height range, so the range is set at creation. The shape, and so
   every result, is bit for bit the one built from the data directly.
-- The replace's transient is ~700 MiB for 1009^2 whatever the arguments (pybullet 3.2.7,
-  PhysicsServerCommandProcessor.cpp): its walk visits every triangle overlapping the shape's own
-  AABB (identity transform, fixed height range and scale, margin 0 that ``changeDynamics`` can
-  only raise), and the heights are written before the walk, so the final write visits all 2.03 M
-  triangles. Per triangle it appends 3 ``GLInstanceVertex`` (36 B) and 3 int indices to arrays
-  that double in capacity, and Bullet's allocator zero-fills every allocation (capacity, not
-  size, is resident); then one position and one normal ``btVector3`` (32 B, double precision)
-  per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the heights. A replace with fewer
-  samples writes only a prefix, and still walks everything in range. :func:`_lean_heap` keeps
-  glibc's heap from adding its freed blocks to that peak (~35 MiB).
+- The replace's transient is ~700 MiB for one 1009^2 heightfield whatever the arguments
+  (pybullet 3.2.7, PhysicsServerCommandProcessor.cpp): its walk visits every triangle
+  overlapping the shape's own AABB (identity transform, fixed height range and scale, margin 0
+  that ``changeDynamics`` can only raise), and the heights are written before the walk, so the
+  final write visits all 2.03 M triangles. Per triangle it appends 3 ``GLInstanceVertex`` (36 B)
+  and 3 int indices to arrays that double in capacity, and Bullet's allocator zero-fills every
+  allocation (capacity, not size, is resident); then one position and one normal ``btVector3``
+  (32 B, double precision) per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the
+  heights. :func:`_lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
+- So the map is built as tiles (``SimConfig.heightfield_tile_cells``, :func:`tile_spans`), one
+  heightfield body each, written one after the other: the transient is one tile's (~45 MiB for
+  the default 256-cell tiles of a 1009^2 map: peak RSS of a build 0.24 GB instead of 0.88 GB, in
+  the same time). Neighbouring tiles share their edge samples and all tiles share the map's height
+  range, so every vertex is where the single heightfield puts it (to the last bit in z, to
+  rounding of the tile centre in x and y) and vertical rays hit the same heights. What changes is
+  the contact bookkeeping on a seam: a wheel there touches two shapes, so Bullet keeps two
+  contact manifolds (up to 4 points each) where one heightfield gives one. The forces are those
+  of the same triangles, but the solver sees other point sets, so trajectories differ in the
+  last digits and then, on rough ground, chaotically (like any other change of rounding);
+  ``heightfield_tile_cells = 0`` rebuilds the single heightfield and its results bit for bit.
 - Reusing one World for another terrain (replacing its heights) was measured and rejected: the
   results then differ in the last digits from a fresh World (solver and contact state carried
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
@@ -74,8 +84,10 @@ class World:
         try:
             self._configure_engine()
             t0 = time.perf_counter()
-            self.terrain_body = self._build_terrain()
-            log.info("heightfield %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
+            self.terrain_bodies = self._build_terrain()
+            self._terrain_set = frozenset(self.terrain_bodies)
+            log.info("heightfield %dx%d built in %.2f s (%d tiles)", hm.rows, hm.cols, time.perf_counter() - t0,
+                     len(self.terrain_bodies))
             self.vehicle_id = self._load_vehicle()
         except BaseException:
             self.close()
@@ -109,29 +121,39 @@ class World:
             physicsClientId=self._cid,
         )
 
-    def _build_terrain(self) -> int:
+    def _build_terrain(self) -> tuple[int, ...]:
+        """One static body per heightfield tile (:func:`tile_spans`), all with the map's height range."""
         hm = self.hm
-        self._terrain_shape = self._heightfield(_empty_heights(hm))
-        with _lean_heap():
-            self._heightfield(hm.z.ravel(), replace=self._terrain_shape)
-        dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=self._cid)
-        centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
-        body = pb.createMultiBody(0, self._terrain_shape, dummy_visual, basePosition=centre, physicsClientId=self._cid)
-        pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=self._cid)
-        lo, hi = pb.getAABB(body, physicsClientId=self._cid)
-        if abs(lo[2] - hm.z_min_m) > 1e-5 or abs(hi[2] - hm.z_max_m) > 1e-5:  # pragma: no cover - a pybullet change
-            raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
-                               f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
-        return body
+        cid = self._cid
+        tile = self.sim.heightfield_tile_cells
+        rows, cols = tile_spans(hm.rows - 1, tile), tile_spans(hm.cols - 1, tile)
+        dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=cid)
+        z_centre = (hm.z_min_m + hm.z_max_m) / 2.0
+        bodies = []
+        for r0, r1 in rows:
+            for c0, c1 in cols:
+                z = hm.z[r0 : r1 + 1, c0 : c1 + 1]
+                shape = self._heightfield(_empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
+                with _lean_heap():
+                    self._heightfield(z.ravel(), z.shape, replace=shape)
+                centre = [(c0 + c1) / 2.0 * hm.cell_size_m, (r0 + r1) / 2.0 * hm.cell_size_m, z_centre]
+                body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=cid)
+                pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=cid)
+                lo, hi = pb.getAABB(body, physicsClientId=cid)
+                if abs(lo[2] - hm.z_min_m) > 1e-5 or abs(hi[2] - hm.z_max_m) > 1e-5:  # pragma: no cover - a pybullet change
+                    raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
+                                       f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
+                bodies.append(body)
+        return tuple(bodies)
 
-    def _heightfield(self, data: np.ndarray, replace: int = -1) -> int:
-        hm = self.hm
+    def _heightfield(self, data: np.ndarray, shape: tuple[int, int], replace: int = -1) -> int:
+        """A heightfield collision shape of ``shape`` = (rows, cols) samples from row-major ``data``."""
         return pb.createCollisionShape(
             pb.GEOM_HEIGHTFIELD,
-            meshScale=[hm.cell_size_m, hm.cell_size_m, 1.0],
+            meshScale=[self.hm.cell_size_m, self.hm.cell_size_m, 1.0],
             heightfieldData=data,
-            numHeightfieldRows=hm.cols,
-            numHeightfieldColumns=hm.rows,
+            numHeightfieldRows=shape[1],
+            numHeightfieldColumns=shape[0],
             replaceHeightfieldIndex=replace,
             physicsClientId=self._cid,
         )
@@ -174,7 +196,7 @@ class World:
             share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
             dt = self.dt_s
             # bristle well inside the explicit step's stability bound (k dt^2/m < 1, c dt/m < 2)
-            self._tyres = CoulombTyres(cid, body, self.terrain_body, self.wheel_joints,
+            self._tyres = CoulombTyres(cid, body, self._terrain_set, self.wheel_joints,
                                        spec.wheel_friction * self.sim.terrain_friction, dt,
                                        stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
         return body
@@ -252,35 +274,55 @@ class World:
         """Row-major 3x3 rotation matrix (body -> world) of a quaternion (x, y, z, w)."""
         return pb.getMatrixFromQuaternion(quat, physicsClientId=self._cid)
 
+    def terrain_contacts(self) -> list[tuple]:
+        """The vehicle's contact points with the terrain (any tile) from the last step, as
+        ``pybullet.getContactPoints`` gives them (vehicle as body A)."""
+        terrain = self._terrain_set
+        return [c for c in pb.getContactPoints(bodyA=self.vehicle_id, physicsClientId=self._cid) if c[2] in terrain]
+
     def wheel_penetration_m(self) -> float:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres."""
         worst = 0.0
         wheels = self.wheel_joints
-        for c in pb.getContactPoints(bodyA=self.vehicle_id, bodyB=self.terrain_body, physicsClientId=self._cid):
+        for c in self.terrain_contacts():
             if c[3] in wheels and -c[8] > worst:
                 worst = -c[8]
         return worst
 
     def ray_height(self, x_m: float, y_m: float) -> float:
-        """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN if missed)."""
-        top = self.hm.z_max_m + 1.0
-        bottom = self.hm.z_min_m - 1.0
-        hit = pb.rayTest([x_m, y_m, top], [x_m, y_m, bottom], physicsClientId=self._cid)[0]
-        if hit[0] != self.terrain_body:
-            return float("nan")
-        return float(hit[3][2])
+        """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN off the map).
+
+        Bullet's heightfield ray test leaves out a shape's outer edge, so a ray exactly on a tile
+        seam misses both tiles; such a ray is cast again 1 nm towards the map's centre."""
+        hm = self.hm
+        for nudge_m in (0.0, 1e-9):
+            x = x_m + math.copysign(nudge_m, hm.width_m / 2.0 - x_m)
+            y = y_m + math.copysign(nudge_m, hm.height_m / 2.0 - y_m)
+            hit = pb.rayTest([x, y, hm.z_max_m + 1.0], [x, y, hm.z_min_m - 1.0], physicsClientId=self._cid)[0]
+            if hit[0] in self._terrain_set:
+                return float(hit[3][2])
+        return float("nan")
 
 
-def _empty_heights(hm: Heightmap) -> np.ndarray:
-    """Heights for an 'empty' heightfield with the map's height range.
+def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:
+    """Split ``cells`` grid cells (``cells + 1`` samples) into near-equal tiles of at most
+    ``tile_cells`` cells: (first sample, last sample) per tile, neighbours sharing their edge sample.
+    ``tile_cells = 0`` gives one tile."""
+    n = 1 if tile_cells == 0 else max(1, -(-cells // tile_cells))
+    edges = [round(i * cells / n) for i in range(n + 1)]
+    return list(zip(edges[:-1], edges[1:]))
+
+
+def _empty_heights(n: int, z_min_m: float, z_max_m: float) -> np.ndarray:
+    """``n`` heights for an 'empty' heightfield with the height range (z_min_m, z_max_m).
 
     Bullet scans the data for its min and max with ``a < b ? a : b``, which a NaN restarts, so
     ``[+inf, ..., +inf, NaN, z_min, z_max]`` gives the range (z_min, z_max); every triangle made only
     of +inf samples lies above that range and is skipped by the render-mesh walk, so creating the
     shape costs almost nothing. The heights are then written with ``replaceHeightfieldIndex``.
     """
-    data = np.full(hm.rows * hm.cols, np.inf)
-    data[-3:] = (np.nan, hm.z_min_m, hm.z_max_m)
+    data = np.full(n, np.inf)
+    data[-3:] = (np.nan, z_min_m, z_max_m)
     return data
 
 

@@ -45,8 +45,7 @@ def test_settled_vehicle_rests_on_the_heightmap_surface():
         touched, wheel_contacts = set(), []
         for _ in range(12):
             world.step()
-            contacts = pb.getContactPoints(bodyA=world.vehicle_id, bodyB=world.terrain_body,
-                                           physicsClientId=world.client_id)
+            contacts = world.terrain_contacts()
             wheel_contacts = [c for c in contacts if c[3] in world.wheel_joints]
             touched |= {c[3] for c in wheel_contacts if c[9] > 0}
         assert len(touched) >= 3
@@ -133,7 +132,7 @@ def test_sim_config_validation():
 class _DirectBuildWorld(World):
     """The heightfield built straight from the data (pybullet's plain way, which keeps a render mesh)."""
 
-    def _build_terrain(self) -> int:
+    def _build_terrain(self) -> tuple[int, ...]:
         import pybullet as pb
 
         hm = self.hm
@@ -145,13 +144,13 @@ class _DirectBuildWorld(World):
         centre = [hm.width_m / 2.0, hm.height_m / 2.0, (hm.z_min_m + hm.z_max_m) / 2.0]
         body = pb.createMultiBody(0, shape, visual, basePosition=centre, physicsClientId=self._cid)
         pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=self._cid)
-        return body
+        return (body,)
 
 
 def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_the_data(monkeypatch):
     """World builds its heightfield empty and writes the heights in place (no render mesh kept),
-    with glibc's allocator tuned around the write; the collision shape, and so a rough-terrain
-    trial, must be exactly the plain build's, with or without the allocator tuning."""
+    with glibc's allocator tuned around the write; untiled, the collision shape, and so a
+    rough-terrain trial, must be exactly the plain build's, with or without the allocator tuning."""
     import pybullet as pb
 
     from offroadbench.navigation.missions import Mission
@@ -163,12 +162,14 @@ def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_
     hm = Heightmap(z, CELL)
     mission = Mission.between(0, (2.0, 3.0), (10.0, 3.5))
     results = []
+    one_field = SimConfig(heightfield_tile_cells=0)
     for cls, lean_heap in ((World, True), (_DirectBuildWorld, False), (World, False)):
         with monkeypatch.context() as m:
             if not lean_heap:
                 m.setattr("offroadbench.sim.world._glibc", lambda: None)
-            with cls(hm) as world:
-                aabb = pb.getAABB(world.terrain_body, physicsClientId=world.client_id)
+            with cls(hm, sim=one_field) as world:
+                (body,) = world.terrain_bodies
+                aabb = pb.getAABB(body, physicsClientId=world.client_id)
                 result, tel = run_mission(world, mission)
                 results.append((aabb, result, tel["z_m"]))
     (aabb_a, res_a, z_a), *others = results
@@ -176,3 +177,64 @@ def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_
         assert aabb_a == aabb_b
         assert res_a == res_b and np.array_equal(z_a, z_b)
     assert res_a.success and res_a.rms_pitch_rate_deg_s > 2.0  # it really drove over the rough map
+
+
+@pytest.mark.parametrize("cells, tile", [(1008, 256), (1008, 252), (120, 16), (33, 16), (10, 16), (240, 0)])
+def test_tile_spans_cover_the_map_with_shared_edges(cells, tile):
+    from offroadbench.sim.world import tile_spans
+
+    spans = tile_spans(cells, tile)
+    assert spans[0][0] == 0 and spans[-1][1] == cells
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:]))  # neighbours share their edge sample
+    sizes = [b - a for a, b in spans]
+    assert min(sizes) >= 1 and max(sizes) - min(sizes) <= 1  # near-equal
+    if tile:
+        assert max(sizes) <= tile and len(spans) == -(-cells // tile)
+    else:
+        assert spans == [(0, cells)]
+
+
+def test_tiled_terrain_is_the_same_surface_as_one_heightfield():
+    """Tiles share their edge samples: vertical rays hit the same heights as on one heightfield,
+    on the seams and between them, and no ray falls through a seam."""
+    rng = np.random.default_rng(5)
+    y, x = np.mgrid[0:121, 0:161] * CELL
+    hm = Heightmap(0.5 + 0.3 * np.sin(x / 1.3) * np.cos(y / 0.9) + rng.uniform(0, 0.05, x.shape), CELL)
+    from offroadbench.sim.world import tile_spans
+
+    col_seams = np.array([b for _, b in tile_spans(hm.cols - 1, 32)[:-1]]) * CELL  # x of the seams
+    row_seams = np.array([b for _, b in tile_spans(hm.rows - 1, 32)[:-1]]) * CELL  # y of the seams
+    pts = [np.column_stack([rng.uniform(0.01, hm.width_m - 0.01, 300), rng.uniform(0.01, hm.height_m - 0.01, 300)]),
+           np.column_stack([np.repeat(col_seams, 20), rng.uniform(0.01, hm.height_m - 0.01, 20 * len(col_seams))]),
+           np.column_stack([rng.uniform(0.01, hm.width_m - 0.01, 20 * len(row_seams)), np.repeat(row_seams, 20)]),
+           np.array([(cx, ry) for cx in col_seams for ry in row_seams])]  # tile corners
+    pts = np.vstack(pts)
+    heights = {}
+    for tile in (0, 32):
+        with World(hm, sim=SimConfig(heightfield_tile_cells=tile)) as world:
+            assert len(world.terrain_bodies) == (1 if tile == 0 else 5 * 4)
+            heights[tile] = np.array([world.ray_height(px, py) for px, py in pts])
+    assert np.all(np.isfinite(heights[32]))
+    np.testing.assert_allclose(heights[32], heights[0], atol=1e-9)
+
+
+def test_vehicle_drives_across_tile_seams_as_on_one_heightfield():
+    """On a tilted plane a wheel on a seam touches two heightfields; the drive across a dozen seams
+    must match the one-heightfield drive (same time, same height profile, no bumps)."""
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim import run_mission
+
+    y, x = np.mgrid[0:121, 0:321] * CELL
+    hm = Heightmap(0.5 + 0.05 * x + 0.03 * y, CELL)  # 2.9 deg up along x, 1.7 deg across
+    mission = Mission.between(0, (1.5, 3.0), (14.5, 3.2))
+    runs = {}
+    for tile in (0, 16):
+        with World(hm, sim=SimConfig(heightfield_tile_cells=tile)) as world:
+            runs[tile] = run_mission(world, mission)
+    (res0, tel0), (res1, tel1) = runs[0], runs[16]
+    assert res0.success and res1.success
+    assert res1.traversal_time_s == pytest.approx(res0.traversal_time_s, abs=0.1)
+    n = min(len(tel0["z_m"]), len(tel1["z_m"]))
+    assert np.max(np.abs(tel1["z_m"][:n] - tel0["z_m"][:n])) < 5e-3
+    assert res1.rms_vertical_accel_m_s2 < 1.5 * res0.rms_vertical_accel_m_s2 + 0.02
+    assert res1.max_penetration_m < res0.max_penetration_m + 2e-3
