@@ -12,7 +12,7 @@ from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
 
-__all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS"]
+__all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "tile_spans"]
 
 #: values of SimConfig.tyre_model
 TYRE_MODELS = ("bullet", "coulomb")
@@ -93,3 +93,12 @@ class ControllerConfig:
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
         check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
+
+
+def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:
+    """Split ``cells`` grid cells (``cells + 1`` samples) into near-equal tiles of at most
+    ``tile_cells`` cells: (first sample, last sample) per tile, neighbours sharing their edge sample.
+    ``tile_cells = 0`` gives one tile."""
+    n = 1 if tile_cells == 0 else max(1, -(-cells // tile_cells))
+    edges = [round(i * cells / n) for i in range(n + 1)]
+    return list(zip(edges[:-1], edges[1:]))

@@ -61,7 +61,7 @@ import pybullet as pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.config import SimConfig
+from offroadbench.sim.config import SimConfig, tile_spans
 from offroadbench.sim.contact import CoulombTyres
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
@@ -302,15 +302,6 @@ class World:
             if hit[0] in self._terrain_set:
                 return float(hit[3][2])
         return float("nan")
-
-
-def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:
-    """Split ``cells`` grid cells (``cells + 1`` samples) into near-equal tiles of at most
-    ``tile_cells`` cells: (first sample, last sample) per tile, neighbours sharing their edge sample.
-    ``tile_cells = 0`` gives one tile."""
-    n = 1 if tile_cells == 0 else max(1, -(-cells // tile_cells))
-    edges = [round(i * cells / n) for i in range(n + 1)]
-    return list(zip(edges[:-1], edges[1:]))
 
 
 def _empty_heights(n: int, z_min_m: float, z_max_m: float) -> np.ndarray:

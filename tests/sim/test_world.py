@@ -181,7 +181,7 @@ def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_
 
 @pytest.mark.parametrize("cells, tile", [(1008, 256), (1008, 252), (120, 16), (33, 16), (10, 16), (240, 0)])
 def test_tile_spans_cover_the_map_with_shared_edges(cells, tile):
-    from offroadbench.sim.world import tile_spans
+    from offroadbench.sim.config import tile_spans
 
     spans = tile_spans(cells, tile)
     assert spans[0][0] == 0 and spans[-1][1] == cells
@@ -200,7 +200,7 @@ def test_tiled_terrain_is_the_same_surface_as_one_heightfield():
     rng = np.random.default_rng(5)
     y, x = np.mgrid[0:121, 0:161] * CELL
     hm = Heightmap(0.5 + 0.3 * np.sin(x / 1.3) * np.cos(y / 0.9) + rng.uniform(0, 0.05, x.shape), CELL)
-    from offroadbench.sim.world import tile_spans
+    from offroadbench.sim.config import tile_spans
 
     col_seams = np.array([b for _, b in tile_spans(hm.cols - 1, 32)[:-1]]) * CELL  # x of the seams
     row_seams = np.array([b for _, b in tile_spans(hm.rows - 1, 32)[:-1]]) * CELL  # y of the seams
