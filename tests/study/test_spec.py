@@ -130,3 +130,21 @@ def test_study_id_changes_with_the_config_and_the_recipe():
     ids = {study_id(s, plan_cells(s)) for s in (a, b, c)}
     assert len(ids) == 3
     assert study_id(a, plan_cells(a)) == study_id(study_from_dict(BASE), plan_cells(study_from_dict(BASE)))
+
+
+def test_worker_memory_estimate_counts_one_heightfield_tile():
+    """A worker's peak is its map plus PyBullet's temporary copy of one tile's triangles: tiling
+    a 1009^2 map must bring the estimate from ~0.9 GB down to the map's share."""
+    from offroadbench.study.runner import (TILE_BUILD_BYTES_PER_CELL, WORKER_BASE_BYTES, WORKER_BYTES_PER_CELL,
+                                           worker_memory_bytes)
+
+    import tomllib
+
+    data = tomllib.loads((ROOT / "experiments" / "majhor2023.toml").read_text())
+    tiled = worker_memory_bytes(plan_cells(study_from_dict(data)))
+    data.setdefault("sim", {})["heightfield_tile_cells"] = 0
+    whole = worker_memory_bytes(plan_cells(study_from_dict(data)))
+    n = 1009 * 1009
+    assert whole == WORKER_BASE_BYTES + (WORKER_BYTES_PER_CELL + TILE_BUILD_BYTES_PER_CELL) * n
+    assert tiled == WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * n + TILE_BUILD_BYTES_PER_CELL * 253 * 253
+    assert tiled < 0.3 * 2**30 < 0.8 * 2**30 < whole
