@@ -335,7 +335,12 @@ class DaskExecutor:
                 raise StudyError(str(exc))
             tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
             raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)
-        for msg in fut.result():
+        try:
+            msgs = fut.result()  # fetches the task's results from its worker through the scheduler
+        except (OSError, TimeoutError) as exc:  # CommClosedError is an OSError: the scheduler went away
+            raise StudyError(f"lost the Dask scheduler while fetching cell {key[0]}, terrain {key[1]} "
+                             f"({type(exc).__name__})") from None
+        for msg in msgs:
             handle(msg)
 
     def _check_workers(self, client, where: str, since: float | None, now: float) -> float | None:

@@ -206,3 +206,24 @@ def test_hung_trial_hits_the_wall_clock_limit_and_resume_completes(tmp_path, ref
         _assert_same(out, expected)
     finally:
         cluster.close()
+
+
+def test_scheduler_lost_while_fetching_a_result_is_one_study_error():
+    """The race the test above can hit: a task finished, and the scheduler dies while its results
+    are fetched (``CommClosedError``, an OSError). That must be the study's one-line error, not
+    a traceback."""
+    from types import SimpleNamespace
+
+    from distributed.comm.core import CommClosedError
+
+    from offroadbench.study.executors import DaskExecutor, StudyError
+
+    class Finished:
+        status = "finished"
+
+        def result(self):
+            raise CommClosedError("in <TCP (closed) ConnectionPool.gather>: ConnectionResetError")
+
+    task = SimpleNamespace(cell=SimpleNamespace(index=2), terrain=5)
+    with pytest.raises(StudyError, match=r"^lost the Dask scheduler while fetching cell 2, terrain 5 \(CommClosedError\)$"):
+        DaskExecutor(workers=1)._collect(None, Finished(), task, lambda msg: None)
