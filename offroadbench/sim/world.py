@@ -5,8 +5,8 @@ The terrain is built once per World and reused for all its missions; the vehicle
 what ran before it. Facts this relies on (measured, shared/DESIGN.md):
 
 - Bullet centres a heightfield on the middle of its x/y grid and at (min + max) / 2 in z, so
-  the body is placed at (width/2, height/2, (z_min + z_max)/2) to put sample (r, c) at
-  (c * cell, r * cell, z[r, c]). ``numHeightfieldRows`` is the number of x samples (cols) and
+  a heightfield of samples (r0..r1, c0..c1) is placed at ((c0 + c1)/2 * cell, (r0 + r1)/2 * cell,
+  (z_min + z_max)/2) to put sample (r, c) at (c * cell, r * cell, z[r, c]). ``numHeightfieldRows`` is the number of x samples (cols) and
   the data is ``z.ravel()`` (index c + r * cols).
 - ``createMultiBody`` gets a tiny dummy visual shape; without one PyBullet builds a render mesh
   (seconds and hundreds of MB per 1009^2 terrain).

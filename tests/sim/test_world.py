@@ -219,7 +219,7 @@ def test_tiled_terrain_is_the_same_surface_as_one_heightfield():
 
 
 def test_vehicle_drives_across_tile_seams_as_on_one_heightfield():
-    """On a tilted plane a wheel on a seam touches two heightfields; the drive across a dozen seams
+    """On a tilted plane a wheel on a seam touches two heightfields; a 13 m drive across 16 seams
     must match the one-heightfield drive (same time, same height profile, no bumps)."""
     from offroadbench.navigation.missions import Mission
     from offroadbench.sim import run_mission
