@@ -61,6 +61,7 @@ import dataclasses
 import heapq
 import logging
 import math
+import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -82,6 +83,7 @@ __all__ = [
     "PlannerChoice",
     "planner_from_table",
     "plan",
+    "entry_config",
     "CostConfig",
     "AStarConfig",
     "LatticeConfig",
@@ -254,15 +256,26 @@ def planner_from_table(table: Mapping[str, Any], where: str = "[planner]") -> Pl
     return PlannerChoice(name, cfg, kind)
 
 
+def entry_config(kind: str, name: str, cfg: Any, expected: type) -> Any:
+    """``cfg`` for the registered ``kind`` (planner or policy) ``name`` whose config class is
+    ``expected``: the default ``NoConfig()`` of a bare ``PlannerChoice(name)`` becomes
+    ``expected()``; a config of another class is an InputError."""
+    if isinstance(cfg, expected):
+        return cfg
+    if type(cfg) is NoConfig:
+        return expected()
+    raise InputError(f"{kind} {name!r} takes config class {expected.__name__}, got {type(cfg).__name__}")
+
+
 def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
     """Waypoints (N, 2) from a planner, checked: finite, at least two, from exactly the start to
     exactly the goal, on the map. A plug-in that breaks the contract raises RuntimeError."""
     if isinstance(choice, str):
-        choice = PlannerChoice(choice, PLANNERS.get(choice).config())
+        choice = PlannerChoice(choice)
     if choice.kind != "planner":
         raise InputError(f"{choice.name!r} is a policy, not a planner")
     spec = PLANNERS.get(choice.name)
-    wp = np.asarray(spec.plan(problem, choice.config), dtype=float)
+    wp = np.asarray(spec.plan(problem, entry_config("planner", choice.name, choice.config, spec.config)), dtype=float)
     bad = None
     if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2 or not np.all(np.isfinite(wp)):
         bad = f"returned an array of shape {wp.shape}; expected (N >= 2, 2) finite waypoints"
@@ -389,7 +402,25 @@ def _patch_planes(z: np.ndarray, cell_m: float, radius_m: float, f: int, shape: 
     return np.hypot(a, b), residual
 
 
+#: footprint hazards per terrain: a study plans every mission of a terrain on the same map, and the
+#: hazard depends only on the map (immutable), the vehicle and the grid (~1 s on a 1009^2 map)
+_HAZARD_CACHE: "weakref.WeakKeyDictionary[Heightmap, dict]" = weakref.WeakKeyDictionary()
+
+
 def footprint_hazard(hm: Heightmap, vehicle: VehicleEnvelope, f: int) -> dict[str, np.ndarray]:
+    """:func:`_footprint_hazard`, computed once per (map, vehicle, grid) while the map lives; the
+    arrays are read-only."""
+    per_map = _HAZARD_CACHE.setdefault(hm, {})
+    key = (vehicle, f)
+    if key not in per_map:
+        out = _footprint_hazard(hm, vehicle, f)
+        for a in out.values():
+            a.setflags(write=False)
+        per_map[key] = out
+    return per_map[key]
+
+
+def _footprint_hazard(hm: Heightmap, vehicle: VehicleEnvelope, f: int) -> dict[str, np.ndarray]:
     """How close each planning cell (``f x f`` map cells) comes to one of the vehicle's limits, by
     the terrain under a vehicle-sized patch round it; 1 = at the limit. Keys:
 

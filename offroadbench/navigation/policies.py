@@ -28,7 +28,7 @@ import numpy as np
 
 from offroadbench.config import check_int, check_range
 from offroadbench.navigation.observation import ObservationConfig
-from offroadbench.navigation.planners import NoConfig, PlanningProblem, VehicleEnvelope
+from offroadbench.navigation.planners import NoConfig, PlanningProblem, VehicleEnvelope, entry_config
 from offroadbench.registry import Registry
 
 __all__ = ["Policy", "PolicyContext", "PolicySpec", "POLICIES", "register_policy", "make_policy",
@@ -85,8 +85,9 @@ def register_policy(name: str, *, config: type = NoConfig, summary: str = ""):
 
 
 def make_policy(name: str, cfg: Any, context: PolicyContext) -> Policy:
-    """Build the registered policy ``name``."""
-    return POLICIES.get(name).make(cfg, context)
+    """Build the registered policy ``name`` (``cfg`` as in planners.entry_config)."""
+    spec = POLICIES.get(name)
+    return spec.make(entry_config("policy", name, cfg, spec.config), context)
 
 
 # ---------------------------------------------------------------------------- reactive

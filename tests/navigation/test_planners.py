@@ -1,5 +1,6 @@
 """Planner plug-ins: the registry, A* and hybrid A* on the hazard and class cost grids, the path tracker and trials."""
 
+import dataclasses
 import logging
 import math
 
@@ -84,6 +85,23 @@ def test_registry_and_the_planner_table():
         planner_from_table({"name": "astar", "turn_radius_m": 2.0})  # a lattice field
     assert planner_from_table({}).name == "straight"
     assert planner_from_table({"name": "reactive"}).kind == "policy"
+
+
+def test_a_bare_choice_gets_the_default_config_and_a_wrong_one_is_refused():
+    """``PlannerChoice("astar")`` (no config) plans as ``plan("astar")``; another entry's config is an
+    InputError naming both classes, for planners and policies alike."""
+    from offroadbench.navigation.observation import ObservationConfig
+    from offroadbench.navigation.policies import PolicyContext, make_policy
+
+    problem = _problem(_wall_classes(), (2.0, 2.0), (10.0, 2.5))
+    assert np.array_equal(plan(PlannerChoice("astar"), problem), plan("astar", problem))
+    assert np.array_equal(plan(PlannerChoice("astar"), problem), plan(PlannerChoice("astar", AStarConfig()), problem))
+    with pytest.raises(InputError, match="planner 'astar' takes config class AStarConfig, got LatticeConfig"):
+        plan(PlannerChoice("astar", LatticeConfig()), problem)
+    context = PolicyContext(observation=ObservationConfig(), vehicle=VehicleEnvelope(), track_m=0.55, control_rate_hz=20)
+    assert make_policy("reactive", PlannerChoice("reactive").config, context) is not None
+    with pytest.raises(InputError, match="policy 'reactive' takes config class ReactiveConfig, got AStarConfig"):
+        make_policy("reactive", AStarConfig(), context)
 
 
 def test_plan_checks_the_contract_of_a_plug_in():
@@ -318,6 +336,30 @@ def test_footprint_hazard_of_a_tilted_plane_and_of_a_step():
     assert np.all(kerb["step"][row, far] == 0.0)
     wall = footprint_hazard(_step_wall(0.2), veh, 5)
     assert wall["hazard"][row, np.abs(cols - 6.0) < 0.2].min() > 1.0
+
+
+def test_footprint_hazard_is_computed_once_per_map_vehicle_and_grid():
+    """Every mission on a terrain plans on the same hazard: it is kept per (map, vehicle, grid),
+    read-only, equal to a fresh computation, and recomputed for another vehicle, grid or map."""
+    import gc
+
+    from offroadbench.navigation import planners
+
+    hm = _step_wall(0.12)
+    veh = VehicleEnvelope()
+    first = footprint_hazard(hm, veh, 5)
+    assert footprint_hazard(hm, veh, 5) is first
+    fresh = planners._footprint_hazard(hm, veh, 5)
+    assert all(np.array_equal(first[k], fresh[k]) for k in fresh)
+    assert not first["hazard"].flags.writeable
+    wide = footprint_hazard(hm, dataclasses.replace(veh, width_m=1.2), 5)
+    assert wide is not first and wide["step"].sum() > first["step"].sum()  # a wider reach sees the step sooner
+    assert footprint_hazard(hm, veh, 4) is not first
+    assert footprint_hazard(_step_wall(0.12), veh, 5) is not first  # another (equal) map object
+    n = len(planners._HAZARD_CACHE)
+    del hm, first, wide
+    gc.collect()
+    assert len(planners._HAZARD_CACHE) < n  # dropped with its map
 
 
 @pytest.mark.parametrize("planner", [plan_astar, plan_lattice])
