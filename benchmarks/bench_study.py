@@ -1,6 +1,7 @@
 """Study throughput: where the time and memory of the paper study go, and variants side by side.
 
     .venv/bin/python benchmarks/bench_study.py profile [--terrains 1] [--missions 4]
+    .venv/bin/python benchmarks/bench_study.py plans [--missions 5] [--planner astar ...]
     .venv/bin/python benchmarks/bench_study.py compare [--terrains 1] [--missions 20] \
         [--variant NAME[:executor=local,workers=2,tree=PATH,KEY=VALUE...]] ...
 
@@ -9,6 +10,9 @@ the terrain (W-M layers), its classes and missions, the PyBullet heightfield and
 trial the vehicle spawn (settling), the physics steps and everything else in Python per tick
 (control, telemetry, end rules, metrics), plus the RSS and the peak RSS of each phase (the peak
 is reset between phases through /proc/self/clear_refs) and the cost of committing one row.
+
+``plans`` times the planners on one paper terrain per D: the first mission of a terrain (which
+computes the footprint hazard) and the median of the others (which reuse it).
 
 ``compare`` runs the paper study cut to ``--terrains`` terrains per D (the same seeds and first
 terrains as the full study) once per variant, each in a fresh process, one after the other in
@@ -155,6 +159,48 @@ def profile(terrains: int, missions: int) -> None:
           f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
 
 
+# ---------------------------------------------------------------------------- plans
+def plans(missions: int, planners: list[str]) -> None:
+    """Seconds per planned mission on one paper terrain per D: the first mission of a terrain (the
+    footprint hazard is computed) and the median of the others (it is reused)."""
+    import statistics
+
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.navigation.planners import _HAZARD_CACHE, PlanningProblem, plan
+    from offroadbench.sim import World
+    from offroadbench.sim.runner import vehicle_envelope
+    from offroadbench.study import load_study
+    from offroadbench.study.runner import plan_tasks
+    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.tasks import sample_mission
+    from offroadbench.terrain.recipe import generate_terrain
+
+    import dataclasses
+
+    study, _ = load_study(STUDY)
+    study = dataclasses.replace(study, terrains_per_cell=1, missions_per_terrain=missions)
+    print("terrain | planner | first mission s | median of the others s | waypoints (median)")
+    for task in plan_tasks(study, plan_cells(study), set()):
+        cell = task.cell
+        hm = generate_terrain(cell.recipe(), task.terrain_seed)
+        maps = classify_terrain(hm, cell.section("roughness"))
+        mcfg = cell.section("missions")
+        ms = [sample_mission(hm, maps.closed, mcfg, k, seed) for k, seed in task.missions]
+        with World(hm, cell.section("vehicle"), cell.section("sim")) as world:
+            envelope = vehicle_envelope(world)
+        for name in planners:
+            _HAZARD_CACHE.clear()  # each planner's first mission computes the hazard
+            times, sizes = [], []
+            for m in ms:
+                problem = PlanningProblem(hm=hm, classes=maps.closed, start_xy=m.start_xy_m, goal_xy=m.goal_xy_m,
+                                          border_m=mcfg.border_m, vehicle=envelope)
+                t = time.perf_counter()
+                sizes.append(len(plan(name, problem)))
+                times.append(time.perf_counter() - t)
+            print(f"D={cell.values.get('recipe.layers.base.D_high')} | {name} | {times[0]:.2f} | "
+                  f"{statistics.median(times[1:]) if len(times) > 1 else float('nan'):.2f} | {statistics.median(sizes):.0f}")
+
+
 # ---------------------------------------------------------------------------- compare
 def parse_variant(text: str) -> dict:
     name, _, rest = text.partition(":")
@@ -243,6 +289,9 @@ def main() -> None:
     p = sub.add_parser("profile")
     p.add_argument("--terrains", type=int, default=1, help="terrains per D")
     p.add_argument("--missions", type=int, default=4)
+    q = sub.add_parser("plans")
+    q.add_argument("--missions", type=int, default=5, help="missions per terrain (one terrain per D)")
+    q.add_argument("--planner", action="append", default=[], help="planner name (repeat; default astar, lattice)")
     c = sub.add_parser("compare")
     c.add_argument("--terrains", type=int, default=1, help="terrains per D (full study: 20)")
     c.add_argument("--missions", type=int, default=20, help="missions per terrain (full study: 20)")
@@ -254,6 +303,8 @@ def main() -> None:
     print(f"machine: {machine_description()}; load average {os.getloadavg()[0]:.1f}")
     if args.cmd == "profile":
         profile(args.terrains, args.missions)
+    elif args.cmd == "plans":
+        plans(args.missions, args.planner or ["astar", "lattice"])
     else:
         compare(args.variant or ["local-2:workers=2", "local-1:workers=1"], args.terrains, args.missions)
 
