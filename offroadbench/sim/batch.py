@@ -2,7 +2,7 @@
 
 :func:`drive_missions` is the whole ``drive`` command as a library call: it classifies the
 terrain and closes its rough areas (Majhor & Bos 2023, Sec. 2.3-2.4), samples ``n`` straight
-missions on the closed map, drives them in one PyBullet World and returns a :class:`DriveRun`
+missions on the closed map, drives them in one World of ``sim.engine`` and returns a :class:`DriveRun`
 with the missions, one :class:`~offroadbench.sim.runner.TrialResult` per mission, each trial's
 20 Hz telemetry (in memory) and the summary of Eq. 5. It writes no file and prints nothing.
 
@@ -135,10 +135,10 @@ def drive_missions(
 
 def _drive(hm, missions: Sequence[Mission], vehicle, sim, kwargs, progress):
     from offroadbench.sim.runner import drive_mission
-    from offroadbench.sim.world import World
+    from offroadbench.sim.engine import open_world
 
     results, telemetry, paths = [], {}, {}
-    with World(hm, vehicle, sim) as world:
+    with open_world(hm, vehicle, sim) as world:
         for i, mission in enumerate(missions):
             rec = drive_mission(world, mission, **kwargs)
             results.append(rec.result)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
+from offroadbench.sim.engine import ENGINES
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "tile_spans"]
 
@@ -54,6 +55,9 @@ class SimConfig:
     """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
     the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
     off; Coulomb forces against each contact's slip velocity, applied every step)."""
+    engine: str = "pybullet"
+    """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
+    default) or another registered engine."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -75,6 +79,7 @@ class SimConfig:
         check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
+        check_choice(self, "engine", self.engine, ENGINES.names())
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -112,11 +112,11 @@ def _drive_kwargs(hm, cell: CellPlan) -> dict[str, Any]:
 
 def sim_trials(hm, missions, cell: CellPlan) -> Iterator[Any]:
     """The real trials (PyBullet): one World per terrain, one TrialRecord per mission as it finishes."""
-    from offroadbench.sim import World
+    from offroadbench.sim.engine import open_world
     from offroadbench.sim.runner import drive_mission
 
     kwargs = _drive_kwargs(hm, cell)
-    with World(hm, cell.section("vehicle"), cell.section("sim")) as world:
+    with open_world(hm, cell.section("vehicle"), cell.section("sim")) as world:
         for mission in missions:
             yield drive_mission(world, mission, **kwargs)
 
@@ -151,7 +151,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     import json
 
     from offroadbench.errors import InputError
-    from offroadbench.sim import World
+    from offroadbench.sim.engine import open_world
     from offroadbench.sim.runner import drive_mission
     from offroadbench.study.store import Store
     from offroadbench.terrain.recipe import generate_terrain
@@ -172,7 +172,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     m = sample_mission(hm, closed, plan.section("missions"), mission, mseed)
     kwargs = _drive_kwargs(hm, plan)
     kwargs["classes"] = closed
-    with World(hm, plan.section("vehicle"), plan.section("sim")) as world:
+    with open_world(hm, plan.section("vehicle"), plan.section("sim")) as world:
         rec = drive_mission(world, m, **kwargs)
     stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too
