@@ -55,6 +55,12 @@ class SimConfig:
     """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
     the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
     off; Coulomb forces against each contact's slip velocity, applied every step)."""
+    cone_friction: bool | None = None
+    """PyBullet's friction cone (``enableConeFriction``) for the contacts Bullet's solver owns:
+    ``None`` (default) switches it off under the ``coulomb`` tyre model, where the wheels' Bullet
+    friction is 0 and the cone's rows for their contacts are wasted solver work (about 17 % of
+    the solver's time; the chassis' contacts then get Bullet's friction pyramid), and keeps it on
+    under ``bullet``. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
     engine: str = "pybullet"
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
     default) or another registered engine."""
@@ -80,6 +86,8 @@ class SimConfig:
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
         check_choice(self, "engine", self.engine, ENGINES.names())
+        if self.cone_friction is not None and not isinstance(self.cone_friction, bool):
+            raise InputError(f"SimConfig.cone_friction = {self.cone_friction!r}: allowed true, false or unset")
 
 
 @dataclass(frozen=True, kw_only=True)

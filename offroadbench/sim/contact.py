@@ -71,45 +71,77 @@ class CoulombTyres:
         self._cid = cid
         self._body = body
         self._terrain = terrain
-        self._wheel_set = frozenset(wheels)
+        self._wheels = sorted(wheels)
+        #: wheel link -> its slot in the per-wheel state below (fixed at construction)
+        self._slot = {link: i for i, link in enumerate(self._wheels)}
         self._mu = mu
         self._dt = dt_s
         self._k = stiffness_n_m
         self._c = damping_n_s_m
-        self._bristle: dict[int, list[float]] = {}
+        n = len(self._wheels)
+        # per-wheel state in flat lists, allocated once: each step only overwrites floats, so the
+        # loop allocates no list or dict of its own (pybullet's query results aside)
+        self._acc = [0.0] * (7 * n)  # summed fn, fn * point (3), fn * normal (3)
+        self._zero = [0.0] * (7 * n)
+        self._touch = [False] * n  # the wheel has a loaded terrain contact this step
+        self._bristle = [0.0] * (3 * n)  # bristle deflection, m
+        self._held = [False] * n  # the wheel's bristle carries a deflection from the last step
 
     def reset(self) -> None:
         """Forget the bristle deflections (after the vehicle is teleported)."""
-        self._bristle.clear()
+        held = self._held
+        for i in range(len(held)):
+            held[i] = False
 
     def apply(self) -> None:
-        """Apply one step's friction forces from the contacts of the last step."""
+        """Apply one step's friction forces from the contacts of the last step.
+
+        Plain Python floats throughout (no numpy: a scalar numpy op costs more than the arithmetic,
+        and its SIMD dispatch could differ between CPUs); the arithmetic, its order and so its
+        results are those of the first implementation, bit for bit (tests/sim/test_contact.py).
+        """
         cid, body = self._cid, self._body
         contacts = pb.getContactPoints(bodyA=body, physicsClientId=cid)
-        terrain = self._terrain
+        terrain, slot, acc, touch = self._terrain, self._slot, self._acc, self._touch
+        acc[:] = self._zero
+        n_wheels = len(touch)
+        for i in range(n_wheels):
+            touch[i] = False
         # a sphere on a heightfield touches several triangles: sum each wheel's normal forces and
         # apply its friction at their force-weighted point, along their force-weighted normal
-        by_wheel: dict[int, list[float]] = {}
+        any_touch = False
         for c in contacts:
             fn = c[9]
-            if fn > 0.0 and c[3] in self._wheel_set and c[2] in terrain:
-                acc = by_wheel.setdefault(c[3], [0.0] * 7)
+            if fn > 0.0 and c[2] in terrain:
+                i = slot.get(c[3])
+                if i is None:
+                    continue
+                touch[i] = any_touch = True
                 p, n = c[5], c[7]
-                acc[0] += fn
-                acc[1] += fn * p[0]
-                acc[2] += fn * p[1]
-                acc[3] += fn * p[2]
-                acc[4] += fn * n[0]
-                acc[5] += fn * n[1]
-                acc[6] += fn * n[2]
-        if not by_wheel:
-            self._bristle.clear()
+                b = 7 * i
+                acc[b] += fn
+                acc[b + 1] += fn * p[0]
+                acc[b + 2] += fn * p[1]
+                acc[b + 3] += fn * p[2]
+                acc[b + 4] += fn * n[0]
+                acc[b + 5] += fn * n[1]
+                acc[b + 6] += fn * n[2]
+        held, bristle = self._held, self._bristle
+        if not any_touch:
+            for i in range(n_wheels):
+                held[i] = False
             return
-        links = sorted(by_wheel)
-        states = pb.getLinkStates(body, links, computeLinkVelocity=1, physicsClientId=cid)
-        for link, st in zip(links, states):
-            fn, spx, spy, spz, snx, sny, snz = by_wheel[link]
-            px, py, pz = spx / fn, spy / fn, spz / fn
+        states = pb.getLinkStates(body, self._wheels, computeLinkVelocity=1, physicsClientId=cid)
+        dt, k, cdamp, mu = self._dt, self._k, self._c, self._mu
+        for i in range(n_wheels):
+            if not touch[i]:
+                held[i] = False
+                continue
+            st = states[i]
+            b = 7 * i
+            fn = acc[b]
+            px, py, pz = acc[b + 1] / fn, acc[b + 2] / fn, acc[b + 3] / fn
+            snx, sny, snz = acc[b + 4], acc[b + 5], acc[b + 6]
             norm = math.sqrt(snx * snx + sny * sny + snz * snz)
             nx, ny, nz = snx / norm, sny / norm, snz / norm  # on the terrain, pointing at the wheel
             cx, cy, cz = st[0]
@@ -122,24 +154,22 @@ class CoulombTyres:
             uz = vz + wx * ry - wy * rx
             un = ux * nx + uy * ny + uz * nz
             sx, sy, sz = ux - un * nx, uy - un * ny, uz - un * nz  # tangential slip
-            d = self._bristle.get(link)
-            if d is None:
-                d = [0.0, 0.0, 0.0]
-            else:  # keep the stored deflection in the current tangent plane
-                dn = d[0] * nx + d[1] * ny + d[2] * nz
-                d = [d[0] - dn * nx, d[1] - dn * ny, d[2] - dn * nz]
-            dt = self._dt
-            d = [d[0] + sx * dt, d[1] + sy * dt, d[2] + sz * dt]
-            k, cdamp = self._k, self._c
-            fx, fy, fz = -(k * d[0] + cdamp * sx), -(k * d[1] + cdamp * sy), -(k * d[2] + cdamp * sz)
+            j = 3 * i
+            if held[i]:  # keep the stored deflection in the current tangent plane
+                dx, dy, dz = bristle[j], bristle[j + 1], bristle[j + 2]
+                dn = dx * nx + dy * ny + dz * nz
+                dx, dy, dz = dx - dn * nx, dy - dn * ny, dz - dn * nz
+            else:
+                dx = dy = dz = 0.0
+            dx, dy, dz = dx + sx * dt, dy + sy * dt, dz + sz * dt
+            fx, fy, fz = -(k * dx + cdamp * sx), -(k * dy + cdamp * sy), -(k * dz + cdamp * sz)
             f = math.sqrt(fx * fx + fy * fy + fz * fz)
-            limit = self._mu * fn
+            limit = mu * fn
             if f > limit:  # sliding: the Coulomb limit, and the bristle at its stretched length
                 s = limit / f
                 fx, fy, fz = fx * s, fy * s, fz * s
-                d = [-fx / k, -fy / k, -fz / k]
-            self._bristle[link] = d
-            pb.applyExternalForce(body, link, [fx, fy, fz], [px, py, pz], pb.WORLD_FRAME, physicsClientId=cid)
-        for link in list(self._bristle):
-            if link not in by_wheel:
-                del self._bristle[link]
+                dx, dy, dz = -fx / k, -fy / k, -fz / k
+            bristle[j], bristle[j + 1], bristle[j + 2] = dx, dy, dz
+            held[i] = True
+            pb.applyExternalForce(body, self._wheels[i], (fx, fy, fz), (px, py, pz), pb.WORLD_FRAME,
+                                  physicsClientId=cid)

@@ -127,8 +127,17 @@ class World:
             numSubSteps=0,
             numSolverIterations=self.sim.solver_iterations,
             deterministicOverlappingPairs=1,
+            enableConeFriction=int(self.cone_friction),
             physicsClientId=self._cid,
         )
+
+    @property
+    def cone_friction(self) -> bool:
+        """Whether Bullet's friction cone is on (SimConfig.cone_friction; default: off under the
+        ``coulomb`` tyre model, whose wheels have no Bullet friction)."""
+        if self.sim.cone_friction is not None:
+            return self.sim.cone_friction
+        return self.sim.tyre_model != "coulomb"
 
     def _build_terrain(self) -> tuple[int, ...]:
         """One static body per heightfield tile (:func:`tile_spans`), all with the map's height range."""
