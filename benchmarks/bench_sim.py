@@ -35,6 +35,10 @@ variant: the trial-time and per-simulated-second ratios to ``main``, successes, 
 against ``main`` and the median ratio of RMS vertical acceleration over the trials both succeeded.
 
     .venv/bin/python benchmarks/bench_sim.py --paired [--missions 8] [--old-rev main]
+
+``--engines`` compares physics engines and rates the same way (the first variant is the reference):
+
+    .venv/bin/python benchmarks/bench_sim.py --engines 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'
 """
 
 from __future__ import annotations
@@ -273,6 +277,71 @@ def paired(args) -> None:
               f"{sum(r.success for r in res[v]):>3d}/{len(res[v]):<4d} {flips:5d} {az:12.3f} {pen:10.1f}", flush=True)
 
 
+def _parse_variant(text: str) -> tuple[str, dict]:
+    """``NAME:key=value,key=value`` (SimConfig fields) -> (NAME, changes)."""
+    name, _, rest = text.partition(":")
+    changes = {}
+    for item in filter(None, rest.split(",")):
+        key, _, value = item.partition("=")
+        changes[key] = int(value) if value.lstrip("-").isdigit() else value
+    return name, changes
+
+
+def engines(args) -> None:
+    """Paired runs of physics engines / rates on the paper missions (as ``--paired``)."""
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.navigation.missions import sample_mission
+    from offroadbench.seeding import mission_seed, terrain_seed
+    from offroadbench.sim import open_world
+    from offroadbench.terrain.recipe import apply_overrides
+
+    variants = [_parse_variant(v) for v in args.engines.split(";")]
+    names = [n for n, _ in variants]
+    wall = dict.fromkeys(names, 0.0)
+    simt = dict.fromkeys(names, 0.0)
+    build = dict.fromkeys(names, 0.0)
+    res = {n: [] for n in names}
+    rc = RoughnessConfig(border_m=5.0)
+    mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
+    print(f"engines {variants}; terrain 0 of each D (root seed 2023), {args.missions} missions each", flush=True)
+    for d in (2.3, 2.45, 2.6):
+        hm = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d}),
+                              terrain_seed(2023, 0))
+        closed = classify_terrain(hm, rc).closed
+        missions = [sample_mission(hm, closed, mcfg, k, mission_seed(2023, 0, k)) for k in range(args.missions)]
+        worlds = {}
+        for n, changes in variants:
+            t0 = time.perf_counter()
+            worlds[n] = open_world(hm, "husky", dataclasses.replace(SimConfig(), **changes))
+            build[n] += time.perf_counter() - t0
+        try:
+            for m in missions:
+                for n, w in worlds.items():
+                    t0 = time.perf_counter()
+                    r, _ = run_mission(w, m)
+                    wall[n] += time.perf_counter() - t0
+                    simt[n] += r.sim_time_s + w.sim.settle_time_s
+                    res[n].append(r)
+        finally:
+            for w in worlds.values():
+                w.close()
+        print(f"  D = {d}: done", flush=True)
+    ref = names[0]
+    print(f"{'variant':14s} {'build_s':>7s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} "
+          f"{'rms_az':>7s} {'az ratio':>8s} {'pitch ratio':>11s} {'pen_med_mm':>10s}")
+    for n in names:
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(res[ref], res[n]))
+        both = [(a, b) for a, b in zip(res[ref], res[n]) if a.success and b.success]
+        az = np.median([b.rms_vertical_accel_m_s2 / a.rms_vertical_accel_m_s2 for a, b in both]) if both else np.nan
+        pr = np.median([b.rms_pitch_rate_deg_s / a.rms_pitch_rate_deg_s for a, b in both]) if both else np.nan
+        ok = [r.rms_vertical_accel_m_s2 for r in res[n] if r.success]
+        pen = np.median([1000 * r.max_penetration_m for r in res[n]])
+        print(f"{n:14s} {build[n]:7.2f} {wall[ref] / wall[n]:10.3f} {(wall[ref] / simt[ref]) / (wall[n] / simt[n]):9.3f} "
+              f"{sum(r.success for r in res[n]):>3d}/{len(res[n]):<4d} {flips:5d} {np.median(ok) if ok else np.nan:7.3f} "
+              f"{az:8.3f} {pr:11.3f} {pen:10.1f}", flush=True)
+        print("      outcomes: " + " ".join(r.failure_reason or "ok" for r in res[n]), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default=None, help="terrain preset (default paper-d2.45; --contact: paper-d2.6)")
@@ -283,7 +352,13 @@ def main() -> None:
     ap.add_argument("--iterations", default=None, help="compare solver iteration counts, e.g. 50,30,20")
     ap.add_argument("--paired", action="store_true", help="PyBullet's wasted work: paired variants (issue 25)")
     ap.add_argument("--old-rev", default="main", help="--paired: git revision of the old tyre loop")
+    ap.add_argument("--engines", default=None,
+                    help="paired engines, e.g. 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'")
     args = ap.parse_args()
+    if args.engines:
+        args.missions = args.missions or 8
+        engines(args)
+        return
     if args.paired:
         args.missions = args.missions or 8
         paired(args)

@@ -28,6 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
+from offroadbench.errors import InputError
 from offroadbench.registry import Registry
 
 if TYPE_CHECKING:
@@ -136,11 +137,19 @@ class TrialWorld(Protocol):
         """Height of the terrain's collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
 
 
-def _lazy(module: str, name: str) -> Callable[..., TrialWorld]:
-    """A constructor that imports its engine module only when a world is opened."""
+def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., TrialWorld]:
+    """A constructor that imports its engine module only when a world is opened; a missing engine
+    package is an InputError saying what to install."""
 
     def make(hm, vehicle, sim):
-        return getattr(importlib.import_module(module), name)(hm, vehicle, sim)
+        try:
+            cls = getattr(importlib.import_module(module), name)
+        except ModuleNotFoundError as exc:
+            if exc.name != package:
+                raise
+            raise InputError(f"engine {sim.engine!r} needs the {package} package: "
+                             f"pip install 'offroadbench[{extra}]'") from None
+        return cls(hm, vehicle, sim)
 
     make.__qualname__ = make.__name__ = f"{name}_factory"
     make.__doc__ = f"Open a {module}.{name}."
@@ -149,7 +158,8 @@ def _lazy(module: str, name: str) -> Callable[..., TrialWorld]:
 
 #: physics engines by name (``SimConfig.engine``): each a callable ``(hm, vehicle, sim) -> TrialWorld``
 ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine")
-ENGINES.add("pybullet", _lazy("offroadbench.sim.world", "World"))
+ENGINES.add("pybullet", _lazy("offroadbench.sim.world", "World", "pybullet", "pybullet"))
+ENGINES.add("mujoco", _lazy("offroadbench.sim.mujoco_world", "MuJoCoWorld", "mujoco", "mujoco"))
 
 
 def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:
