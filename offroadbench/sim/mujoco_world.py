@@ -63,11 +63,22 @@ class ContactTuning:
     """solref of the wheel-terrain contact, (time constant s, damping ratio); None: from the
     spec's tyre stiffness and damping (see the module docstring)."""
     wheel_margin_m: float = 0.0
-    """Geom margin of the wheels: contacts are found (and act) within this distance, m."""
+    """Geom margin of the wheels: contacts are found within this distance, m."""
+    wheel_gap_m: float = 0.0
+    """Geom gap of the wheels: a found contact acts once closer than ``margin - gap``, m."""
+    refsafe: bool = True
+    """MuJoCo's ``refsafe``: time constants below two steps are raised to two steps."""
     chassis_solref: tuple[float, float] = (0.02, 1.0)
     """The chassis-terrain contact's solref (time constant s, damping ratio): MuJoCo's default."""
     solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
     """solimp of every vehicle contact (MuJoCo's default)."""
+    min_rate_hz: int = 120
+    """MuJoCo steps at least this often: a trial's step (``SimConfig.physics_rate_hz``) is split into
+    ``ceil(min_rate_hz / physics_rate_hz)`` MuJoCo steps, the tyre forces applied at each. Below
+    120 Hz the ride is bumpier than PyBullet's at 60 Hz (benchmarks/RESULTS.md, 'MuJoCo')."""
+    ccd_iterations: int = 10
+    """MuJoCo's convex-collision iterations (its default 35): 10 gave the same trials to the last
+    printed digit and 1.2x the speed on paper terrain (the chassis box against the hfield's prisms)."""
     servo_gain: float = 4.0
     """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
     1 / (1 + gain) per step before the torque limit."""
@@ -169,6 +180,8 @@ class MuJoCoWorld:
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
         self.contact = contact
+        self.substeps = max(1, math.ceil(contact.min_rate_hz / sim.physics_rate_hz))
+        self._dt_mj = self.dt_s / self.substeps
         t0 = time.perf_counter()
         xml = self._mjcf()
         try:
@@ -182,11 +195,15 @@ class MuJoCoWorld:
         self._tyres = None
         if sim.tyre_model == "coulomb":
             share = self.geometry_mass() / len(self._wheel_bodies)
+            # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
+            # tyre is the same whatever the engine's step), integrated at MuJoCo's step
             dt = self.dt_s
-            self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction, dt,
-                                          stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+            self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
+                                          self._dt_mj, stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
+        self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
+        self._xfrc_zero = [0.0] * (6 * self.model.nbody)
         self.geometry = self._measure_geometry()
 
     # ------------------------------------------------------------------ lifetime
@@ -222,8 +239,10 @@ class MuJoCoWorld:
 
         root = ET.Element("mujoco", model=f"offroadbench-{spec.name}")
         ET.SubElement(root, "compiler", angle="radian", eulerseq="XYZ", inertiafromgeom="false", autolimits="true")
-        ET.SubElement(root, "option", timestep=repr(self.dt_s), gravity=_fmt((0, 0, -sim.gravity_m_s2)),
+        option = ET.SubElement(root, "option", timestep=repr(self._dt_mj), ccd_iterations=str(tune.ccd_iterations), gravity=_fmt((0, 0, -sim.gravity_m_s2)),
                       integrator="implicitfast", cone="pyramidal", iterations=str(sim.solver_iterations))
+        if not tune.refsafe:
+            ET.SubElement(option, "flag", refsafe="disable")
         size = ET.SubElement(root, "size")
         size.set("memory", f"{max(16, 4 * len(spec.wheel_joints))}M")
         asset = ET.SubElement(root, "asset")
@@ -259,7 +278,7 @@ class MuJoCoWorld:
         act = ET.SubElement(root, "actuator")
         for name in spec.wheel_joints:
             spin = spec.wheel_spin_inertia_kg_m2 or links[by_name[name].child].inertia[1]
-            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(tune.servo_gain * spin / self.dt_s),
+            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(tune.servo_gain * spin / self._dt_mj),
                           forcerange=_fmt((-spec.wheel_torque_limit_nm, spec.wheel_torque_limit_nm)))
         return ET.tostring(root, encoding="unicode")
 
@@ -274,6 +293,7 @@ class MuJoCoWorld:
             if is_wheel:
                 g.set("name", f"wheel_{link.name}")
                 g.set("margin", repr(tune.wheel_margin_m))
+                g.set("gap", repr(tune.wheel_gap_m))
                 g.set("solref", _fmt(tune.wheel_solref or self._tyre_solref(share)))
                 if coulomb:
                     g.set("condim", "1")
@@ -291,9 +311,10 @@ class MuJoCoWorld:
         mass, the time constant raised to MuJoCo's stable minimum of two steps."""
         spec = self.spec
         if spec.tyre_stiffness_n_m is None:
-            return (max(0.02, 2.0 * self.dt_s), 1.0)
+            return (max(0.02, 2.0 * self._dt_mj), 1.0)
         k, c = spec.tyre_stiffness_n_m, spec.tyre_damping_n_s_m
-        return (max(math.sqrt(share / k), 2.0 * self.dt_s), c / (2.0 * math.sqrt(k * share)))
+        floor = 2.0 * self._dt_mj if self.contact.refsafe else 0.0
+        return (max(math.sqrt(share / k), floor), c / (2.0 * math.sqrt(k * share)))
 
     def _write_heights(self) -> None:
         hm = self.hm
@@ -424,42 +445,46 @@ class MuJoCoWorld:
             ctrl[i] = left_rad_s if i < n else right_rad_s
 
     def step(self) -> None:
-        """``mj_step1``, the tyre forces into ``xfrc_applied``, ``mj_step2``; then the contacts."""
+        """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
+        ``xfrc_applied``, ``mj_step2``, then the contacts."""
         m, d = self.model, self.data
-        mujoco.mj_step1(m, d)
-        if self._tyres is not None:
-            self._apply_tyres()
-        mujoco.mj_step2(m, d)
-        self._read_contacts()
+        for _ in range(self.substeps):
+            mujoco.mj_step1(m, d)
+            if self._tyres is not None:
+                self._apply_tyres()
+            mujoco.mj_step2(m, d)
+            self._read_contacts()
 
     def _apply_tyres(self) -> None:
+        """The tyre forces of the wheels touched in the last step, as forces and torques about each
+        wheel's centre of mass in ``xfrc_applied`` (one write of all rows)."""
         d, core = self.data, self._tyres
-        xfrc = d.xfrc_applied
-        if not any(core.touch):
-            for b in self._wheel_bodies:
-                xfrc[b] = 0.0
-            return
-        qvel = d.qvel.tolist()
-        r = d.xmat[self._chassis].tolist()
-        v = qvel[0:3]
-        wb = qvel[3:6]
-        w = (r[0] * wb[0] + r[1] * wb[1] + r[2] * wb[2],
-             r[3] * wb[0] + r[4] * wb[1] + r[5] * wb[2],
-             r[6] * wb[0] + r[7] * wb[1] + r[8] * wb[2])
-        c0 = d.xipos[self._chassis].tolist()
-        for i, b in enumerate(self._wheel_bodies):
-            if not core.touch[i]:
-                xfrc[b] = 0.0
-                continue
-            c = d.xipos[b].tolist()
-            rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
-            lin = (v[0] + w[1] * rz - w[2] * ry, v[1] + w[2] * rx - w[0] * rz, v[2] + w[0] * ry - w[1] * rx)
-            a = self._axis_world(i, r)
-            s = qvel[self._wheel_qvel[i]]
-            ang = (w[0] + a[0] * s, w[1] + a[1] * s, w[2] + a[2] * s)
-            fx, fy, fz, px, py, pz = core.wheel_force(i, c, lin, ang)
-            ox, oy, oz = px - c[0], py - c[1], pz - c[2]
-            xfrc[b] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
+        xfrc = self._xfrc
+        xfrc[:] = self._xfrc_zero
+        touch = core.touch
+        if any(touch):
+            qvel = d.qvel.tolist()
+            r = d.xmat[self._chassis].tolist()
+            xipos = d.xipos.tolist()
+            v0, v1, v2 = qvel[0:3]
+            wb0, wb1, wb2 = qvel[3:6]
+            w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2
+            w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
+            w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
+            c0 = xipos[self._chassis]
+            for i, b in enumerate(self._wheel_bodies):
+                if not touch[i]:
+                    continue
+                c = xipos[b]
+                rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
+                lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
+                a0, a1, a2 = self._axis_world(i, r)
+                s = qvel[self._wheel_qvel[i]]
+                fx, fy, fz, px, py, pz = core.wheel_force(i, c, lin, (w0 + a0 * s, w1 + a1 * s, w2 + a2 * s))
+                ox, oy, oz = px - c[0], py - c[1], pz - c[2]
+                k = 6 * b
+                xfrc[k:k + 6] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
+        d.xfrc_applied.flat[:] = xfrc
 
     def _axis_world(self, i: int, r: list) -> tuple[float, float, float]:
         a = self._wheel_axis[i]  # in the chassis frame (the wheels hang straight off it)
