@@ -36,7 +36,8 @@ against ``main`` and the median ratio of RMS vertical acceleration over the tria
 
     .venv/bin/python benchmarks/bench_sim.py --paired [--missions 8] [--old-rev main]
 
-``--engines`` compares physics engines and rates the same way (the first variant is the reference):
+``--engines`` compares physics engines and rates the same way (the first variant is the reference;
+``contact.FIELD=VALUE`` sets a field of the MuJoCo world's ContactTuning):
 
     .venv/bin/python benchmarks/bench_sim.py --engines 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'
 """
@@ -312,7 +313,14 @@ def engines(args) -> None:
         worlds = {}
         for n, changes in variants:
             t0 = time.perf_counter()
-            worlds[n] = open_world(hm, "husky", dataclasses.replace(SimConfig(), **changes))
+            tuning = {k.split(".", 1)[1]: v for k, v in changes.items() if k.startswith("contact.")}
+            sim = dataclasses.replace(SimConfig(), **{k: v for k, v in changes.items() if not k.startswith("contact.")})
+            if tuning:  # MuJoCo contact settings (offroadbench.sim.mujoco_world.ContactTuning)
+                from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld
+
+                worlds[n] = MuJoCoWorld(hm, "husky", sim, ContactTuning(**tuning))
+            else:
+                worlds[n] = open_world(hm, "husky", sim)
             build[n] += time.perf_counter() - t0
         try:
             for m in missions:

@@ -71,7 +71,13 @@ class ContactTuning:
     chassis_solref: tuple[float, float] = (0.02, 1.0)
     """The chassis-terrain contact's solref (time constant s, damping ratio): MuJoCo's default."""
     solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
-    """solimp of every vehicle contact (MuJoCo's default)."""
+    """solimp of the wheels' contacts (MuJoCo's default)."""
+    chassis_solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
+    """solimp of the chassis' contacts (MuJoCo's default)."""
+    chassis_condim: int = 3
+    """Contact dimensionality of the chassis: 3 sliding friction (as Bullet), 4 adds torsional, 6 rolling."""
+    cone: str = "pyramidal"
+    """MuJoCo's friction cone for the contacts it owns (the chassis'): ``pyramidal`` or ``elliptic``."""
     min_rate_hz: int = 120
     """MuJoCo steps at least this often: a trial's step (``SimConfig.physics_rate_hz``) is split into
     ``ceil(min_rate_hz / physics_rate_hz)`` MuJoCo steps, the tyre forces applied at each. Below
@@ -240,7 +246,7 @@ class MuJoCoWorld:
         root = ET.Element("mujoco", model=f"offroadbench-{spec.name}")
         ET.SubElement(root, "compiler", angle="radian", eulerseq="XYZ", inertiafromgeom="false", autolimits="true")
         option = ET.SubElement(root, "option", timestep=repr(self._dt_mj), ccd_iterations=str(tune.ccd_iterations), gravity=_fmt((0, 0, -sim.gravity_m_s2)),
-                      integrator="implicitfast", cone="pyramidal", iterations=str(sim.solver_iterations))
+                      integrator="implicitfast", cone=tune.cone, iterations=str(sim.solver_iterations))
         if not tune.refsafe:
             ET.SubElement(option, "flag", refsafe="disable")
         size = ET.SubElement(root, "size")
@@ -289,7 +295,8 @@ class MuJoCoWorld:
             ET.SubElement(el, "inertial", pos=_fmt(com), mass=repr(link.mass), diaginertia=_fmt(link.inertia))
         for kind, size, pos, euler in link.shapes:
             g = ET.SubElement(el, "geom", type=kind, size=_fmt(size), pos=_fmt(tuple(p - s for p, s in zip(pos, shift))),
-                              euler=_fmt(euler), group="1", priority="1", solimp=_fmt(tune.solimp))
+                              euler=_fmt(euler), group="1", priority="1",
+                              solimp=_fmt(tune.solimp if is_wheel else tune.chassis_solimp))
             if is_wheel:
                 g.set("name", f"wheel_{link.name}")
                 g.set("margin", repr(tune.wheel_margin_m))
@@ -301,7 +308,7 @@ class MuJoCoWorld:
                     g.set("condim", "3")
                     g.set("friction", _fmt((spec.wheel_friction * sim.terrain_friction, 0.005, 0.0001)))
             else:
-                g.set("condim", "3")
+                g.set("condim", str(tune.chassis_condim))
                 g.set("solref", _fmt(tune.chassis_solref))
                 g.set("friction", _fmt((spec.chassis_friction * sim.terrain_friction, 0.005, 0.0001)))
 
