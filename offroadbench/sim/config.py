@@ -63,7 +63,8 @@ class SimConfig:
     under ``bullet``. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
     engine: str = "pybullet"
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
-    default) or another registered engine."""
+    default) or ``mujoco`` (offroadbench.sim.mujoco_world; ``pip install 'offroadbench[mujoco]'``).
+    Both run the same trial, tyre model, telemetry and failure rules."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)

@@ -165,6 +165,16 @@ def test_sim_config_validation():
         SimConfig(physics_rate_hz=10)
     with pytest.raises(InputError, match="engine = 'bullet' is not known; allowed: .*pybullet"):
         SimConfig(engine="bullet")
+    with pytest.raises(InputError, match="cone_friction"):
+        SimConfig(cone_friction="yes")
+
+
+def test_cone_friction_is_off_where_the_tyre_model_owns_the_friction():
+    hm = Heightmap.flat(41, 41, CELL)
+    for sim, cone in ((SimConfig(), False), (SimConfig(tyre_model="bullet"), True),
+                      (SimConfig(cone_friction=True), True), (SimConfig(tyre_model="bullet", cone_friction=False), False)):
+        with World(hm, "husky", sim) as world:
+            assert world.cone_friction is cone
 
 
 class _DirectBuildWorld(World):
