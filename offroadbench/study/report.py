@@ -72,10 +72,6 @@ def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
     return "\n".join([head, sep, *body])
 
 
-def _pm(med: float, iqr: float) -> str:
-    return f"{_fmt(med)} (IQR {_fmt(iqr)})"
-
-
 # ---------------------------------------------------------------------------- figures
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
