@@ -125,3 +125,99 @@ def test_io_does_not_import_terrain():
                 names = [node.module]
             offenders += [f"{path.relative_to(PKG)}: {n}" for n in names if n.startswith("offroadbench.terrain")]
     assert offenders == []
+
+
+def _all_imports(path: Path, module: str, known: set[str]) -> set[str]:
+    """offroadbench modules ``module`` imports anywhere in its file: at module level and inside
+    functions, methods and conditionals (every ``Import``/``ImportFrom`` node at any depth, except
+    under ``if TYPE_CHECKING``). Importing ``a.b.c`` also runs the packages ``a.b`` and ``a`` first,
+    so those count as imported too. Registries' loaders, which import their built-ins by name
+    (``importlib.import_module("...")``) the first time a registry is read, are not imports here."""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+    def resolve(name: str) -> str | None:
+        while name and name not in known:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    found: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.orelse:
+                visit(child)
+            return
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, base] if base else anchor)
+            names = [f"{base}.{a.name}" for a in node.names] + [base]
+        for n in names:
+            r = resolve(n) if n.startswith("offroadbench") else None
+            while r and r != module:
+                found.add(r)
+                r = r.rpartition(".")[0] if "." in r else None  # its parent packages run first
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(ast.parse(path.read_text(), filename=str(path)))
+    found.discard(module)
+    return found
+
+
+def test_no_import_cycles_at_any_level():
+    """No cycle among the package's modules counting every import, also those inside functions
+    (a function-level import hides a cycle until the function runs, and lets two modules grow into
+    one). A module importing its own parent package is not an edge (the parent is already being
+    imported)."""
+    mods = _modules()
+    graph = {m: {n for n in _all_imports(p, m, set(mods)) if not m.startswith(n + ".")} for m, p in mods.items()}
+    # Tarjan's strongly connected components: every cycle lies inside one of more than one module
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[list[str]] = []
+
+    def strongconnect(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                strongconnect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                components.append(sorted(comp))
+
+    for m in sorted(graph):
+        if m not in index:
+            strongconnect(m)
+    detail = [", ".join(c) + ":\n  " + "\n  ".join(f"{a} -> {', '.join(sorted(graph[a] & set(c)))}" for a in c)
+              for c in components]
+    assert not components, "import cycles (counting imports inside functions):\n" + "\n".join(detail)
+
+
+def test_the_any_level_cycle_check_sees_imports_inside_functions(tmp_path):
+    """The check above is not vacuous: a cycle closed only by an import inside a function is found."""
+    pkg = tmp_path / "offroadbench"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("from offroadbench import b\n")
+    (pkg / "b.py").write_text("def f():\n    if True:\n        from offroadbench.a import x\n")
+    known = {"offroadbench", "offroadbench.a", "offroadbench.b"}
+    assert _top_level_imports(pkg / "b.py", "offroadbench.b", known) == set()
+    assert _all_imports(pkg / "b.py", "offroadbench.b", known) == {"offroadbench.a", "offroadbench"}
