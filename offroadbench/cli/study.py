@@ -65,20 +65,13 @@ def _run_dir(path: str) -> Path:
 
 def _workers(args: argparse.Namespace, plans) -> int | None:
     """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
-    import os
-
-    from offroadbench.cli._common import format_bytes, available_memory_bytes, check_memory
+    from offroadbench.memory import check_memory, format_bytes, workers_that_fit
     from offroadbench.study.runner import worker_memory_bytes
 
     if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
-    workers = args.workers
-    if workers is None:
-        avail = available_memory_bytes()
-        workers = os.cpu_count() or 1
-        if avail is not None:
-            workers = max(1, min(workers, avail // per_worker))
+    workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
     check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
     return workers
 
