@@ -119,7 +119,7 @@ def export_heightmap(
     meta: Mapping[str, Any] | None = None,
     **options: Any,
 ) -> ExportResult:
-    """Write ``hm`` in format ``fmt`` into ``out_dir`` (created if missing; its parent must exist).
+    """Write ``hm`` in format ``fmt`` into ``out_dir`` (created with its missing parents).
 
     ``name`` is the stem of the written files, ``meta`` extra keys for sidecars (recipe, seed, crs,
     ...), ``options`` format options (``stride`` for obj). All or nothing: on any error no file is
