@@ -221,3 +221,24 @@ def test_the_any_level_cycle_check_sees_imports_inside_functions(tmp_path):
     known = {"offroadbench", "offroadbench.a", "offroadbench.b"}
     assert _top_level_imports(pkg / "b.py", "offroadbench.b", known) == set()
     assert _all_imports(pkg / "b.py", "offroadbench.b", known) == {"offroadbench.a", "offroadbench"}
+
+
+def test_layers_point_one_way():
+    """Figures draw what they are given (plots imports nothing of study; the report imports
+    plots), export writes files (io imports nothing of analysis; the CLI warns about a spike),
+    and no package imports another's private module (e.g. study -> sim._banner)."""
+    mods = _modules()
+    known = set(mods)
+    offenders = []
+    for m, p in mods.items():
+        imported = _all_imports(p, m, known)
+        if m.startswith("offroadbench.plots"):
+            offenders += [f"{m} -> {n}" for n in imported if n.startswith("offroadbench.study")]
+        if m.startswith("offroadbench.io"):
+            offenders += [f"{m} -> {n}" for n in imported if n.startswith("offroadbench.analysis")]
+        for n in imported:
+            private = next((part for part in n.split(".")[1:] if part.startswith("_") and part != "__init__"), None)
+            owner = n[: n.index("." + private)] if private else None
+            if private and not (m == owner or m.startswith(owner + ".")):
+                offenders.append(f"{m} -> {n} (private to {owner})")
+    assert offenders == []
