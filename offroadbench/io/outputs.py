@@ -20,7 +20,7 @@ from typing import Iterator
 
 from offroadbench.errors import InputError
 
-__all__ = ["check_output_dir", "check_output_file", "created_dirs"]
+__all__ = ["check_output_dir", "check_output_file", "created_dirs", "missing_dirs"]
 
 
 def _probe_dir(d: Path, flag: str, target: Path) -> None:
@@ -66,20 +66,24 @@ def check_output_file(path: str | Path, flag: str = "--output", suffixes: tuple[
     return p
 
 
+def missing_dirs(path: str | Path) -> list[Path]:
+    """The directories of ``path`` (itself included) that do not exist yet, deepest first: what a
+    writer creates, and removes again (in this order) if it fails."""
+    out = []
+    q = Path(path)
+    while not q.exists() and q.parent != q:
+        out.append(q)
+        q = q.parent
+    return out
+
+
 @contextlib.contextmanager
 def created_dirs(*dirs: str | Path) -> Iterator[None]:
     """Create ``dirs`` (with missing parents); if the block fails, remove the ones created here."""
     made: list[Path] = []
     try:
         for d in dirs:
-            missing = []
-            q = Path(d)
-            while not q.exists():
-                missing.append(q)
-                if q.parent == q:
-                    break
-                q = q.parent
-            for m in reversed(missing):
+            for m in reversed(missing_dirs(d)):
                 try:
                     m.mkdir()
                 except OSError as exc:

@@ -20,6 +20,7 @@ from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
+from offroadbench.io.outputs import missing_dirs
 from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
 from offroadbench.study.store import Store, remove_store
@@ -168,7 +169,7 @@ def run_study(
     version = code_version()
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
-    made_dirs = _missing_dirs(run_dir)
+    made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
     store = Store(run_dir, create=True)
     ran = 0
     running = False
@@ -232,13 +233,3 @@ def run_study(
     return RunSummary(
         run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
     )
-
-
-def _missing_dirs(path: Path) -> list[Path]:
-    """The directories of ``path`` (itself included) that do not exist yet, deepest first."""
-    out = []
-    q = path
-    while not q.exists() and q.parent != q:
-        out.append(q)
-        q = q.parent
-    return out

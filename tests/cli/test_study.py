@@ -38,3 +38,17 @@ def test_replay_that_differs_names_the_fields_and_exits_1(tiny_run, capsys):
     captured = capsys.readouterr()
     assert "identical to the stored row: NO" in captured.out
     assert captured.err.strip() == "differs in: rms_pitch_rate_deg_s"
+
+
+def test_replay_plot_follows_the_output_path_policy(tiny_run, tmp_path, capsys):
+    """``--out`` is checked before the replay (a path below a file: exit 2, nothing written) and
+    its missing folders are created only when the figure is written."""
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    args = ["study", "replay", str(tiny_run), "--cell", "0", "--terrain", "0", "--mission", "0", "--plot"]
+    assert main([*args, "--out", str(blocker / "replays")]) == 2
+    captured = capsys.readouterr()
+    assert "is a file, not a directory" in captured.err and captured.out == ""
+    out = tmp_path / "new" / "replays"
+    assert main([*args, "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["cell0_terrain0_mission0.parquet", "cell0_terrain0_mission0.png"]
