@@ -23,6 +23,20 @@ def _modules() -> dict[str, Path]:
     return out
 
 
+def _imported_names(node: ast.AST, package: str) -> list[str]:
+    """The absolute dotted names an ``Import``/``ImportFrom`` node imports (``from a import b``
+    gives ``a.b`` and ``a``; relative imports resolved against ``package``); [] for other nodes."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names]
+    if isinstance(node, ast.ImportFrom):
+        base = node.module or ""
+        if node.level:
+            anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+            base = ".".join([*anchor, base] if base else anchor)
+        return [f"{base}.{a.name}" for a in node.names] + [base]
+    return []
+
+
 def _top_level_imports(path: Path, module: str, known: set[str]) -> set[str]:
     """offroadbench modules imported at module level (not inside functions or TYPE_CHECKING)."""
     tree = ast.parse(path.read_text(), filename=str(path))
@@ -39,17 +53,7 @@ def _top_level_imports(path: Path, module: str, known: set[str]) -> set[str]:
             continue
         stmts = [node] if not isinstance(node, (ast.Try, ast.If)) else [*node.body]
         for st in stmts:
-            if isinstance(st, ast.Import):
-                names = [a.name for a in st.names]
-            elif isinstance(st, ast.ImportFrom):
-                base = st.module or ""
-                if st.level:
-                    anchor = package.split(".")[: len(package.split(".")) - st.level + 1]
-                    base = ".".join([*anchor, base] if base else anchor)
-                names = [f"{base}.{a.name}" for a in st.names] + [base]
-            else:
-                continue
-            for n in names:
+            for n in _imported_names(st, package):
                 if n.startswith("offroadbench"):
                     r = resolve(n)
                     if r and r != module:
@@ -147,16 +151,7 @@ def _all_imports(path: Path, module: str, known: set[str]) -> set[str]:
             for child in node.orelse:
                 visit(child)
             return
-        names: list[str] = []
-        if isinstance(node, ast.Import):
-            names = [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
-                base = ".".join([*anchor, base] if base else anchor)
-            names = [f"{base}.{a.name}" for a in node.names] + [base]
-        for n in names:
+        for n in _imported_names(node, package):
             r = resolve(n) if n.startswith("offroadbench") else None
             while r and r != module:
                 found.add(r)
