@@ -3,9 +3,10 @@
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
 at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
-The driver is the study's ``[planner]`` (offroadbench.navigation.drivers): a planner (offroadbench.navigation.planners; default
-``straight``, the start-goal line) whose path pure pursuit follows, or a closed-loop policy
-(offroadbench.navigation.policies) fed the Gymnasium env's observation. The clock starts after the
+The driver is the study's ``[planner]`` (offroadbench.navigation.drivers): a planner
+(offroadbench.navigation.planners; default ``straight``, the start-goal line) whose path pure
+pursuit follows, or a closed-loop policy (offroadbench.navigation.policies) fed the Gymnasium env's
+observation; each is given what its registry entry declares it needs. The clock starts after the
 vehicle has settled at the start; the trial ends as ``timeout`` after ``rules.timeout_factor``
 times the nominal time ``path length / cruise speed`` (for a policy, the mission length).
 
