@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from offroadbench.analysis.roughness import HIGH, LOW, SEMI
-from offroadbench.config import from_dict
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
