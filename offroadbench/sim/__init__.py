@@ -3,7 +3,8 @@ engine boundary is offroadbench.sim.engine).
 
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
 load_vehicle, World (PyBullet), open_world / TrialWorld / VehicleGeometry / ENGINES (the engine
-boundary, offroadbench.sim.engine), TrialResult, run_mission, run_missions, drive_missions / DriveRun.
+boundary, offroadbench.sim.engine), TrialResult, run_mission, run_missions, drive_missions / DriveRun,
+and import_pybullet_quietly (for application entry points: the CLI and the study workers).
 
 The names load lazily (PEP 562), so importing a config (``offroadbench.sim.config``) or this
 package does not import pybullet; only touching ``World`` or the runner does.
@@ -35,6 +36,7 @@ _EXPORTS = {
     "run_missions": "runner",
     "DriveRun": "batch",
     "drive_missions": "batch",
+    "import_pybullet_quietly": "_banner",
 }
 
 __all__ = list(_EXPORTS)
