@@ -87,3 +87,27 @@ def test_a_missing_mujoco_is_an_input_error(monkeypatch):
     monkeypatch.delitem(sys.modules, "offroadbench.sim.mujoco_world", raising=False)
     with pytest.raises(InputError, match=r"engine 'mujoco' needs the mujoco package: pip install 'offroadbench\[mujoco\]'"):
         open_world(Heightmap.flat(41, 41, CELL), "husky", MUJOCO)
+
+
+def test_a_mujoco_trial_is_bit_identical_in_another_process():
+    """The same mission in a fresh process gives the same row to the last bit (MuJoCo is compiled
+    without CPU dispatch in its wheel; the trial loop is dispatch-free Python)."""
+    import subprocess
+
+    code = (
+        "from offroadbench.heightmap import Heightmap\n"
+        "from offroadbench.navigation.missions import Mission\n"
+        "from offroadbench.sim import SimConfig, open_world, run_mission\n"
+        "import numpy as np\n"
+        "y, x = np.mgrid[0:81, 0:201] * 0.05\n"
+        "hm = Heightmap(0.3 + 0.08 * np.sin(2.1 * x) * np.cos(1.7 * y), 0.05)\n"
+        "with open_world(hm, 'husky', SimConfig(engine='mujoco')) as w:\n"
+        "    r, _ = run_mission(w, Mission.between(0, (2, 2), (8, 2)))\n"
+        "print(repr(r))\n"
+    )
+    runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+            for _ in range(2)]
+    assert runs[0] == runs[1] and "TrialResult(" in runs[0]
+    ns = {}
+    exec(code.replace("print(repr(r))\n", ""), ns)
+    assert repr(ns["r"]) + "\n" == runs[0]
