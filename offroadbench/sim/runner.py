@@ -19,13 +19,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from offroadbench.errors import InputError
-from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
@@ -33,15 +30,13 @@ from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
-from offroadbench.progress import ProgressFn, report
-from offroadbench.sim.config import ControllerConfig, SimConfig
+from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
-           "run_missions", "vehicle_envelope", "body_velocity", "body_frame"]
+           "vehicle_envelope", "body_velocity", "body_frame"]
 
 #: telemetry columns, each a 1-D array sampled at SimConfig.telemetry_rate_hz
 TELEMETRY_COLUMNS = (
@@ -305,42 +300,3 @@ def _result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialRe
         goal_y_m=float(mission.goal_xy_m[1]),
         heading_deg=float(np.degrees(mission.heading_rad)),
     )
-
-
-def run_missions(
-    hm: Heightmap,
-    missions: Sequence[Mission],
-    *,
-    vehicle: VehicleSpec | str = "husky",
-    planner: PlannerChoice = PlannerChoice(),
-    classes: np.ndarray | None = None,
-    border_m: float = 0.0,
-    controller: ControllerConfig = ControllerConfig(),
-    sim: SimConfig = SimConfig(),
-    rules: FailureRules = FailureRules(),
-    progress: ProgressFn | None = None,
-    telemetry_dir: str | Path | None = None,
-) -> list[TrialResult]:
-    """Run every mission on one terrain (built once) and return one TrialResult per mission.
-
-    ``planner``, ``classes`` and ``border_m`` as in :func:`drive_mission`. With ``telemetry_dir``
-    the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
-    offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.
-    """
-    from offroadbench.io.telemetry import save_telemetry
-
-    out_dir = Path(telemetry_dir) if telemetry_dir is not None else None
-    if out_dir is not None and not out_dir.is_dir():
-        raise InputError(f"telemetry_dir {out_dir} is not a directory")
-    results: list[TrialResult] = []
-    with World(hm, vehicle, sim) as world:
-        for i, mission in enumerate(missions):
-            rec = drive_mission(world, mission, planner=planner, classes=classes, border_m=border_m,
-                                controller=controller, rules=rules)
-            results.append(rec.result)
-            if out_dir is not None:
-                save_telemetry(rec.telemetry, out_dir / f"mission_{mission.index:03d}.npz")
-                save_telemetry({"x_m": rec.path_xy[:, 0], "y_m": rec.path_xy[:, 1]},
-                               out_dir / f"mission_{mission.index:03d}_path.npz")
-            report(progress, i + 1, len(missions))
-    return results

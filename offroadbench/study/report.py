@@ -75,16 +75,14 @@ def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
 # ---------------------------------------------------------------------------- figures
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
-    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.seeding import terrain_seed
-    from offroadbench.study.spec import build_section
-    from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
+    from offroadbench.sim.pipeline import prepare_terrain
+    from offroadbench.study.spec import CellPlan
 
-    info = meta["cells"][cell]
-    seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=info["seed_key"])
-    hm = generate_terrain(recipe_from_dict(info["recipe"]), seed)
-    rcfg = build_section("roughness", info["settings"].get("roughness", {}), "report")
-    maps = classify_terrain(hm, rcfg)
+    plan = CellPlan.from_meta(meta, cell)
+    seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=plan.key)
+    prepared = prepare_terrain(plan.recipe(), seed, plan.trial_settings, [])
+    hm, maps, rcfg = prepared.hm, prepared.maps, plan.trial_settings.roughness
     t = trials[(trials["cell"] == cell) & (trials["terrain"] == terrain)]
     title = (f"Terrain {terrain} of {short_label(stats.group_labels(meta)[cell])} (seed {seed}); "
              "missions: white = success, black = failure")
@@ -331,13 +329,11 @@ def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason:
 def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None):
     """Planned and driven paths of every planner on one mission (the one whose outcomes differ most
     between planners, at the middle level), over the closed class map."""
-    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.io.telemetry import load_telemetry
     from offroadbench.plots.study import fig_paths
+    from offroadbench.sim.pipeline import prepare_terrain
     from offroadbench.study.runner import telemetry_paths
     from offroadbench.study.spec import CellPlan
-    from offroadbench.study.tasks import sample_mission
-    from offroadbench.terrain.recipe import generate_terrain
 
     t = trials
     if level is not None:
@@ -347,12 +343,10 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     terrain, mission = spread.sort_values(ascending=False, kind="stable").index[0]
     rows = t[(t["terrain"] == terrain) & (t["mission"] == mission)]
     first = rows.iloc[0]
-    info = meta["cells"][int(first["cell"])]
-    plan = CellPlan(index=int(first["cell"]), values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
-                    settings=info["settings"])
-    hm = generate_terrain(plan.recipe(), int(first["terrain_seed"]))
-    closed = classify_terrain(hm, plan.section("roughness")).closed
-    m = sample_mission(hm, closed, plan.section("missions"), int(mission), int(first["mission_seed"]))
+    plan = CellPlan.from_meta(meta, int(first["cell"]))
+    prepared = prepare_terrain(plan.recipe(), int(first["terrain_seed"]), plan.trial_settings,
+                               [(int(mission), int(first["mission_seed"]))])
+    hm, closed, m = prepared.hm, prepared.maps.closed, prepared.missions[0]
     drawn = []
     for r in rows.itertuples(index=False):
         tel_p, path_p = telemetry_paths(run_dir, r.cell, r.terrain, r.mission)

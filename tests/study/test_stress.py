@@ -65,10 +65,11 @@ STUDY = {
 }
 
 
-def fake_planner_trials(hm, missions, cell):
+def fake_planner_trials(prepared, settings):
     """Success falls with the terrain's steepness along the line; the 'astar' cells tolerate more."""
-    tolerance = {"straight": 1.2, "astar": 2.0}[cell.values["planner.name"]]
-    for m in missions:
+    tolerance = {"straight": 1.2, "astar": 2.0}[settings.planner.name]
+    hm = prepared.hm
+    for m in prepared.missions:
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         t = np.linspace(0.0, 1.0, 61)
         z = hm.height_at(sx + t * (gx - sx), sy + t * (gy - sy))
