@@ -386,9 +386,12 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     baseline = "straight" if "straight" in planners else planners[0]
     lines = ["## Planner stress test", "",
              f"Planners: {', '.join(f'`{p}`' for p in planners)}; every planner drove the same missions "
-             "(same terrain and mission seeds). Intervals are 95 %: Wilson score intervals for success rates, "
-             "percentile bootstrap over terrains (2000 resamples) for breaking points; paired comparisons are "
-             f"exact McNemar tests against `{baseline}` on the missions where exactly one of the two succeeded.",
+             "(same terrain and mission seeds). The unit of the tests is the terrain (the missions of one "
+             "terrain are not independent): Wilson intervals of success rates treat missions as independent "
+             "and are only descriptive; breaking points come from a logistic fit of success on the level, "
+             "clustered by terrain, with Fieller intervals; paired comparisons against "
+             f"`{baseline}` test the per-terrain success differences (exact sign-flip and Wilcoxon tests, "
+             "Durkalski's cluster-adjusted McNemar, terrain-bootstrap interval), Holm-adjusted over the table.",
              ""]
     figures: dict[str, Any] = {}
     tables: dict[str, pd.DataFrame] = {}
@@ -404,20 +407,31 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
         lo_lv, hi_lv = min(trials[level]), max(trials[level])
 
         def fmt(v: float) -> str:
-            return f"> {hi_lv:g}" if v == math.inf else (f"< {lo_lv:g}" if v == -math.inf else f"{v:.3f}")
+            return "–" if math.isnan(v) else ("+inf" if v == math.inf else ("-inf" if v == -math.inf else f"{v:.3f}"))
 
-        bp_shown = pd.DataFrame({group: bp[group], f"{level} at 50 % success": [fmt(v) for v in bp["breaking_point"]],
-                                 "95 % interval": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])]})
+        bp_shown = pd.DataFrame({group: bp[group], f"{level} at 50 % (logistic)": [
+            fmt(v) + (" (extrapolated)" if e else "") for v, e in zip(bp["breaking_point"], bp["extrapolated"])],
+            "95 % interval (Fieller)": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])],
+            "terrains": bp["terrains"], "first level < 50 %": [f"> {hi_lv:g}" if v == math.inf else f"{v:g}"
+                                                              for v in bp["first_level_below"]]})
         lines += ["### Success against " + level, "", "![success](planner_success.png)", "",
                   markdown_table(shown), "",
                   "### Breaking points", "",
-                  f"The {level} at which the success rate first falls below 50 % (linear interpolation between "
-                  f"the studied values; `> {hi_lv:g}`: not within the studied range).", "",
-                  markdown_table(bp_shown), ""]
+                  f"The {level} at which the fitted success probability is 50 % (logistic regression of trial "
+                  "success on the level, covariance clustered by terrain; `–`: success or failure is separated "
+                  f"by the level, no fit; an infinite end: the data do not bound it); studied: {lo_lv:g}-{hi_lv:g}.",
+                  "", markdown_table(bp_shown), ""]
     paired = stress.paired_table(trials, group, level, baseline)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
-        lines += ["### Paired comparisons on the same missions", "", markdown_table(paired), ""]
+        cols = [group, "versus", level or "level", "terrains", "pairs", "only this", "only baseline",
+                "terrain_diff_pct", "terrain_ci95_low", "terrain_ci95_high", "bootstrap_distinct", "p_sign_flip",
+                "p_wilcoxon", "p_durkalski", "p_holm", "significant", "mcnemar_p_missions"]
+        lines += ["### Paired comparisons on the same missions", "",
+                  "Per-terrain success difference in points (mean over terrains, 95 % terrain-bootstrap interval "
+                  "and its distinct resamples); `significant`: Holm-adjusted sign-flip p < 0.05. "
+                  "`mcnemar_p_missions` treats missions as independent and is shown only for comparison.", "",
+                  markdown_table(paired[cols]), ""]
     reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
     reasons.columns.name = None
     tables["planner_failures.csv"] = reasons.reset_index()
