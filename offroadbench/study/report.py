@@ -105,7 +105,8 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[list[str], dict[str, pd.DataFrame]]:
+def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None
+                        ) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
     if not ref:
@@ -142,7 +143,8 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
                 rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'])} → {short_label(mine.loc[i, 'to'])}",
                              "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
-                             "same direction": same})
+                             "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
+                                                                         mine.loc[i, "to"], p_abs)})
         df = pd.DataFrame(rows)
         tables["reference_median_changes.csv"] = df
         lines += [
@@ -168,6 +170,42 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
         tables["reference_outliers.csv"] = df
         lines += ["### 1.5 IQR outliers", "", markdown_table(df), ""]
     return lines, tables
+
+
+def _terrain_verdict(terrain: pd.DataFrame | None, name: str, frm: str, to: str, paper: float) -> dict[str, Any]:
+    """The terrain-level columns of one paper claim: our per-terrain change, its Holm p, and whether
+    it is significant at the terrain level in the paper's direction."""
+    if terrain is None or terrain.empty:
+        return {}
+    hit = terrain[(terrain["quantity"] == name) & (terrain["from"] == frm) & (terrain["to"] == to)]
+    if hit.empty:
+        return {"terrains": math.nan, "terrain-level p (Holm)": math.nan, "significant at the terrain level": "–"}
+    r = hit.iloc[0]
+    if math.isnan(paper) or paper == 0:
+        verdict = "–"
+    elif not r["significant"]:
+        verdict = "no"
+    else:
+        verdict = "yes" if np.sign(paper) == np.sign(r["mean_change"]) else "no (opposite direction)"
+    return {"terrains": int(r["terrains"]), "terrain-level p (Holm)": r["p_holm"],
+            "significant at the terrain level": verdict}
+
+
+def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
+                             study: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
+    """Each change between consecutive groups tested with the terrain as the unit (stats.terrain_changes)."""
+    paired = bool(study.get("paired_terrains", True))
+    tab = stats.terrain_changes(trials, terrains, labels, names, paired=paired)
+    how = ("per-terrain differences (terrain j of every group shares its seed): mean with a 95 % terrain-bootstrap "
+           "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
+           if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
+           "Mann-Whitney U p (in the p_wilcoxon column)")
+    shown = tab.assign(step=[f"{short_label(a)} → {short_label(b)}" for a, b in zip(tab["from"], tab["to"])])
+    shown = shown[["quantity", "step", *[c for c in tab.columns if c not in ("quantity", "from", "to")]]]
+    text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
+            "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
+            "of successful trials.")
+    return ["## Changes at the terrain level", "", text, "", markdown_table(shown), ""], tab
 
 
 # ---------------------------------------------------------------------------- report
@@ -288,6 +326,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         changes = stats.median_changes(summary, names)
         tables["median_changes.csv"] = changes
         lines += ["## Changes of the medians between consecutive groups", "", markdown_table(changes), ""]
+        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
+        lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
@@ -301,7 +341,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary)
+    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
