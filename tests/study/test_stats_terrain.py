@@ -1,5 +1,6 @@
 """Changes between groups tested with the terrain as the unit, on the committed paper study."""
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +47,7 @@ def test_success_change_matches_a_direct_wilcoxon_and_holm_covers_the_table(pape
     tab = terrain_changes(trials, ter, labels, ["area_low_pct", "success_rate_pct"])
     cells = sorted(labels)
     rate = ter.set_index(["cell", "terrain"])["success_rate_pct"]
-    for i, (c0, c1) in enumerate(zip(cells[:-1], cells[1:])):
+    for c0, c1 in itertools.pairwise(cells):
         d = (rate.loc[c1] - rate.loc[c0]).to_numpy()
         row = tab[(tab["quantity"] == "success_rate_pct") & (tab["from"] == labels[c0])].iloc[0]
         assert row["p_wilcoxon"] == pytest.approx(wilcoxon_test(d))
