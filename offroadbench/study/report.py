@@ -31,6 +31,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -352,13 +353,19 @@ def _numeric(values) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
-def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None]:
-    """(planner column, the one numeric grid column or None) of a study with a planner axis."""
+def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str]]:
+    """(planner column, the level column or None, the other grid columns) of a study with a planner
+    axis. The level is the one numeric axis, or the one numeric recipe axis (e.g. ``D_high``) when
+    there are several; every other axis (``band_limited``, ``map_noise_m``, ...) is a stratum."""
     columns = meta["columns"]
     axes = meta["study"]["grid"]
     planner = columns.get("planner.name")
-    numeric = [columns[a["key"]] for a in axes if _numeric(a["values"])]
-    return planner, (numeric[0] if len(numeric) == 1 else None)
+    numeric = [a["key"] for a in axes if _numeric(a["values"])]
+    if len(numeric) > 1:
+        numeric = [k for k in numeric if k.startswith("recipe.")]
+    level = columns[numeric[0]] if len(numeric) == 1 else None
+    strata = [columns[a["key"]] for a in axes if columns[a["key"]] not in (planner, level)]
+    return planner, level, strata
 
 
 def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason: int = 2) -> pd.DataFrame:
@@ -372,7 +379,8 @@ def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason:
     return pd.DataFrame(rows)
 
 
-def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None):
+def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None,
+                  strata: Sequence[str] = ()):
     """Planned and driven paths of every planner on one mission (the one whose outcomes differ most
     between planners, at the middle level), over the closed class map."""
     from offroadbench.analysis.roughness import classify_terrain
@@ -384,6 +392,8 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     from offroadbench.terrain.recipe import generate_terrain
 
     t = trials
+    for col in strata:  # one stratum: the first value of every other axis
+        t = t[t[col] == t[col].min()]
     if level is not None:
         levels = sorted(t[level].unique())
         t = t[t[level] == levels[len(levels) // 2]]
@@ -419,7 +429,7 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study import stress
 
-    group, level = _stress_axes(meta)
+    group, level, strata = _stress_axes(meta)
     if group is None:
         return [], {}, {}
     planners = sorted(trials[group].unique())
@@ -436,20 +446,22 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     figures: dict[str, Any] = {}
     tables: dict[str, pd.DataFrame] = {}
     if level is not None:
-        by = stress.success_by_level(trials, group, level)
+        by = stress.success_by_level(trials, group, level, by=strata)
         tables["planner_success.csv"] = by
-        figures["planner_success.png"] = fig_success_vs_level(by, group, level)
+        lines_of = by.assign(line=[", ".join(f"{c}={r[c]}" if c != group else str(r[c]) for c in [group, *strata])
+                                   for _, r in by.iterrows()])
+        figures["planner_success.png"] = fig_success_vs_level(lines_of, "line", level)
         shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low": 100 * by["ci95_low"],
-                             "95 % CI high": 100 * by["ci95_high"]})[[group, level, "successes", "trials", "success (%)",
-                                                                     "95 % CI low", "95 % CI high"]]
-        bp = stress.breaking_points(trials, group, level)
+                             "95 % CI high": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
+                                                                     "success (%)", "95 % CI low", "95 % CI high"]]
+        bp = stress.breaking_points(trials, group, level, by=strata)
         tables["breaking_points.csv"] = bp
         lo_lv, hi_lv = min(trials[level]), max(trials[level])
 
         def fmt(v: float) -> str:
             return "–" if math.isnan(v) else ("+inf" if v == math.inf else ("-inf" if v == -math.inf else f"{v:.3f}"))
 
-        bp_shown = pd.DataFrame({group: bp[group], f"{level} at 50 % (logistic)": [
+        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} at 50 % (logistic)": [
             fmt(v) + (" (extrapolated)" if e else "") for v, e in zip(bp["breaking_point"], bp["extrapolated"])],
             "95 % interval (Fieller)": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])],
             "terrains": bp["terrains"], "first level < 50 %": [f"> {hi_lv:g}" if v == math.inf else f"{v:g}"
@@ -461,10 +473,10 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   "success on the level, covariance clustered by terrain; `–`: success or failure is separated "
                   f"by the level, no fit; an infinite end: the data do not bound it); studied: {lo_lv:g}-{hi_lv:g}.",
                   "", markdown_table(bp_shown), ""]
-    paired = stress.paired_table(trials, group, level, baseline)
+    paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
-        cols = [group, "versus", level or "level", "terrains", "pairs", "only this", "only baseline",
+        cols = [group, "versus", *strata, level or "level", "terrains", "pairs", "only this", "only baseline",
                 "terrain_diff_pct", "terrain_ci95_low", "terrain_ci95_high", "bootstrap_distinct", "p_sign_flip",
                 "p_wilcoxon", "p_durkalski", "p_holm", "significant", "mcnemar_p_missions"]
         lines += ["### Paired comparisons on the same missions", "",
@@ -483,13 +495,13 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   "Each command re-runs one trial bit for bit from the run directory and draws it "
                   "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
     ok = trials[trials["success"].astype(bool)]
-    keys = [group] + ([level] if level else [])
+    keys = [group, *strata] + ([level] if level else [])
     rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
         f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
     tables["planner_metrics.csv"] = rms
     lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
     try:
-        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level)
+        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level, strata)
         lines += ["### Planned and driven paths", "", "![paths](planner_paths.png)", ""]
     except (OSError, KeyError, IndexError) as exc:  # a partial run without telemetry: say so, do not fail
         lines += [f"(No path figure: {exc}.)", ""]

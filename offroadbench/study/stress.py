@@ -75,19 +75,23 @@ def mcnemar_exact(n10: int, n01: int) -> float:
     return float(binomtest(n10, n, 0.5, alternative="two-sided").pvalue)
 
 
-def success_by_level(trials: pd.DataFrame, group: str, level: str) -> pd.DataFrame:
-    """Per group (planner) and level (D): trials, successes, rate and its Wilson interval."""
+def success_by_level(trials: pd.DataFrame, group: str, level: str, by: Sequence[str] = ()) -> pd.DataFrame:
+    """Per group (planner), stratum (the other grid axes ``by``) and level (D): trials, successes,
+    rate and its Wilson interval."""
+    keys = [group, *by, level]
     rows = []
-    for (g, x), t in trials.groupby([group, level], sort=True):
+    for vals, t in trials.groupby(keys, sort=True):
         n, k = len(t), int(t["success"].astype(bool).sum())
         lo, hi = wilson_interval(k, n)
-        rows.append({group: g, level: x, "trials": n, "successes": k, "success_rate": k / n,
+        rows.append({**dict(zip(keys, vals)), "trials": n, "successes": k, "success_rate": k / n,
                      "ci95_low": lo, "ci95_high": hi})
     return pd.DataFrame(rows)
 
 
-def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: float = 0.5) -> pd.DataFrame:
-    """Logistic breaking point per group with its Fieller interval (see the module docstring).
+def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: float = 0.5,
+                    by: Sequence[str] = ()) -> pd.DataFrame:
+    """Logistic breaking point per group (and stratum ``by``) with its Fieller interval (see the
+    module docstring).
 
     Columns: the group, ``breaking_point`` (NaN when the fit does not exist: success or failure is
     separated by the level), ``ci95_low``, ``ci95_high``, ``slope`` (per unit of the level),
@@ -97,15 +101,17 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
     from offroadbench.study.clustered import breaking_point_logistic, fit_logistic
 
     levels = sorted(trials[level].unique())
+    keys = [group, *by]
     rows = []
-    for g, t in trials.groupby(group, sort=True):
-        by = success_by_level(t, group, level)
+    for vals, t in trials.groupby(keys, sort=True):
+        rates = t.groupby(level, sort=True)["success"].mean()
         fit = fit_logistic(t[level].to_numpy(float), t["success"].astype(float).to_numpy(), t["terrain"].to_numpy())
         point, lo, hi = breaking_point_logistic(fit, threshold)
-        rows.append({group: g, "breaking_point": point, "ci95_low": lo, "ci95_high": hi, "slope": fit.slope,
+        rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,))), "breaking_point": point,
+                     "ci95_low": lo, "ci95_high": hi, "slope": fit.slope,
                      "extrapolated": bool(math.isfinite(point) and not (min(levels) <= point <= max(levels))),
                      "terrains": fit.clusters,
-                     "first_level_below": first_level_below(by[level], by["success_rate"], threshold),
+                     "first_level_below": first_level_below(rates.index, rates.to_numpy(float), threshold),
                      "levels": f"{min(levels):g}-{max(levels):g}"})
     return pd.DataFrame(rows)
 
@@ -130,7 +136,7 @@ def _terrain_row(p: pd.DataFrame, rng: np.random.Generator, n_boot: int) -> dict
 
 
 def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: str, seed: int = 0,
-                 n_boot: int = 2000) -> pd.DataFrame:
+                 n_boot: int = 2000, by: Sequence[str] = ()) -> pd.DataFrame:
     """Each group against ``baseline`` on the same (terrain, mission) at each level and pooled.
 
     Mission counts (both / only this / only baseline / neither) and the exact McNemar p that treats
@@ -138,9 +144,12 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
     statistics: ``terrains``, the mean per-terrain success difference in points with its terrain
     bootstrap interval and distinct resamples, ``p_sign_flip``, ``p_wilcoxon``, ``p_durkalski``, and
     ``p_holm`` (Holm over the sign-flip p of every row) with ``significant`` = p_holm < 0.05.
+    ``by``: the other grid axes (strata); each stratum is compared within itself, at each level and
+    pooled over its levels.
     """
     rng = np.random.default_rng(seed)
-    key = ["terrain", "mission"] + ([level] if level else [])
+    by = list(by)
+    key = ["terrain", "mission", *by] + ([level] if level else [])
     base = trials[trials[group] == baseline].set_index(key)["success"].astype(bool)
     rows = []
     for g in sorted(trials[group].unique()):
@@ -148,12 +157,16 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
             continue
         other = trials[trials[group] == g].set_index(key)["success"].astype(bool)
         both = other.to_frame("a").join(base.to_frame("b"), how="inner").reset_index()
-        parts = list(both.groupby(level, sort=True)) if level else []
-        parts.append(("all", both))
-        for x, p in parts:
+        strata = list(both.groupby(by, sort=True)) if by else [((), both)]
+        parts = []
+        for sv, sp in strata:
+            sv = sv if isinstance(sv, tuple) else (sv,)
+            parts += [(sv, x, p) for x, p in (sp.groupby(level, sort=True) if level else [])]
+            parts.append((sv, "all", sp))
+        for sv, x, p in parts:
             n10 = int((p["a"] & ~p["b"]).sum())
             n01 = int((~p["a"] & p["b"]).sum())
-            rows.append({group: g, "versus": baseline, level or "level": x, "pairs": len(p),
+            rows.append({group: g, "versus": baseline, **dict(zip(by, sv)), level or "level": x, "pairs": len(p),
                          "both": int((p["a"] & p["b"]).sum()), "only this": n10, "only baseline": n01,
                          "neither": int((~p["a"] & ~p["b"]).sum()),
                          "success_diff_pct": 100.0 * (p["a"].mean() - p["b"].mean()),

@@ -154,3 +154,33 @@ def test_report_of_a_planner_study(tmp_path):
     assert bp.loc["straight", "first_level_below"] <= bp.loc["astar", "first_level_below"]
     assert "offroadbench study replay" in rep.tables["replay_examples.csv"]["replay"].iloc[0]
     assert "planner_paths.png" in rep.figures and "planner_success.png" in rep.figures
+
+
+def fake_noisy_map_trials(hm, missions, cell):
+    """As fake_planner_trials, but astar's tolerance shrinks with the planner map's error."""
+    noise = cell.values.get("planner.map_noise_m", 0.0)
+    tolerance = {"straight": 1.2, "astar": 2.0 - 16 * noise}[cell.values["planner.name"]]
+    for row in fake_planner_trials(hm, missions, cell):
+        ok = row["rms_vertical_accel_m_s2"] < tolerance
+        yield {**row, "success": ok, "failure_reason": "" if ok else "stuck"}
+
+
+def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
+    data = {**STUDY, "grid": {"planner.name": ["straight", "astar"], "recipe.layers.base.D_high": [2.3, 2.9],
+                              "recipe.layers.base.wm.band_limited": [False, True],
+                              "planner.map_noise_m": [0.0, 0.05]}}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path, executor="inline", trial_fn=fake_noisy_map_trials)
+    rep = build_report(tmp_path)
+    paired = rep.tables["paired_tests.csv"]
+    assert {"band_limited", "map_noise_m", "D_high"} <= set(paired.columns)
+    # one row per (stratum, level) and one pooled row per stratum: 4 strata x (2 levels + 1)
+    assert len(paired) == 4 * 3
+    pooled = paired[paired["D_high"] == "all"].set_index(["band_limited", "map_noise_m"])
+    for band in (False, True):
+        # the planner's advantage shrinks with the map error
+        assert pooled.loc[(band, 0.05), "terrain_diff_pct"] <= pooled.loc[(band, 0.0), "terrain_diff_pct"]
+    assert pooled.loc[(False, 0.0), "terrain_diff_pct"] > pooled.loc[(False, 0.05), "terrain_diff_pct"] == 0
+    by = rep.tables["planner_success.csv"]
+    assert len(by) == 2 * 2 * 2 * 2 and {"band_limited", "map_noise_m"} <= set(by.columns)
+    assert len(rep.tables["breaking_points.csv"]) == 2 * 4
