@@ -25,6 +25,11 @@ independent units, not K x missions. Everything here works on per-terrain (per-c
   C(2K - 1, K) of them (462 for K = 6), so 2000 draws of 6 terrains are not 2000 samples.
 * **Multiple comparisons.** :func:`holm` is Holm's (1979) step-down adjustment, which controls the
   family-wise error rate under any dependence between the tests.
+* **Designs with power.** :func:`paired_power` is the power of the two-sided paired t-test of K
+  per-terrain differences with standardised effect d_z = mean / sd (the noncentral t, Cohen 1988,
+  Ch. 2); the sign-flip test on the mean has the same asymptotic efficiency, the Wilcoxon test
+  0.955 of it for normal differences (Hodges & Lehmann 1956). :func:`terrains_needed` is the
+  smallest K that reaches a power at a (Holm/Bonferroni-adjusted) alpha.
 * **Breaking points from a fitted model.** :func:`fit_logistic` fits success ~ logistic(a + b x) to
   trial outcomes by iteratively reweighted least squares, with a cluster-robust (sandwich)
   covariance (Liang & Zeger 1986; the CR1 small-sample factor G / (G - 1) (N - 1) / (N - 2) as in
@@ -53,7 +58,9 @@ __all__ = [
     "fit_logistic",
     "holm",
     "obuchowski_mcnemar",
+    "paired_power",
     "sign_flip_test",
+    "terrains_needed",
     "wilcoxon_test",
 ]
 
@@ -258,6 +265,8 @@ def breaking_point_logistic(fit: LogisticFit, threshold: float = 0.5, z: float =
     """
     if not fit.converged or not math.isfinite(fit.slope) or fit.slope == 0:
         return math.nan, math.nan, math.nan
+    if not np.all(np.isfinite(fit.cov)):  # e.g. one cluster: no robust covariance, no interval
+        return -(fit.intercept - math.log(threshold / (1 - threshold))) / fit.slope, math.nan, math.nan
     L = math.log(threshold / (1 - threshold))
     a, b = fit.intercept - L, fit.slope
     vaa, vab, vbb = fit.cov[0, 0], fit.cov[0, 1], fit.cov[1, 1]
@@ -275,3 +284,32 @@ def breaking_point_logistic(fit: LogisticFit, threshold: float = 0.5, z: float =
     r1, r2 = sorted(((-qb - math.sqrt(disc)) / (2 * qa), (-qb + math.sqrt(disc)) / (2 * qa)))
     # the point itself lies in one of the two unbounded pieces
     return (point, -math.inf, r1) if point <= r1 else (point, r2, math.inf)
+
+
+def paired_power(n: int, effect: float, sd: float, alpha: float = 0.05) -> float:
+    """Power of the two-sided paired t-test with ``n`` clusters, mean difference ``effect`` and
+    per-cluster standard deviation ``sd`` at level ``alpha`` (noncentral t)."""
+    from scipy.stats import nct, t
+
+    if n < 2:
+        return 0.0
+    if sd <= 0:
+        return 1.0 if effect != 0 else alpha
+    df = n - 1
+    crit = float(t.ppf(1 - alpha / 2, df))
+    nc = effect / sd * math.sqrt(n)
+    power = float(nct.sf(crit, df, nc) + nct.cdf(-crit, df, nc))
+    if not math.isfinite(power):  # scipy's noncentral t fails far in the tail: the normal limit
+        from scipy.stats import norm
+
+        z = float(norm.ppf(1 - alpha / 2))
+        power = float(norm.sf(z - nc) + norm.cdf(-z - nc))
+    return min(1.0, power)
+
+
+def terrains_needed(effect: float, sd: float, alpha: float = 0.05, power: float = 0.8, n_max: int = 10_000) -> int:
+    """Smallest number of terrains whose paired test reaches ``power`` (``n_max + 1`` if none does)."""
+    for n in range(2, n_max + 1):
+        if paired_power(n, effect, sd, alpha) >= power:
+            return n
+    return n_max + 1
