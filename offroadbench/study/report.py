@@ -193,10 +193,12 @@ def _terrain_verdict(terrain: pd.DataFrame | None, name: str, frm: str, to: str,
 
 
 def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
-                             study: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
-    """Each change between consecutive groups tested with the terrain as the unit (stats.terrain_changes)."""
+                             study: dict[str, Any], pairs: list[tuple[int, int]] | None = None
+                             ) -> tuple[list[str], pd.DataFrame]:
+    """Changes between groups (consecutive, or ``pairs``) tested with the terrain as the unit
+    (stats.terrain_changes)."""
     paired = bool(study.get("paired_terrains", True))
-    tab = stats.terrain_changes(trials, terrains, labels, names, paired=paired)
+    tab = stats.terrain_changes(trials, terrains, labels, names, paired=paired, pairs=pairs)
     how = ("per-terrain differences (terrain j of every group shares its seed): mean with a 95 % terrain-bootstrap "
            "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
            if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
@@ -206,7 +208,8 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
     text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
             "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
             "of successful trials.")
-    return ["## Changes at the terrain level", "", text, "", markdown_table(shown), ""], tab
+    title = "## Changes at the terrain level" + ("" if pairs is None else ": every group against the first")
+    return [title, "", text, "", markdown_table(shown), ""], tab
 
 
 # ---------------------------------------------------------------------------- report
@@ -328,6 +331,13 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         tables["median_changes.csv"] = changes
         lines += ["## Changes of the medians between consecutive groups", "", markdown_table(changes), ""]
         terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
+        lines += terrain_lines
+    elif len(labels) > 1 and study["grid"] and all(_numeric(a["values"]) for a in study["grid"]):
+        # several numeric axes (a sensitivity study): every cell against the first
+        names = ["success_rate_pct", *stats.METRICS]
+        first = min(labels)
+        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(
+            trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
         lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     lines += [

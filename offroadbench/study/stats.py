@@ -159,8 +159,10 @@ def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence
 
 
 def terrain_changes(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: Sequence[str],
-                    paired: bool = True, seed: int = 0, n_boot: int = 2000) -> pd.DataFrame:
-    """Each change between consecutive groups, with the terrain as the unit.
+                    paired: bool = True, seed: int = 0, n_boot: int = 2000,
+                    pairs: Sequence[tuple[int, int]] | None = None) -> pd.DataFrame:
+    """Each change between consecutive groups (or between the cells of ``pairs``, (from, to)), with
+    the terrain as the unit.
 
     Paired terrains (terrain j of every cell from the same seed): per-terrain differences d_j (later
     minus earlier group), their mean with a terrain-bootstrap 95 % interval and its number of
@@ -186,7 +188,7 @@ def terrain_changes(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[i
     for name in names:
         if name not in vals:
             continue
-        for c0, c1 in itertools.pairwise(cells):
+        for c0, c1 in (pairs if pairs is not None else itertools.pairwise(cells)):
             a = vals[vals["cell"] == c0].set_index("terrain")[name]
             b = vals[vals["cell"] == c1].set_index("terrain")[name]
             row: dict[str, Any] = {"quantity": name, "from": labels[c0], "to": labels[c1]}
@@ -195,8 +197,9 @@ def terrain_changes(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[i
                 boot = cluster_bootstrap(d, np.mean, rng, n_boot)
                 row.update(terrains=d.size, mean_change=boot.estimate, ci95_low=boot.low, ci95_high=boot.high,
                            bootstrap_distinct=f"{boot.distinct} of {min(boot.possible, n_boot)}",
-                           up=int((d > 0).sum()), down=int((d < 0).sum()), p_wilcoxon=wilcoxon_test(d),
-                           p_sign_flip=sign_flip_test(d, rng=rng))
+                           up=int((d > 0).sum()), down=int((d < 0).sum()),
+                           p_wilcoxon=wilcoxon_test(d) if d.size else math.nan,
+                           p_sign_flip=sign_flip_test(d, rng=rng) if d.size else math.nan)
             else:
                 x, y = a.dropna().to_numpy(float), b.dropna().to_numpy(float)
                 bx = cluster_bootstrap(x, np.mean, rng, n_boot)
