@@ -98,6 +98,25 @@ def _planner_successes(folder: Path) -> list[float]:
     return [float(v) for v in table[["straight", "astar", "lattice", "reactive"]].to_numpy().ravel()]
 
 
+def _durkalski_astar(folder: Path) -> list[float]:
+    from offroadbench.study.clustered import durkalski_mcnemar
+
+    t = trial_table(folder)
+    out = []
+    for level in (2.9, 2.95, 2.99):
+        s = t[t["D_high"] == level].groupby(["terrain", "planner"])["success"].agg(["sum", "size"]).unstack("planner")
+        d = s[("sum", "astar")] - s[("sum", "straight")]
+        out.append(durkalski_mcnemar(d.clip(lower=0), (-d).clip(lower=0), s[("size", "astar")])[1])
+    return out
+
+
+def _straight_breaking_point(folder: Path) -> list[float]:
+    from offroadbench.study.stress import breaking_points
+
+    bp = breaking_points(trial_table(folder), "planner", "D_high").set_index("planner")
+    return [float(bp.loc["straight", c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("majhor2023 successful trials", "majhor2023",
@@ -115,6 +134,10 @@ SAMPLES = [
            _metric_medians("rms_vertical_accel_m_s2")),
     Sample("majhor2023 traversal time medians", "majhor2023",
            rf"median traversal time, s \|[^|]*\| {_NUM} / {_NUM} / {_NUM} \(", _metric_medians("traversal_time_s")),
+    Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
+           rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
+    Sample("planner-stress straight-line breaking point", "planner-stress",
+           rf"`straight` {_NUM} \[{_NUM}, {_NUM}\]", _straight_breaking_point),
     Sample("planner-stress successes per planner and D", "planner-stress",
            r"\| D_high \| straight \| astar \| lattice \| reactive \|\n\|[-|]+\|\n"
            + r"".join(rf"\| [\d.]+ \| \**{_NUM}\** \| \**{_NUM}\** \| \**{_NUM}\** \| \**{_NUM}\** \|\n" for _ in range(5)),
