@@ -117,6 +117,18 @@ def _straight_breaking_point(folder: Path) -> list[float]:
     return [float(bp.loc["straight", c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
 
 
+def _terrain_success_changes(folder: Path) -> list[float]:
+    from offroadbench.study.stats import terrain_changes
+
+    t = trial_table(folder)
+    ter = pd.read_csv(folder / "terrains.csv")
+    labels = {c: f"D_high = {d}" for c, d in ter.groupby("cell")["D_high"].first().items()}
+    areas = [f"area_{c}_pct" for c in ("low", "semi", "high")]
+    tab = terrain_changes(t, ter, labels, ["success_rate_pct", *areas]).iloc[0]
+    return [-tab["mean_change"], tab["ci95_low"], tab["ci95_high"], tab["down"], tab["up"], tab["p_wilcoxon"],
+            tab["p_holm"]]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("majhor2023 successful trials", "majhor2023",
@@ -134,6 +146,9 @@ SAMPLES = [
            _metric_medians("rms_vertical_accel_m_s2")),
     Sample("majhor2023 traversal time medians", "majhor2023",
            rf"median traversal time, s \|[^|]*\| {_NUM} / {_NUM} / {_NUM} \(", _metric_medians("traversal_time_s")),
+    Sample("majhor2023 terrain-level success changes", "majhor2023",
+           rf"Per-terrain success falls by {_NUM} points \[{_NUM}, {_NUM}\] from 2.3 to 2.45 \({_NUM} terrains down,"
+           rf"\s+{_NUM} up; Wilcoxon p = {_NUM}, Holm {_NUM}\)", _terrain_success_changes),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
