@@ -433,6 +433,19 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     return fig_paths(hm, closed, plan.section("missions").border_m, m, drawn, title=title)
 
 
+def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: list[str]) -> list[str]:
+    """Each planner's terrain-level advantage over the baseline per stratum (rows) and level (columns):
+    how it changes with, e.g., the planner map's error or the band limit."""
+    p = paired[paired[level] != "all"].copy()
+    p["cell"] = [f"{d:+.0f} [{lo:+.0f}, {hi:+.0f}]{' *' if sig else ''}" for d, lo, hi, sig in
+                 zip(p["terrain_diff_pct"], p["terrain_ci95_low"], p["terrain_ci95_high"], p["significant"])]
+    wide = p.pivot_table(index=[group, *strata], columns=level, values="cell", aggfunc="first").reset_index()
+    wide.columns = [str(c) if c in (group, *strata) else f"{level} = {c}" for c in wide.columns]
+    return ["### Advantage over the baseline per " + " and ".join(f"`{c}`" for c in strata), "",
+            "Mean per-terrain success difference in points with its 95 % terrain-bootstrap interval; "
+            "`*`: significant at the terrain level (Holm).", "", markdown_table(wide), ""]
+
+
 def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path
                      ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
     """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
@@ -494,6 +507,8 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   "and its distinct resamples); `significant`: Holm-adjusted sign-flip p < 0.05. "
                   "`mcnemar_p_missions` treats missions as independent and is shown only for comparison.", "",
                   markdown_table(paired[cols]), ""]
+        if strata and level:
+            lines += _advantage_by_stratum(paired, group, level, strata)
     reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
     reasons.columns.name = None
     tables["planner_failures.csv"] = reasons.reset_index()

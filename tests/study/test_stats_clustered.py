@@ -12,6 +12,8 @@ from offroadbench.study.clustered import (
     fit_logistic,
     holm,
     obuchowski_mcnemar,
+    paired_power,
+    terrains_needed,
     sign_flip_test,
     wilcoxon_test,
 )
@@ -141,3 +143,14 @@ def test_breaking_point_is_unbounded_when_success_does_not_move():
     sep = fit_logistic([1, 1, 2, 2], [1, 1, 0, 0])
     assert not sep.converged
     assert all(math.isnan(v) for v in breaking_point_logistic(sep))
+
+
+def test_power_of_the_paired_test_matches_cohens_tables():
+    # the textbook one-sample / paired t-test sample sizes (Cohen 1988; G*Power): d = 0.5, two-sided
+    # alpha 0.05, power 0.80 -> 34 pairs; d = 0.8 -> 15
+    assert terrains_needed(0.5, 1.0) == 34
+    assert terrains_needed(0.8, 1.0) == 15
+    assert paired_power(34, 0.5, 1.0) >= 0.8 > paired_power(33, 0.5, 1.0)
+    # a stricter alpha needs more terrains; no effect has power alpha
+    assert terrains_needed(0.5, 1.0, alpha=0.005) > 34
+    assert paired_power(20, 0.0, 1.0) == pytest.approx(0.05)

@@ -181,6 +181,7 @@ def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
         # the planner's advantage shrinks with the map error
         assert pooled.loc[(band, 0.05), "terrain_diff_pct"] <= pooled.loc[(band, 0.0), "terrain_diff_pct"]
     assert pooled.loc[(False, 0.0), "terrain_diff_pct"] > pooled.loc[(False, 0.05), "terrain_diff_pct"] == 0
+    assert "### Advantage over the baseline per `band_limited` and `map_noise_m`" in rep.markdown
     by = rep.tables["planner_success.csv"]
     assert len(by) == 2 * 2 * 2 * 2 and {"band_limited", "map_noise_m"} <= set(by.columns)
     assert len(rep.tables["breaking_points.csv"]) == 2 * 4
