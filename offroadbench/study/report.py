@@ -471,9 +471,14 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     if level is not None:
         by = stress.success_by_level(trials, group, level, by=strata)
         tables["planner_success.csv"] = by
-        lines_of = by.assign(line=[", ".join(f"{c}={r[c]}" if c != group else str(r[c]) for c in [group, *strata])
-                                   for _, r in by.iterrows()])
-        figures["planner_success.png"] = fig_success_vs_level(lines_of, "line", level)
+        figs = []
+        for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
+            name = f"planner_success_{i}.png" if strata else "planner_success.png"
+            figures[name] = fig = fig_success_vs_level(part, group, level)
+            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,)))
+            if where:
+                fig.axes[0].set_title(f"Success per planner, {where} (95 % Wilson)", fontsize=10)
+            figs.append(f"![success{': ' + where if where else ''}]({name})")
         shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low": 100 * by["ci95_low"],
                              "95 % CI high": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
                                                                      "success (%)", "95 % CI low", "95 % CI high"]]
@@ -489,7 +494,7 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
             "95 % interval (Fieller)": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])],
             "terrains": bp["terrains"], "first level < 50 %": [f"> {hi_lv:g}" if v == math.inf else f"{v:g}"
                                                               for v in bp["first_level_below"]]})
-        lines += ["### Success against " + level, "", "![success](planner_success.png)", "",
+        lines += ["### Success against " + level, "", *figs, "",
                   markdown_table(shown), "",
                   "### Breaking points", "",
                   f"The {level} at which the fitted success probability is 50 % (logistic regression of trial "

@@ -185,3 +185,4 @@ def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
     by = rep.tables["planner_success.csv"]
     assert len(by) == 2 * 2 * 2 * 2 and {"band_limited", "map_noise_m"} <= set(by.columns)
     assert len(rep.tables["breaking_points.csv"]) == 2 * 4
+    assert {f"planner_success_{i}.png" for i in range(4)} <= set(rep.figures)
