@@ -34,6 +34,7 @@ from __future__ import annotations
 import hashlib
 import math
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -180,13 +181,16 @@ def seen_map(hm: Heightmap, seen: np.ndarray, smoothing_m: float = UNSEEN_SMOOTH
 class Replanner:
     """The plans of one trial on the planner's degraded, partly seen map.
 
+    ``plan(problem) -> waypoints`` is the planner (e.g. ``lambda p:
+    offroadbench.navigation.drivers.plan(choice, p)``); ``problem`` the true planning problem.
+
     ``waypoints`` is the current plan; :meth:`update` with the vehicle's position returns a new plan
     (from that position to the goal) when one is due, else None; ``trace`` is the start, every
     re-planning position and the current plan, the path the planner meant the vehicle to take.
     """
 
-    def __init__(self, choice: Any, problem: Any, mission: Any, cfg: PerceptionConfig) -> None:
-        self.choice, self.problem, self.cfg = choice, problem, cfg
+    def __init__(self, plan: Callable[[Any], np.ndarray], problem: Any, mission: Any, cfg: PerceptionConfig) -> None:
+        self.plan_fn, self.problem, self.cfg = plan, problem, cfg
         self.map = degrade(problem.hm, cfg, np.random.default_rng(perception_seed(mission)))
         hm = problem.hm
         self._rows = np.arange(hm.rows)[:, None] * hm.cell_size_m
@@ -201,8 +205,6 @@ class Replanner:
     def _plan(self, xy: np.ndarray) -> np.ndarray:
         import dataclasses
 
-        from offroadbench.navigation.planners import plan
-
         if self.cfg.sensing_radius_m > 0:
             r = self.cfg.sensing_radius_m
             self.seen |= (self._cols - xy[0]) ** 2 + (self._rows - xy[1]) ** 2 <= r * r
@@ -210,7 +212,7 @@ class Replanner:
         start = (float(xy[0]), float(xy[1]))
         problem = dataclasses.replace(self.problem, hm=known, start_xy=start)
         self._trace.append(np.asarray(start))
-        return plan(self.choice, problem)
+        return self.plan_fn(problem)
 
     def update(self, xy: Any) -> np.ndarray | None:
         """A new plan from ``xy`` (map metres) if the vehicle moved ``replan_every_m`` since the last."""

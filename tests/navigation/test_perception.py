@@ -104,7 +104,7 @@ def test_unseen_ground_is_a_smooth_guess_from_what_was_seen():
 def test_sensing_radius_replans_round_the_ridge_once_it_is_seen():
     hm, m = _ridge_map(gap=True), _mission()
     cfg = PerceptionConfig(sensing_radius_m=1.5, replan_every_m=0.5)
-    rp = Replanner(PlannerChoice("astar"), _problem(hm, m), m, cfg)
+    rp = Replanner(lambda p: plan("astar", p), _problem(hm, m), m, cfg)
     assert _max_dy(rp.waypoints) < 0.5  # the ridge 4 m ahead is not seen yet: straight on
     turned = None
     for x in np.arange(2.0, 5.6, 0.25):
