@@ -4,7 +4,7 @@ By default a planner plans on the very heightmap the physics drives on: an oracl
 :class:`PerceptionConfig` (keys of a study's ``[planner]`` table, beside the planner's own) gives
 it a degraded map instead, while the physics keeps the true terrain:
 
-* ``map_cell_m``: a coarser map. Heights are averaged over blocks of about ``map_cell_m`` (a
+* ``map_cell_m``: a coarser map. Heights are averaged over blocks of about ``map_cell_m`` (an
   elevation map of that resolution, e.g. 0.2-0.5 m cells for a rover's stereo map) and read back at
   the true grid's points by bilinear interpolation, so steps narrower than a cell are smoothed away.
 * ``map_noise_m``: Gaussian height error of this standard deviation, one draw per map cell (per
