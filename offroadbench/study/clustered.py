@@ -19,7 +19,10 @@ independent units, not K x missions. Everything here works on per-terrain (per-c
 
   referred to chi-square with 1 df (:func:`durkalski_mcnemar`). With one pair per cluster it is
   McNemar's statistic. Obuchowski's (1998) test, in the form Yang et al. (2010) give for it,
-  is (K - 1) / K (sum_k (b_k - c_k))^2 / sum_k (b_k - c_k)^2 (:func:`obuchowski_mcnemar`).
+  is (K - 1) / K (sum_k (b_k - c_k))^2 / sum_k (b_k - c_k)^2 (:func:`obuchowski_mcnemar`). In Yang
+  et al.'s simulations Obuchowski's test is the most conservative and Durkalski's suits few
+  clusters (K < 50); the reports use Durkalski's beside the exact per-terrain tests, which are
+  the primary ones (they need no large-K approximation).
 * **Cluster bootstrap.** :func:`cluster_bootstrap` resamples whole terrains (Davison & Hinkley 1997,
   Sec. 3.8) and says how many distinct resamples it drew: K terrains allow only
   C(2K - 1, K) of them (462 for K = 6), so 2000 draws of 6 terrains are not 2000 samples.
