@@ -28,6 +28,7 @@ from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
+from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
 from offroadbench.sim.config import ControllerConfig
@@ -196,7 +197,7 @@ def drive_mission(
     goal = np.asarray(mission.goal_xy_m, dtype=float)
     v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
-    policy = tracker = None
+    policy = tracker = replanner = None
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
@@ -209,6 +210,9 @@ def drive_mission(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
         policy.reset(problem)
+    elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
+        replanner = Replanner(lambda p: plan(planner, p), problem, mission, planner.perception)
+        waypoints = replanner.waypoints
     else:
         waypoints = plan(planner, problem)
     if policy is None:
@@ -238,6 +242,8 @@ def drive_mission(
             roll, pitch, yaw, *rates = body_frame(world, quat, ang)
         if ctrl_tick:
             if policy is None:
+                if replanner is not None and replanner.update(pos[:2]) is not None:
+                    tracker = make_tracker(replanner.waypoints, spec, controller)
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
@@ -246,7 +252,7 @@ def drive_mission(
                 cmd_w = min(max(float(a[1]), -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
-            progress = tracker.progress(np.array(pos[:2])) if tracker is not None else mission.length_m - math.hypot(
+            progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
                 goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
@@ -264,7 +270,8 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
+    path = replanner.trace if replanner is not None else waypoints
+    return TrialRecord(result, tel, np.asarray(path, dtype=float))
 
 
 def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
