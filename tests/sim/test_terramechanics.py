@@ -1,0 +1,130 @@
+"""Wong-Reece terramechanics: the force code against an independent quadrature, the tables against
+the integrals, the shipped soils, and the tyre model in the physics engine on flat ground."""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from offroadbench.errors import InputError
+from offroadbench.sim.terramechanics import (
+    build_tables,
+    list_soils,
+    load_soil,
+    static_sinkage,
+    wheel_forces,
+)
+
+R, B = 0.1651, 0.1143  # the Husky's wheel
+SHIPPED = {"lunar-regolith", "lunar-simulant-ishigami2007", "lete-sand", "clayey-soil", "snow"}
+#: agreement of the force code (Gauss-Legendre) with adaptive quadrature, relative to the load scale
+QUAD_TOL = 1e-3
+
+
+def _reference(soil, h, s):
+    """(F_z, F_x, T) of Wong & Reece 1967 / Ishigami et al. 2007, Eq. 5-7, by scipy.integrate.quad,
+    written out again here from the papers' equations (independent of the force code)."""
+    t1 = math.acos(1.0 - h / R)
+    tm = (soil.a0 + soil.a1 * abs(s)) * t1
+    k = soil.k_c / B + soil.k_phi
+    tan_phi = math.tan(math.radians(soil.friction_angle_deg))
+
+    def sigma(t):
+        eq = t if t >= tm else t1 - t / tm * (t1 - tm)
+        return k * (R * (math.cos(eq) - math.cos(t1))) ** soil.n if math.cos(eq) > math.cos(t1) else 0.0
+
+    def tau(t):
+        if s >= 0:
+            j = R * ((t1 - t) - (1 - s) * (math.sin(t1) - math.sin(t)))
+        else:
+            j = R * ((1 + s) * (t1 - t) - (math.sin(t1) - math.sin(t)))
+        return math.copysign(1.0, j) * (soil.cohesion_pa + sigma(t) * tan_phi) * (1 - math.exp(-abs(j) / soil.shear_modulus_m))
+
+    def quad(f):
+        return integrate.quad(f, 0.0, t1, points=[tm], epsabs=1e-10, epsrel=1e-10, limit=200)[0]
+
+    fz = R * B * quad(lambda t: tau(t) * math.sin(t) + sigma(t) * math.cos(t))
+    fx = R * B * quad(lambda t: tau(t) * math.cos(t) - sigma(t) * math.sin(t))
+    torque = R * R * B * quad(tau)
+    return fz, fx, torque
+
+
+def test_shipped_soils_load_with_valid_values():
+    assert SHIPPED <= set(list_soils())
+    for name in SHIPPED:
+        soil = load_soil(name)
+        assert soil.name == name and soil.description
+        assert soil.modulus(B) > 0
+
+
+def test_unknown_soil_names_the_known_ones():
+    with pytest.raises(InputError, match="lunar-regolith"):
+        load_soil("lunar-regolit")
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_force_code_matches_independent_quadrature(name):
+    soil = load_soil(name)
+    for h in (0.003, 0.02, 0.06):
+        for s in (-0.5, 0.0, 0.1, 0.3, 0.6, 0.9):
+            fz, fx, torque = (float(v) for v in wheel_forces(soil, R, B, h, s))
+            rz, rx, rt = _reference(soil, h, s)
+            scale = max(abs(rz), 1.0)
+            assert abs(fz - rz) <= QUAD_TOL * scale, (h, s)
+            assert abs(fx - rx) <= QUAD_TOL * scale, (h, s)
+            assert abs(torque - rt) <= QUAD_TOL * scale * R, (h, s)
+
+
+def test_tables_interpolate_the_integrals_and_keep_the_series_spring():
+    soil = load_soil("lunar-regolith")
+    k = 5.0e4
+    tables = build_tables(soil, R, B, k)
+    for delta in (0.004, 0.015, 0.04):
+        for s in (0.0, 0.2, 0.55, 0.9):
+            h, fz, fx, torque = tables.lookup(delta, s)
+            assert delta - (h + fz / k) == pytest.approx(0.0, abs=2e-4)
+            ez, ex, et = (float(v) for v in wheel_forces(soil, R, B, h, s))
+            assert fz == pytest.approx(ez, rel=0.03, abs=0.5)
+            assert fx == pytest.approx(ex, rel=0.05, abs=0.5)
+            assert torque == pytest.approx(et, rel=0.05, abs=0.1)
+
+
+def test_drawbar_pull_rises_with_slip_and_sinkage_with_load():
+    soil = load_soil("lunar-regolith")
+    h = static_sinkage(soil, R, B, 130.0)
+    fx = [float(wheel_forces(soil, R, B, h, s)[1]) for s in np.linspace(0.0, 0.9, 10)]
+    assert fx[0] < 0.0 < fx[-1]  # compaction resistance at zero slip, traction at high slip
+    assert all(b >= a - 1e-9 for a, b in itertools.pairwise(fx))
+    assert static_sinkage(soil, R, B, 22.0) < h
+
+
+@pytest.fixture(scope="module")
+def flat():
+    from offroadbench.heightmap import Heightmap
+
+    return Heightmap.flat(81, 81, 0.1)
+
+
+@pytest.mark.parametrize("gravity", [9.81, 1.625])
+def test_vehicle_settles_at_the_static_sinkage_and_drives(flat, gravity):
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.skid_steer import wheel_speeds
+
+    sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=gravity)
+    with World(flat, "husky", sim) as world:
+        world.spawn(2.0, 4.0, 0.0)
+        share = world._tyres._share
+        expected = static_sinkage(load_soil("lunar-regolith"), R, B, share * gravity)
+        assert world.wheel_penetration_m() == pytest.approx(expected, rel=0.1)
+        assert world.wheel_slip() == pytest.approx(0.0, abs=0.02)
+        x0 = world.base_state()[0][0]
+        for k in range(240):  # ramp to 0.5 m/s, as the speed profile does
+            world.command_wheels(*wheel_speeds(min(0.5, 0.5 * k / 60), 0.0, world.spec))
+            world.step()
+        pos = world.base_state()[0]
+        assert pos[0] - x0 > 1.0
+        assert 0.0 < world.wheel_slip() < 0.6  # drives with slip
+        assert abs(pos[1] - 4.0) < 0.05
+        assert world.wheel_penetration_m() >= expected  # slip sinkage: deeper than at rest
