@@ -110,13 +110,19 @@ def _drive_kwargs(hm, cell: CellPlan) -> dict[str, Any]:
             "controller": cell.section("controller"), "rules": cell.section("rules")}
 
 
+def _sim_for(cell: CellPlan):
+    """The cell's ``[sim]`` with its terrain's gravity and soil where ``[sim]`` leaves them open."""
+    recipe = cell.recipe()
+    return cell.section("sim").for_terrain(recipe.gravity_m_s2, recipe.soil)
+
+
 def sim_trials(hm, missions, cell: CellPlan) -> Iterator[Any]:
     """The real trials (PyBullet): one World per terrain, one TrialRecord per mission as it finishes."""
     from offroadbench.sim import World
     from offroadbench.sim.runner import drive_mission
 
     kwargs = _drive_kwargs(hm, cell)
-    with World(hm, cell.section("vehicle"), cell.section("sim")) as world:
+    with World(hm, cell.section("vehicle"), _sim_for(cell)) as world:
         for mission in missions:
             yield drive_mission(world, mission, **kwargs)
 
@@ -172,7 +178,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     m = sample_mission(hm, closed, plan.section("missions"), mission, mseed)
     kwargs = _drive_kwargs(hm, plan)
     kwargs["classes"] = closed
-    with World(hm, plan.section("vehicle"), plan.section("sim")) as world:
+    with World(hm, plan.section("vehicle"), _sim_for(plan)) as world:
         rec = drive_mission(world, m, **kwargs)
     stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too
