@@ -121,7 +121,8 @@ class SoilTyres:
     def apply(self) -> None:
         """Apply one step's soil forces and torques from the wheel states of the last step."""
         cid, body = self._cid, self._body
-        states = pb.getLinkStates(body, self._wheels, computeLinkVelocity=1, physicsClientId=cid)
+        states = pb.getLinkStates(body, self._wheels, computeLinkVelocity=1, computeForwardKinematics=1,
+                                 physicsClientId=cid)
         tables = self.tables
         self.last = {}
         for link, st in zip(self._wheels, states):

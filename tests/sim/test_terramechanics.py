@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy import integrate
+from scipy import integrate, optimize
 
 from offroadbench.errors import InputError
 from offroadbench.sim.terramechanics import (
@@ -128,3 +128,34 @@ def test_vehicle_settles_at_the_static_sinkage_and_drives(flat, gravity):
         assert 0.0 < world.wheel_slip() < 0.6  # drives with slip
         assert abs(pos[1] - 4.0) < 0.05
         assert world.wheel_penetration_m() >= expected  # slip sinkage: deeper than at rest
+
+
+#: rig tolerance: sinkage within 1 %, drawbar pull within 1 % of the load, torque within 1 % of load x radius
+RIG_TOL = 0.01
+
+
+@pytest.mark.parametrize("name,load_n,gravity", [("lunar-regolith", 22.9, 1.62), ("lete-sand", 138.8, 9.81)])
+def test_single_wheel_rig_in_the_engine_matches_independent_quadrature(name, load_n, gravity):
+    """Done-when of issue 21: the engine rig agrees with the integrals, computed here by scipy
+    quadrature with the sinkage solved by brentq, over slip 0-0.9."""
+    from offroadbench.sim.soil_check import SLIPS, rig_curve
+
+    soil = load_soil(name)
+    rig = rig_curve(soil, R, B, load_n, gravity_m_s2=gravity)
+    for i, s in enumerate(SLIPS):
+        h = optimize.brentq(lambda h, s=s: _reference(soil, h, s)[0] - load_n, 1e-7, 0.7 * R, xtol=1e-9)
+        _, fx, torque = _reference(soil, h, s)
+        assert rig.sinkage_m[i] == pytest.approx(h, rel=RIG_TOL), s
+        assert abs(rig.drawbar_pull_n[i] - fx) <= RIG_TOL * load_n, s
+        assert abs(rig.torque_nm[i] - torque) <= RIG_TOL * load_n * R, s
+
+
+def test_soil_check_command_prints_and_plots(tmp_path, capsys):
+    from offroadbench.cli import main
+
+    out = tmp_path / "check.png"
+    assert main(["soil", "check", "snow", "--gravity", "1.62", "--plot", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "soil check: snow" in text and "0.900" in text
+    assert out.stat().st_size > 0
+    assert main(["soil", "check", "sno"]) == 2
