@@ -222,7 +222,8 @@ def drive_mission(
     timeout_s = rules.timeout_factor * length / v_nominal
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
     checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
-                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m)
+                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
+                          wheel_radius_m=spec.wheel_radius_m)
     fill_m = hm.z_min_m - rules.fall_depth_m
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
@@ -255,7 +256,7 @@ def drive_mission(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            done = checker.check(pos, roll, pitch)
+            done = checker.check(pos, roll, pitch, world.wheel_slip(), rows[-1][-1])
             if done is not None:
                 reason = done
                 end_step = k
