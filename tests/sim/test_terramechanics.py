@@ -159,3 +159,26 @@ def test_soil_check_command_prints_and_plots(tmp_path, capsys):
     assert "soil check: snow" in text and "0.900" in text
     assert out.stat().st_size > 0
     assert main(["soil", "check", "sno"]) == 2
+
+
+def test_slip_is_higher_on_a_slope(flat):
+    """Lunar regolith, lunar gravity: climbing a 8 deg grade at 0.3 m/s takes more slip than the flat."""
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.check import _set_gravity
+    from offroadbench.sim.skid_steer import wheel_speeds
+
+    sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
+    slips = []
+    with World(flat, "husky", sim) as world:
+        for grade in (0.0, 8.0):
+            world.spawn(2.0, 4.0, 0.0)
+            _set_gravity(world, math.radians(grade), "y")
+            samples = []
+            for k in range(300):
+                world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / 60), 0.0, world.spec))
+                world.step()
+                if k >= 180:
+                    samples.append(world.wheel_slip())
+            slips.append(sum(samples) / len(samples))
+            _set_gravity(world, 0.0, "y")
+    assert 0.0 < slips[0] < slips[1] < 1.0, slips
