@@ -156,7 +156,7 @@ class RuleChecker:
         self.window_s = stuck_window_s(rules, timeout_s)
         self.window = max(1, int(round(self.window_s * sample_rate_hz)))
         self.xy_hist: list[tuple[float, float]] = []
-        self.entrap_window = max(1, int(round(rules.entrap_window_s * sample_rate_hz)))
+        self.entrap_window = max(1, round(rules.entrap_window_s * sample_rate_hz))
         self._entrap_limit_m = None if wheel_radius_m is None else rules.entrap_sinkage_fraction * wheel_radius_m
         self._dug_in = 0  # consecutive samples with slip and sinkage over the entrapment limits
         for why in unreachable(rules, timeout_s, mission_length_m):

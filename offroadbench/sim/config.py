@@ -88,7 +88,7 @@ class SimConfig:
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
 
-    def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> "SimConfig":
+    def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> SimConfig:
         """This config with the terrain's gravity and soil where it leaves them open (None), and
         Earth's gravity and the default soil where the terrain names none either."""
         from offroadbench.sim.terramechanics import DEFAULT_SOIL
