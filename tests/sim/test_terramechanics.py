@@ -182,3 +182,23 @@ def test_slip_is_higher_on_a_slope(flat):
             slips.append(sum(samples) / len(samples))
             _set_gravity(world, 0.0, "y")
     assert 0.0 < slips[0] < slips[1] < 1.0, slips
+
+
+def test_deep_snow_ramp_entraps_where_rigid_ground_climbs():
+    """A 20 deg ramp after 3 m of flat: on snow (Earth gravity, ~12 cm sinkage) the Husky digs in and
+    the trial ends ``entrapped``; on rigid ground (mu 0.8 allows 38 deg) it reaches the goal."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.runner import drive_mission
+
+    x = np.arange(241) * 0.1
+    hm = Heightmap(np.tile(math.tan(math.radians(20.0)) * np.maximum(0.0, x - 6.0), (81, 1)), 0.1)
+    mission = Mission.between(0, (3.0, 4.0), (20.0, 4.0))
+    outcome = {}
+    for model in ("terramechanics", "coulomb"):
+        with World(hm, "husky", SimConfig(tyre_model=model, soil="snow", gravity_m_s2=9.81)) as world:
+            outcome[model] = drive_mission(world, mission).result
+    assert outcome["terramechanics"].failure_reason == "entrapped"
+    assert outcome["terramechanics"].max_penetration_m > 0.3 * R
+    assert outcome["coulomb"].success
