@@ -94,6 +94,10 @@ class TrialResult:
     """Mission goal y on the map, metres."""
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
+    mean_slip: float = float("nan")
+    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
+    deepest soil sinkage."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -230,6 +234,7 @@ def drive_mission(
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
 
     rows: list[tuple] = []
+    slips: list[float] = []
     cmd_v = cmd_w = 0.0
     reason = "timeout"
     traversal_time = float("nan")
@@ -256,7 +261,10 @@ def drive_mission(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            done = checker.check(pos, roll, pitch, world.wheel_slip(), rows[-1][-1])
+            slip = world.wheel_slip()
+            if slip is not None:
+                slips.append(slip)
+            done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
             if done is not None:
                 reason = done
                 end_step = k
@@ -268,6 +276,8 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
+    if slips:
+        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
 
 

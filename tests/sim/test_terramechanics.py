@@ -202,3 +202,4 @@ def test_deep_snow_ramp_entraps_where_rigid_ground_climbs():
     assert outcome["terramechanics"].failure_reason == "entrapped"
     assert outcome["terramechanics"].max_penetration_m > 0.3 * R
     assert outcome["coulomb"].success
+    assert outcome["terramechanics"].mean_slip > 0.5 and math.isnan(outcome["coulomb"].mean_slip)
