@@ -190,7 +190,8 @@ def _static_penetration(tables: SoilTables, load_n: float) -> float:
 
 
 def make_soil_tyres(world, body: int) -> SoilTyres:
-    """The soil tyres of a World's vehicle: its soil and wheel, Bullet's wheel-terrain collisions off.
+    """The soil tyres of a World's vehicle: its soil and wheel, Bullet's wheel-terrain collisions off
+    (for this vehicle body; the tables are built once per World and kept on it).
 
     The series spring is the vehicle's tyre stiffness capped at ``m / dt^2`` for a wheel's share
     ``m`` of the mass (the explicit step's stability), the penetration damping ``0.5 m / dt`` (as
@@ -198,25 +199,30 @@ def make_soil_tyres(world, body: int) -> SoilTyres:
     the slip spring ``(dF/ds) / length`` at the static load stays below ``0.25 m / dt^2``.
     """
     spec, sim, cid = world.spec, world.sim, world.client_id
-    if spec.wheel_width_m is None:
-        raise InputError(f"vehicle {spec.name!r} has no wheel_width_m; the terramechanics tyre model needs it")
-    soil = load_soil(sim.soil)
-    n_links = pb.getNumJoints(body, physicsClientId=cid)
-    mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
-    share = mass / len(world.wheel_joints)
     dt = world.dt_s
-    k_cap = share / dt**2
-    k_series = min(spec.tyre_stiffness_n_m or k_cap, k_cap)
-    tables = build_tables(soil, spec.wheel_radius_m, spec.wheel_width_m, k_series)
-    k_stab = 0.25 * share / dt**2
-    delta = _static_penetration(tables, share * sim.gravity_m_s2)
-    ds = 2.0 / (tables.n_slip - 1)
-    slope_x = max(abs(tables.lookup(delta, -1.0 + (j + 1) * ds)[2] - tables.lookup(delta, -1.0 + j * ds)[2]) / ds
-                  for j in range(tables.n_slip - 1))
-    slope_y = tables.lateral(delta, 0.0, 0.01) / 0.01
+    setup = getattr(world, "_soil_setup", None)
+    if setup is None:  # once per World: the vehicle is reloaded for every mission, the soil is not
+        if spec.wheel_width_m is None:
+            raise InputError(f"vehicle {spec.name!r} has no wheel_width_m; the terramechanics tyre model needs it")
+        soil = load_soil(sim.soil)
+        n_links = pb.getNumJoints(body, physicsClientId=cid)
+        mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
+        share = mass / len(world.wheel_joints)
+        k_cap = share / dt**2
+        k_series = min(spec.tyre_stiffness_n_m or k_cap, k_cap)
+        tables = build_tables(soil, spec.wheel_radius_m, spec.wheel_width_m, k_series)
+        k_stab = 0.25 * share / dt**2
+        delta = _static_penetration(tables, share * sim.gravity_m_s2)
+        ds = 2.0 / (tables.n_slip - 1)
+        slope_x = max(abs(tables.lookup(delta, -1.0 + (j + 1) * ds)[2] - tables.lookup(delta, -1.0 + j * ds)[2]) / ds
+                      for j in range(tables.n_slip - 1))
+        slope_y = tables.lateral(delta, 0.0, 0.01) / 0.01
+        setup = (tables, share, max(soil.shear_modulus_m, slope_x / k_stab),
+                 max(soil.lateral_shear_modulus_m, slope_y / k_stab))
+        world._soil_setup = setup
+    tables, share, relax_x, relax_y = setup
     for terrain in world.terrain_bodies:
         for j in world.wheel_joints:
             pb.setCollisionFilterPair(terrain, body, -1, j, 0, physicsClientId=cid)
     return SoilTyres(cid, body, world.wheel_joints, world.hm, tables, dt, share, damping_n_s_m=0.5 * share / dt,
-                     relaxation_m=max(soil.shear_modulus_m, slope_x / k_stab),
-                     lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
+                     relaxation_m=relax_x, lateral_relaxation_m=relax_y)
