@@ -48,7 +48,7 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from offroadbench.errors import InputError
-    from offroadbench.sim.soil_check import model_curve, rig_curve
+    from offroadbench.sim.soil_check import model_curve, rig_curve, wheel_load_n
     from offroadbench.sim.terramechanics import load_soil
     from offroadbench.sim.vehicle import load_vehicle
 
@@ -58,18 +58,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     spec = load_vehicle(args.wheel)
     if spec.wheel_width_m is None:
         raise InputError(f"--wheel {args.wheel}: the vehicle has no wheel_width_m")
-    load = args.load_n
-    if load is None:  # a quarter of the vehicle's weight
-        import pybullet as pb
-
-        cid = pb.connect(pb.DIRECT)
-        try:
-            body = pb.loadURDF(spec.urdf, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
-            mass = sum(pb.getDynamicsInfo(body, j, physicsClientId=cid)[0]
-                       for j in range(-1, pb.getNumJoints(body, physicsClientId=cid)))
-        finally:
-            pb.disconnect(physicsClientId=cid)
-        load = mass * args.gravity / len(spec.wheel_joints)
+    load = args.load_n if args.load_n is not None else wheel_load_n(spec, args.gravity)
     with bar("slips", unit="slip") as progress:
         rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity, progress=progress)
     model = model_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load)

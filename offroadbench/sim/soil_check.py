@@ -35,7 +35,7 @@ from offroadbench.sim.terramechanics import (
     wheel_forces,
 )
 
-__all__ = ["SLIPS", "SoilCheck", "model_curve", "rig_curve"]
+__all__ = ["SLIPS", "SoilCheck", "model_curve", "rig_curve", "wheel_load_n"]
 
 #: slips of the check
 SLIPS = tuple(round(0.1 * i, 1) for i in range(10))
@@ -65,6 +65,18 @@ def model_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float
         out.append((h, float(fx), float(t)))
     h, fx, t = (np.array(c) for c in zip(*out))
     return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
+
+
+def wheel_load_n(spec, gravity_m_s2: float) -> float:
+    """One wheel's share of the vehicle's weight, N (the URDF's masses, equal shares)."""
+    cid = pb.connect(pb.DIRECT)
+    try:
+        body = pb.loadURDF(spec.urdf, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        mass = sum(pb.getDynamicsInfo(body, j, physicsClientId=cid)[0]
+                   for j in range(-1, pb.getNumJoints(body, physicsClientId=cid)))
+    finally:
+        pb.disconnect(physicsClientId=cid)
+    return mass * gravity_m_s2 / len(spec.wheel_joints)
 
 
 def _rig(cid: int, radius_m: float, load_kg: float) -> tuple[int, int, int]:
