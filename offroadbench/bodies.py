@@ -17,7 +17,7 @@ from typing import Any
 from offroadbench.config import check_range
 from offroadbench.errors import InputError
 
-__all__ = ["BODIES", "body_gravity"]
+__all__ = ["BODIES", "body_gravity", "terrain_gravity_and_soil"]
 
 #: body name -> mean surface gravity, m/s^2
 BODIES = {"earth": 9.81, "moon": 1.62, "mars": 3.71}
@@ -41,3 +41,15 @@ def body_gravity(table: Mapping[str, Any], where: str = "[body]") -> tuple[str, 
     if name not in BODIES:
         raise InputError(f"{where}: name = {name!r}; allowed: {', '.join(BODIES)} (or give gravity_m_s2)")
     return name, BODIES[name]
+
+
+def terrain_gravity_and_soil(recipe_data: Any) -> tuple[float | None, str | None]:
+    """(gravity m/s^2 or None, soil name or None) of a recipe's TOML dict (e.g. the one stored in a
+    PNG's sidecar); None where it names no ``[body]`` or ``[soil]``."""
+    if not isinstance(recipe_data, Mapping):
+        return None, None
+    body = recipe_data.get("body")
+    gravity = body_gravity(body, "recipe [body]")[1] if body is not None else None
+    soil = recipe_data.get("soil")
+    name = soil.get("name") if isinstance(soil, Mapping) else None
+    return gravity, name if isinstance(name, str) and name else None

@@ -67,3 +67,12 @@ def test_study_cells_use_the_terrain_gravity(tmp_path):
     path.write_text('[study]\nname = "g"\nrecipe = "lunar-mare"\nroot_seed = 1\n')
     _, plans = load_study(path)
     assert _sim_for(plans[0]).gravity_m_s2 == pytest.approx(1.62)
+
+
+def test_a_png_sidecar_recipe_keeps_its_body_and_soil():
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    data = dict(load_recipe("lunar-mare").data)
+    assert terrain_gravity_and_soil(data) == (pytest.approx(1.62), "lunar-regolith")
+    assert terrain_gravity_and_soil(dict(load_recipe("paper-d2.3").data)) == (None, None)
+    assert terrain_gravity_and_soil(None) == (None, None)
