@@ -203,3 +203,20 @@ def test_deep_snow_ramp_entraps_where_rigid_ground_climbs():
     assert outcome["terramechanics"].max_penetration_m > 0.3 * R
     assert outcome["coulomb"].success
     assert outcome["terramechanics"].mean_slip > 0.5 and math.isnan(outcome["coulomb"].mean_slip)
+
+
+def test_soils_on_the_search_path_add_to_and_replace_the_shipped_ones(tmp_path, monkeypatch):
+    from offroadbench import resources
+
+    shipped = (resources.shipped("soils") / "lunar-regolith.toml").read_text()
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "my-sand.toml").write_text(shipped.replace('name = "lunar-regolith"', 'name = "my-sand"'))
+    (tmp_path / "soils" / "snow.toml").write_text(shipped.replace('name = "lunar-regolith"', 'name = "snow"')
+                                                  .replace("cohesion_pa = 170.0", "cohesion_pa = 999.0"))
+    monkeypatch.setenv(resources.ENV_VAR, str(tmp_path))
+    assert {"my-sand", "snow", "lunar-regolith"} <= set(list_soils())
+    assert load_soil("snow").cohesion_pa == 999.0
+    with pytest.raises(InputError, match="no \\[soil\\] table"):
+        bad = tmp_path / "bad.toml"
+        bad.write_text("[other]\nx = 1\n")
+        load_soil(bad)
