@@ -126,14 +126,25 @@ class PreparedTerrain:
     """The seed the terrain was generated from (None for a terrain read from a file)."""
     mission_seeds: tuple[int | None, ...] = ()
     """Each mission's seed (:func:`offroadbench.seeding.mission_seed`), same order."""
+    gravity_m_s2: float | None = None
+    """The gravity of the terrain's body (``[body]`` of its recipe; None: not named)."""
+    soil: str | None = None
+    """The terrain's soil (``[soil]`` of its recipe; None: not named)."""
+
+    def sim_for(self, sim: SimConfig) -> SimConfig:
+        """``sim`` with this terrain's gravity and soil where ``sim`` leaves them open (SimConfig.for_terrain)."""
+        return sim.for_terrain(self.gravity_m_s2, self.soil)
 
 
 def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
-                    missions: Sequence[tuple[int, int]] | Sequence[Mission]) -> PreparedTerrain:
+                    missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
+                    gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
     """The terrain, its class maps and its missions.
 
-    ``terrain`` is a Heightmap (``seed`` is then only recorded) or a recipe
-    (:class:`offroadbench.terrain.recipe.Recipe`, generated with ``seed``). ``missions`` are
+    ``terrain`` is a Heightmap (``seed`` is then only recorded; ``gravity_m_s2`` and ``soil`` say
+    its body's gravity and its soil, if known) or a recipe
+    (:class:`offroadbench.terrain.recipe.Recipe`, generated with ``seed``; its ``[body]`` and
+    ``[soil]`` give gravity and soil). ``missions`` are
     ``(index, mission_seed)`` pairs, each drawn alone on the closed class map (Majhor & Bos 2023,
     Sec. 2.3), or Mission objects used as they are; either way in the order they will be driven.
     """
@@ -143,14 +154,16 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
         from offroadbench.terrain.recipe import generate_terrain
 
         hm = generate_terrain(terrain, seed)
+        gravity_m_s2, soil = terrain.gravity_m_s2, terrain.soil
     maps = classify_terrain(hm, settings.roughness)
     items = list(missions)
     if items and isinstance(items[0], Mission):
-        return PreparedTerrain(hm=hm, maps=maps, missions=tuple(items), terrain_seed=seed,
-                               mission_seeds=(None,) * len(items))
-    drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s)) for k, s in items)
-    return PreparedTerrain(hm=hm, maps=maps, missions=drawn, terrain_seed=seed,
-                           mission_seeds=tuple(int(s) for _, s in items))
+        drawn, seeds = tuple(items), (None,) * len(items)
+    else:
+        drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s)) for k, s in items)
+        seeds = tuple(int(s) for _, s in items)
+    return PreparedTerrain(hm=hm, maps=maps, missions=drawn, terrain_seed=seed, mission_seeds=seeds,
+                           gravity_m_s2=gravity_m_s2, soil=soil)
 
 
 def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
@@ -164,7 +177,7 @@ def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
     kwargs = settings.drive_kwargs(prepared.maps if "classes" in needs else None)
     n = len(prepared.missions)
-    with World(prepared.hm, settings.vehicle, settings.sim) as world:
+    with World(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):
             yield drive_mission(world, mission, **kwargs)
             report(progress, i + 1, n)

@@ -91,6 +91,10 @@ class TrialResult:
     """Mission goal y on the map, metres."""
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
+    mean_slip: float = float("nan")
+    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
+    deepest soil sinkage."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -223,13 +227,15 @@ def drive_mission(
     timeout_s = rules.timeout_factor * length / v_nominal
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
     checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
-                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m)
+                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
+                          wheel_radius_m=spec.wheel_radius_m)
     fill_m = hm.z_min_m - rules.fall_depth_m
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
 
     rows: list[tuple] = []
+    slips: list[float] = []
     cmd_v = cmd_w = 0.0
     reason = "timeout"
     traversal_time = float("nan")
@@ -258,7 +264,10 @@ def drive_mission(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            done = checker.check(pos, roll, pitch)
+            slip = world.wheel_slip()
+            if slip is not None:
+                slips.append(slip)
+            done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
             if done is not None:
                 reason = done
                 end_step = k
@@ -270,6 +279,8 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
+    if slips:
+        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     path = replanner.trace if replanner is not None else waypoints
     return TrialRecord(result, tel, np.asarray(path, dtype=float))
 
