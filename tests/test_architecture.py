@@ -109,7 +109,10 @@ def test_importing_leaves_pybullet_and_matplotlib_backend_alone(module):
 
 #: the only modules that may talk to a physics engine (offroadbench.sim.engine, the engine boundary)
 ENGINE_MODULES = {"offroadbench.sim.world", "offroadbench.sim.contact", "offroadbench.sim._banner",
-                  "offroadbench.sim.mujoco_world"}
+                  "offroadbench.sim.mujoco_world",
+                  # the terramechanics tyre model's PyBullet adapter (contact.py's sibling) and its
+                  # PyBullet single-wheel rig (issue 21): engine code, not callers of the boundary
+                  "offroadbench.sim.soil_contact", "offroadbench.sim.soil_check"}
 #: top-level packages of physics engines
 ENGINE_PACKAGES = {"pybullet", "pybullet_data", "pybullet_envs", "mujoco"}
 

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from offroadbench.sim.config import SimConfig
     from offroadbench.sim.vehicle import VehicleSpec
 
-__all__ = ["ENGINES", "TrialWorld", "VehicleGeometry", "open_world"]
+__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -123,12 +123,20 @@ class TrialWorld(Protocol):
     def wheel_penetration_m(self) -> float:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), m."""
 
+    def wheel_slip(self) -> float | None:
+        """Mean longitudinal slip of the wheels on soft soil in the last step (1: spinning in place),
+        or None where the tyre model has no soil (every model but ``terramechanics``)."""
+
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal contact force from the terrain in the last step, N (spec
         order: left wheels, then right)."""
 
     def centre_of_mass_m(self) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass in the world, m."""
+
+    def push_base(self, fx: float, fy: float, fz: float) -> None:
+        """An external force on the chassis at its centre of mass during the next step, N (world
+        frame; the vehicle check's drawbar-pull rig)."""
 
     def set_gravity(self, gx: float, gy: float, gz: float) -> None:
         """Gravity vector, m/s^2 (the vehicle check tilts it to make a slope of a flat map)."""
@@ -160,6 +168,10 @@ def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., Tri
 ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine")
 ENGINES.add("pybullet", _lazy("offroadbench.sim.world", "World", "pybullet", "pybullet"))
 ENGINES.add("mujoco", _lazy("offroadbench.sim.mujoco_world", "MuJoCoWorld", "mujoco", "mujoco"))
+
+
+#: tyre models (SimConfig.tyre_model) each engine implements
+ENGINE_TYRE_MODELS = {"pybullet": ("bullet", "coulomb", "terramechanics"), "mujoco": ("bullet", "coulomb")}
 
 
 def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:

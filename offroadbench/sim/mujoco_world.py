@@ -190,7 +190,7 @@ class MuJoCoWorld:
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig(),
                  contact: ContactTuning = MUJOCO_CONTACT) -> None:
         self.hm = hm
-        self.sim = sim
+        self.sim = sim = sim.for_terrain()  # Earth's gravity where nothing names one
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
         self.contact = contact
@@ -219,6 +219,7 @@ class MuJoCoWorld:
         self._penetration = 0.0
         self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
         self._xfrc_zero = [0.0] * (6 * self.model.nbody)
+        self._base_force = None  # push_base's force for the next step
         self.geometry = self._measure_geometry()
 
     # ------------------------------------------------------------------ lifetime
@@ -466,6 +467,9 @@ class MuJoCoWorld:
         m, d = self.model, self.data
         each = self.contact.tyres_each_substep
         last = self.substeps - 1
+        pushed = self._base_force
+        if pushed is not None and self._tyres is None:
+            d.xfrc_applied[self._chassis, 0:3] = pushed
         for k in range(self.substeps):
             if each or k == 0:
                 mujoco.mj_step1(m, d)
@@ -476,6 +480,10 @@ class MuJoCoWorld:
                 mujoco.mj_step(m, d)  # the tyre forces of this trial step held in xfrc_applied
             if each or k == last:
                 self._read_contacts()
+        if pushed is not None:
+            self._base_force = None
+            if self._tyres is None:
+                d.xfrc_applied[self._chassis] = 0.0
 
     def _apply_tyres(self) -> None:
         """The tyre forces of the wheels touched in the last step, as forces and torques about each
@@ -483,6 +491,9 @@ class MuJoCoWorld:
         d, core = self.data, self._tyres
         xfrc = self._xfrc
         xfrc[:] = self._xfrc_zero
+        if self._base_force is not None:
+            k = 6 * self._chassis
+            xfrc[k:k + 3] = self._base_force
         touch = core.touch
         if any(touch):
             qvel = d.qvel.tolist()
@@ -603,6 +614,10 @@ class MuJoCoWorld:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), m."""
         return self._penetration
 
+    def wheel_slip(self) -> float | None:
+        """None: the soil's slip belongs to the ``terramechanics`` tyre model, not implemented on MuJoCo."""
+        return None
+
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal force from the terrain in the last step, N (left, then right)."""
         return tuple(self._loads)
@@ -613,6 +628,10 @@ class MuJoCoWorld:
         mujoco.mj_kinematics(m, d)
         mujoco.mj_comPos(m, d)
         return tuple(d.subtree_com[self._chassis].tolist())
+
+    def push_base(self, fx: float, fy: float, fz: float) -> None:
+        """An external force on the chassis at its centre of mass during the next step, N (world frame)."""
+        self._base_force = (fx, fy, fz)
 
     def set_gravity(self, gx: float, gy: float, gz: float) -> None:
         """Gravity vector, m/s^2."""
