@@ -53,8 +53,15 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
 
-This module (with ``contact.py``) is the only code that calls pybullet: :class:`World` implements
-offroadbench.sim.engine.TrialWorld, the engine boundary, for PyBullet.
+- Under the ``coulomb`` tyre model Bullet's friction cone is off (``enableConeFriction = 0``,
+  SimConfig.cone_friction): the wheels' Bullet friction is 0 there, so the cone's solver rows for
+  their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
+  benchmarks/RESULTS.md, 'Issue 25').
+
+This module (with ``contact.py`` and the terramechanics adapter ``soil_contact.py``) is the only
+code that calls pybullet for a trial: :class:`World` implements offroadbench.sim.engine.TrialWorld,
+the engine boundary, for PyBullet; the vehicle's geometry is measured once, at load
+(:meth:`World._measure_geometry`).
 """
 
 from __future__ import annotations
