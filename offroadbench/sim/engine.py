@@ -164,8 +164,9 @@ def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., Tri
     return make
 
 
-#: physics engines by name (``SimConfig.engine``): each a callable ``(hm, vehicle, sim) -> TrialWorld``
-ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine")
+#: physics engines by name (``SimConfig.engine``): each a callable ``(hm, vehicle, sim) -> TrialWorld``;
+#: installed packages add theirs through the entry-point group ``offroadbench.engines``
+ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine", entry_point_group="offroadbench.engines")
 ENGINES.add("pybullet", _lazy("offroadbench.sim.world", "World", "pybullet", "pybullet"))
 ENGINES.add("mujoco", _lazy("offroadbench.sim.mujoco_world", "MuJoCoWorld", "mujoco", "mujoco"))
 
