@@ -38,7 +38,8 @@ def save_telemetry(columns: Mapping[str, np.ndarray], path: str | Path) -> Path:
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            pq.write_table(pa.table(arrays), tmp)
+            with open(tmp, "wb") as fh:  # a file object: pyarrow cannot encode a non-UTF-8 path itself
+                pq.write_table(pa.table(arrays), fh)
     return p
 
 
@@ -53,5 +54,6 @@ def load_telemetry(path: str | Path) -> dict[str, np.ndarray]:
             return {k: data[k] for k in data.files}
     import pyarrow.parquet as pq
 
-    table = pq.read_table(p)
+    with open(p, "rb") as fh:
+        table = pq.read_table(fh)
     return {name: table.column(name).to_numpy() for name in table.column_names}

@@ -8,6 +8,7 @@ its pending missions). Tasks are ordered terrain-major (terrain 0 of every cell,
 
 from __future__ import annotations
 
+import errno
 import logging
 import time
 from dataclasses import dataclass
@@ -21,14 +22,15 @@ from offroadbench import seeding
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
 from offroadbench.study.executors import StudyError, get_executor
-from offroadbench.study.store import Store, remove_store
-from offroadbench.study.tasks import TerrainTask, TrialFn
+from offroadbench.study.fingerprint import platform_fingerprint
+from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
+from offroadbench.study.tasks import TerrainTask, TrialFn, keeps_telemetry
 from offroadbench.sim.config import tile_spans
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry",
-           "worker_memory_bytes"]
+__all__ = ["RunSummary", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+           "save_trial_telemetry", "worker_memory_bytes"]
 
 #: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
 WORKER_BYTES_PER_CELL = 60
@@ -47,15 +49,42 @@ def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) 
     return stem.with_name(stem.name + ".parquet"), stem.with_name(stem.name + "_path.parquet")
 
 
-def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> None:
-    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files)."""
+def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> list[str]:
+    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files); returns
+    their paths relative to ``run_dir``, as the trial's row in the store names them. A file that
+    cannot be written (a full disk) is a StudyError naming it; the trial is then not stored."""
     from offroadbench.io.telemetry import save_telemetry
 
     tel_path, path_path = telemetry_paths(run_dir, cell, terrain, mission)
-    tel_path.parent.mkdir(exist_ok=True)
-    save_telemetry(kept["telemetry"], tel_path)
-    xy = kept["path_xy"]
-    save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path)
+    try:
+        tel_path.parent.mkdir(exist_ok=True)
+        save_telemetry(kept["telemetry"], tel_path)
+        xy = kept["path_xy"]
+        save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path)
+    except OSError as exc:
+        why = "no space left on the device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+        raise StudyError(f"cannot write the telemetry of cell {cell}, terrain {terrain}, mission {mission} "
+                         f"in {tel_path.parent} ({why})") from None
+    return [str(q.relative_to(run_dir)) for q in (tel_path, path_path)]
+
+
+def repair_telemetry(store: Store, run_dir: Path, setting: str) -> list[tuple[int, int, int]]:
+    """Drop the stored trials whose telemetry files are missing, so this run does them again.
+
+    A row names its files (schema 2); a row of a schema-1 store (which committed the row before
+    writing the files) is expected to have them when ``setting`` keeps its telemetry. Returns the
+    (cell, terrain, mission) keys dropped."""
+    missing = []
+    for cell, terrain, mission, success, files, run_id in store.trial_telemetry():
+        if files is None:
+            files = ([str(q.relative_to(run_dir)) for q in telemetry_paths(run_dir, cell, terrain, mission)]
+                     if keeps_telemetry(setting, success) else [])
+        if any(not (run_dir / f).is_file() for f in files):
+            missing.append((cell, terrain, mission, run_id))
+    if missing:
+        log.warning("%s: %d stored trial(s) have no telemetry files; running them again", run_dir, len(missing))
+        store.drop_trials(missing)
+    return [k[:3] for k in missing]
 
 
 @dataclass(frozen=True)
@@ -177,19 +206,28 @@ def run_study(
     """
     ex = get_executor(executor, workers, scheduler, **dict(executor_options or {}))
     version = code_version()
+    fingerprint = platform_fingerprint()
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
     made_dirs = _missing_dirs(run_dir)
-    store = Store(run_dir, create=True)
+    lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
+    try:
+        remove_stale_temp_files(run_dir)
+        store = Store(run_dir, create=True)
+    except BaseException:
+        lock.release()
+        _remove_dirs(made_dirs)
+        raise
     ran = 0
     running = False
     try:
         store.init_meta(study_meta(study, plans, source_text, version))
+        repair_telemetry(store, run_dir, study.telemetry)
         tasks = plan_tasks(study, plans, store.done_trials())
         total = study.n_trials
         done, _ = store.counts()
         report(progress, done, total)
-        run_id = store.start_run(executor, ex.workers, version)
+        run_id = store.start_run(executor, ex.workers, version, fingerprint)
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
         def handle(msg: tuple) -> None:
@@ -199,9 +237,11 @@ def run_study(
                 store.add_terrain(cell, terrain, tseed, stats)
                 return
             _, cell, terrain, mission, tseed, mseed, row, kept = msg
-            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id):
-                if kept is not None:
-                    save_trial_telemetry(run_dir, cell, terrain, mission, kept)
+            files: list[str] = []
+            if kept is not None and not store.has_trial(cell, terrain, mission):
+                # the files first, then the row that names them: a stored trial has its telemetry
+                files = save_trial_telemetry(run_dir, cell, terrain, mission, kept)
+            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id, telemetry=files):
                 ran += 1
                 done += 1
                 if on_trial is not None:
@@ -227,12 +267,10 @@ def run_study(
         if store.created and stored == 0:
             # failed before any trial: leave no store (and no directory) behind
             remove_store(run_dir)
-            for d in made_dirs:
-                try:
-                    d.rmdir()
-                except OSError:
-                    break
+            lock.release()
+            _remove_dirs(made_dirs)
             raise
+        lock.release()
         if running and isinstance(exc, (StudyError, InputError)) and stored:
             # keep every finished trial and say how to go on
             hint = (f"{stored} of {study.n_trials} trials are saved in {run_dir}; "
@@ -240,9 +278,23 @@ def run_study(
             raise type(exc)(f"{exc}; {hint}") from None
         raise
     store.close()
+    lock.release()
     return RunSummary(
         run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
     )
+
+
+def _remove_dirs(made: list[Path]) -> None:
+    """Remove the (empty) directories a failed run created, deepest first."""
+    for d in made:
+        try:
+            (d / "telemetry").rmdir()
+        except OSError:
+            pass
+        try:
+            d.rmdir()
+        except OSError:
+            break
 
 
 def _missing_dirs(path: Path) -> list[Path]:
