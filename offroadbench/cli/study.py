@@ -3,12 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path
 
 EXPORT_FORMATS = ("parquet", "csv")
+#: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
+EXIT_TERMINATED = 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during ``study run``: it ends the run as Ctrl-C does (workers stopped, the session
+    recorded as ``interrupted``, every committed trial kept)."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -106,9 +118,18 @@ def cmd_run(args: argparse.Namespace) -> int:
         counts["new"] += 1
         counts["ok"] += bool(row["success"])
 
-    with bar(study.name, unit="trial", postfix=success) as progress:
-        summary = run_study(study, plans, out, executor=args.executor, workers=workers,
-                            scheduler=args.scheduler, executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+    import signal
+
+    old = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        with bar(study.name, unit="trial", postfix=success) as progress:
+            summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
+                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+    except Terminated:
+        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        return EXIT_TERMINATED
+    finally:
+        signal.signal(signal.SIGTERM, old)
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
     if summary.done == summary.total and not args.no_report:

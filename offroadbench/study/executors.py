@@ -85,6 +85,7 @@ def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
 def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None:
     _die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the coordinator's SIGTERM handler is not the worker's
     _worker_bootstrap()
     while True:
         task = task_q.get()
