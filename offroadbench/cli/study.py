@@ -202,6 +202,27 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantise: str) -> str:
+    """A line when the stored trial ran on another platform or offroadbench, saying whether
+    bit-identity is promised here (offroadbench.study.fingerprint); "" when it ran on this one."""
+    from offroadbench.study.fingerprint import describe, identity_promise, platform_fingerprint
+    from offroadbench.study.results import trial_platform
+    from offroadbench.study.runner import code_version
+
+    stored, stored_version = trial_platform(run_dir, cell, terrain, mission)
+    here, version = platform_fingerprint(), code_version()
+    if stored == here and stored_version == version:
+        return ""
+    ok, why = identity_promise(stored, here, quantise, stored_version, version)
+    where = "on another platform" if stored != here else "on this platform"
+    if stored is None:
+        where = "on a platform that was not recorded"
+    elif stored != here:
+        where += f" ({describe(stored)})"
+    verdict = {True: "promised", False: "not promised", None: "not known to be promised"}[ok]
+    return f"the stored trial ran {where}; bit-identity with it is {verdict} here: {why}"
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     """Replay one trial; exit 1 if it does not reproduce the stored row."""
     from offroadbench.study.tasks import replay_trial
@@ -215,6 +236,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if not rep.identical:
         diff = [k for k in rep.stored if str(rep.stored[k]) != str(r.as_row().get(k))]
         print(f"differs in: {', '.join(diff)}", file=sys.stderr)
+    note = _platform_note(run_dir, args.cell, args.terrain, args.mission, rep.cell.recipe().grid.quantise)
+    if note:
+        print(note)
     if args.plot:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay

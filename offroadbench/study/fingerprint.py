@@ -60,15 +60,20 @@ def _numpy_dispatch() -> tuple[list[str], list[str]]:
 
 
 def _openblas() -> dict[str, Any]:
+    """numpy's OpenBLAS (its wheel's ``numpy.libs`` copy; scipy may load another one, which is
+    left out so the fingerprint does not depend on what else the process imported)."""
     try:
         from threadpoolctl import threadpool_info
     except ImportError:  # pragma: no cover - a declared dependency
         return {}
-    import numpy  # noqa: F401 - loads numpy's OpenBLAS, so threadpoolctl sees it
+    import numpy
 
-    for lib in threadpool_info():
-        if lib.get("internal_api") == "openblas":
-            return {"version": lib.get("version"), "core": lib.get("architecture")}
+    libs = [lib for lib in threadpool_info() if lib.get("internal_api") == "openblas"]
+    root = os.path.dirname(os.path.dirname(numpy.__file__))
+    ours = [lib for lib in libs if os.path.basename(os.path.dirname(lib.get("filepath", ""))) == "numpy.libs"
+            or str(lib.get("filepath", "")).startswith(os.path.join(root, "numpy"))]
+    for lib in ours or libs[:1]:
+        return {"version": lib.get("version"), "core": lib.get("architecture")}
     return {}
 
 

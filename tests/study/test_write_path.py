@@ -23,7 +23,6 @@ from offroadbench.study import runner as runner_mod
 from offroadbench.study.runner import telemetry_paths
 from offroadbench.study.spec import plan_cells
 from offroadbench.study.store import Store
-
 from tests.study.test_run import STUDY, fake_trials
 
 KILL_AT = 3  # the third trial's write path is cut
