@@ -10,7 +10,7 @@ import logging
 import os
 import sys
 
-from offroadbench.errors import InputError, StudyError
+from offroadbench.errors import InputError, PluginError, StudyError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "drive", "export", "vehicle")
@@ -64,6 +64,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except StudyError as exc:
         sys.stderr.write(f"offroadbench: study stopped: {_one_line(exc)}\n")
+        return EXIT_FAILED
+    except PluginError as exc:
+        sys.stderr.write(f"offroadbench: plug-in fault: {_one_line(exc)}\n")
         return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")

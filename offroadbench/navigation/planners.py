@@ -69,7 +69,7 @@ import numpy as np
 
 from offroadbench.analysis.roughness import HIGH, SEMI, border_mask, disk, gradient_map
 from offroadbench.config import check_choice, check_int, check_range, from_dict
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, PluginError
 from offroadbench.heightmap import Heightmap
 from offroadbench.registry import Registry
 
@@ -269,7 +269,7 @@ def entry_config(kind: str, name: str, cfg: Any, expected: type) -> Any:
 
 def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
     """Waypoints (N, 2) from a planner, checked: finite, at least two, from exactly the start to
-    exactly the goal, on the map. A plug-in that breaks the contract raises RuntimeError."""
+    exactly the goal, on the map. A plug-in that breaks the contract raises PluginError (a RuntimeError)."""
     if isinstance(choice, str):
         choice = PlannerChoice(choice)
     if choice.kind != "planner":
@@ -284,7 +284,7 @@ def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
     elif not np.all((wp >= 0) & (wp <= [problem.hm.width_m, problem.hm.height_m])):
         bad = "leaves the map"
     if bad:
-        raise RuntimeError(f"planner {choice.name!r} {bad}")
+        raise PluginError(f"planner {choice.name!r} {bad}")
     return wp
 
 

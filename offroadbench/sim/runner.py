@@ -16,6 +16,7 @@ Metrics follow Majhor & Bos 2023, Sec. 2.4 (see offroadbench.navigation.metrics)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, PluginError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
@@ -154,6 +155,24 @@ def vehicle_envelope(world: World) -> VehicleEnvelope:
                            max_step_m=float(step), ground_clearance_m=belly, wheel_radius_m=spec.wheel_radius_m)
 
 
+def _parks_on_failure(fn):
+    """A failed trial (any exception, Ctrl-C included) parks the vehicle before it propagates, so
+    the world serves the next trial as if the failed one never ran (see :func:`park_vehicle`)."""
+
+    @functools.wraps(fn)
+    def wrapper(world, *args, **kwargs):
+        try:
+            return fn(world, *args, **kwargs)
+        except BaseException:
+            try:
+                park_vehicle(world)
+            except Exception:  # noqa: BLE001 - a closed world: nothing to clean, the first error matters
+                pass
+            raise
+
+    return wrapper
+
+
 @dataclass(frozen=True, eq=False)
 class TrialRecord:
     """Everything one trial produced: the result row, the 20 Hz telemetry and the planned path."""
@@ -165,6 +184,7 @@ class TrialRecord:
     """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
 
 
+@_parks_on_failure
 def drive_mission(
     world: World,
     mission: Mission,
@@ -244,11 +264,12 @@ def drive_mission(
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
-                a = policy.act(obs)
-                cmd_v = min(max(float(a[0]), -v_lim), v_lim)
-                cmd_w = min(max(float(a[1]), -w_lim), w_lim)
+                a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
+                cmd_v = min(max(a[0], -v_lim), v_lim)
+                cmd_w = min(max(a[1], -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
+            _check_state(planner.name, k * world.dt_s, pos, quat, lin, ang)
             progress = tracker.progress(np.array(pos[:2])) if tracker is not None else mission.length_m - math.hypot(
                 goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
@@ -268,6 +289,38 @@ def drive_mission(
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
     return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
+
+
+def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:
+    """A policy's (v, omega) as two finite floats, else a PluginError naming the policy and value."""
+    try:
+        v, w = (float(x) for x in np.asarray(action, dtype=float).reshape(2))
+    except (TypeError, ValueError):
+        raise PluginError(f"policy {name!r} returned {action!r} at t = {t_s:.2f} s; expected (v, omega), "
+                          "two finite numbers") from None
+    if not (math.isfinite(v) and math.isfinite(w)):
+        raise PluginError(f"policy {name!r} returned a non-finite action ({v!r}, {w!r}) at t = {t_s:.2f} s")
+    return v, w
+
+
+def _check_state(name: str, t_s: float, pos, quat, lin, ang) -> None:
+    """Refuse a non-finite base state (the physics blew up): a fault, not an outcome such as tipped."""
+    if not all(map(math.isfinite, (*pos, *quat, *lin, *ang))):
+        raise PluginError(f"the simulation state became non-finite at t = {t_s:.2f} s (position {tuple(pos)}) "
+                          f"while driving with {name!r}")
+
+
+def park_vehicle(world: World) -> None:
+    """Put the vehicle at rest high above the map with every joint reset and the wheels stopped:
+    what a failed trial leaves for the next ``spawn``."""
+    import pybullet as pb
+
+    cid, body = world.client_id, world.vehicle_id
+    pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
+    pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+    for j in range(pb.getNumJoints(body, physicsClientId=cid)):
+        pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
+    world.command_wheels(0.0, 0.0)
 
 
 def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
