@@ -248,18 +248,18 @@ def run_study(
                     on_trial(row)
                 report(progress, done, total)
 
-        status = "interrupted"
+        status, error = "interrupted", None
         running = True
         try:
             ex.run(tasks, trial_fn, handle)
             status = "finished"
         except KeyboardInterrupt:
             raise
-        except BaseException:
-            status = "failed"
+        except BaseException as exc:
+            status, error = "failed", f"{type(exc).__name__}: {exc}"
             raise
         finally:
-            store.finish_run(run_id, status)
+            store.finish_run(run_id, status, error)
         done, successes = store.counts()
     except BaseException as exc:
         stored = store.counts()[0]

@@ -16,7 +16,8 @@ Tables (``study.sqlite``):
   as JSON): the wall time of the study, and the platforms its trials came from, are read here.
 
 Schema versions. 1: the tables above without ``trials.telemetry``, ``trials.run_id`` and
-``runs.platform``. 2: with them. A run (``Store(..., create=True)``) migrates a schema-1 store in
+``runs.platform`` and ``runs.error``. 2: with them (``error``: the one-line reason a failed
+session stopped, e.g. a plug-in fault). A run (``Store(..., create=True)``) migrates a schema-1 store in
 place (three ``ALTER TABLE ... ADD COLUMN``, in one transaction); readers accept both.
 
 Safety. Only the coordinating process writes, and only while it holds the run directory's lock
@@ -74,10 +75,11 @@ CREATE TABLE IF NOT EXISTS trials (
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
     executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
-    host TEXT, machine TEXT, version TEXT, platform TEXT);
+    host TEXT, machine TEXT, version TEXT, platform TEXT, error TEXT);
 """
 #: columns added by schema 2, per table: (name, SQL type)
-_SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")), "runs": (("platform", "TEXT"),)}
+_SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
+                    "runs": (("platform", "TEXT"), ("error", "TEXT"))}
 
 
 def store_path(run_dir: str | Path) -> Path:
@@ -280,9 +282,14 @@ class Store:
         )
         return int(cur.lastrowid)
 
-    def finish_run(self, run_id: int, status: str) -> None:
-        """Close a session. Its ``trials_run`` was counted by :meth:`add_trial`, trial by trial."""
-        self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
+    def finish_run(self, run_id: int, status: str, error: str | None = None) -> None:
+        """Close a session (``error``: why it failed, one line). Its ``trials_run`` was counted by
+        :meth:`add_trial`, trial by trial."""
+        if error is not None and "error" in self.columns["runs"]:
+            self.con.execute("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
+                             (time.time(), status, " ".join(error.split())[:2000], run_id))
+        else:
+            self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
 
     def runs(self) -> list[dict[str, Any]]:
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")

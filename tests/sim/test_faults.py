@@ -121,7 +121,7 @@ STUDY_TOML = {
 
 
 def test_a_nan_policys_study_fixed_and_resumed_equals_the_fixed_run(tmp_path, nan_policy):
-    from offroadbench.study import load, run_study, study_from_dict
+    from offroadbench.study import load, load_meta, run_study, study_from_dict
     from offroadbench.study.spec import plan_cells
 
     study = study_from_dict(copy.deepcopy(STUDY_TOML))
@@ -130,6 +130,8 @@ def test_a_nan_policys_study_fixed_and_resumed_equals_the_fixed_run(tmp_path, na
         run_study(study, cells, tmp_path / "a", executor="inline")
     partial = load(tmp_path / "a")
     assert list(partial["mission"]) == [0]  # the faulty trial is not stored, as tipped or otherwise
+    session = load_meta(tmp_path / "a")["runs"][0]
+    assert session["status"] == "failed" and "PluginError: policy 'nan-test' returned a non-finite" in session["error"]
     POISON["armed"] = False  # the plug-in is fixed
     resumed = run_study(study, cells, tmp_path / "a", executor="inline")
     assert resumed.ran == 2

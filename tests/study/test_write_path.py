@@ -167,6 +167,7 @@ def test_a_schema_1_store_is_read_migrated_and_repaired(tmp_path):
         con.execute("ALTER TABLE trials DROP COLUMN telemetry")
         con.execute("ALTER TABLE trials DROP COLUMN run_id")
         con.execute("ALTER TABLE runs DROP COLUMN platform")
+        con.execute("ALTER TABLE runs DROP COLUMN error")
     con.execute("PRAGMA user_version=1")
     con.close()
     pd.testing.assert_frame_equal(load(tmp_path), before)
