@@ -5,6 +5,7 @@ and exit status 2."""
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import logging
 import os
@@ -76,6 +77,12 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 141
+    except OSError as exc:  # after BrokenPipeError, itself an OSError
+        if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        where = f" writing {os.fsdecode(exc.filename)}" if exc.filename else ""
+        sys.stderr.write(f"offroadbench: error: no space left on the device{where}; nothing was left half written\n")
+        return EXIT_FAILED
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -175,21 +175,21 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
 
     from offroadbench.cli._common import created_dirs, save_figure
 
+    from offroadbench.io.export._staging import staged_dir
+
     report = build_report(run_dir, fig4=fig4)
     toml = load_meta(run_dir).get("study_toml")
-    path = out / "report.md"
-    with created_dirs(out):
+    # all or nothing: the report is written beside its folder and swapped in whole, so a killed
+    # report never leaves figures without report.md, nor a new report.md over old figures
+    with created_dirs(out.parent), staged_dir(out) as stage:
         for name, fig in report.figures.items():
-            save_figure(fig, out / name, dpi=110)
+            save_figure(fig, stage / name, dpi=110)
         for name, df in report.tables.items():
-            with atomic_path(out / name) as tmp:
-                df.to_csv(tmp, index=False)
+            df.to_csv(stage / name, index=False)
         if toml:
-            with atomic_path(out / "study.toml") as tmp:
-                tmp.write_text(toml)
-        with atomic_path(path) as tmp:
-            tmp.write_text(report.markdown)
-    return path
+            (stage / "study.toml").write_text(toml)
+        (stage / "report.md").write_text(report.markdown)
+    return out / "report.md"
 
 
 def cmd_report(args: argparse.Namespace) -> int:

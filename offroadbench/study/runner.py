@@ -58,11 +58,14 @@ def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: 
     tel_path, path_path = telemetry_paths(run_dir, cell, terrain, mission)
     try:
         tel_path.parent.mkdir(exist_ok=True)
-        save_telemetry(kept["telemetry"], tel_path)
+        save_telemetry(kept["telemetry"], tel_path, sweep=False)  # the run swept its directory at the start
         xy = kept["path_xy"]
-        save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path)
-    except OSError as exc:
-        why = "no space left on the device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+        save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path, sweep=False)
+    except (OSError, InputError) as exc:
+        if isinstance(exc, InputError):
+            why = str(exc)
+        else:
+            why = "no space left on the device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
         raise StudyError(f"cannot write the telemetry of cell {cell}, terrain {terrain}, mission {mission} "
                          f"in {tel_path.parent} ({why})") from None
     return [str(q.relative_to(run_dir)) for q in (tel_path, path_path)]
