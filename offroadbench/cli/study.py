@@ -40,7 +40,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="dask: stop the study (and restart the worker) when one trial runs longer than this, s")
+                     help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
+                          "(default: generous against the trials' nominal time)")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     run.set_defaults(func=cmd_run)
@@ -102,8 +103,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
-    if args.trial_timeout_s is not None and args.executor != "dask":
-        raise InputError("--trial-timeout-s applies to --executor dask only")
+    if args.trial_timeout_s is not None and args.executor == "inline":
+        raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
     study, plans = load_study(path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)

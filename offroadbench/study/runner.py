@@ -29,7 +29,7 @@ from offroadbench.sim.config import tile_spans
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+__all__ = ["RunSummary", "default_trial_timeout_s", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
            "save_trial_telemetry", "worker_memory_bytes"]
 
 #: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
@@ -124,6 +124,31 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
     return tasks
 
 
+#: the per-trial wall-clock limit by default: this many seconds (a terrain build, planning) plus
+TRIAL_LIMIT_BASE_S = 300.0
+#: ... this many wall seconds per simulated second of a trial's timeout (a real-time factor of 0.1,
+#: against the 25-80 measured: benchmarks/RESULTS.md), plus
+TRIAL_LIMIT_PER_SIM_S = 10.0
+#: ... this many seconds per map cell (building and classifying large maps)
+TRIAL_LIMIT_PER_CELL_S = 20e-6
+#: a planned path may be this many times the mission length (detours) in the default limit
+PATH_ALLOWANCE = 3.0
+
+
+def default_trial_timeout_s(plans: list[CellPlan]) -> float:
+    """The default per-trial wall-clock limit of a study, seconds: generous against the nominal
+    time (``rules.timeout_factor * PATH_ALLOWANCE * mission length / speed`` simulated seconds at
+    a real-time factor of 0.1, plus the terrain build), so only a hung trial reaches it."""
+    worst = 0.0
+    for p in plans:
+        rules, missions, ctrl = p.section("rules"), p.section("missions"), p.section("controller")
+        speed = min(ctrl.cruise_speed_m_s, p.section("vehicle").max_speed_m_s)
+        sim_s = rules.timeout_factor * PATH_ALLOWANCE * missions.length_m / speed
+        cells = int(p.recipe_data["grid"]["rows"]) * int(p.recipe_data["grid"]["cols"])
+        worst = max(worst, TRIAL_LIMIT_BASE_S + TRIAL_LIMIT_PER_SIM_S * sim_s + TRIAL_LIMIT_PER_CELL_S * cells)
+    return worst
+
+
 def worker_memory_bytes(plans: list[CellPlan]) -> int:
     """Peak memory estimate of one trial worker of the study: its largest terrain's world."""
     return max(_world_bytes(p) for p in plans)
@@ -205,9 +230,13 @@ def run_study(
     re-raises KeyboardInterrupt; what was committed stays. A run that fails before its first
     trial removes the store (and the directories) it created; one that fails later keeps every
     committed trial and its error says how to resume. ``executor_options`` go to the executor
-    (e.g. ``trial_timeout_s`` for dask).
+    (``trial_timeout_s``: the per-trial wall-clock limit of the ``local`` and ``dask`` executors,
+    default :func:`default_trial_timeout_s`).
     """
-    ex = get_executor(executor, workers, scheduler, **dict(executor_options or {}))
+    options = dict(executor_options or {})
+    if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
+        options["trial_timeout_s"] = default_trial_timeout_s(plans)
+    ex = get_executor(executor, workers, scheduler, **options)
     version = code_version()
     fingerprint = platform_fingerprint()
     t0 = time.perf_counter()
