@@ -233,7 +233,7 @@ def drive_mission(
                 control_rate_hz=controller.control_rate_hz))
             policy.reset(problem)
         else:
-            waypoints = plan(planner, problem)
+            waypoints = plan_within_limits(planner, problem)
     if policy is None:
         tracker = make_tracker(waypoints, spec, controller)
         length = tracker.length_m
@@ -321,6 +321,47 @@ def park_vehicle(world: World) -> None:
     for j in range(pb.getNumJoints(body, physicsClientId=cid)):
         pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
     world.command_wheels(0.0, 0.0)
+
+
+#: wall-clock seconds a planner may take for one mission (enforced in the main thread; elsewhere a
+#: study's per-trial limit applies)
+PLANNING_LIMIT_S = 120.0
+#: the most waypoints a planned path may have (the tracker's cost grows with them)
+MAX_WAYPOINTS = 100_000
+#: a planned path may be at most this many times the start-goal distance, plus MAX_PATH_EXTRA_M
+MAX_PATH_FACTOR = 20.0
+MAX_PATH_EXTRA_M = 10.0
+
+
+def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.ndarray:
+    """:func:`~offroadbench.navigation.planners.plan` within PLANNING_LIMIT_S, and a path within
+    MAX_WAYPOINTS and MAX_PATH_FACTOR; a planner beyond a limit is a PluginError naming it."""
+    import signal
+    import threading
+
+    def too_slow(signum, frame):
+        raise PluginError(f"planner {planner.name!r} took longer than {PLANNING_LIMIT_S:g} s to plan one mission")
+
+    timed = (threading.current_thread() is threading.main_thread()
+             and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+             and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0))
+    if timed:
+        signal.signal(signal.SIGALRM, too_slow)
+        signal.setitimer(signal.ITIMER_REAL, PLANNING_LIMIT_S)
+    try:
+        wp = plan(planner, problem)
+    finally:
+        if timed:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+    if len(wp) > MAX_WAYPOINTS:
+        raise PluginError(f"planner {planner.name!r} returned {len(wp)} waypoints; at most {MAX_WAYPOINTS} are allowed")
+    straight = math.hypot(problem.goal_xy[0] - problem.start_xy[0], problem.goal_xy[1] - problem.start_xy[1])
+    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist()))
+    if length > MAX_PATH_FACTOR * straight + MAX_PATH_EXTRA_M:
+        raise PluginError(f"planner {planner.name!r} returned a path of {length:.1f} m for a {straight:.1f} m mission; "
+                          f"at most {MAX_PATH_FACTOR:g} x + {MAX_PATH_EXTRA_M:g} m is allowed")
+    return wp
 
 
 def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:

@@ -190,3 +190,54 @@ def test_the_env_refuses_a_step_after_the_end(env):
 def test_the_env_validates_reset_options(env, options):
     with pytest.raises(InputError, match="options"):
         env.reset(options=options)
+
+
+# ---------------------------------------------------------------------------- planner limits
+def _register(name, fn):
+    from offroadbench.navigation.planners import register_planner
+
+    register_planner(name)(fn)
+    return PlannerChoice(name)
+
+
+@pytest.fixture
+def cleanup_planners():
+    from offroadbench.navigation.planners import PLANNERS
+
+    yield
+    for name in ("sleepy-test", "long-test", "many-test"):
+        PLANNERS._entries.pop(name, None)
+
+
+def test_a_planner_beyond_its_limits_is_a_plugin_error(terrain, cleanup_planners, monkeypatch):
+    import time
+
+    from offroadbench.sim import runner
+
+    hm, classes = terrain
+    a, _ = missions(hm)
+    monkeypatch.setattr(runner, "PLANNING_LIMIT_S", 0.5)
+
+    def sleepy(problem, cfg):
+        time.sleep(60)
+
+    def long_way(problem, cfg):  # back and forth 30 times: 210 m for a 3.5 m mission
+        s, g = np.asarray(problem.start_xy), np.asarray(problem.goal_xy)
+        return np.array([s, *([g, s] * 30), g])
+
+    def many(problem, cfg):
+        return np.linspace(problem.start_xy, problem.goal_xy, runner.MAX_WAYPOINTS + 1)
+
+    with World(hm) as world:
+        t0 = time.monotonic()
+        with pytest.raises(PluginError, match="planner 'sleepy-test' took longer than 0.5 s"):
+            drive_mission(world, a, planner=_register("sleepy-test", sleepy), classes=classes, border_m=1.0)
+        assert time.monotonic() - t0 < 30
+        with pytest.raises(PluginError, match=r"planner 'long-test' returned a path of 2\d\d.\d m for a 3.5 m mission"):
+            drive_mission(world, a, planner=_register("long-test", long_way), classes=classes, border_m=1.0)
+        with pytest.raises(PluginError, match="planner 'many-test' returned 100001 waypoints"):
+            drive_mission(world, a, planner=_register("many-test", many), classes=classes, border_m=1.0)
+        import signal
+
+        assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+        assert signal.getsignal(signal.SIGALRM) == signal.SIG_DFL
