@@ -43,7 +43,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
                           "(default: generous against the trials' nominal time)")
     run.add_argument("--force", action="store_true",
-                     help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
+                     help="skip the up-front memory and study-size estimate checks (memory also "
+                          "OFFROADBENCH_NO_MEMORY_CHECK=1)")
     run.set_defaults(func=cmd_run)
 
     exp = sub.add_parser("export", help="write the trial and terrain tables of a run directory")
@@ -98,14 +99,22 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
 def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.io.inputs import check_input_file
-    from offroadbench.study import load_study, run_study
+    from offroadbench.config import load_toml
+    from offroadbench.study import run_study
+    from offroadbench.study.runner import check_study_size
+    from offroadbench.study.spec import plan_cells, study_from_dict
 
     path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    study, plans = load_study(path)
+    study = study_from_dict(load_toml(path), where=str(path))
+    check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
+    try:
+        plans = plan_cells(study, base_dir=path.parent)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}

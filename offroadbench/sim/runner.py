@@ -166,7 +166,7 @@ def _parks_on_failure(fn):
         except BaseException:
             try:
                 park_vehicle(world)
-            except Exception:  # noqa: BLE001 - a closed world: nothing to clean, the first error matters
+            except Exception:  # noqa: BLE001, S110 - a closed world: nothing to clean, the first error matters
                 pass
             raise
 

@@ -29,7 +29,7 @@ from offroadbench.sim.config import tile_spans
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "default_trial_timeout_s", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+__all__ = ["RunSummary", "StudyEstimate", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
            "save_trial_telemetry", "worker_memory_bytes"]
 
 #: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
@@ -147,6 +147,66 @@ def default_trial_timeout_s(plans: list[CellPlan]) -> float:
         cells = int(p.recipe_data["grid"]["rows"]) * int(p.recipe_data["grid"]["cols"])
         worst = max(worst, TRIAL_LIMIT_BASE_S + TRIAL_LIMIT_PER_SIM_S * sim_s + TRIAL_LIMIT_PER_CELL_S * cells)
     return worst
+
+
+#: assumed real-time factor of a trial in a study's size estimate (25-80 measured on 2 cores,
+#: benchmarks/RESULTS.md; the estimate stays on the long side)
+ESTIMATE_RTF = 20.0
+#: assumed seconds to build and classify one terrain in the size estimate (a 1009^2 paper map)
+ESTIMATE_TERRAIN_S = 10.0
+#: ``study run`` refuses, without --force, a study of more grid cells than this ...
+MAX_CELLS = 10_000
+#: ... or of more estimated CPU time than this, seconds (7 CPU-days)
+MAX_CPU_S = 7 * 86400.0
+
+
+@dataclass(frozen=True)
+class StudyEstimate:
+    """The size of a study, known before its cells are resolved (:func:`estimate_study`)."""
+
+    cells: int
+    trials: int
+    cpu_s: float
+    """Estimated CPU time: trials x nominal simulated time / ESTIMATE_RTF + terrains x ESTIMATE_TERRAIN_S."""
+
+    def describe(self) -> str:
+        return (f"{self.cells} grid cell(s), {self.trials} trial(s), about {self.cpu_s / 3600:.3g} CPU-hours "
+                f"(trials at a real-time factor of {ESTIMATE_RTF:g}, {ESTIMATE_TERRAIN_S:g} s per terrain)")
+
+
+def estimate_study(study: StudyConfig) -> StudyEstimate:
+    """Cells, trials and CPU time of ``study`` from its config alone (no cell is resolved, so a
+    grid of a million values is judged in seconds). The nominal simulated time of a trial is
+    ``mission length / cruise speed`` with the longest length and slowest speed of the grid."""
+    from offroadbench.navigation.missions import MissionConfig
+    from offroadbench.sim.config import ControllerConfig
+
+    def values(key: str, default: float) -> list[float]:
+        for axis in study.grid:
+            if axis.key == key:
+                return [float(v) for v in axis.values]
+        table, field = key.split(".")
+        return [float(study.settings.get(table, {}).get(field, default))]
+
+    try:
+        length = max(values("missions.length_m", MissionConfig().length_m))
+        speed = min(values("controller.cruise_speed_m_s", ControllerConfig().cruise_speed_m_s))
+        sim_s = length / speed if speed > 0 else float("inf")
+    except (TypeError, ValueError):  # not numbers: resolving the cells will name the bad value
+        sim_s = 0.0
+    terrains = study.n_cells * study.terrains_per_cell
+    cpu = study.n_trials * sim_s / ESTIMATE_RTF + terrains * ESTIMATE_TERRAIN_S
+    return StudyEstimate(cells=study.n_cells, trials=study.n_trials, cpu_s=cpu)
+
+
+def check_study_size(study: StudyConfig, force: bool = False) -> StudyEstimate:
+    """Refuse (InputError with the estimate) a study beyond MAX_CELLS or MAX_CPU_S unless ``force``."""
+    est = estimate_study(study)
+    if not force and (est.cells > MAX_CELLS or not est.cpu_s <= MAX_CPU_S):
+        raise InputError(f"study {study.name!r}: {est.describe()}; more than the {MAX_CELLS} cells or "
+                         f"{MAX_CPU_S / 86400:g} CPU-days run without --force: check the grid and the mission "
+                         "length, or give --force to run it anyway")
+    return est
 
 
 def worker_memory_bytes(plans: list[CellPlan]) -> int:

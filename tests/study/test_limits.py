@@ -64,3 +64,38 @@ def test_a_bad_limit_is_refused(tmp_path):
     study, cells = study_and_cells()
     with pytest.raises(InputError, match="trial_timeout_s"):
         run_study(study, cells, tmp_path, executor="local", trial_fn=fake_trials, executor_options={"trial_timeout_s": 0})
+
+
+# ---------------------------------------------------------------------------- study size
+def test_a_huge_grid_or_mission_is_refused_with_the_estimate_before_any_work(tmp_path):
+    import subprocess
+    import sys
+
+    from offroadbench.study.runner import MAX_CELLS, check_study_size, estimate_study
+
+    huge = copy.deepcopy(STUDY)
+    huge["grid"] = {"missions.length_m": [3.0 + 1e-6 * i for i in range(MAX_CELLS + 1)]}
+    study = study_from_dict(huge)
+    est = estimate_study(study)
+    assert est.cells == MAX_CELLS + 1 and est.trials == 12 * (MAX_CELLS + 1)
+    with pytest.raises(InputError, match=rf"{MAX_CELLS + 1} grid cell\(s\), {12 * (MAX_CELLS + 1)} trial\(s\).*--force"):
+        check_study_size(study)
+    assert check_study_size(study, force=True) == est
+    far = copy.deepcopy(STUDY)
+    far["missions"]["length_m"] = 1e7  # 10^7 s of driving per trial
+    with pytest.raises(InputError, match="CPU-hours"):
+        check_study_size(study_from_dict(far))
+    ok, _ = study_and_cells()
+    assert estimate_study(ok).cpu_s < 3600
+
+    path = tmp_path / "huge.toml"
+    values = ", ".join(repr(3.0 + 1e-6 * i) for i in range(200_000))
+    path.write_text(f'[study]\nname = "huge"\nrecipe = "paper-d2.45"\nroot_seed = 1\nterrains_per_cell = 1\n'
+                    f'missions_per_terrain = 1\n[grid]\n"missions.length_m" = [{values}]\n')
+    t0 = time.monotonic()
+    r = subprocess.run([sys.executable, "-c", "import sys; from offroadbench.cli import main; sys.exit(main())",
+                        "study", "run", str(path), "--out", str(tmp_path / "run")],
+                       capture_output=True, text=True, timeout=300, check=False)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "200000 grid cell(s)" in r.stderr, r.stderr
+    assert time.monotonic() - t0 < 120
+    assert not (tmp_path / "run").exists()
