@@ -76,6 +76,15 @@ def _run_dir(path: str) -> Path:
     return p
 
 
+def _check_dir_name(name: str, path: Path) -> None:
+    """The study name names the default run directory runs/NAME: it must be one plain path
+    component (not empty, ``.`` or ``..``, no slash, NUL or control character)."""
+    bad = name in ("", ".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 or ord(c) == 127 for c in name)
+    if bad:
+        raise InputError(f"{path}: [study] name = {name!r} cannot name the run directory runs/NAME (it must be one "
+                         "plain file name: no slash, control character, '.' or '..'); rename the study or give --out")
+
+
 def _workers(args: argparse.Namespace, plans) -> int | None:
     """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
     import os
@@ -115,6 +124,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    if not args.out:
+        _check_dir_name(study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}

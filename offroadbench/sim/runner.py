@@ -350,6 +350,14 @@ def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.n
         signal.setitimer(signal.ITIMER_REAL, PLANNING_LIMIT_S)
     try:
         wp = plan(planner, problem)
+    except (PluginError, InputError):
+        raise
+    except Exception as exc:  # a plug-in's own failure: one line naming it (the traceback goes to the log)
+        import logging
+
+        logging.getLogger(__name__).info("planner %r failed", planner.name, exc_info=True)
+        raise PluginError(f"planner {planner.name!r} failed: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}"
+                          ) from exc
     finally:
         if timed:
             signal.setitimer(signal.ITIMER_REAL, 0.0)

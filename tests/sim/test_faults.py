@@ -205,7 +205,7 @@ def cleanup_planners():
     from offroadbench.navigation.planners import PLANNERS
 
     yield
-    for name in ("sleepy-test", "long-test", "many-test"):
+    for name in ("sleepy-test", "long-test", "many-test", "raise-test"):
         PLANNERS._entries.pop(name, None)
 
 
@@ -237,6 +237,11 @@ def test_a_planner_beyond_its_limits_is_a_plugin_error(terrain, cleanup_planners
             drive_mission(world, a, planner=_register("long-test", long_way), classes=classes, border_m=1.0)
         with pytest.raises(PluginError, match="planner 'many-test' returned 100001 waypoints"):
             drive_mission(world, a, planner=_register("many-test", many), classes=classes, border_m=1.0)
+        def broken(problem, cfg):
+            return 1 / 0
+
+        with pytest.raises(PluginError, match="planner 'raise-test' failed: ZeroDivisionError: division by zero"):
+            drive_mission(world, a, planner=_register("raise-test", broken), classes=classes, border_m=1.0)
         import signal
 
         assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
