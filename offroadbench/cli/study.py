@@ -87,20 +87,13 @@ def _check_dir_name(name: str, path: Path) -> None:
 
 def _workers(args: argparse.Namespace, plans) -> int | None:
     """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
-    import os
-
-    from offroadbench.cli._common import format_bytes, available_memory_bytes, check_memory
+    from offroadbench.memory import check_memory, format_bytes, workers_that_fit
     from offroadbench.study.runner import worker_memory_bytes
 
     if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
-    workers = args.workers
-    if workers is None:
-        avail = available_memory_bytes()
-        workers = os.cpu_count() or 1
-        if avail is not None:
-            workers = max(1, min(workers, avail // per_worker))
+    workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
     check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
     return workers
 
@@ -196,7 +189,7 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
 
     from offroadbench.cli._common import created_dirs, save_figure
 
-    from offroadbench.io.export._staging import staged_dir
+    from offroadbench.io.export import staged_dir
 
     report = build_report(run_dir, fig4=fig4)
     toml = load_meta(run_dir).get("study_toml")
@@ -246,9 +239,11 @@ def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantis
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """Replay one trial; exit 1 if it does not reproduce the stored row."""
+    from offroadbench.cli._common import check_output_dir, created_dirs
     from offroadbench.study.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
+    out = check_output_dir(args.out if args.out else run_dir / "replays", "--out") if args.plot else None
     rep = replay_trial(run_dir, args.cell, args.terrain, args.mission)
     r = rep.record.result
     name = f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}"
@@ -264,14 +259,13 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        out = Path(args.out) if args.out else run_dir / "replays"
-        out.mkdir(parents=True, exist_ok=True)
         title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
-        with atomic_path(out / f"{name}.png") as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
-        save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
+        with created_dirs(out):  # the output-path policy: missing folders made now, removed on failure
+            with atomic_path(out / f"{name}.png") as tmp:
+                fig.savefig(tmp, format="png", dpi=110)
+            save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
         print(f"wrote {out / (name + '.png')}, {out / (name + '.parquet')}")
     return 0 if rep.identical else 1

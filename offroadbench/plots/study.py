@@ -1,28 +1,32 @@
 """Figures of a study report (after Majhor & Bos 2023, Figs. 4-7). Each returns a
-:class:`matplotlib.figure.Figure`; the caller saves it."""
+:class:`matplotlib.figure.Figure`; the caller saves it.
+
+The figures draw what they are given: box plots take the box statistics the report's tables come
+from (offroadbench.study.stats.box_stats), so tables and plots agree exactly, and this module
+imports nothing of offroadbench.study (the report imports it, never the other way round)."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
-from offroadbench.study import stats
 
 __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "fig_success_vs_level",
            "fig_paths", "short_label"]
 
 
-def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
+def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -> None:
+    """Box plots from box statistics (``median``, ``q1``, ``q3``, ``whislo``, ``whishi``, ``fliers``,
+    ``n``), one per group label."""
     boxes = []
-    for label, values in zip(groups, samples):
-        s = stats.box_stats(values)
+    for label, s in groups.items():
         if s["n"] == 0:
             s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": label, "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+        boxes.append({"label": short_label(label), "med": s["median"], "q1": s["q1"], "q3": s["q3"],
                       "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
     ax.bxp(boxes, showfliers=True,
            medianprops={"color": "red"},
@@ -53,24 +57,22 @@ def fig_class_areas(summary: pd.DataFrame):
     return fig
 
 
-def fig_success(per_terrain: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 6: box plots of the per-terrain success rate per group."""
+def fig_success(boxes: Mapping[str, Mapping[str, Any]]):
+    """Fig. 6: box plots of the per-terrain success rate, given per group label as box statistics
+    (offroadbench.study.stats.success_boxes)."""
     fig, ax = new_figure(figsize=(5, 3.6))
-    cells = sorted(labels)
-    samples = [per_terrain.loc[per_terrain["cell"] == c, "success_rate_pct"] for c in cells]
-    _bxp(ax, [short_label(labels[c]) for c in cells], samples, "success rate per terrain (%)", "Success rate (Eq. 5)")
+    _bxp(ax, boxes, "success rate per terrain (%)", "Success rate (Eq. 5)")
     ax.set_ylim(-3, 103)
     return fig
 
 
-def fig_metrics(trials: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 7: box plots of the traversal metrics of successful trials per group."""
+def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
+    """Fig. 7: box plots of the traversal metrics of successful trials per group; ``boxes`` is metric
+    -> group label -> box statistics (offroadbench.study.stats.metric_boxes), ``metrics`` is metric
+    -> (title, unit) for the four panels."""
     fig, axes = new_figure(2, 2, figsize=(9, 6.4))
-    ok = trials[trials["success"].astype(bool)]
-    cells = sorted(labels)
-    for ax, (metric, (title, unit)) in zip(axes.ravel(), stats.METRICS.items()):
-        samples = [ok.loc[ok["cell"] == c, metric] for c in cells]
-        _bxp(ax, [short_label(labels[c]) for c in cells], samples, f"{title} ({unit})", title)
+    for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items()):
+        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Successful trials only", fontsize=10)
     return fig
 

@@ -21,26 +21,18 @@ from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
+from offroadbench.io.outputs import missing_dirs
+from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
 from offroadbench.study.fingerprint import platform_fingerprint
 from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
 from offroadbench.study.tasks import TerrainTask, TrialFn, keeps_telemetry
-from offroadbench.sim.config import tile_spans
 
 log = logging.getLogger(__name__)
 
 __all__ = ["RunSummary", "StudyEstimate", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
            "save_trial_telemetry", "worker_memory_bytes"]
 
-#: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
-WORKER_BYTES_PER_CELL = 60
-#: PyBullet's transient triangle copy while one heightfield tile's heights are written, per cell of
-#: the tile (sim/world.py): ~700 MB for an untiled 1009^2 map, ~45 MB for a 256-cell tile
-TILE_BUILD_BYTES_PER_CELL = 690
-#: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes.
-#: With these, a 1009^2 worker is estimated at 266 MiB tiled (measured peak 203 MB) and 923 MiB
-#: untiled (860 MB; benchmarks/RESULTS.md, "Heightfield tiles")
-WORKER_BASE_BYTES = 160 * 2**20
 
 
 def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
@@ -210,16 +202,14 @@ def check_study_size(study: StudyConfig, force: bool = False) -> StudyEstimate:
 
 
 def worker_memory_bytes(plans: list[CellPlan]) -> int:
-    """Peak memory estimate of one trial worker of the study: its largest terrain's world."""
+    """Peak memory estimate of one trial worker of the study: its largest terrain's world
+    (offroadbench.memory.world_bytes)."""
     return max(_world_bytes(p) for p in plans)
 
 
 def _world_bytes(plan: CellPlan) -> int:
-    rows, cols = int(plan.recipe_data["grid"]["rows"]), int(plan.recipe_data["grid"]["cols"])
-    tile = plan.section("sim").heightfield_tile_cells
-    tile_rows = max(b - a for a, b in tile_spans(rows - 1, tile)) + 1
-    tile_cols = max(b - a for a, b in tile_spans(cols - 1, tile)) + 1
-    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * rows * cols + TILE_BUILD_BYTES_PER_CELL * tile_rows * tile_cols
+    grid = plan.recipe_data["grid"]
+    return world_bytes(grid["rows"], grid["cols"], plan.section("sim").heightfield_tile_cells)
 
 
 def code_version() -> str:
@@ -301,7 +291,7 @@ def run_study(
     fingerprint = platform_fingerprint()
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
-    made_dirs = _missing_dirs(run_dir)
+    made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
     lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
     try:
         remove_stale_temp_files(run_dir)
@@ -389,11 +379,3 @@ def _remove_dirs(made: list[Path]) -> None:
             break
 
 
-def _missing_dirs(path: Path) -> list[Path]:
-    """The directories of ``path`` (itself included) that do not exist yet, deepest first."""
-    out = []
-    q = path
-    while not q.exists() and q.parent != q:
-        out.append(q)
-        q = q.parent
-    return out

@@ -27,6 +27,8 @@ __all__ = [
     "failure_table",
     "median_changes",
     "group_labels",
+    "success_boxes",
+    "metric_boxes",
 ]
 
 QUANTILE_METHOD = "hazen"
@@ -80,6 +82,17 @@ def terrain_success(trials: pd.DataFrame) -> pd.DataFrame:
     out = pd.DataFrame({"trials": g.size(), "successes": g.sum().astype(int)}).reset_index()
     out["success_rate_pct"] = 100.0 * out["successes"] / out["trials"]
     return out
+
+
+def success_boxes(per_terrain: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict[str, Any]]:
+    """Fig. 6: group label -> :func:`box_stats` of its per-terrain success rates (%), in cell order."""
+    return {labels[c]: box_stats(per_terrain.loc[per_terrain["cell"] == c, "success_rate_pct"]) for c in sorted(labels)}
+
+
+def metric_boxes(trials: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict[str, dict[str, Any]]]:
+    """Fig. 7: metric column -> group label -> :func:`box_stats` over the group's successful trials."""
+    ok = trials[trials["success"].astype(bool)]
+    return {metric: {labels[c]: box_stats(ok.loc[ok["cell"] == c, metric]) for c in sorted(labels)} for metric in METRICS}
 
 
 def group_summary(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from offroadbench.sim.check import CheckResult, check_vehicle, climb_limit_deg
+from offroadbench.sim.check import check_vehicle, climb_limit_deg
 
 
 @pytest.fixture(scope="module", params=["husky", "jackal"])

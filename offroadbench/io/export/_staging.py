@@ -17,7 +17,9 @@ when the block ends without an error do the files appear in the output directory
 
 Staging and set-aside directories carry the writer's pid (``.NAME.<pid>.XXXX.tmp``); the next
 export to the same directory removes those of processes that are gone. On any error the staging
-directory is deleted.
+directory is deleted. Where the output may go is the one output-path policy of
+offroadbench.io.outputs: a missing output directory and its missing parents are created (and
+removed again if the export fails); the nearest existing ancestor must accept a new file.
 """
 
 from __future__ import annotations
@@ -35,8 +37,9 @@ from typing import Iterator
 
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import current_umask, os_error, remove_stale, temp_prefix
+from offroadbench.io.outputs import check_output_dir, created_dirs
 
-__all__ = ["check_output_dir", "staged_dir", "MAX_LINKED"]
+__all__ = ["MAX_LINKED", "staged_dir"]
 
 log = logging.getLogger(__name__)
 
@@ -44,23 +47,6 @@ log = logging.getLogger(__name__)
 MAX_LINKED = 2000
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
-
-
-def check_output_dir(out_dir: str | Path) -> Path:
-    """``out_dir`` if it is a writable directory, or can be created in a writable existing parent."""
-    d = Path(out_dir)
-    if d.exists():
-        if not d.is_dir():
-            raise InputError(f"output directory {d}: exists and is not a directory")
-        if not os.access(d, os.W_OK | os.X_OK):
-            raise InputError(f"output directory {d}: is not writable")
-        return d
-    parent = d.parent if str(d.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"output directory {d}: parent {parent} does not exist or is not a directory")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"output directory {d}: parent {parent} is not writable")
-    return d
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -119,9 +105,14 @@ def _link_rest(out_dir: Path, stage: Path) -> bool:
 @contextlib.contextmanager
 def staged_dir(out_dir: str | Path) -> Iterator[Path]:
     """Yield an empty staging directory; on success its contents appear in ``out_dir`` (see module doc)."""
-    out_dir = check_output_dir(out_dir)
+    out_dir = check_output_dir(out_dir, "output directory")
     fresh = not out_dir.exists()
     parent = out_dir.parent if str(out_dir.parent) else Path(".")
+    with created_dirs(parent):  # missing parents, removed again if the export fails
+        yield from _staged(out_dir, fresh, parent)
+
+
+def _staged(out_dir: Path, fresh: bool, parent: Path) -> Iterator[Path]:
     name = out_dir.resolve().name or "export"
     remove_stale(parent, name)
     if not fresh:
