@@ -18,6 +18,12 @@ place and at 1 m/s, headings 0 / 22.5 / 45 deg) and the median turn-in-place rat
 
     .venv/bin/python benchmarks/bench_sim.py --contact [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
 
+``--soil`` instead compares ``terramechanics`` (lunar regolith) with ``coulomb`` on small lunar-mare
+maps (513^2 at 5 cm, 15 m missions, lunar gravity): the same missions run with each model in turn
+(interleaved, so machine load hits both alike); it prints each model's RTF and their ratio.
+
+    .venv/bin/python benchmarks/bench_sim.py --soil [--seeds 1,2] [--missions 4]
+
 ``--iterations 50,30,20`` instead compares Bullet solver iteration counts (``SimConfig.
 solver_iterations``) at the default contact model and rate: per count, the RTF on the same missions
 (in rounds, as above) and its ratio to the first count, successes, wheel penetration, flat-ground
@@ -151,6 +157,40 @@ def compare_contact(args) -> None:
               flush=True)
 
 
+def compare_soil(args) -> None:
+    from offroadbench.terrain.recipe import apply_overrides
+
+    recipe = apply_overrides(load_recipe("lunar-mare"), {"grid.rows": 513, "grid.cols": 513,
+                                                         "layers.craters.population.d_max_m": 6.0})
+    models = ("coulomb", "terramechanics")
+    clock = {m: [0.0, 0.0] for m in models}
+    outcomes = {m: [] for m in models}
+    husky = load_vehicle("husky")
+    for seed in (int(s) for s in args.seeds.split(",")):
+        hm = generate_terrain(recipe, seed)
+        rc = RoughnessConfig()
+        closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
+        mcfg = MissionConfig(count=args.missions, length_m=15.0, border_m=2.0)
+        missions = sample_missions(hm, closed, mcfg, np.random.default_rng(seed))
+        worlds = {m: World(hm, husky, SimConfig(tyre_model=m, soil="lunar-regolith", gravity_m_s2=1.62))
+                  for m in models}
+        try:
+            for mission in missions:
+                for m in models:  # interleaved, mission by mission
+                    tw = time.perf_counter()
+                    r, _ = run_mission(worlds[m], mission)
+                    clock[m][1] += time.perf_counter() - tw
+                    clock[m][0] += r.sim_time_s + worlds[m].sim.settle_time_s
+                    outcomes[m].append(r.failure_reason or "ok")
+        finally:
+            for w in worlds.values():
+                w.close()
+    rtf = {m: clock[m][0] / clock[m][1] for m in models}
+    for m in models:
+        print(f"{m:15s} RTF {rtf[m]:6.1f}  simulated {clock[m][0]:7.1f} s  outcomes {' '.join(outcomes[m])}")
+    print(f"RTF ratio terramechanics / coulomb: {rtf['terramechanics'] / rtf['coulomb']:.2f}", flush=True)
+
+
 def compare_iterations(args) -> None:
     from offroadbench.sim.check import check_vehicle
 
@@ -196,7 +236,12 @@ def main() -> None:
     ap.add_argument("--missions", type=int, default=None, help="missions per terrain (default 5; --contact: 10)")
     ap.add_argument("--contact", action="store_true", help="compare the tyre-terrain contact models")
     ap.add_argument("--iterations", default=None, help="compare solver iteration counts, e.g. 50,30,20")
+    ap.add_argument("--soil", action="store_true", help="compare terramechanics with coulomb on lunar-mare")
     args = ap.parse_args()
+    if args.soil:
+        args.missions = args.missions or 4
+        compare_soil(args)
+        return
     if args.iterations:
         args.preset = args.preset or "paper-d2.6"
         args.missions = args.missions or 10

@@ -97,6 +97,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=args.set, force=args.force)
+    if recipe is not None:  # the terrain's body and soil
+        sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
+    else:  # a PNG: those of the recipe in its sidecar, if any
+        from offroadbench.bodies import terrain_gravity_and_soil
+        from offroadbench.io.png16 import read_png16_metadata
+
+        sim = sim.for_terrain(*terrain_gravity_and_soil(read_png16_metadata(args.terrain).get("recipe")))
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
                              length_m=args.length_m, vehicle=vehicle, sim=sim, planner=args.planner, progress=progress)

@@ -57,6 +57,7 @@ __all__ = [
     "decode_png16",
     "sidecar_path",
     "check_sidecar_pair",
+    "read_png16_metadata",
     "png_metadata",
     "write_png16",
     "read_png16",
@@ -271,6 +272,21 @@ def read_png16(
     if not relief_m >= 0:
         raise InputError(f"relief_m must be >= 0, got {relief_m}")
     return decode_png16(q, cell_size_m, z_min_m, z_min_m + relief_m)
+
+
+def read_png16_metadata(path: str | Path) -> dict[str, Any]:
+    """The metadata stored with a PNG heightmap (sidecar, else text chunks; {} if none), e.g. the
+    ``recipe`` it was generated from."""
+    from PIL import Image
+
+    p = Path(path)
+    try:
+        with Image.open(p) as img:
+            text = dict(getattr(img, "text", {}) or {})
+    except Exception:  # a damaged file: read_png16 reports it
+        text = {}
+    meta = _metadata_for(p, text)
+    return {} if meta is None else dict(meta[1])
 
 
 def _metadata_for(png: Path, text: Mapping[str, str]) -> tuple[str, dict[str, Any]] | None:

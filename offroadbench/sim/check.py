@@ -31,6 +31,19 @@ contact model and skid-steer drive the trials use:
   across a 2 cm grid). Expected: the spec sheet's, else the geometric bound of
   :func:`step_bound_m` (wheel radius, chassis nose, belly clearing the edge); pass: 0.6-1.05x.
 
+**Soft soil** (:func:`soft_soil_checks`, the ``terramechanics`` tyre model on lunar regolith in
+lunar gravity, offroadbench.sim.terramechanics):
+
+- **sinkage at rest** against the Wong-Reece sinkage that carries a quarter of the weight; pass:
+  within 15 %.
+- **steepest grade climbed from rest** (as on rigid ground), against the quasi-static soil limit
+  :func:`soil_climb_limit_deg` at slip 0.75 (the largest slip at which the test's 0.5 m/s wheel
+  speed still gains its 1 m in 10 s); pass: within 3 deg; the note gives the rigid-ground figure.
+- **drawbar pull at 20 % slip**: the vehicle drives on flat soil while a horizontal force on the
+  chassis, fed back on the mean wheel slip, holds the slip at 0.2; the force is the vehicle's
+  drawbar pull, against four times a wheel's Wong-Reece pull at a quarter of the weight; pass:
+  within 10 % of the expected pull or 1 % of the weight.
+
 All measurements are in SI units; angles are reported in degrees.
 """
 
@@ -51,7 +64,12 @@ from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.world import World
 
-__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG"]
+__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
+           "soft_soil_checks", "soil_climb_limit_deg", "SOFT_SOIL", "SOFT_SOIL_GRAVITY_M_S2"]
+
+#: soil and gravity of the soft-soil rows
+SOFT_SOIL = "lunar-regolith"
+SOFT_SOIL_GRAVITY_M_S2 = 1.62
 
 #: yaw-rate commands of the tracking checks, rad/s (capped at the vehicle's limit)
 YAW_COMMANDS_RAD_S = (0.25, 0.5, 1.0, 2.0)
@@ -424,7 +442,7 @@ def check_vehicle(
     quick = dataclasses.replace(sim, settle_time_s=min(sim.settle_time_s, 0.5))
     flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
     rows: list[CheckResult] = []
-    total = 6
+    total = 7
     tip_row, tip_deg = _tip_angle(spec, quick, flat)
     report(progress, 1, total)
     with World(flat, spec, quick) as world:
@@ -443,7 +461,92 @@ def check_vehicle(
     report(progress, 5, total)
     rows.append(_step(spec, quick, belly, wheelbase, overhang))
     report(progress, 6, total)
+    rows += soft_soil_checks(spec, sim)
+    report(progress, 7, total)
     return rows
+
+
+def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
+                         n_wheels: int = 4) -> float:
+    """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
+    weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
+    from offroadbench.sim.terramechanics import static_sinkage, wheel_forces
+
+    def margin(theta: float) -> float:
+        load = mass_kg * g * math.cos(theta) / n_wheels
+        h = static_sinkage(soil, radius_m, width_m, load, slip)
+        return n_wheels * float(wheel_forces(soil, radius_m, width_m, h, slip)[1]) - mass_kg * g * math.sin(theta)
+
+    lo, hi = 0.0, 0.5 * math.pi
+    if margin(lo) < 0.0:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def _tow_pull(world: World, slip: float, seconds: float = 8.0) -> float:
+    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
+    spec = world.spec
+    world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
+    rate = world.sim.physics_rate_hz
+    weight = _total_mass(world) * world.sim.gravity_m_s2
+    drag, pulls = 0.0, []
+    n = int(round(seconds * rate))
+    for k in range(n):
+        world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / rate), 0.0, spec))
+        pos = world.base_state()[0]
+        pb.applyExternalForce(world.vehicle_id, -1, [-drag, 0.0, 0.0], pos, pb.WORLD_FRAME,
+                              physicsClientId=world.client_id)
+        world.step()
+        measured = world.wheel_slip()
+        if measured is not None and k > rate:
+            drag = drag + 0.5 * weight * (slip - measured) / rate  # integral feedback (a push if negative)
+        if k >= n - 2 * rate:
+            pulls.append(drag)
+    return sum(pulls) / len(pulls)
+
+
+def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
+    """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
+    from offroadbench.sim.terramechanics import load_soil, static_sinkage, wheel_forces
+
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    if spec.wheel_width_m is None:
+        return []
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soil = load_soil(SOFT_SOIL)
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    r, b = spec.wheel_radius_m, spec.wheel_width_m
+    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
+    with World(flat, spec, soft) as world:
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        mass = _total_mass(world)
+        n = len(world.wheel_joints)
+        load = mass * g / n
+        sink = world.wheel_penetration_m()
+        expected_sink = static_sinkage(soil, r, b, load)
+        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        pull = _tow_pull(world, 0.2)
+    h20 = static_sinkage(soil, r, b, load, 0.2)
+    expected_pull = n * float(wheel_forces(soil, r, b, h20, 0.2)[1])
+    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n)
+    mu = spec.wheel_friction * sim.terrain_friction
+    return [
+        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
+                   f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
+        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+                 f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
+                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
+        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
+                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
+                    "within 10 % or 1 % of the weight",
+                    f"{where}; {n} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+    ]
 
 
 def _geometry(world: World) -> tuple[float, float, bool]:

@@ -47,6 +47,10 @@ Two remedies, chosen with :attr:`offroadbench.sim.config.SimConfig.tyre_model`:
 
 Both models keep Bullet's normal contact (with the vehicle's tyre stiffness and damping) and the
 velocity-controlled, torque-limited wheel motors.
+
+A third model, ``terramechanics``, puts the wheels on soft soil: Bullet's wheel-terrain contact is
+switched off and Wong-Reece soil forces replace both the normal contact and the friction
+(offroadbench.sim.soil_contact, offroadbench.sim.terramechanics).
 """
 
 from __future__ import annotations

@@ -20,29 +20,25 @@ import dataclasses
 import functools
 import math
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from offroadbench.errors import InputError, PluginError
-from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
+from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
-from offroadbench.progress import ProgressFn, report
-from offroadbench.sim.config import ControllerConfig, SimConfig
+from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.vehicle import VehicleSpec
 from offroadbench.sim.world import World
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
-           "run_missions", "vehicle_envelope", "body_velocity", "body_frame"]
+           "vehicle_envelope", "body_velocity", "body_frame"]
 
 #: telemetry columns, each a 1-D array sampled at SimConfig.telemetry_rate_hz
 TELEMETRY_COLUMNS = (
@@ -96,6 +92,10 @@ class TrialResult:
     """Mission goal y on the map, metres."""
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
+    mean_slip: float = float("nan")
+    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
+    deepest soil sinkage."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -221,7 +221,7 @@ def drive_mission(
     goal = np.asarray(mission.goal_xy_m, dtype=float)
     v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
-    policy = tracker = None
+    policy = tracker = replanner = None
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
@@ -234,6 +234,9 @@ def drive_mission(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
         policy.reset(problem)
+    elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
+        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
+        waypoints = replanner.waypoints
     else:
         waypoints = plan_within_limits(planner, problem)
     if policy is None:
@@ -244,13 +247,15 @@ def drive_mission(
     timeout_s = rules.timeout_factor * length / v_nominal
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
     checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
-                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m)
+                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
+                          wheel_radius_m=spec.wheel_radius_m)
     fill_m = hm.z_min_m - rules.fall_depth_m
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
 
     rows: list[tuple] = []
+    slips: list[float] = []
     cmd_v = cmd_w = 0.0
     reason = "timeout"
     traversal_time = float("nan")
@@ -263,6 +268,8 @@ def drive_mission(
             roll, pitch, yaw, *rates = body_frame(world, quat, ang)
         if ctrl_tick:
             if policy is None:
+                if replanner is not None and replanner.update(pos[:2]) is not None:
+                    tracker = make_tracker(replanner.waypoints, spec, controller)
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
@@ -272,13 +279,16 @@ def drive_mission(
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
             _check_state(planner.name, k * world.dt_s, pos, quat, lin, ang)
-            progress = tracker.progress(np.array(pos[:2])) if tracker is not None else mission.length_m - math.hypot(
+            progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
                 goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            done = checker.check(pos, roll, pitch)
+            slip = world.wheel_slip()
+            if slip is not None:
+                slips.append(slip)
+            done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
             if done is not None:
                 reason = done
                 end_step = k
@@ -290,7 +300,10 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
+    if slips:
+        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
+    path = replanner.trace if replanner is not None else waypoints
+    return TrialRecord(result, tel, np.asarray(path, dtype=float))
 
 
 def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:
@@ -407,42 +420,3 @@ def _result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialRe
         goal_y_m=float(mission.goal_xy_m[1]),
         heading_deg=float(np.degrees(mission.heading_rad)),
     )
-
-
-def run_missions(
-    hm: Heightmap,
-    missions: Sequence[Mission],
-    *,
-    vehicle: VehicleSpec | str = "husky",
-    planner: PlannerChoice = PlannerChoice(),
-    classes: np.ndarray | None = None,
-    border_m: float = 0.0,
-    controller: ControllerConfig = ControllerConfig(),
-    sim: SimConfig = SimConfig(),
-    rules: FailureRules = FailureRules(),
-    progress: ProgressFn | None = None,
-    telemetry_dir: str | Path | None = None,
-) -> list[TrialResult]:
-    """Run every mission on one terrain (built once) and return one TrialResult per mission.
-
-    ``planner``, ``classes`` and ``border_m`` as in :func:`drive_mission`. With ``telemetry_dir``
-    the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
-    offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.
-    """
-    from offroadbench.io.telemetry import save_telemetry
-
-    out_dir = Path(telemetry_dir) if telemetry_dir is not None else None
-    if out_dir is not None and not out_dir.is_dir():
-        raise InputError(f"telemetry_dir {out_dir} is not a directory")
-    results: list[TrialResult] = []
-    with World(hm, vehicle, sim) as world:
-        for i, mission in enumerate(missions):
-            rec = drive_mission(world, mission, planner=planner, classes=classes, border_m=border_m,
-                                controller=controller, rules=rules)
-            results.append(rec.result)
-            if out_dir is not None:
-                save_telemetry(rec.telemetry, out_dir / f"mission_{mission.index:03d}.npz")
-                save_telemetry({"x_m": rec.path_xy[:, 0], "y_m": rec.path_xy[:, 1]},
-                               out_dir / f"mission_{mission.index:03d}_path.npz")
-            report(progress, i + 1, len(missions))
-    return results

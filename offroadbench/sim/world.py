@@ -84,7 +84,7 @@ class World:
 
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig()) -> None:
         self.hm = hm
-        self.sim = sim
+        self.sim = sim.for_terrain()  # Earth's gravity and the default soil where nothing names them
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
         self._cid = pb.connect(pb.DIRECT)
@@ -190,7 +190,7 @@ class World:
         tyre = {}
         if spec.tyre_stiffness_n_m is not None:
             tyre = {"contactStiffness": spec.tyre_stiffness_n_m, "contactDamping": spec.tyre_damping_n_s_m}
-        coulomb = self.sim.tyre_model == "coulomb"
+        coulomb = self.sim.tyre_model in ("coulomb", "terramechanics")
         for j in self.wheel_joints:
             pb.changeDynamics(body, j, lateralFriction=0.0 if coulomb else spec.wheel_friction, **tyre,
                               physicsClientId=cid)
@@ -199,7 +199,11 @@ class World:
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
                                   physicsClientId=cid)
         self._tyres = None
-        if coulomb:
+        if self.sim.tyre_model == "terramechanics":
+            from offroadbench.sim.soil_contact import make_soil_tyres
+
+            self._tyres = make_soil_tyres(self, body)
+        elif coulomb:
             n_links = pb.getNumJoints(body, physicsClientId=cid)
             mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
             share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
@@ -292,13 +296,24 @@ class World:
         return [c for c in pb.getContactPoints(bodyA=self.vehicle_id, physicsClientId=self._cid) if c[2] in terrain]
 
     def wheel_penetration_m(self) -> float:
-        """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres."""
+        """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres;
+        with the ``terramechanics`` tyre model, the deepest soil sinkage."""
+        if self.sim.tyre_model == "terramechanics":
+            return max((v[0] for v in self._tyres.last.values()), default=0.0)
         worst = 0.0
         wheels = self.wheel_joints
         for c in self.terrain_contacts():
             if c[3] in wheels and -c[8] > worst:
                 worst = -c[8]
         return worst
+
+    def wheel_slip(self) -> float | None:
+        """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
+        or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
+        if self.sim.tyre_model != "terramechanics" or not self._tyres.last:
+            return None
+        slips = [v[1] for v in self._tyres.last.values()]
+        return sum(slips) / len(slips)
 
     def ray_height(self, x_m: float, y_m: float) -> float:
         """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN off the map).
