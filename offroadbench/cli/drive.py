@@ -48,7 +48,7 @@ def format_drive_run(run, label: str) -> str:
     medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
         f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
-        f"planner {run.planner}, physics {run.sim.physics_rate_hz} Hz",
+        f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
         f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
@@ -92,7 +92,8 @@ def cmd_drive(args: argparse.Namespace) -> int:
         raise InputError("--plot needs --out DIR to write the figures into")
     out = check_output_dir(args.out, "--out") if args.out else None
     vehicle = load_vehicle(args.vehicle)
-    sim = SimConfig() if args.physics_rate_hz is None else SimConfig(physics_rate_hz=args.physics_rate_hz)
+    changes = {k: v for k, v in (("physics_rate_hz", args.physics_rate_hz), ("engine", args.engine)) if v is not None}
+    sim = SimConfig(**changes)
     from offroadbench.seeding import terrain_seed
 
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
@@ -131,6 +132,7 @@ def register(sub) -> None:
     p.add_argument("--planner", default="straight",
                    help="planner or policy (built-in: straight, astar, lattice, reactive; installed plug-ins too)")
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
+    p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",
                    help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_drive)

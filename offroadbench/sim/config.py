@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
+from offroadbench.sim.engine import ENGINE_TYRE_MODELS, ENGINES
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
@@ -63,6 +64,16 @@ class SimConfig:
     soil: str | None = None
     """Soil of the ``terramechanics`` tyre model: a soil name (``soils/*.toml``) or TOML path. None:
     the terrain's (its recipe's ``[soil] name``), else offroadbench.sim.terramechanics.DEFAULT_SOIL."""
+    cone_friction: bool | None = None
+    """PyBullet's friction cone (``enableConeFriction``) for the contacts Bullet's solver owns:
+    ``None`` (default) switches it off under the ``coulomb`` tyre model, where the wheels' Bullet
+    friction is 0 and the cone's rows for their contacts are wasted solver work (about 17 % of
+    the solver's time; the chassis' contacts then get Bullet's friction pyramid), and keeps it on
+    under the other tyre models. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
+    engine: str = "pybullet"
+    """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
+    default) or ``mujoco`` (offroadbench.sim.mujoco_world; ``pip install 'offroadbench[mujoco]'``).
+    Both run the same trial, tyre model, telemetry and failure rules."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -87,6 +98,13 @@ class SimConfig:
             raise InputError(f"SimConfig.soil = {self.soil!r}; must be a soil name or a .toml path")
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
+        check_choice(self, "engine", self.engine, ENGINES.names())
+        models = ENGINE_TYRE_MODELS.get(self.engine, TYRE_MODELS)
+        if self.tyre_model not in models:
+            raise InputError(f"SimConfig.tyre_model = {self.tyre_model!r} is not implemented on engine "
+                             f"{self.engine!r}; allowed there: {', '.join(models)}")
+        if self.cone_friction is not None and not isinstance(self.cone_friction, bool):
+            raise InputError(f"SimConfig.cone_friction = {self.cone_friction!r}: allowed true, false or unset")
 
     def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> SimConfig:
         """This config with the terrain's gravity and soil where it leaves them open (None), and

@@ -168,16 +168,16 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
 
 def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
                   progress: ProgressFn | None = None) -> Iterator[Any]:
-    """Drive every prepared mission in one World; yield one TrialRecord per mission as it finishes."""
+    """Drive every prepared mission in one world of ``sim.engine`` (offroadbench.sim.engine.open_world); yield one TrialRecord per mission as it finishes."""
     from offroadbench.sim.runner import drive_mission
-    from offroadbench.sim.world import World
+    from offroadbench.sim.engine import open_world
 
     needs = settings.planner.needs
     if "classes" in needs and prepared.maps is None:
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
     kwargs = settings.drive_kwargs(prepared.maps if "classes" in needs else None)
     n = len(prepared.missions)
-    with World(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
+    with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):
             yield drive_mission(world, mission, **kwargs)
             report(progress, i + 1, n)

@@ -17,7 +17,6 @@ Metrics follow Majhor & Bos 2023, Sec. 2.4 (see offroadbench.navigation.metrics)
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass
 
@@ -35,7 +34,7 @@ from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChe
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.world import World
+from offroadbench.sim.engine import TrialWorld
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
            "vehicle_envelope", "body_velocity", "body_frame"]
@@ -112,7 +111,7 @@ class TrialResult:
     __hash__ = None  # type: ignore[assignment]  # NaN-aware equality has no matching hash
 
 
-def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
+def body_frame(world: TrialWorld, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
     """(roll, pitch, yaw, body roll rate, body pitch rate, body yaw rate) from the base quaternion
     and world angular velocity; angles as in metrics.roll_pitch_yaw_from_quat (scalar, fast path)."""
     r = world.rotation_matrix(quat)  # row-major 3x3, body -> world
@@ -127,51 +126,22 @@ def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, floa
             r[2] * wx + r[5] * wy + r[8] * wz)
 
 
-def vehicle_envelope(world: World) -> VehicleEnvelope:
-    """The footprint (overall length and width, from the links' bounding boxes at rest, heading +x)
-    and limits of ``world``'s vehicle, for planners: the belly's height above the wheels' bottoms,
-    and the step limit (the spec's ``rated_step_m``, else offroadbench.sim.check.step_bound_m of
-    that geometry, the bound ``offroadbench vehicle check`` tests). Moves the vehicle: call it
-    before ``spawn``."""
-    import pybullet as pb
-
+def vehicle_envelope(world: TrialWorld) -> VehicleEnvelope:
+    """The footprint and limits of ``world``'s vehicle, for planners, from its measured geometry
+    (``world.geometry``, offroadbench.sim.engine.VehicleGeometry): overall length and width, the
+    belly's height above the wheels' bottoms, and the step limit (the spec's ``rated_step_m``, else
+    offroadbench.sim.check.step_bound_m of that geometry, the bound ``offroadbench vehicle check``
+    tests)."""
     from offroadbench.sim.check import step_bound_m
 
-    cid, body = world.client_id, world.vehicle_id
-    pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
-    boxes = [pb.getAABB(body, link, physicsClientId=cid) for link in range(-1, pb.getNumJoints(body, physicsClientId=cid))]
-    lo = np.min([b[0] for b in boxes], axis=0)
-    hi = np.max([b[1] for b in boxes], axis=0)
-    spec = world.spec
-    wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in world.wheel_joints]
-    wheels_x = [pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints]
-    belly = float(boxes[0][0][2] - min(w[0][2] for w in wheels))
-    overhang = boxes[0][1][0] > max(w[1][0] for w in wheels) + 1e-3
+    spec, geo = world.spec, world.geometry
     step = spec.rated_step_m
     if step is None:
-        step = step_bound_m(spec.wheel_radius_m, belly, max(wheels_x) - min(wheels_x), overhang)
-    return VehicleEnvelope(length_m=float(hi[0] - lo[0]), width_m=float(hi[1] - lo[1]),
+        step = step_bound_m(spec.wheel_radius_m, geo.belly_m, geo.wheelbase_m, geo.overhang)
+    return VehicleEnvelope(length_m=geo.length_m, width_m=geo.width_m,
                            max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
                            max_slope=spec.wheel_friction * world.sim.terrain_friction,
-                           max_step_m=float(step), ground_clearance_m=belly, wheel_radius_m=spec.wheel_radius_m)
-
-
-def _parks_on_failure(fn):
-    """A failed trial (any exception, Ctrl-C included) parks the vehicle before it propagates, so
-    the world serves the next trial as if the failed one never ran (see :func:`park_vehicle`)."""
-
-    @functools.wraps(fn)
-    def wrapper(world, *args, **kwargs):
-        try:
-            return fn(world, *args, **kwargs)
-        except BaseException:
-            try:
-                park_vehicle(world)
-            except Exception:  # noqa: BLE001, S110 - a closed world: nothing to clean, the first error matters
-                pass
-            raise
-
-    return wrapper
+                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m)
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,9 +155,8 @@ class TrialRecord:
     """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
 
 
-@_parks_on_failure
 def drive_mission(
-    world: World,
+    world: TrialWorld,
     mission: Mission,
     *,
     planner: PlannerChoice = PlannerChoice(),
@@ -325,19 +294,6 @@ def _check_state(name: str, t_s: float, pos, quat, lin, ang) -> None:
                           f"while driving with {name!r}")
 
 
-def park_vehicle(world: World) -> None:
-    """Put the vehicle at rest high above the map with every joint reset and the wheels stopped:
-    what a failed trial leaves for the next ``spawn``."""
-    import pybullet as pb
-
-    cid, body = world.client_id, world.vehicle_id
-    pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
-    pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
-    for j in range(pb.getNumJoints(body, physicsClientId=cid)):
-        pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
-    world.command_wheels(0.0, 0.0)
-
-
 #: wall-clock seconds a planner may take for one mission (enforced in the main thread; elsewhere a
 #: study's per-trial limit applies)
 PLANNING_LIMIT_S = 120.0
@@ -387,13 +343,13 @@ def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.n
     return wp
 
 
-def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
+def run_mission(world: TrialWorld, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
     """:func:`drive_mission`, returning (result, telemetry columns)."""
     rec = drive_mission(world, mission, **kwargs)
     return rec.result, rec.telemetry
 
 
-def body_velocity(world: World, quat: tuple, lin: tuple) -> tuple[float, float, float]:
+def body_velocity(world: TrialWorld, quat: tuple, lin: tuple) -> tuple[float, float, float]:
     """The base's velocity in the body frame (forward, left, up), m/s."""
     r = world.rotation_matrix(quat)  # row-major, body -> world
     return tuple(r[i] * lin[0] + r[i + 3] * lin[1] + r[i + 6] * lin[2] for i in range(3))

@@ -76,8 +76,9 @@ def test_report_tests_each_change_at_the_terrain_level(tmp_path):
     from offroadbench.study.report import build_report
     from offroadbench.study.spec import plan_cells
 
-    def fake(hm, missions, cell):
-        for m in missions:
+    def fake(prepared, settings):
+        hm = prepared.hm
+        for m in prepared.missions:
             (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
             z = hm.height_at(np.linspace(sx, gx, 41), np.linspace(sy, gy, 41))
             rough = float(np.abs(np.diff(z)).max())

@@ -157,11 +157,12 @@ def test_report_of_a_planner_study(tmp_path):
     assert "planner_paths.png" in rep.figures and "planner_success.png" in rep.figures
 
 
-def fake_noisy_map_trials(hm, missions, cell):
+def fake_noisy_map_trials(prepared, settings):
     """As fake_planner_trials, but astar's tolerance shrinks with the planner map's error."""
-    noise = cell.values.get("planner.map_noise_m", 0.0)
-    tolerance = {"straight": 1.2, "astar": 2.0 - 16 * noise}[cell.values["planner.name"]]
-    for row in fake_planner_trials(hm, missions, cell):
+    perception = settings.planner.perception
+    noise = perception.map_noise_m if perception is not None else 0.0
+    tolerance = {"straight": 1.2, "astar": 2.0 - 16 * noise}[settings.planner.name]
+    for row in fake_planner_trials(prepared, settings):
         ok = row["rms_vertical_accel_m_s2"] < tolerance
         yield {**row, "success": ok, "failure_reason": "" if ok else "stuck"}
 

@@ -56,17 +56,24 @@ def test_study_sim_overrides_the_terrain_body_and_soil():
 
 
 def test_study_cells_use_the_terrain_gravity(tmp_path):
+    from offroadbench.sim.pipeline import prepare_terrain
     from offroadbench.study.spec import load_study
-    from offroadbench.study.tasks import _sim_for
+
+    def sim_of(plan):  # what drive_terrain gives the World
+        recipe = plan.recipe()
+        prepared = prepare_terrain(recipe, 1, plan.trial_settings, [])
+        return prepared.sim_for(plan.trial_settings.sim)
 
     path = tmp_path / "s.toml"
     path.write_text('[study]\nname = "g"\nrecipe = "lunar-mare"\nroot_seed = 1\n'
+                    '[recipe_overrides]\n"grid.rows" = 65\n"grid.cols" = 65\n[roughness]\nborder_m = 0.5\n'
                     '[grid]\n"sim.gravity_m_s2" = [9.81]\n')
     _, plans = load_study(path)
-    assert _sim_for(plans[0]).gravity_m_s2 == 9.81
-    path.write_text('[study]\nname = "g"\nrecipe = "lunar-mare"\nroot_seed = 1\n')
+    assert sim_of(plans[0]).gravity_m_s2 == 9.81
+    path.write_text('[study]\nname = "g"\nrecipe = "lunar-mare"\nroot_seed = 1\n'
+                    '[recipe_overrides]\n"grid.rows" = 65\n"grid.cols" = 65\n[roughness]\nborder_m = 0.5\n')
     _, plans = load_study(path)
-    assert _sim_for(plans[0]).gravity_m_s2 == pytest.approx(1.62)
+    assert sim_of(plans[0]).gravity_m_s2 == pytest.approx(1.62)
 
 
 def test_a_png_sidecar_recipe_keeps_its_body_and_soil():
