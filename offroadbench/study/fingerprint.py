@@ -4,21 +4,22 @@ to come out bit for bit the same on another.
 :func:`platform_fingerprint` describes this process: the architecture and CPU model, numpy's
 enabled SIMD dispatch targets (``numpy._core._multiarray_umath.__cpu_features__`` restricted to
 ``__cpu_dispatch__``: what ``np.show_runtime()`` lists as found), OpenBLAS's version and the
-core type its kernels were chosen for (threadpoolctl), the versions of the packages whose
-numerics a trial goes through (numpy, pybullet, ruckig, finufft, Python), and the environment
-switches that change numpy's or OpenBLAS's dispatch (``NPY_DISABLE_CPU_FEATURES``,
-``OPENBLAS_CORETYPE``). ``study run`` stores it per session (``runs.platform``).
+core type its kernels were chosen for (threadpoolctl), whether the CPU has AVX2 and FMA (its
+``/proc/cpuinfo`` flags: glibc's ``sin``/``exp``/``atan2`` take other code paths without them),
+the versions of the code a trial's numbers go through (numpy, pybullet, ruckig, finufft, glibc,
+Python), and the environment switches that change numpy's or OpenBLAS's dispatch
+(``NPY_DISABLE_CPU_FEATURES``, ``OPENBLAS_CORETYPE``). ``study run`` stores it per session
+(``runs.platform``).
 
-The promise (:func:`identity_promise`), as the project states it:
+The promise (:func:`identity_promise`), as the README's reproducibility contract states it:
 
 * terrain quantised to 16-bit levels (``[grid] quantise = "png16"``, the default) and the
-  dispatch-free trial loop give identical trials on every x86-64 CPU, given the same wheel
-  versions of numpy, pybullet and ruckig (and the same offroadbench);
+  dispatch-free trial loop give identical trials on every x86-64 CPU with AVX2 and FMA, given the
+  same versions of numpy, pybullet, ruckig, finufft and glibc (and the same offroadbench);
 * float64 terrain (``quantise = "none"``) is identical only on the same *CPU kind*: the same
   architecture, numpy dispatch targets and OpenBLAS core type (SIMD transcendental functions,
-  BLAS kernels and FFTW's codelets differ in their last bits between kinds), and the same
-  versions of every package above (finufft included);
-* another architecture, or other package versions, are not covered.
+  BLAS kernels and FFTW's codelets differ in their last bits between kinds), with those versions;
+* other architectures, x86-64 without AVX2/FMA and other versions are not covered.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ from typing import Any
 
 __all__ = ["TRIAL_PACKAGES", "cpu_kind", "describe", "identity_promise", "platform_fingerprint"]
 
-#: packages whose versions decide a trial's bits on quantised terrain (the project's rule)
-TRIAL_PACKAGES = ("numpy", "pybullet", "ruckig")
+#: code whose versions decide a trial's bits (the README's contract)
+TRIAL_PACKAGES = ("numpy", "pybullet", "ruckig", "finufft", "glibc")
 _ALL_PACKAGES = ("numpy", "pybullet", "ruckig", "finufft")
 _X86_64 = ("x86_64", "amd64")
 
@@ -45,6 +46,19 @@ def _cpu_model() -> str:
     except OSError:
         pass
     return platform.processor() or platform.machine() or "unknown"
+
+
+def _avx2_fma() -> bool | None:
+    """Whether the CPU has AVX2 and FMA (``/proc/cpuinfo`` flags; None where unknown)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                if line.startswith("flags"):
+                    flags = set(line.split(":", 1)[1].split())
+                    return {"avx2", "fma"} <= flags
+    except OSError:
+        pass
+    return None
 
 
 def _numpy_dispatch() -> tuple[list[str], list[str]]:
@@ -96,8 +110,10 @@ def platform_fingerprint() -> dict[str, Any]:
         "cpu": _cpu_model(),
         "numpy_baseline": baseline,
         "numpy_dispatch": targets,
+        "avx2_fma": _avx2_fma(),
         "openblas": _openblas(),
-        "versions": {**{p: _version(p) for p in _ALL_PACKAGES}, "python": platform.python_version()},
+        "versions": {**{p: _version(p) for p in _ALL_PACKAGES}, "glibc": platform.libc_ver()[1] or None,
+                     "python": platform.python_version()},
         "env": env,
     }
 
@@ -132,19 +148,19 @@ def identity_promise(stored: Mapping[str, Any] | None, here: Mapping[str, Any], 
         return False, f"it was run by offroadbench {stored_version}, this is {version}"
     if not stored:
         return None, "the platform of the stored trial was not recorded"
-    if stored.get("arch") != here.get("arch") or str(here.get("arch")).lower() not in _X86_64:
-        if stored.get("arch") == here.get("arch") and cpu_kind(stored) == cpu_kind(here) \
-                and stored.get("versions") == here.get("versions"):
-            return True, f"same CPU kind and package versions on {here.get('arch')}"
-        return False, f"architecture {stored.get('arch')} vs {here.get('arch')}: only x86-64 is covered"
+    if stored.get("arch") != here.get("arch"):
+        return False, f"architecture {stored.get('arch')} vs {here.get('arch')}: not covered"
     sv, hv = stored.get("versions") or {}, here.get("versions") or {}
-    packages = TRIAL_PACKAGES if quantise != "none" else _ALL_PACKAGES
-    differ = [f"{p} {sv.get(p)} vs {hv.get(p)}" for p in packages if sv.get(p) != hv.get(p)]
+    differ = [f"{p} {sv.get(p)} vs {hv.get(p)}" for p in TRIAL_PACKAGES if sv.get(p) != hv.get(p)]
     if differ:
-        return False, "other package versions (" + ", ".join(differ) + ") are not covered"
+        return False, "other versions (" + ", ".join(differ) + ") are not covered"
+    if cpu_kind(stored) == cpu_kind(here):
+        return True, "same CPU kind and versions"
     if quantise == "none":
-        if cpu_kind(stored) != cpu_kind(here):
-            return False, ('float64 terrain (quantise = "none") is promised only on the same CPU kind '
-                           "(numpy dispatch targets and OpenBLAS core)")
-        return True, 'same CPU kind and package versions (float64 terrain, quantise = "none")'
-    return True, "quantised terrain and the same numpy/pybullet/ruckig versions on x86-64"
+        return False, ('float64 terrain (quantise = "none") is promised only on the same CPU kind '
+                       "(numpy dispatch targets and OpenBLAS core)")
+    if str(here.get("arch")).lower() not in _X86_64:
+        return False, f"only x86-64 is covered across CPU kinds, this is {here.get('arch')}"
+    if not (stored.get("avx2_fma") and here.get("avx2_fma")):
+        return False, "only x86-64 CPUs with AVX2 and FMA are covered across CPU kinds"
+    return True, "quantised terrain and the same versions on x86-64 CPUs with AVX2 and FMA"

@@ -41,8 +41,9 @@ def test_the_fingerprint_names_cpu_dispatch_and_versions():
     assert set(fp["numpy_dispatch"]) <= set(umath.__cpu_dispatch__)
     assert fp["numpy_dispatch"] == [t for t in umath.__cpu_dispatch__ if umath.__cpu_features__.get(t)]
     assert fp["versions"]["numpy"] == np.__version__
-    for name in ("pybullet", "ruckig", "finufft"):
+    for name in ("pybullet", "ruckig", "finufft", "glibc"):
         assert fp["versions"][name]
+    assert fp["avx2_fma"] in (True, False)
     assert fp["openblas"].get("version")
     json.dumps(fp)  # stored as JSON
 
@@ -81,10 +82,14 @@ def test_the_promise_follows_the_projects_rule():
     newer = {**here, "versions": {**here["versions"], "numpy": "99.0"}}
     ok, why = identity_promise(newer, here, "png16")
     assert ok is False and "numpy 99.0" in why
-    # finufft only matters for float64 terrain
-    ff = {**here, "versions": {**here["versions"], "finufft": "0.1"}}
-    assert identity_promise(ff, here, "png16")[0] is True
-    assert identity_promise(ff, here, "none")[0] is False
+    for name in ("finufft", "glibc", "ruckig"):
+        other = {**here, "versions": {**here["versions"], name: "0.1"}}
+        ok, why = identity_promise(other, here, "png16")
+        assert ok is False and f"{name} 0.1" in why
+    no_fma = {**other_kind, "avx2_fma": False}
+    if here["arch"] == "x86_64":
+        ok, why = identity_promise(no_fma, here, "png16")
+        assert ok is False and "AVX2 and FMA" in why
     arm = {**here, "arch": "aarch64"}
     ok, why = identity_promise(arm, here, "png16")
     assert ok is False and "architecture" in why
@@ -133,6 +138,7 @@ def test_a_resume_on_another_platform_is_recorded_and_reported(tmp_path):
     assert "## Platforms" in report.markdown and "The trials ran on 2 platforms" in report.markdown
     assert "OPENBLAS_CORETYPE=Nehalem" in report.markdown
     assert "yes: quantised terrain" in report.markdown  # the paper preset is quantised by default
+    assert all(r["platform"]["avx2_fma"] for r in runs)
     fp, version = trial_platform(out, 0, 0, 0)
     assert fp == runs[0]["platform"] and version == runs[0]["version"]
 
@@ -166,6 +172,8 @@ def test_replay_says_when_the_trial_came_from_another_platform(tmp_path, write_t
     assert r.returncode == 0, r.stderr
     assert "identical to the stored row: yes" in r.stdout and "platform" not in r.stdout
     here = platform_fingerprint()
+    if not (here["arch"] == "x86_64" and here["avx2_fma"]):
+        pytest.skip("the cross-CPU promise covers x86-64 CPUs with AVX2 and FMA only")
     elsewhere = {**here, "cpu": "Some Other CPU", "numpy_dispatch": ["X86_V3"]}
     con = sqlite3.connect(out / "study.sqlite")
     with con:
@@ -173,10 +181,10 @@ def test_replay_says_when_the_trial_came_from_another_platform(tmp_path, write_t
     r = replay()
     assert r.returncode == 0, r.stderr
     assert "ran on another platform (Some Other CPU" in r.stdout
-    assert "bit-identity with it is promised here: quantised terrain" in r.stdout
+    assert "bit-identity with it is promised here: quantised terrain and the same versions" in r.stdout
     elsewhere["versions"] = {**here["versions"], "pybullet": "1.0"}
     with con:
         con.execute("UPDATE runs SET platform=?", (json.dumps(elsewhere),))
     con.close()
     r = replay()
-    assert "bit-identity with it is not promised here: other package versions (pybullet 1.0" in r.stdout
+    assert "bit-identity with it is not promised here: other versions (pybullet 1.0" in r.stdout
