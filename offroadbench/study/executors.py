@@ -356,10 +356,15 @@ class DaskExecutor:
                 raise StudyError(f"cell {key[0]}, terrain {key[1]} killed every Dask worker that ran it ({exc})")
             if isinstance(exc, TrialTimeout):
                 worker = str(exc).rsplit(" ", 1)[-1]
+                quiet = logging.getLogger("distributed")  # the restart's own ERROR lines: the study says it in one
+                old_level = quiet.level
+                quiet.setLevel(logging.CRITICAL + 1)
                 try:
                     client.restart_workers([worker], timeout=30)
                 except Exception as rexc:  # best effort: the stop below is what matters
-                    log.warning("could not restart the hung Dask worker %s: %s", worker, rexc)
+                    log.info("could not restart the hung Dask worker %s: %s", worker, rexc)
+                finally:
+                    quiet.setLevel(old_level)
                 raise StudyError(str(exc))
             tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
             raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)
