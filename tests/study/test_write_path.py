@@ -190,3 +190,34 @@ def test_a_non_utf8_run_directory_keeps_its_telemetry(tmp_path):
     run_study(study, cells, out, executor="inline", trial_fn=records)
     assert_complete(out, study)
     assert run_study(study, cells, out, executor="inline", trial_fn=records).ran == 0
+
+
+def test_a_full_disk_while_writing_telemetry_stores_nothing_half_and_resumes(tmp_path, monkeypatch):
+    import errno
+    import tempfile
+
+    from offroadbench.errors import StudyError
+    from offroadbench.io import atomic
+
+    calls = {"n": 0}
+
+    class FillsUp:
+        def __getattr__(self, name):
+            return getattr(tempfile, name)
+
+        @staticmethod
+        def mkstemp(*a, **k):
+            calls["n"] += 1
+            if calls["n"] > 5:  # the third trial's second file
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return tempfile.mkstemp(*a, **k)
+
+    study, cells = study_and_cells()
+    monkeypatch.setattr(atomic, "tempfile", FillsUp())
+    with pytest.raises(StudyError, match=r"cannot write the telemetry of cell 0, terrain 0, mission 2 .*no space left"):
+        run_study(study, cells, tmp_path, executor="inline", trial_fn=records)
+    monkeypatch.undo()
+    with Store(tmp_path) as store:
+        assert store.counts()[0] == 2
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=records)
+    assert_complete(tmp_path, study)
