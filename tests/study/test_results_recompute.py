@@ -123,8 +123,12 @@ def _terrain_success_changes(folder: Path) -> list[float]:
     t = trial_table(folder)
     ter = pd.read_csv(folder / "terrains.csv")
     labels = {c: f"D_high = {d}" for c, d in ter.groupby("cell")["D_high"].first().items()}
+    from offroadbench.study.stats import METRICS
+
     areas = [f"area_{c}_pct" for c in ("low", "semi", "high")]
-    tab = terrain_changes(t, ter, labels, ["success_rate_pct", *areas]).iloc[0]
+    # the report's family of comparisons (Holm over all of them); metrics need the trial table
+    metrics = list(METRICS) if (folder / "trials.parquet").is_file() else []
+    tab = terrain_changes(t, ter, labels, ["success_rate_pct", *areas, *metrics]).iloc[0]
     return [-tab["mean_change"], tab["ci95_low"], tab["ci95_high"], tab["down"], tab["up"], tab["p_wilcoxon"],
             tab["p_holm"]]
 
