@@ -84,9 +84,9 @@ DRIVER = textwrap.dedent('''
             task = TerrainTask(cell=task.cell, terrain=task.terrain, terrain_seed=task.terrain_seed,
                                missions=tuple(missions), telemetry="none")
             for msg in run_terrain(task):
-                if msg[0] == "trial":
-                    row = {k: (float(v).hex() if isinstance(v, float) else v) for k, v in msg[6].items()}
-                    out["rows"][f"{key}/{msg[3]}"] = row
+                if hasattr(msg, "row"):  # a TrialDone
+                    row = {k: (float(v).hex() if isinstance(v, float) else v) for k, v in msg.row.items()}
+                    out["rows"][f"{key}/{msg.mission}"] = row
         return out
 
     if __name__ == "__main__":

@@ -101,8 +101,9 @@ def test_study_terrain_j_is_generate_with_the_shown_seed(tmp_path, capsys):
         return iter(())
 
     messages = list(run_terrain(task, no_trials))
-    kind, cell, terrain, shown_seed, _stats = messages[0]
-    assert (kind, cell, terrain) == ("terrain", 2, 1)
+    first = messages[0]
+    cell, terrain, shown_seed = first.cell, first.terrain, first.terrain_seed
+    assert (type(first).__name__, cell, terrain) == ("TerrainBuilt", 2, 1)
     assert shown_seed == seeding.terrain_seed(study.root_seed, 1) == 8666231986299349920
     sets = {**study.recipe_overrides, "layers.base.D_high": 2.6}
     again = generate_terrain(apply_overrides(load_recipe(study.recipe), sets), shown_seed)

@@ -30,7 +30,7 @@ from typing import Callable, Sequence
 
 from offroadbench.errors import InputError, StudyError
 from offroadbench.registry import Registry
-from offroadbench.study.tasks import TerrainTask, TrialFn, collect_terrain, run_terrain
+from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFn, collect_terrain, run_terrain
 
 __all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 
@@ -177,18 +177,18 @@ class LocalExecutor:
                             "finished trials are saved, run the same command again to resume"
                         )
                     continue
-                kind = msg[0]
-                if kind in ("begin", "terrain", "trial"):
-                    active[msg[1] if kind == "begin" else (msg[1], msg[2])] = time.monotonic()
-                if kind == "begin":
+                if isinstance(msg, (TerrainBuilt, TrialDone)):  # a task's message for the store
+                    active[msg.key] = time.monotonic()
+                    handle(msg)
                     continue
-                if kind == "done":
+                kind = msg[0]  # the executor's own control messages: (kind, task key, ...)
+                if kind == "begin":
+                    active[msg[1]] = time.monotonic()
+                elif kind == "done":
                     active.pop(msg[1], None)
                     pending -= 1
                 elif kind == "error":
                     raise task_failure(msg[1], msg[2], msg[3], msg[4])
-                else:
-                    handle(msg)
         finally:
             for p in procs:
                 if p.is_alive():

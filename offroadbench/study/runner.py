@@ -26,7 +26,7 @@ from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
 from offroadbench.study.fingerprint import platform_fingerprint
 from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
-from offroadbench.study.tasks import TerrainTask, TrialFn, keeps_telemetry
+from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFn, keeps_telemetry
 
 log = logging.getLogger(__name__)
 
@@ -312,18 +312,18 @@ def run_study(
         run_id = store.start_run(executor, ex.workers, version, fingerprint)
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
-        def handle(msg: tuple) -> None:
+        def handle(msg: TerrainBuilt | TrialDone) -> None:
             nonlocal ran, done
-            if msg[0] == "terrain":
-                _, cell, terrain, tseed, stats = msg
-                store.add_terrain(cell, terrain, tseed, stats)
+            if isinstance(msg, TerrainBuilt):
+                store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
                 return
-            _, cell, terrain, mission, tseed, mseed, row, kept = msg
+            cell, terrain, mission, row = msg.cell, msg.terrain, msg.mission, msg.row
             files: list[str] = []
-            if kept is not None and not store.has_trial(cell, terrain, mission):
+            if msg.kept is not None and not store.has_trial(cell, terrain, mission):
                 # the files first, then the row that names them: a stored trial has its telemetry
-                files = save_trial_telemetry(run_dir, cell, terrain, mission, kept)
-            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id, telemetry=files):
+                files = save_trial_telemetry(run_dir, cell, terrain, mission, msg.kept)
+            if store.add_trial(cell, terrain, mission, msg.terrain_seed, msg.mission_seed, row, run_id=run_id,
+                               telemetry=files):
                 ran += 1
                 done += 1
                 if on_trial is not None:

@@ -4,11 +4,11 @@ A :class:`TerrainTask` is plain picklable data (the resolved cell, the terrain's
 pending missions with their seeds), so any worker (a local process, a Dask worker on another
 machine) runs it without reading the study file. :func:`run_terrain` yields messages:
 
-* ``("terrain", cell, terrain, terrain_seed, stats)`` once the terrain is built and classified;
-  ``stats`` holds the class area fractions of Sec. 2.4 (inside the border, before the closing);
-* ``("trial", cell, terrain, mission, terrain_seed, mission_seed, row, kept)`` after each trial;
-  ``kept`` is None, or ``{"telemetry": columns, "path_xy": waypoints}`` when the task's
-  ``telemetry`` setting keeps this trial's telemetry (``failed``: failed trials only; ``all``).
+* :class:`TerrainBuilt` once the terrain is built and classified (its ``stats`` hold the class
+  area fractions of Sec. 2.4, inside the border, before the closing);
+* :class:`TrialDone` after each trial (its ``kept`` is None, or ``{"telemetry": columns,
+  "path_xy": waypoints}`` when the task's ``telemetry`` setting keeps this trial's telemetry:
+  ``failed``, failed trials only; ``all``).
 
 The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
 ``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
@@ -35,7 +35,8 @@ from typing import Any, Callable, Iterator, Mapping
 from offroadbench.sim.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["TerrainTask", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry", "Replay", "replay_trial"]
+__all__ = ["TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
+           "Replay", "replay_trial"]
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
 #: prepared mission, in order`` (see :func:`offroadbench.sim.pipeline.drive_terrain`)
@@ -54,12 +55,48 @@ class TerrainTask:
     """Which trials' telemetry to send back: ``none``, ``failed`` or ``all``."""
 
 
+@dataclass(frozen=True)
+class TerrainBuilt:
+    """Message: terrain ``terrain`` of cell ``cell`` is built and classified."""
+
+    cell: int
+    terrain: int
+    terrain_seed: int
+    stats: Mapping[str, float]
+    """``area_low`` / ``area_semi`` / ``area_high`` (fractions inside the border) and ``build_s``."""
+
+    @property
+    def key(self) -> tuple[int, int]:
+        """(cell, terrain): the task this message belongs to."""
+        return (self.cell, self.terrain)
+
+
+@dataclass(frozen=True)
+class TrialDone:
+    """Message: one trial of a terrain task is finished."""
+
+    cell: int
+    terrain: int
+    mission: int
+    terrain_seed: int
+    mission_seed: int
+    row: Mapping[str, Any]
+    """The trial's row (offroadbench.sim.runner.TrialResult.as_row)."""
+    kept: Mapping[str, Any] | None = None
+    """None, or ``{"telemetry": columns, "path_xy": waypoints}`` to store beside the row."""
+
+    @property
+    def key(self) -> tuple[int, int]:
+        """(cell, terrain): the task this message belongs to."""
+        return (self.cell, self.terrain)
+
+
 def keeps_telemetry(setting: str, success: bool) -> bool:
     """Whether a trial's telemetry is kept under ``setting`` (none / failed / all)."""
     return setting == "all" or (setting == "failed" and not success)
 
 
-def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[tuple]:
+def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[TerrainBuilt | TrialDone]:
     """Build the task's terrain once and run all its pending missions, yielding messages."""
     trial_fn = trial_fn or drive_terrain
     cell = task.cell
@@ -68,7 +105,7 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
     prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
     stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()}
     stats["build_s"] = time.perf_counter() - t0
-    yield ("terrain", cell.index, task.terrain, task.terrain_seed, stats)
+    yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
     for mission, item in zip(prepared.missions, trial_fn(prepared, settings)):
         k = mission.index
@@ -81,10 +118,10 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
             row = dict(item)
         if int(row.get("mission_index", k)) != k:
             raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
-        yield ("trial", cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+        yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
 
 
-def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[tuple]:
+def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[TerrainBuilt | TrialDone]:
     """All messages of :func:`run_terrain` as a list (for executors that return per task)."""
     return list(run_terrain(task, trial_fn))
 
