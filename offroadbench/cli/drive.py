@@ -14,6 +14,7 @@ import pandas as pd
 from offroadbench.cli._common import (
     bar,
     check_output_dir,
+    check_output_file,
     created_dirs,
     format_table,
     load_heightmap_arg,
@@ -69,7 +70,11 @@ def write_drive_run(run, out: Path, label: str, plot: bool) -> list[str]:
             save_telemetry(tel, tel_dir / f"mission_{index:03d}.npz")
         written = ["trials.csv", "telemetry/mission_*.npz"]
         if plot:
-            from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
+            from offroadbench.plots.traversal import (
+                plot_missions,
+                plot_timeseries,
+                plot_trajectories,
+            )
 
             hm, closed, border = run.heightmap, run.closed, run.mission_config.border_m
             save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
@@ -85,12 +90,48 @@ def write_drive_run(run, out: Path, label: str, plot: bool) -> list[str]:
     return written
 
 
+def vehicle_footprint(spec, sim) -> tuple[float, float]:
+    """(length, width) of the vehicle's footprint in metres, from its links' bounding boxes at rest
+    (offroadbench.sim.runner.vehicle_envelope, on a small flat world)."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.sim import World
+    from offroadbench.sim.runner import vehicle_envelope
+
+    with World(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
+        env = vehicle_envelope(world)
+    return env.length_m, env.width_m
+
+
+def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason: str, footprint_m, title: str,
+                          fps: float = 10.0) -> Path:
+    """One trial as a GIF or MP4 (offroadbench.plots.animate): the footprint moving over the
+    hillshade and class map, beside speed, pitch, roll and vertical acceleration; the failure marked."""
+    import numpy as np
+
+    from offroadbench.io.animation import save_animation
+    from offroadbench.plots.animate import TrialView, frame_indices
+
+    view = TrialView(hm, classes, path_xy, footprint_m=footprint_m,
+                     region_xy=np.column_stack([tel["x_m"], tel["y_m"]]), title=title)
+    t = np.asarray(tel["t_s"], float)
+    rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 20.0
+    frames = frame_indices(len(t), rate, fps=fps)
+    with created_dirs(path.parent):
+        return save_animation(view.fig, lambda i: view.draw(tel, i, failure_reason=failure_reason), frames, path,
+                              fps=fps)
+
+
 def cmd_drive(args: argparse.Namespace) -> int:
     from offroadbench.sim import SimConfig, drive_missions, load_vehicle
 
     if args.plot and args.out is None:
         raise InputError("--plot needs --out DIR to write the figures into")
     out = check_output_dir(args.out, "--out") if args.out else None
+    if args.animate:
+        from offroadbench.io.animation import check_animation_path
+
+        check_animation_path(args.animate)
+        check_output_file(args.animate, "--animate")
     vehicle = load_vehicle(args.vehicle)
     sim = SimConfig() if args.physics_rate_hz is None else SimConfig(physics_rate_hz=args.physics_rate_hz)
     from offroadbench.seeding import terrain_seed
@@ -104,6 +145,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
     if out is not None:
         written = write_drive_run(run, out, label, args.plot)
         print(f"\nwrote {', '.join(f'{out}/{w}' for w in written)}")
+    if args.animate:
+        shown = next((r for r in run.results if not r.success), run.results[0])
+        k = shown.mission_index
+        title = f"{label}: mission {k}, {run.planner}, {shown.failure_reason or 'success'}"
+        path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
+                                     shown.failure_reason, vehicle_footprint(vehicle, sim), title)
+        print(f"wrote {path} (mission {k})")
     return 0
 
 
@@ -119,6 +167,11 @@ def register(sub) -> None:
     p.add_argument("--length-m", type=positive_float, default=35.0, help="start-goal distance, m (default 35, paper)")
     p.add_argument("--out", help="directory for trials.csv, telemetry/ and figures (created if missing)")
     p.add_argument("--plot", action="store_true", help="write missions.png, trajectories.png, timeseries.png")
+    p.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
+                   help="write an animation of one trial (the first that failed, else mission 0): the "
+                   "footprint moving over the hillshade and class map along its planned and driven paths, "
+                   "with speed, pitch, roll and vertical acceleration against time and the failure marked "
+                   "(.mp4 needs ffmpeg)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
     p.add_argument("--planner", default="straight",

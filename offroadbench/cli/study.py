@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
@@ -52,6 +53,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rpl.add_argument("--mission", type=int, required=True, help="mission index on the terrain")
     rpl.add_argument("--plot", action="store_true", help="write the figure (class map, paths, time series)")
     rpl.add_argument("--out", help="folder for the figure and telemetry (default: RUN_DIR/replays)")
+    rpl.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
+                     help="write an animation of the trial: the footprint moving over the hillshade and class "
+                     "map along its planned and driven paths, with speed, pitch, roll and vertical acceleration "
+                     "against time and the failure marked (.mp4 needs ffmpeg)")
     rpl.set_defaults(func=cmd_replay)
 
 
@@ -186,6 +191,12 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from offroadbench.study.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
+    if args.animate:
+        from offroadbench.cli._common import check_output_file
+        from offroadbench.io.animation import check_animation_path
+
+        check_animation_path(args.animate)
+        check_output_file(args.animate, "--animate")
     rep = replay_trial(run_dir, args.cell, args.terrain, args.mission)
     r = rep.record.result
     name = f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}"
@@ -208,4 +219,12 @@ def cmd_replay(args: argparse.Namespace) -> int:
             fig.savefig(tmp, format="png", dpi=110)
         save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
         print(f"wrote {out / (name + '.png')}, {out / (name + '.parquet')}")
+    if args.animate:
+        from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
+
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
+        path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
+                                     r.failure_reason, footprint, title)
+        print(f"wrote {path}")
     return 0 if rep.identical else 1

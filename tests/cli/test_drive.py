@@ -41,3 +41,17 @@ def test_drive_bad_input_exits_2_without_output(tmp_path, capsys):
     assert main(["drive", "paper-d2.3", *SMALL, "--vehicle", "tank", "--out", str(out)]) == 2
     assert "unknown vehicle 'tank'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_drive_animate_writes_a_gif_of_one_trial(tmp_path, capsys):
+    from PIL import Image
+
+    gif = tmp_path / "anim" / "trial.gif"
+    assert main(["drive", "paper-d2.3", *SMALL, "--missions", "1", "--animate", str(gif)]) == 0
+    assert f"wrote {gif} (mission 0)" in capsys.readouterr().out
+    with Image.open(gif) as im:
+        assert im.n_frames > 15 and im.size[0] > im.size[1]  # map beside the strip
+    # a wrong suffix is refused before any work, leaving nothing
+    bad = tmp_path / "bad" / "trial.avi"
+    assert main(["drive", "paper-d2.3", *SMALL, "--missions", "1", "--animate", str(bad)]) == 2
+    assert ".gif or .mp4" in capsys.readouterr().err and not bad.parent.exists()
