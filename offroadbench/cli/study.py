@@ -51,7 +51,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rpl.add_argument("--cell", type=int, required=True, help="grid cell index")
     rpl.add_argument("--terrain", type=int, required=True, help="terrain index within the cell")
     rpl.add_argument("--mission", type=int, required=True, help="mission index on the terrain")
-    rpl.add_argument("--plot", action="store_true", help="write the figure (class map, paths, time series)")
+    rpl.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
+                     help="write the figure (class map, paths, time series) to PATH, or with a bare --plot to "
+                     "--out/cell<C>_terrain<T>_mission<M>.png; the telemetry (Parquet) goes beside it")
     rpl.add_argument("--out", help="folder for the figure and telemetry (default: RUN_DIR/replays)")
     rpl.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
                      help="write an animation of the trial: the footprint moving over the hillshade and class "
@@ -129,7 +131,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir, "--out")
-    tables = (("trials", load(run_dir)), ("terrains", load_terrains(run_dir)))
+    from offroadbench.study.stats import terrain_success
+
+    trials = load(run_dir)
+    terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
+    terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
+    tables = (("trials", trials), ("terrains", terrains))
     with created_dirs(out):
         for name, df in tables:
             path = out / f"{name}.{args.format}"
@@ -191,8 +198,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from offroadbench.study.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
+    from offroadbench.cli._common import check_output_file
+
+    if isinstance(args.plot, str):
+        check_output_file(args.plot, "--plot", suffixes=(".png",))
     if args.animate:
-        from offroadbench.cli._common import check_output_file
         from offroadbench.io.animation import check_animation_path
 
         check_animation_path(args.animate)
@@ -210,15 +220,17 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.plots.study import fig_replay
 
         out = Path(args.out) if args.out else run_dir / "replays"
-        out.mkdir(parents=True, exist_ok=True)
+        png = out / f"{name}.png" if args.plot is True else Path(args.plot)
+        png.parent.mkdir(parents=True, exist_ok=True)
         title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
-        with atomic_path(out / f"{name}.png") as tmp:
+        with atomic_path(png) as tmp:
             fig.savefig(tmp, format="png", dpi=110)
-        save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
-        print(f"wrote {out / (name + '.png')}, {out / (name + '.parquet')}")
+        tel = png.with_suffix(".parquet")
+        save_telemetry(rep.record.telemetry, tel)
+        print(f"wrote {png}, {tel}")
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
 

@@ -44,6 +44,7 @@ __all__ = [
     "write_png16",
     "read_png16",
     "png_shape",
+    "png_sidecar_meta",
     "ue_z_range_m",
     "ue_landscape_settings",
     "ue_heights_m",
@@ -243,6 +244,13 @@ def read_png16(
     if not relief_m >= 0:
         raise InputError(f"relief_m must be >= 0, got {relief_m}")
     return decode_png16(q, cell_size_m, z_min_m, z_min_m + relief_m)
+
+
+def png_sidecar_meta(path: str | Path) -> dict[str, Any]:
+    """The JSON sidecar of a PNG heightmap as a dict ({} when there is none): cell size, z range and,
+    for a generated terrain, its recipe (whose ``[recipe] crs`` an export keeps)."""
+    found = _metadata_for(Path(path), {})
+    return dict(found[1]) if found is not None else {}
 
 
 def _metadata_for(png: Path, text: Mapping[str, str]) -> tuple[str, dict[str, Any]] | None:
