@@ -16,14 +16,25 @@ __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig
            "fig_paths", "short_label"]
 
 
+#: below this many samples a box plot also shows every sample
+SHOW_POINTS_BELOW = 10
+
+
 def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
+    """Box plots (Majhor & Bos 2023, Eq. 6-8) labelled with their n; a group of fewer than
+    SHOW_POINTS_BELOW samples also shows its samples (spread sideways by rank, not at random)."""
     boxes = []
-    for label, values in zip(groups, samples):
+    for i, (label, values) in enumerate(zip(groups, samples)):
         s = stats.box_stats(values)
         if s["n"] == 0:
             s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": label, "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+        boxes.append({"label": f"{label}\nn={s['n']}", "med": s["median"], "q1": s["q1"], "q3": s["q3"],
                       "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
+        v = np.asarray(values, dtype=float)
+        v = np.sort(v[np.isfinite(v)])
+        if 0 < len(v) < SHOW_POINTS_BELOW:
+            offsets = np.linspace(-0.12, 0.12, len(v)) if len(v) > 1 else np.zeros(1)
+            ax.plot(i + 1 + offsets, v, "o", color="black", ms=3.5, alpha=0.7, zorder=3)
     ax.bxp(boxes, showfliers=True,
            medianprops={"color": "red"},
            boxprops={"color": CLASS_COLOURS[0]},
