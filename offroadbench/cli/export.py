@@ -79,7 +79,8 @@ def register(sub) -> None:
     )
     p.add_argument("terrain", nargs="?", help="16-bit PNG heightmap, preset name or recipe .toml")
     p.add_argument("--format", help="export format (see --list)")
-    p.add_argument("-o", "--output", help="output directory (created with its missing parents)")
+    p.add_argument("-o", "--output", "--out", dest="output",
+                   help="output directory (created with its missing parents); --out as in the other commands")
     p.add_argument("--list", action="store_true", help="list the export formats and exit")
     p.add_argument("--seed", type=seed_arg, default=0, help="when TERRAIN is a preset: " + TERRAIN_SEED_HELP)
     p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
