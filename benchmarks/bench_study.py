@@ -166,7 +166,8 @@ def plans(missions: int, planners: list[str]) -> None:
     import statistics
 
     from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.navigation.planners import _HAZARD_CACHE, PlanningProblem, plan
+    from offroadbench.navigation.costmap import _HAZARD_CACHE
+    from offroadbench.navigation.planners import PlanningProblem, plan
     from offroadbench.sim import World
     from offroadbench.sim.runner import vehicle_envelope
     from offroadbench.study import load_study

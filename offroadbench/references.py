@@ -7,7 +7,7 @@ terrains`` and the reports name presets and methods by these keys.
 
 from __future__ import annotations
 
-__all__ = ["REFERENCES", "cite"]
+__all__ = ["REFERENCES"]
 
 #: key -> (short form used in docstrings, full citation)
 REFERENCES: dict[str, tuple[str, str]] = {
@@ -50,10 +50,3 @@ REFERENCES: dict[str, tuple[str, str]] = {
     ),
 }
 
-
-def cite(key: str) -> str:
-    """The full citation of ``key`` (e.g. ``"martin2014"``)."""
-    try:
-        return REFERENCES[key][1]
-    except KeyError:
-        raise KeyError(f"unknown reference {key!r}; known: {', '.join(sorted(REFERENCES))}") from None

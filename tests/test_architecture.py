@@ -23,6 +23,20 @@ def _modules() -> dict[str, Path]:
     return out
 
 
+def _imported_names(node: ast.AST, package: str) -> list[str]:
+    """The absolute dotted names an ``Import``/``ImportFrom`` node imports (``from a import b``
+    gives ``a.b`` and ``a``; relative imports resolved against ``package``); [] for other nodes."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names]
+    if isinstance(node, ast.ImportFrom):
+        base = node.module or ""
+        if node.level:
+            anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+            base = ".".join([*anchor, base] if base else anchor)
+        return [f"{base}.{a.name}" for a in node.names] + [base]
+    return []
+
+
 def _top_level_imports(path: Path, module: str, known: set[str]) -> set[str]:
     """offroadbench modules imported at module level (not inside functions or TYPE_CHECKING)."""
     tree = ast.parse(path.read_text(), filename=str(path))
@@ -39,17 +53,7 @@ def _top_level_imports(path: Path, module: str, known: set[str]) -> set[str]:
             continue
         stmts = [node] if not isinstance(node, (ast.Try, ast.If)) else [*node.body]
         for st in stmts:
-            if isinstance(st, ast.Import):
-                names = [a.name for a in st.names]
-            elif isinstance(st, ast.ImportFrom):
-                base = st.module or ""
-                if st.level:
-                    anchor = package.split(".")[: len(package.split(".")) - st.level + 1]
-                    base = ".".join([*anchor, base] if base else anchor)
-                names = [f"{base}.{a.name}" for a in st.names] + [base]
-            else:
-                continue
-            for n in names:
+            for n in _imported_names(st, package):
                 if n.startswith("offroadbench"):
                     r = resolve(n)
                     if r and r != module:
@@ -124,4 +128,112 @@ def test_io_does_not_import_terrain():
             if isinstance(node, ast.ImportFrom) and node.module:
                 names = [node.module]
             offenders += [f"{path.relative_to(PKG)}: {n}" for n in names if n.startswith("offroadbench.terrain")]
+    assert offenders == []
+
+
+def _all_imports(path: Path, module: str, known: set[str]) -> set[str]:
+    """offroadbench modules ``module`` imports anywhere in its file: at module level and inside
+    functions, methods and conditionals (every ``Import``/``ImportFrom`` node at any depth, except
+    under ``if TYPE_CHECKING``). Importing ``a.b.c`` also runs the packages ``a.b`` and ``a`` first,
+    so those count as imported too. Registries' loaders, which import their built-ins by name
+    (``importlib.import_module("...")``) the first time a registry is read, are not imports here."""
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+    def resolve(name: str) -> str | None:
+        while name and name not in known:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    found: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.orelse:
+                visit(child)
+            return
+        for n in _imported_names(node, package):
+            r = resolve(n) if n.startswith("offroadbench") else None
+            while r and r != module:
+                found.add(r)
+                r = r.rpartition(".")[0] if "." in r else None  # its parent packages run first
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(ast.parse(path.read_text(), filename=str(path)))
+    found.discard(module)
+    return found
+
+
+def test_no_import_cycles_at_any_level():
+    """No cycle among the package's modules counting every import, also those inside functions
+    (a function-level import hides a cycle until the function runs, and lets two modules grow into
+    one). A module importing its own parent package is not an edge (the parent is already being
+    imported)."""
+    mods = _modules()
+    graph = {m: {n for n in _all_imports(p, m, set(mods)) if not m.startswith(n + ".")} for m, p in mods.items()}
+    # Tarjan's strongly connected components: every cycle lies inside one of more than one module
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[list[str]] = []
+
+    def strongconnect(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                strongconnect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                components.append(sorted(comp))
+
+    for m in sorted(graph):
+        if m not in index:
+            strongconnect(m)
+    detail = [", ".join(c) + ":\n  " + "\n  ".join(f"{a} -> {', '.join(sorted(graph[a] & set(c)))}" for a in c)
+              for c in components]
+    assert not components, "import cycles (counting imports inside functions):\n" + "\n".join(detail)
+
+
+def test_the_any_level_cycle_check_sees_imports_inside_functions(tmp_path):
+    """The check above is not vacuous: a cycle closed only by an import inside a function is found."""
+    pkg = tmp_path / "offroadbench"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("from offroadbench import b\n")
+    (pkg / "b.py").write_text("def f():\n    if True:\n        from offroadbench.a import x\n")
+    known = {"offroadbench", "offroadbench.a", "offroadbench.b"}
+    assert _top_level_imports(pkg / "b.py", "offroadbench.b", known) == set()
+    assert _all_imports(pkg / "b.py", "offroadbench.b", known) == {"offroadbench.a", "offroadbench"}
+
+
+def test_layers_point_one_way():
+    """Figures draw what they are given (plots imports nothing of study; the report imports
+    plots), export writes files (io imports nothing of analysis; the CLI warns about a spike),
+    and no package imports another's private module (e.g. study -> sim._banner)."""
+    mods = _modules()
+    known = set(mods)
+    offenders = []
+    for m, p in mods.items():
+        imported = _all_imports(p, m, known)
+        if m.startswith("offroadbench.plots"):
+            offenders += [f"{m} -> {n}" for n in imported if n.startswith("offroadbench.study")]
+        if m.startswith("offroadbench.io"):
+            offenders += [f"{m} -> {n}" for n in imported if n.startswith("offroadbench.analysis")]
+        for n in imported:
+            private = next((part for part in n.split(".")[1:] if part.startswith("_") and part != "__init__"), None)
+            owner = n[: n.index("." + private)] if private else None
+            if private and not (m == owner or m.startswith(owner + ".")):
+                offenders.append(f"{m} -> {n} (private to {owner})")
     assert offenders == []

@@ -7,7 +7,7 @@ is ``P_grad = max |Q_grad|``. Pixels are then ``low`` (P_grad <= t_low), ``semi`
 
 Units. The paper's thresholds 50 and 140 are in 16-bit DEM units per centimetre, as its
 5 / 7.07 cm distances say. Its Unreal import used Z scale 0.75 %: at Z scale 100 a 16-bit map
-spans 512 m (128 DEM units per cm of height at scale 1; :func:`offroadbench.io.png16.ue_z_range_m`),
+spans 512 m (128 DEM units per cm of height at scale 1; :func:`offroadbench.levels16.ue_z_range_m`),
 so one DEM unit is 0.75/128 cm and the
 thresholds in rise/run are 50 * 0.75/128 = 0.293 and 140 * 0.75/128 = 0.820. The one function
 that converts is :func:`paper_gradient_to_slope`; here everything is metres and rise/run.
@@ -22,7 +22,7 @@ import numpy as np
 
 from offroadbench.config import check_range
 from offroadbench.heightmap import Heightmap
-from offroadbench.io.png16 import LEVELS, ue_z_range_m
+from offroadbench.levels16 import LEVELS, ue_z_range_m
 
 __all__ = [
     "LOW",

@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
     # process-wide choices belong to the application, not the library: the figure backend
     # (the library draws on Figure objects and never picks one) and pybullet's banner
     os.environ.setdefault("MPLBACKEND", "Agg")
-    from offroadbench.sim._banner import import_pybullet_quietly
+    from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
     parser = build_parser()

@@ -1,12 +1,8 @@
 """What every command shares: argument types, loading a terrain argument, output checks, the
 progress bar, figure saving and table formatting.
 
-Output policy (one for every command): an output directory or the directory of an output file
-may be missing; its missing parents are created when the results are written, after the work.
-Before any work each command checks that the path can be created: the nearest existing
-ancestor must be a directory in which a file can actually be created (a read-only filesystem,
-``/proc`` or a path under a regular file is refused with one line). If the command then fails,
-the directories it created are removed again, so a failed command leaves nothing behind.
+The output-path policy (offroadbench.io.outputs) and the memory model (offroadbench.memory) live
+in the library; this module re-exports their checks for the commands.
 """
 
 from __future__ import annotations
@@ -14,15 +10,15 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 from typing import Callable, Iterator
 
 import pandas as pd
 
 from offroadbench.errors import InputError
+from offroadbench.io.outputs import check_output_dir, check_output_file, created_dirs
+from offroadbench.memory import available_memory_bytes, check_memory, check_recipe_memory, grid_bytes
 from offroadbench.progress import ProgressFn
 
 __all__ = [
@@ -130,137 +126,6 @@ def crater_diameters(recipe, seed: int):
     if not tables:
         return None
     return np.concatenate([np.asarray(t.diameter_m) for t in tables.values()])
-
-
-# --------------------------------------------------------------------------- memory
-#: bytes per grid cell that generating and classifying a terrain keeps alive at its peak
-#: (float64 heights, W-M layers and products, gradient and class maps, closing masks)
-GRID_BYTES_PER_CELL = 80
-
-#: set to 1 to skip the memory estimate check (same as --force)
-NO_MEMORY_CHECK_ENV = "OFFROADBENCH_NO_MEMORY_CHECK"
-
-
-def grid_bytes(rows: int, cols: int) -> int:
-    """Peak memory estimate of building and analysing a rows x cols terrain, bytes."""
-    return int(rows) * int(cols) * GRID_BYTES_PER_CELL
-
-
-def available_memory_bytes() -> int | None:
-    """Memory this process may still use: MemAvailable, capped by a cgroup limit; None if unknown."""
-    avail = None
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                avail = int(line.split()[1]) * 1024
-                break
-    except (OSError, ValueError):
-        pass
-    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
-                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
-                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
-        try:
-            text = Path(limit_file).read_text().strip()
-            if text == "max":
-                continue
-            room = int(text) - int(Path(usage_file).read_text().strip())
-            avail = room if avail is None else min(avail, room)
-        except (OSError, ValueError):
-            continue
-    return avail
-
-
-def check_recipe_memory(recipe, force: bool = False) -> None:
-    """Refuse a recipe whose grid would not fit in memory (see :func:`check_memory`)."""
-    rows, cols = int(recipe.grid.rows), int(recipe.grid.cols)
-    check_memory(grid_bytes(rows, cols), f"{recipe.name}: a {rows}x{cols} grid", force)
-
-
-def check_memory(estimate_bytes: int, what: str, force: bool = False) -> None:
-    """Refuse ``what`` up front if its memory estimate exceeds the memory available."""
-    if force or os.environ.get(NO_MEMORY_CHECK_ENV, "") not in ("", "0"):
-        return
-    avail = available_memory_bytes()
-    if avail is not None and estimate_bytes > avail:
-        raise InputError(
-            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available; "
-            f"make it smaller, or pass --force (or set {NO_MEMORY_CHECK_ENV}=1) to try anyway"
-        )
-
-
-def format_bytes(n: int) -> str:
-    return f"{n / 2**30:.1f} GB" if n >= 2**27 else f"{n / 2**20:.0f} MB"
-
-
-# --------------------------------------------------------------------------- outputs
-def _probe_dir(d: Path, flag: str, target: Path) -> None:
-    """Raise InputError unless a file can be created in the existing directory ``d``."""
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=".offroadbench-probe.", dir=d)
-    except OSError as exc:
-        raise InputError(f"{flag} {target}: cannot write into {d} ({exc.strerror})") from None
-    os.close(fd)
-    os.unlink(tmp)
-
-
-def _nearest_existing(p: Path, flag: str, target: Path) -> Path:
-    """The nearest existing ancestor of ``p`` (itself included); it must be a directory."""
-    q = p
-    while not q.exists() and not q.is_symlink():
-        if q.parent == q:
-            break
-        q = q.parent
-    if not q.is_dir():
-        raise InputError(f"{flag} {target}: {q} is a file, not a directory")
-    return q
-
-
-def check_output_dir(path: str | Path, flag: str = "--out") -> Path:
-    """Check, before any work, that ``path`` is (or can be created as) a writable directory."""
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise InputError(f"{flag} {p}: exists and is not a directory")
-    _probe_dir(_nearest_existing(p, flag, p), flag, p)
-    return p
-
-
-def check_output_file(path: str | Path, flag: str = "--output", suffixes: tuple[str, ...] = ()) -> Path:
-    """Check, before any work, that the file ``path`` can be written (its directory created)."""
-    p = Path(path)
-    if p.is_dir() or str(path).endswith(("/", os.sep)):
-        raise InputError(f"{flag} {p}: is a directory; give a file name")
-    if suffixes and p.suffix.lower() not in suffixes:
-        raise InputError(f"{flag} {p}: must end in {' or '.join(suffixes)}")
-    parent = p.parent if str(p.parent) else Path(".")
-    _probe_dir(_nearest_existing(parent, flag, p), flag, p)
-    return p
-
-
-@contextlib.contextmanager
-def created_dirs(*dirs: str | Path) -> Iterator[None]:
-    """Create ``dirs`` (with missing parents); if the block fails, remove the ones created here."""
-    made: list[Path] = []
-    try:
-        for d in dirs:
-            missing = []
-            q = Path(d)
-            while not q.exists():
-                missing.append(q)
-                if q.parent == q:
-                    break
-                q = q.parent
-            for m in reversed(missing):
-                try:
-                    m.mkdir()
-                except OSError as exc:
-                    raise InputError(f"cannot create directory {m} ({exc.strerror})") from None
-                made.append(m)
-        yield
-    except BaseException:
-        for m in reversed(made):
-            with contextlib.suppress(OSError):
-                m.rmdir()  # only empty ones: a file someone else put there stays
-        raise
 
 
 def save_figure(fig, path: str | Path, dpi: int = 150) -> Path:

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import time
 
 from offroadbench.errors import InputError
 
+log = logging.getLogger(__name__)
+
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
-    from offroadbench.cli._common import check_output_dir, created_dirs, load_heightmap_arg
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile, tail_report
+    from offroadbench.cli._common import check_output_dir, load_heightmap_arg
     from offroadbench.io.export import EXPORTERS, check_name, export_heightmap
 
     if args.list:
@@ -53,14 +56,16 @@ def cmd_export(args: argparse.Namespace) -> int:
         name = args.name or label
     if args.clip_percentile:
         meta["clip_percentile"] = args.clip_percentile
-    with created_dirs(out.parent):  # the exporter stages beside out and creates out itself
-        result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
+    tails = tail_report(hm)  # a spike that sets the 16-bit step of the image formats: exported as it is, said here
+    if tails.dominated:
+        log.warning("export %s: %s", args.format, tails.message())
+    result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
     print(
         f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
         f"({time.perf_counter() - t0:.2f} s)"
     )
-    for note in result.notes:
-        if not note.startswith("warning: "):  # the exporter logged each warning already: print it once
+    for note in result.notes:  # the spire warning was logged above: printed once
+        if not note.startswith("warning: "):  # an exporter logs each warning it returns as a note
             print(f"  {note}")
     for path in result.files:
         print(f"wrote {path}")

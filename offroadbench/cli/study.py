@@ -71,20 +71,13 @@ def _run_dir(path: str) -> Path:
 
 def _workers(args: argparse.Namespace, plans) -> int | None:
     """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
-    import os
-
-    from offroadbench.cli._common import format_bytes, available_memory_bytes, check_memory
+    from offroadbench.memory import check_memory, format_bytes, workers_that_fit
     from offroadbench.study.runner import worker_memory_bytes
 
     if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
-    workers = args.workers
-    if workers is None:
-        avail = available_memory_bytes()
-        workers = os.cpu_count() or 1
-        if avail is not None:
-            workers = max(1, min(workers, avail // per_worker))
+    workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
     check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
     return workers
 
@@ -195,13 +188,16 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """Replay one trial; exit 1 if it does not reproduce the stored row."""
+    from offroadbench.cli._common import check_output_dir, check_output_file, created_dirs
     from offroadbench.study.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
-    from offroadbench.cli._common import check_output_file
-
-    if isinstance(args.plot, str):
-        check_output_file(args.plot, "--plot", suffixes=(".png",))
+    png = None
+    if args.plot is True:  # a bare --plot: the figure and telemetry into --out (default RUN_DIR/replays)
+        out = check_output_dir(args.out if args.out else run_dir / "replays", "--out")
+        png = out / f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}.png"
+    elif args.plot:
+        png = check_output_file(args.plot, "--plot", suffixes=(".png",))
     if args.animate:
         from offroadbench.io.animation import check_animation_path
 
@@ -219,17 +215,15 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        out = Path(args.out) if args.out else run_dir / "replays"
-        png = out / f"{name}.png" if args.plot is True else Path(args.plot)
-        png.parent.mkdir(parents=True, exist_ok=True)
         title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
-        with atomic_path(png) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
         tel = png.with_suffix(".parquet")
-        save_telemetry(rep.record.telemetry, tel)
+        with created_dirs(png.parent):  # the output-path policy: missing folders made now, removed on failure
+            with atomic_path(png) as tmp:
+                fig.savefig(tmp, format="png", dpi=110)
+            save_telemetry(rep.record.telemetry, tel)
         print(f"wrote {png}, {tel}")
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation

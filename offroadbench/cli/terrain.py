@@ -26,7 +26,6 @@ from offroadbench.cli._common import (
     save_figure,
     seed_arg,
 )
-from offroadbench.errors import InputError
 
 log = logging.getLogger(__name__)
 

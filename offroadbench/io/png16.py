@@ -33,6 +33,14 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.atomic import atomic_path, check_writable
+from offroadbench.levels16 import (
+    LEVELS,
+    UE_LEVELS_PER_CM,
+    UE_ZERO_LEVEL,
+    decode_levels,
+    encode_levels,
+    ue_z_range_m,
+)
 
 __all__ = [
     "FORMAT",
@@ -51,19 +59,6 @@ __all__ = [
 ]
 
 FORMAT = "offroadbench-png16/1"
-LEVELS = 65535
-#: Unreal's 16-bit level at Location.Z, and levels per centimetre at Scale.Z = 1 (LANDSCAPE_ZSCALE = 1/128)
-UE_ZERO_LEVEL = 32768
-UE_LEVELS_PER_CM = 128
-
-
-def ue_z_range_m(z_scale: float) -> float:
-    """Height in metres that Unreal spans from level 0 to level 65535 at Landscape ``Scale.Z``.
-
-    ``65535 / 128 * z_scale`` cm: 511.99 m at 100, 3.83994 m at the paper's 0.75. The one place
-    that holds Unreal's vertical scale (see the module docstring).
-    """
-    return LEVELS / UE_LEVELS_PER_CM * z_scale / 100.0
 
 
 def ue_landscape_settings(hm: Heightmap) -> dict[str, float]:
@@ -98,20 +93,15 @@ def sidecar_path(png_path: str | Path) -> Path:
 
 
 def encode_png16(hm: Heightmap) -> np.ndarray:
-    """Quantise heights to uint16 over the full range (a flat map becomes all zeros)."""
-    span = hm.relief_m
-    if span == 0:
-        return np.zeros(hm.shape, dtype=np.uint16)
-    q = np.rint((hm.z - hm.z_min_m) / span * LEVELS)
-    return np.clip(q, 0, LEVELS).astype(np.uint16)
+    """Quantise heights to uint16 over the map's full range (a flat map becomes all zeros)."""
+    return encode_levels(hm.z, hm.z_min_m, hm.z_max_m)
 
 
 def decode_png16(q: np.ndarray, cell_size_m: float, z_min_m: float, z_max_m: float) -> Heightmap:
-    """Heights in metres from uint16 levels and the range they span."""
+    """Heights in metres from uint16 levels and the range they span (:func:`offroadbench.levels16.decode_levels`)."""
     if not z_max_m >= z_min_m:
         raise InputError(f"z_max_m ({z_max_m}) must be >= z_min_m ({z_min_m})")
-    z = z_min_m + q.astype(np.float64) * ((z_max_m - z_min_m) / LEVELS)
-    return Heightmap(z=z, cell_size_m=cell_size_m)
+    return Heightmap(z=decode_levels(q, z_min_m, z_max_m), cell_size_m=cell_size_m)
 
 
 def png_metadata(hm: Heightmap, extra: Mapping[str, Any] | None = None) -> dict[str, Any]:

@@ -6,6 +6,10 @@
   longitudinal axis), both from a level reference, differentiated once; then their RMS.
 - Success rate, Eq. (5): ``100 * N_success / N_trials``.
 
+Portability: every reduction here is plain Python on floats (``math.fsum``, ``math.hypot``) or an
+element-wise IEEE operation (``np.diff``, division), never a BLAS call or a SIMD reduction whose
+last bit may depend on the CPU, so a trial's metrics are the same bits on every x86-64 machine.
+
 Angles: yaw, pitch and roll are Z-Y-X Tait-Bryan angles of the body (x forward, y left, z up),
 so a level vehicle has zero roll and pitch whatever its heading. Pitch is the angle of the
 longitudinal axis above the horizontal (nose up positive); roll is the rotation about the
@@ -13,6 +17,8 @@ longitudinal axis (left side up positive).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -51,8 +57,8 @@ def roll_pitch_yaw_from_quat(quat_xyzw: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 def rms(x: np.ndarray) -> float:
     """Root mean square of a 1-D array; NaN for an empty one."""
-    a = np.asarray(x, dtype=float)
-    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
+    a = np.asarray(x, dtype=float).ravel().tolist()
+    return math.sqrt(math.fsum(v * v for v in a) / len(a)) if a else float("nan")
 
 
 def vertical_acceleration(z_m: np.ndarray, dt_s: float) -> np.ndarray:
@@ -72,7 +78,7 @@ def rms_vertical_acceleration(z_m: np.ndarray, dt_s: float) -> float:
 
 def rms_angle_rate_deg_s(angle_rad: np.ndarray, dt_s: float) -> float:
     """RMS rate (deg/s) of a uniformly sampled angle series in radians (pitch or roll)."""
-    return float(np.degrees(rms(angle_rate(angle_rad, dt_s))))
+    return math.degrees(rms(angle_rate(angle_rad, dt_s)))
 
 
 def path_length(xyz_m: np.ndarray) -> float:
@@ -80,7 +86,7 @@ def path_length(xyz_m: np.ndarray) -> float:
     p = np.asarray(xyz_m, dtype=float)
     if len(p) < 2:
         return 0.0
-    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+    return math.fsum(math.hypot(*d) for d in np.diff(p, axis=0).tolist())
 
 
 def success_rate(successes) -> float:
@@ -95,9 +101,9 @@ def stuck_index(xy_m: np.ndarray, window: int, distance_m: float) -> int | None:
 
     Paper Sec. 2.4: stuck if it fails to move more than 0.2 m within 30 s.
     """
-    p = np.asarray(xy_m, dtype=float)
+    p = np.asarray(xy_m, dtype=float).tolist()
     for end in range(window, len(p)):
-        seg = p[end - window : end + 1]
-        if np.max(np.linalg.norm(seg - seg[0], axis=1)) < distance_m:
+        x0, y0 = p[end - window]
+        if all(math.hypot(x - x0, y - y0) < distance_m for x, y in p[end - window + 1 : end + 1]):
             return end
     return None

@@ -1,16 +1,19 @@
 """Figures of a study report (after Majhor & Bos 2023, Figs. 4-7). Each returns a
-:class:`matplotlib.figure.Figure`; the caller saves it."""
+:class:`matplotlib.figure.Figure`; the caller saves it.
+
+The figures draw what they are given: box plots take the box statistics the report's tables come
+from (offroadbench.study.stats.box_stats), so tables and plots agree exactly, and this module
+imports nothing of offroadbench.study (the report imports it, never the other way round)."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
-from offroadbench.study import stats
 
 __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig_replay", "fig_success_vs_level",
            "fig_paths", "short_label"]
@@ -20,18 +23,17 @@ __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig
 SHOW_POINTS_BELOW = 10
 
 
-def _bxp(ax, groups: Sequence[str], samples: Sequence[Sequence[float]], ylabel: str, title: str) -> None:
-    """Box plots (Majhor & Bos 2023, Eq. 6-8) labelled with their n; a group of fewer than
+def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -> None:
+    """Box plots from box statistics (``median``, ``q1``, ``q3``, ``whislo``, ``whishi``, ``fliers``,
+    ``n``, ``values``), one per group label, each labelled with its n; a group of fewer than
     SHOW_POINTS_BELOW samples also shows its samples (spread sideways by rank, not at random)."""
     boxes = []
-    for i, (label, values) in enumerate(zip(groups, samples)):
-        s = stats.box_stats(values)
+    for i, (label, s) in enumerate(groups.items()):
         if s["n"] == 0:
             s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": f"{label}\nn={s['n']}", "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+        boxes.append({"label": f"{short_label(label)}\nn={s['n']}", "med": s["median"], "q1": s["q1"], "q3": s["q3"],
                       "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
-        v = np.asarray(values, dtype=float)
-        v = np.sort(v[np.isfinite(v)])
+        v = np.asarray(s.get("values", ()), dtype=float)
         if 0 < len(v) < SHOW_POINTS_BELOW:
             offsets = np.linspace(-0.12, 0.12, len(v)) if len(v) > 1 else np.zeros(1)
             ax.plot(i + 1 + offsets, v, "o", color="black", ms=3.5, alpha=0.7, zorder=3)
@@ -64,24 +66,22 @@ def fig_class_areas(summary: pd.DataFrame):
     return fig
 
 
-def fig_success(per_terrain: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 6: box plots of the per-terrain success rate per group."""
+def fig_success(boxes: Mapping[str, Mapping[str, Any]]):
+    """Fig. 6: box plots of the per-terrain success rate, given per group label as box statistics
+    (offroadbench.study.stats.success_boxes)."""
     fig, ax = new_figure(figsize=(5, 3.6))
-    cells = sorted(labels)
-    samples = [per_terrain.loc[per_terrain["cell"] == c, "success_rate_pct"] for c in cells]
-    _bxp(ax, [short_label(labels[c]) for c in cells], samples, "success rate per terrain (%)", "Success rate (Eq. 5)")
+    _bxp(ax, boxes, "success rate per terrain (%)", "Success rate (Eq. 5)")
     ax.set_ylim(-3, 103)
     return fig
 
 
-def fig_metrics(trials: pd.DataFrame, labels: dict[int, str]):
-    """Fig. 7: box plots of the traversal metrics of successful trials per group."""
+def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
+    """Fig. 7: box plots of the traversal metrics of successful trials per group; ``boxes`` is metric
+    -> group label -> box statistics (offroadbench.study.stats.metric_boxes), ``metrics`` is metric
+    -> (title, unit) for the four panels."""
     fig, axes = new_figure(2, 2, figsize=(9, 6.4))
-    ok = trials[trials["success"].astype(bool)]
-    cells = sorted(labels)
-    for ax, (metric, (title, unit)) in zip(axes.ravel(), stats.METRICS.items()):
-        samples = [ok.loc[ok["cell"] == c, metric] for c in cells]
-        _bxp(ax, [short_label(labels[c]) for c in cells], samples, f"{title} ({unit})", title)
+    for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items()):
+        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Successful trials only", fontsize=10)
     return fig
 

@@ -1,7 +1,8 @@
 """Traversal trials in PyBullet: the only package that imports pybullet.
 
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
-load_vehicle, World, TrialResult, run_mission, run_missions, drive_missions / DriveRun.
+load_vehicle, World, TrialResult, run_mission, run_missions, drive_missions / DriveRun, and
+import_pybullet_quietly (for application entry points: the CLI and the study workers).
 
 The names load lazily (PEP 562), so importing a config (``offroadbench.sim.config``) or this
 package does not import pybullet; only touching ``World`` or the runner does.
@@ -29,6 +30,7 @@ _EXPORTS = {
     "run_missions": "runner",
     "DriveRun": "batch",
     "drive_missions": "batch",
+    "import_pybullet_quietly": "_banner",
 }
 
 __all__ = list(_EXPORTS)

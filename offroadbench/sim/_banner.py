@@ -6,7 +6,8 @@ exits, below everything the program printed). :func:`import_pybullet_quietly` im
 with file descriptors 1 and 2 pointed at /dev/null and flushes C stdio before it restores them,
 so the banner goes nowhere whichever stream a build uses.
 
-Only application entry points call this: the CLI's ``main`` and the study workers' bootstrap
+Only application entry points call this (as ``offroadbench.sim.import_pybullet_quietly``): the
+CLI's ``main`` and the study workers' bootstrap
 (``offroadbench.study.executors``). A library import never touches the process's descriptors.
 """
 

@@ -28,6 +28,16 @@ from offroadbench.sim.vehicle import VehicleSpec
 __all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker", "PathTracker", "make_tracker"]
 
 
+def _dot2(x: float, y: float, unit) -> float:
+    """``x * unit[0] + y * unit[1]`` in plain Python floats.
+
+    Not ``np.dot``: numpy hands a dot product to BLAS, whose kernel (and so the last bit of the
+    result, e.g. through a fused multiply-add) depends on the CPU; the control loop must compute
+    the same bits on every x86-64 machine (README, "Reproducibility").
+    """
+    return float(x) * float(unit[0]) + float(y) * float(unit[1])
+
+
 def pure_pursuit_omega(
     pos_xy: np.ndarray, yaw_rad: float, target_xy: np.ndarray, v_m_s: float, max_yaw_rate_rad_s: float
 ) -> float:
@@ -95,12 +105,12 @@ class LineTracker:
 
     def progress(self, pos_xy: np.ndarray) -> float:
         """Distance along the line of the projection of ``pos_xy``, metres."""
-        return float(np.dot(np.asarray(pos_xy, dtype=float) - self.start, self.unit))
+        return _dot2(pos_xy[0] - self.start[0], pos_xy[1] - self.start[1], self.unit)
 
     def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
         """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
         s = self.progress(pos_xy)
-        v = self.speed.command(s, float(np.dot(vel_xy, self.unit)))
+        v = self.speed.command(s, _dot2(vel_xy[0], vel_xy[1], self.unit))
         target = self.start + self.unit * min(max(s, 0.0) + self.cfg.lookahead_m, self.length_m)
         omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
         return v, omega, s
@@ -128,13 +138,13 @@ class PathTracker:
     def __init__(self, waypoints, spec: VehicleSpec, cfg: ControllerConfig) -> None:
         pts = np.asarray(waypoints, dtype=float)
         seg = np.diff(pts, axis=0)
-        seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        seg_len = np.array([math.hypot(dx, dy) for dx, dy in seg.tolist()])
         keep = np.concatenate([[True], seg_len > 1e-9])  # drop repeated waypoints
         self.points = pts[keep]
         if len(self.points) < 2:
             raise InputError(f"a path needs two distinct waypoints, got {len(pts)} point(s) with {len(self.points)} distinct")
         seg = np.diff(self.points, axis=0)
-        self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        self._seg_len = np.array([math.hypot(dx, dy) for dx, dy in seg.tolist()])
         self._unit = seg / self._seg_len[:, None]
         self._cum = np.concatenate([[0.0], np.cumsum(self._seg_len)])
         self.length_m = float(self._cum[-1])
@@ -157,7 +167,7 @@ class PathTracker:
         best = (math.inf, self._seg, 0.0)
         k = self._seg
         while k <= last and (k == self._seg or self._cum[k] <= self._s + self._window_m):
-            t = float(np.dot(pos_xy - self.points[k], self._unit[k]))
+            t = _dot2(pos_xy[0] - self.points[k][0], pos_xy[1] - self.points[k][1], self._unit[k])
             t_c = t if (k == 0 and t < 0) or (k == last and t > 0) else min(max(t, 0.0), self._seg_len[k])
             foot = self.points[k] + t_c * self._unit[k]
             d = math.hypot(pos_xy[0] - foot[0], pos_xy[1] - foot[1])
@@ -184,7 +194,7 @@ class PathTracker:
         to_goal = math.hypot(self.points[-1][0] - p[0], self.points[-1][1] - p[1])
         # the speed profile plans to the goal, not to the foot of the projection: a vehicle that
         # has run past the path's end (or cut a hairpin) away from the goal keeps driving back to it
-        v = self.speed.command(min(s, self.length_m - to_goal), float(np.dot(vel_xy, self._unit[self._seg])))
+        v = self.speed.command(min(s, self.length_m - to_goal), _dot2(vel_xy[0], vel_xy[1], self._unit[self._seg]))
         target = self.point_at(max(s, 0.0) + self.cfg.lookahead_m)
         d = target - np.asarray(pos_xy, dtype=float)
         alpha = (math.atan2(d[1], d[0]) - yaw_rad + math.pi) % (2.0 * math.pi) - math.pi

@@ -3,9 +3,10 @@
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
 at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
-The driver is the study's ``[planner]``: a planner (offroadbench.navigation.planners; default
-``straight``, the start-goal line) whose path pure pursuit follows, or a closed-loop policy
-(offroadbench.navigation.policies) fed the Gymnasium env's observation. The clock starts after the
+The driver is the study's ``[planner]`` (offroadbench.navigation.drivers): a planner
+(offroadbench.navigation.planners; default ``straight``, the start-goal line) whose path pure
+pursuit follows, or a closed-loop policy (offroadbench.navigation.policies) fed the Gymnasium env's
+observation; each is given what its registry entry declares it needs. The clock starts after the
 vehicle has settled at the start; the trial ends as ``timeout`` after ``rules.timeout_factor``
 times the nominal time ``path length / cruise speed`` (for a policy, the mission length).
 
@@ -29,8 +30,8 @@ from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
-from offroadbench.navigation.planners import PlannerChoice, PlanningProblem, VehicleEnvelope, plan
-from offroadbench.navigation.policies import PolicyContext, make_policy
+from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
+from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import ControllerConfig, SimConfig
@@ -179,8 +180,10 @@ def drive_mission(
 ) -> TrialRecord:
     """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy.
 
-    ``classes`` is the closed roughness-class map the planner sees (the study's; needed by every
-    planner but ``straight``), ``border_m`` the mission border planned paths keep to.
+    ``classes`` is the closed roughness-class map the planner sees (the study's; needed by a driver
+    whose registry entry declares it, see offroadbench.navigation.drivers.NEEDS), ``border_m`` the
+    mission border planned paths keep to. The vehicle's envelope is measured only for a driver that
+    declares ``vehicle``.
     ``spawn_roll_rad`` tilts the vehicle about its long axis at spawn (a test hook: 90 deg puts it
     on its side).
     """
@@ -199,21 +202,20 @@ def drive_mission(
     v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
     policy = tracker = None
-    if planner.name == "straight" and planner.kind == "planner":
-        waypoints = np.array([mission.start_xy_m, mission.goal_xy_m], dtype=float)
+    needs = planner.needs  # declared on the planner's or policy's registry entry
+    if "classes" in needs and classes is None:
+        raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
+    problem = PlanningProblem(hm=hm, classes=classes if "classes" in needs else None, start_xy=mission.start_xy_m,
+                              goal_xy=mission.goal_xy_m, border_m=border_m,
+                              vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
+    if planner.kind == "policy":
+        waypoints = problem.endpoints()
+        policy = make_policy(planner.name, planner.config, PolicyContext(
+            observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
+            control_rate_hz=controller.control_rate_hz))
+        policy.reset(problem)
     else:
-        if classes is None:
-            raise InputError(f"planner {planner.name!r} needs the class map (classes=...)")
-        problem = PlanningProblem(hm=hm, classes=classes, start_xy=mission.start_xy_m, goal_xy=mission.goal_xy_m,
-                                  border_m=border_m, vehicle=vehicle_envelope(world))
-        if planner.kind == "policy":
-            waypoints = problem.endpoints()
-            policy = make_policy(planner.name, planner.config, PolicyContext(
-                observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
-                control_rate_hz=controller.control_rate_hz))
-            policy.reset(problem)
-        else:
-            waypoints = plan(planner, problem)
+        waypoints = plan(planner, problem)
     if policy is None:
         tracker = make_tracker(waypoints, spec, controller)
         length = tracker.length_m

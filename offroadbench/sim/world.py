@@ -1,8 +1,17 @@
 """A PyBullet DIRECT world holding one terrain (a few heightfield tiles) and one vehicle.
 
-The terrain is built once per World and reused for all its missions; the vehicle is reset
-(pose, velocities, wheel joints) before each mission, so a mission's result does not depend on
-what ran before it. Facts this relies on (measured, shared/DESIGN.md):
+The terrain is built once per World and reused for all its missions; the vehicle is removed and
+loaded anew before each mission (:meth:`World.spawn`), so a mission's result does not depend on
+what ran before it, to the last bit. Facts this relies on (measured, shared/DESIGN.md):
+
+- Resetting the vehicle's pose, velocities and joints is not enough for that: Bullet keeps
+  per-body state across steps that those resets leave alone (the vehicle's contact manifolds,
+  whose cached points and impulses warm-start the solver, and the multibody's own solver data).
+  With a reset vehicle, 3 of 6 missions on a 32 m paper map run after others in one World
+  differed in their last digits from the same missions in a fresh World (and then chaotically),
+  also with a physics step taken in the air between missions. A vehicle removed and loaded again
+  (about 4 ms, against a second or more per mission) gave every mission the bits of a fresh World,
+  in any order (``tests/test_portable.py``).
 
 - Bullet centres a heightfield on the middle of its x/y grid and at (min + max) / 2 in z, so
   a heightfield of samples (r0..r1, c0..c1) is placed at ((c0 + c1)/2 * cell, (r0 + r1)/2 * cell,
@@ -214,10 +223,12 @@ class World:
         """Put the vehicle at rest above (x, y) facing ``heading_rad``, clear of the terrain, then
         let it settle for ``sim.settle_time_s`` with its wheels braked.
 
-        Every piece of vehicle state is reset, so what ran before does not matter.
+        The vehicle is a newly loaded body (a new ``vehicle_id``; see the module docstring), so
+        what ran before does not matter.
         """
         cid = self._cid
-        body = self.vehicle_id
+        pb.removeBody(self.vehicle_id, physicsClientId=cid)
+        self.vehicle_id = body = self._load_vehicle()
         orn = pb.getQuaternionFromEuler([roll_rad, 0.0, heading_rad])
         pb.resetBasePositionAndOrientation(body, [x_m, y_m, self.hm.z_max_m + 10.0], orn, physicsClientId=cid)
         pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)

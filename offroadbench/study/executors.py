@@ -65,7 +65,7 @@ def _die_with_parent(parent_pid: int) -> None:
 
 def _worker_bootstrap() -> None:
     """What every worker process does first: import pybullet without its banner."""
-    from offroadbench.sim._banner import import_pybullet_quietly
+    from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
 

@@ -72,10 +72,6 @@ def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
     return "\n".join([head, sep, *body])
 
 
-def _pm(med: float, iqr: float) -> str:
-    return f"{_fmt(med)} (IQR {_fmt(iqr)})"
-
-
 # ---------------------------------------------------------------------------- figures
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
@@ -227,8 +223,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     figures = {
         "fig5_class_areas.png": fig_class_areas(summary),
-        "fig6_success_rate.png": fig_success(per_terrain, labels),
-        "fig7_traversal_metrics.png": fig_metrics(trials, labels),
+        "fig6_success_rate.png": fig_success(stats.success_boxes(per_terrain, labels)),
+        "fig7_traversal_metrics.png": fig_metrics(stats.metric_boxes(trials, labels), stats.METRICS),
         "fig4_missions.png": _fig4(meta, trials, *fig4),
     }
     tables = {

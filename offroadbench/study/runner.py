@@ -20,25 +20,17 @@ from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
+from offroadbench.io.outputs import missing_dirs
+from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
 from offroadbench.study.store import Store, remove_store
 from offroadbench.study.tasks import TerrainTask, TrialFn
-from offroadbench.sim.config import tile_spans
 
 log = logging.getLogger(__name__)
 
 __all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry",
            "worker_memory_bytes"]
 
-#: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
-WORKER_BYTES_PER_CELL = 60
-#: PyBullet's transient triangle copy while one heightfield tile's heights are written, per cell of
-#: the tile (sim/world.py): ~700 MB for an untiled 1009^2 map, ~45 MB for a 256-cell tile
-TILE_BUILD_BYTES_PER_CELL = 690
-#: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes.
-#: With these, a 1009^2 worker is estimated at 266 MiB tiled (measured peak 203 MB) and 923 MiB
-#: untiled (860 MB; benchmarks/RESULTS.md, "Heightfield tiles")
-WORKER_BASE_BYTES = 160 * 2**20
 
 
 def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
@@ -93,16 +85,14 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
 
 
 def worker_memory_bytes(plans: list[CellPlan]) -> int:
-    """Peak memory estimate of one trial worker of the study: its largest terrain's world."""
+    """Peak memory estimate of one trial worker of the study: its largest terrain's world
+    (offroadbench.memory.world_bytes)."""
     return max(_world_bytes(p) for p in plans)
 
 
 def _world_bytes(plan: CellPlan) -> int:
-    rows, cols = int(plan.recipe_data["grid"]["rows"]), int(plan.recipe_data["grid"]["cols"])
-    tile = plan.section("sim").heightfield_tile_cells
-    tile_rows = max(b - a for a, b in tile_spans(rows - 1, tile)) + 1
-    tile_cols = max(b - a for a, b in tile_spans(cols - 1, tile)) + 1
-    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * rows * cols + TILE_BUILD_BYTES_PER_CELL * tile_rows * tile_cols
+    grid = plan.recipe_data["grid"]
+    return world_bytes(grid["rows"], grid["cols"], plan.section("sim").heightfield_tile_cells)
 
 
 def code_version() -> str:
@@ -179,7 +169,7 @@ def run_study(
     version = code_version()
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
-    made_dirs = _missing_dirs(run_dir)
+    made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
     store = Store(run_dir, create=True)
     ran = 0
     running = False
@@ -243,13 +233,3 @@ def run_study(
     return RunSummary(
         run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
     )
-
-
-def _missing_dirs(path: Path) -> list[Path]:
-    """The directories of ``path`` (itself included) that do not exist yet, deepest first."""
-    out = []
-    q = path
-    while not q.exists() and q.parent != q:
-        out.append(q)
-        q = q.parent
-    return out

@@ -102,10 +102,10 @@ def _closed_classes(hm, cell: CellPlan):
 
 
 def _drive_kwargs(hm, cell: CellPlan) -> dict[str, Any]:
-    """The planner, class map and border of the cell's trials (the class map only when needed)."""
+    """The planner, class map and border of the cell's trials (the class map only when the
+    planner's or policy's registry entry declares that it needs it)."""
     choice = cell.section("planner")
-    needs = not (choice.kind == "planner" and choice.name == "straight")
-    return {"planner": choice, "classes": _closed_classes(hm, cell) if needs else None,
+    return {"planner": choice, "classes": _closed_classes(hm, cell) if "classes" in choice.needs else None,
             "border_m": cell.section("missions").border_m,
             "controller": cell.section("controller"), "rules": cell.section("rules")}
 

@@ -12,6 +12,7 @@ Format (``terrains/*.toml``)::
     rows = 1009
     cols = 1009
     cell_size_m = 0.05
+    quantise = "png16"       # optional: "png16" (default, 16-bit levels) or "none" (float64, CPU-dependent bits)
 
     [layers.base]            # applied in file order; the table name is the layer's name
     generator = "multifractal"
@@ -49,6 +50,7 @@ from offroadbench import resources
 from offroadbench.config import check_int, check_range, config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.levels16 import quantise
 from offroadbench.seeding import layer_rng, seed_sequence
 from offroadbench.io.craters_csv import read_craters
 from offroadbench.io.dem import read_dem
@@ -214,7 +216,7 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
     _check_keys(data, _TOP_KEYS, where)
     meta = data.get("recipe", {})
     _check_keys(meta, _RECIPE_KEYS, f"{where}: [recipe]")
-    grid_keys = [f.name for f in dataclasses.fields(GridConfig)]
+    grid_keys = [f.name for f in dataclasses.fields(GridConfig) if f.name != "quantise"]
     table = data.get("grid")
     if not isinstance(table, dict):
         raise InputError(f"{where}: missing [grid] table with {', '.join(grid_keys)}")
@@ -263,7 +265,11 @@ def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:
 
 # --------------------------------------------------------------------------- generation
 def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heightmap:
-    """Run the recipe's layers in order and return the Heightmap (pure: no I/O)."""
+    """Run the recipe's layers in order and return the Heightmap (pure: no I/O).
+
+    The finished map is rescaled to ``[recipe] relief_m`` if given, then quantised as
+    ``[grid] quantise`` says (default: the 16-bit levels of the PNG export, portable across CPUs).
+    """
     root = seed_sequence(seed)
     shape = recipe.grid.shape
     hm: Heightmap | None = None
@@ -287,4 +293,6 @@ def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heig
     assert hm is not None
     if recipe.relief_m is not None:
         hm = hm.rescaled(recipe.relief_m)
+    if recipe.grid.quantise == "png16":
+        hm = hm.with_z(quantise(hm.z))
     return hm

@@ -93,7 +93,7 @@ def main() -> None:
     import importlib
 
     from offroadbench.cli import build_parser
-    from offroadbench.sim._banner import import_pybullet_quietly
+    from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
     build_parser()  # imports every command module

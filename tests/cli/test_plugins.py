@@ -2,7 +2,6 @@
 (into a temporary directory, not the source tree), and its planner and policy run through
 ``offroadbench drive --planner`` and ``offroadbench study run``; a failed trial replays bit for bit."""
 
-import json
 import os
 import shutil
 import subprocess

@@ -27,7 +27,7 @@ def _write(path, z, transform, nodata=None, crs=None):
 
 
 def test_export_then_dem_layer_gives_the_same_heightmap(hm, tmp_path):
-    from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
+    from offroadbench.terrain.recipe import apply_overrides, generate_terrain, recipe_from_dict
 
     export_heightmap(hm, "geotiff", tmp_path, name="site", meta={"crs": "IAU_2015:30110"})
     raw = read_dem(tmp_path / "site.geo.tif")
@@ -35,11 +35,13 @@ def test_export_then_dem_layer_gives_the_same_heightmap(hm, tmp_path):
     assert np.array_equal(raw.z, hm.z)
     recipe = recipe_from_dict({
         "recipe": {"name": "site"},
-        "grid": {"rows": hm.rows, "cols": hm.cols, "cell_size_m": hm.cell_size_m},
+        "grid": {"rows": hm.rows, "cols": hm.cols, "cell_size_m": hm.cell_size_m, "quantise": "none"},
         "layers": {"base": {"generator": "dem", "path": str(tmp_path / "site.geo.tif")}},
     })
     out = generate_terrain(recipe, 0)
     assert out.cell_size_m == hm.cell_size_m and np.array_equal(out.z, hm.z)
+    levels = generate_terrain(apply_overrides(recipe, {"grid.quantise": "png16"}), 0)  # the default
+    assert np.max(np.abs(levels.z - hm.z)) <= hm.relief_m / 65535 / 2 * (1 + 1e-6)
 
 
 def test_foreign_north_up_dem_with_nodata(tmp_path):

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from offroadbench.analysis.roughness import HIGH, LOW, SEMI
-from offroadbench.config import from_dict
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
@@ -19,7 +18,6 @@ from offroadbench.navigation.planners import (
     PlannerChoice,
     PlanningProblem,
     VehicleEnvelope,
-    _astar,
     cost_grid,
     footprint_hazard,
     plan,
@@ -28,6 +26,7 @@ from offroadbench.navigation.planners import (
     plan_straight,
     planner_from_table,
 )
+from offroadbench.navigation.planners.astar import _astar
 from offroadbench.sim import ControllerConfig, FailureRules, World, load_vehicle, run_mission
 from offroadbench.sim.controller import LineTracker, PathTracker, make_tracker
 
@@ -114,6 +113,53 @@ def test_plan_checks_the_contract_of_a_plug_in():
     finally:
         PLANNERS._entries.pop("_test_bad")
 
+
+
+def test_entries_declare_what_they_need_and_the_runner_gives_exactly_that():
+    """What a driver needs beyond the mission (class map, vehicle envelope) is declared on its
+    registry entry, not inferred from its name: ``straight`` needs neither, the cost-grid planners
+    both, ``reactive`` the vehicle; a plug-in that says nothing needs both. The runner hands a
+    planner the class map and the measured envelope only when its entry declares them, and refuses
+    to drive one that needs the class map without it."""
+    from offroadbench.navigation.drivers import NEEDS, PlannerSpec
+    from offroadbench.navigation.policies import POLICIES
+
+    assert PLANNERS.get("straight").needs == frozenset()
+    assert PLANNERS.get("astar").needs == PLANNERS.get("lattice").needs == NEEDS == {"classes", "vehicle"}
+    assert POLICIES.get("reactive").needs == {"vehicle"}
+    assert PlannerChoice("straight").needs == frozenset() and planner_from_table({"name": "reactive"}).needs == {"vehicle"}
+    with pytest.raises(ValueError, match="wheels"):
+        PlannerSpec(plan_straight, needs=frozenset({"wheels"}))
+
+    seen = {}
+
+    def spy(name):
+        def plan_spy(problem, cfg):
+            seen[name] = (problem.classes, problem.vehicle)
+            return problem.endpoints()
+        return plan_spy
+
+    needs = {"_test_none": frozenset(), "_test_vehicle": frozenset({"vehicle"}), "_test_default": NEEDS}
+    for name, need in needs.items():
+        PLANNERS.add(name, PlannerSpec(spy(name), needs=need))
+    try:
+        classes = _open()
+        mission = Mission.between(0, (2.0, 2.0), (3.0, 2.0))
+        with World(FLAT) as world:
+            for name in needs:
+                run_mission(world, mission, planner=PlannerChoice(name), classes=classes,
+                            rules=FailureRules(timeout_factor=1.0))
+            with pytest.raises(InputError, match="planner '_test_default' needs the class map"):
+                run_mission(world, mission, planner=PlannerChoice("_test_default"))
+    finally:
+        for name in needs:
+            PLANNERS._entries.pop(name)
+    assert seen["_test_none"] == (None, None)
+    assert seen["_test_vehicle"][0] is None and isinstance(seen["_test_vehicle"][1], VehicleEnvelope)
+    measured = seen["_test_default"][1]
+    assert np.array_equal(seen["_test_default"][0], classes)
+    assert measured == seen["_test_vehicle"][1] and measured != VehicleEnvelope(length_m=1.0)  # measured, not a default
+    assert measured.length_m == pytest.approx(0.99, abs=0.02)  # the Husky's overall length (spec sheet: 0.99 m)
 
 # ---------------------------------------------------------------------------- A*
 def test_astar_cost_on_a_uniform_grid_is_the_octile_distance():
@@ -343,23 +389,23 @@ def test_footprint_hazard_is_computed_once_per_map_vehicle_and_grid():
     read-only, equal to a fresh computation, and recomputed for another vehicle, grid or map."""
     import gc
 
-    from offroadbench.navigation import planners
+    from offroadbench.navigation import costmap
 
     hm = _step_wall(0.12)
     veh = VehicleEnvelope()
     first = footprint_hazard(hm, veh, 5)
     assert footprint_hazard(hm, veh, 5) is first
-    fresh = planners._footprint_hazard(hm, veh, 5)
+    fresh = costmap._footprint_hazard(hm, veh, 5)
     assert all(np.array_equal(first[k], fresh[k]) for k in fresh)
     assert not first["hazard"].flags.writeable
     wide = footprint_hazard(hm, dataclasses.replace(veh, width_m=1.2), 5)
     assert wide is not first and wide["step"].sum() > first["step"].sum()  # a wider reach sees the step sooner
     assert footprint_hazard(hm, veh, 4) is not first
     assert footprint_hazard(_step_wall(0.12), veh, 5) is not first  # another (equal) map object
-    n = len(planners._HAZARD_CACHE)
+    n = len(costmap._HAZARD_CACHE)
     del hm, first, wide
     gc.collect()
-    assert len(planners._HAZARD_CACHE) < n  # dropped with its map
+    assert len(costmap._HAZARD_CACHE) < n  # dropped with its map
 
 
 @pytest.mark.parametrize("planner", [plan_astar, plan_lattice])

@@ -3,7 +3,6 @@ heading, and a parked vehicle holds on a slope."""
 
 import math
 
-import numpy as np
 import pytest
 
 from offroadbench.heightmap import Heightmap

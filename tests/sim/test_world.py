@@ -35,7 +35,6 @@ def test_terrain_sits_where_the_heightmap_says():
 
 
 def test_settled_vehicle_rests_on_the_heightmap_surface():
-    import pybullet as pb
 
     hm = _smooth_map()
     with World(hm) as world:

@@ -135,8 +135,8 @@ def test_study_id_changes_with_the_config_and_the_recipe():
 def test_worker_memory_estimate_counts_one_heightfield_tile():
     """A worker's peak is its map plus PyBullet's temporary copy of one tile's triangles: tiling
     a 1009^2 map must bring the estimate from ~0.9 GB down to the map's share."""
-    from offroadbench.study.runner import (TILE_BUILD_BYTES_PER_CELL, WORKER_BASE_BYTES, WORKER_BYTES_PER_CELL,
-                                           worker_memory_bytes)
+    from offroadbench.memory import TILE_BUILD_BYTES_PER_CELL, WORKER_BASE_BYTES, WORKER_BYTES_PER_CELL
+    from offroadbench.study.runner import worker_memory_bytes
 
     import tomllib
 

@@ -1,10 +1,16 @@
-"""Terrains are bit-identical to the ones the code made before the nested-config redesign.
+"""Terrains are bit-identical on every x86-64 CPU, and a refactor moves no bit of them.
 
-The sha256 of ``z`` (float64, C order) was recorded on commit 2992680 (flat configs, grid fields
-in every generator config) for every preset in ``terrains/`` on a small grid at seeds 0 and 1, for
-the full 1009 x 1009 ``paper-d2.45`` at seed 0, and for one small recipe per generator and modifier
-setting that no preset covers. A refactor of configs, grids, seeding or file loading must not move
-a single bit; a change that means to move them must say so and record new hashes.
+The pinned sha256 are of ``z`` (float64, C order) as ``generate_terrain`` returns it by default,
+i.e. quantised to the 16-bit levels of the PNG export (``[grid] quantise = "png16"``,
+:mod:`offroadbench.levels16`). Those bits do not depend on the CPU's SIMD or BLAS kernels (checked in
+``tests/test_portable.py`` by recomputing them with numpy's and OpenBLAS's dispatch switched down),
+so these hashes hold on the AMD AVX2, AMD AVX-512 and Intel AVX-512 machines alike. They were
+recorded when quantisation became the default (issue 24); the float64 terrain under them is the one
+the nested-config redesign pinned on commit 2992680. Every preset in ``terrains/`` is covered on a
+small grid at seeds 0 and 1, the full 1009 x 1009 ``paper-d2.45`` at seed 0, and one small recipe
+per generator and modifier setting that no preset covers. A change that means to move them must
+say so and record new hashes. ``quantise = "none"`` (float64 as generated) is platform-dependent in
+its last bits and is checked for same-machine determinism only (last test).
 """
 
 from __future__ import annotations
@@ -18,25 +24,25 @@ from offroadbench.terrain.craters import recipe_craters
 from offroadbench.terrain.recipe import apply_overrides, generate_terrain, load_recipe, recipe_from_dict
 
 PRESETS = {
-    ("asteroid-regolith", 0): "99514c747eef648d38ee80a2b93efe4cefc1a2508134dd5b71ad135cfea5d3b4",
-    ("asteroid-regolith", 1): "3b753dd48f7bcd7cb46b77e44471db42f9f476715b2f5cc23466dfecb0bc9d0e",
-    ("lunar-highland", 0): "8ef545a6089ddb5e5e58258ef1befa1ad7d506d390ad38fd4033572c7df59883",
-    ("lunar-highland", 1): "abf680b12cf2ce2aa77496548e844eec55c94a07e8d33019df465c6008a2b664",
-    ("lunar-mare", 0): "6076ef6e33526de950307f6143d412fcdfd04dcde60a841eaeb542d7157441af",
-    ("lunar-mare", 1): "d7dd6306105963bdb4fad45d53db397a577ebad15b00bb82ca22f2df9b456e69",
-    ("multifractal-cratered", 0): "6c03bd496ce58a56fce6465ed82fb42fa9d583fc3e9fdc280e1e53dcd151819a",
-    ("multifractal-cratered", 1): "19ad0f5bb397ed758b99fb3b349b43128d4b52a11b5a9c7cb8f78c9b2da45bb3",
-    ("paper-d2.3", 0): "b156571a30ab0a71a28998f8cd078b684c989034080004598a4e1ad47638f596",
-    ("paper-d2.3", 1): "d8677b439a689500422083e8626d9dd4aaf86ed8cf1728533662ec8d852dfa09",
-    ("paper-d2.45", 0): "4372343e4850afa59db9317e228cc78ca286bf3b3649c5199c8119c85fea2407",
-    ("paper-d2.45", 1): "f717df0dcd13a4604781d6e8181741508cfb8f9f34204c65836155a5428e8f07",
-    ("paper-d2.6", 0): "11eb239afee92747fd4fa9a736c8a79c1cfcbc83c846adbe068a1474e36c6ed8",
-    ("paper-d2.6", 1): "6472be324f58702a58a539fa433e9e664fb3ea490ce0c4cc3aeb92f2ef3e15f2",
+    ("asteroid-regolith", 0): "85262fade144ecfba1ccca662d36acadc5f67d08ac81d23b4b0d81bd9b538f69",
+    ("asteroid-regolith", 1): "b289b05c1213c337f828f63b795d426829c356de106c4c70a1928389bb41d36d",
+    ("lunar-highland", 0): "b736a7e7008e3ebd6287c291ebc448c04b23f4793d623f57edab0c88ff24dbbe",
+    ("lunar-highland", 1): "a53539fe18fa400073a94e53c044c00937950769cc50a3372d463c0335b7933e",
+    ("lunar-mare", 0): "bec3e10a9364d20d641eab46005110a18739258d6b7e3e06ba5fa7b02bcc593d",
+    ("lunar-mare", 1): "6f32b18524e3918b428b9de035914cd78e6693d529f3cc6d8e8af781aa281234",
+    ("multifractal-cratered", 0): "de962c48add44c8bc55044f128c89c2be7d9b12ac555418d84f66030008ecfd0",
+    ("multifractal-cratered", 1): "51ab0189a84d2d2e408db58028f54baec7a5132df7f0274032b650eb56970aa1",
+    ("paper-d2.3", 0): "a9f18ffeff1d4ab916df1910f9a6bbee4d9fbf63cf6a282ff8659088117686bc",
+    ("paper-d2.3", 1): "9953a21b2eaedff776a06f1b76eb96c13634656e0df244b656ae745233c32b84",
+    ("paper-d2.45", 0): "30947d815d53343bf96e90a83bc705ebe335ec21e00e6e9134a3825e650d5d22",
+    ("paper-d2.45", 1): "8a62df43b9cc5f5a38eb701d7ad87f9034b51c7d9dde43250a1f0885ef54f73a",
+    ("paper-d2.6", 0): "784e2686b048da9d2a96facd3d195c213f4aad1822873c9b69c9458eb1baaaa2",
+    ("paper-d2.6", 1): "2ea71f37fd264d0dcdafe55ddecd67f1593748b22c79ffb482b344d76d13dbb7",
 }
 #: the presets were hashed on this grid (their own cell size)
 SMALL = {"grid.rows": 129, "grid.cols": 97}
 
-FULL_PAPER_D245_SEED0 = "35e3d925248795164773c589603a164f2a47b966a7a9e47fa088fdabbad54456"
+FULL_PAPER_D245_SEED0 = "08933cba7fda4b39f4c9482a36b18a4cdbd626a4195b6589ea38266ad8ecba7f"
 
 GRID = {"rows": 65, "cols": 81, "cell_size_m": 0.1}
 DEM_GRID = {"rows": 60, "cols": 50, "cell_size_m": 0.3}
@@ -50,22 +56,22 @@ RECIPES = {
     "wm": (
         {"base": {"generator": "wm", "M": 8, "D": 2.4, "smoothing_sigma_px": 0.5}},
         GRID,
-        "8741e01210d9617580859c5b7892f325fd6c769c1926edbafccfefc383a62f7e",
+        "88b6cfa67c819bda2a4b0f03d4d526c1b5550196c35dceb5712ffa2a625a73c9",
     ),
     "wm-metres": (
         {"base": {"generator": "wm", "M": 8, "D": 2.3, "coordinates": "metres", "L": 10.0, "origin_offset_px": 30.0}},
         GRID,
-        "dd669d4201601cac6b070550575a5ac2f593e6a6018e9083e261d4a5728605f9",
+        "c774fdafbe67b5124ff42bfb8965deb37c3c4b8174e1ff2ee1d3408bdd2bb52e",
     ),
     "fbm-H": (
         {"base": {"generator": "fbm", "H": 0.7, "relief_m": 2.0}},
         GRID,
-        "a81740c56022a4b598867f626b17091bd73b6a24e58c470c4fdccffeae8d2c10",
+        "6acbb0139bb88217497f91c7c2a5f55a280b529a01142b11767e91b682c5901b",
     ),
     "diamond_square": (
         {"base": {"generator": "diamond_square", "D": 2.3}, "up": {"generator": "rmd_expand", "levels": 1}},
         GRID,
-        "5f1ae24f16bd815c5417d7673efc5b06a82f66b90d0755e6dd2cf869c3939332",
+        "427e31280c290dfebf80ef1ca7a6fed675d48c38798d1004fb0c79e68f311a9c",
     ),
     "ds-relief-spectral": (
         {
@@ -73,12 +79,12 @@ RECIPES = {
             "sp": {"generator": "spectral_restore", "cutoff_wavelength_m": 1.0},
         },
         GRID,
-        "d0f42ac2653c977695810c2fb1c0d9ee6e18751dcd59d0dba750f97ce6675476",
+        "d211fa27ebb25dcc8f9577ca99c2362923955c3e5bc9be76f91241af7bdcf35f",
     ),
     "dem-sample": (
         {"base": {"generator": "dem"}},
         DEM_GRID,
-        "c0f205293c948a3d2c8157ac185f9e9b9661b6c3bc4069a6ebb717fa37e13860",
+        "c6395f234ac83c81d616a17bdb0e516de6a67bd1403bba4d95bbea464e673478",
     ),
     "dem-sample-sum": (
         {
@@ -86,7 +92,7 @@ RECIPES = {
             "fb": {"generator": "fbm", "relief_m": 0.1, "weight": 0.5},
         },
         DEM_GRID,
-        "a3a89098f787b301dfdea9d336a8dd2ea248126902db002550780f74cc1e7c69",
+        "933780e71c9261b66bafc7ffeabf1e127ebd36c30ecc7c180c9378f15812b0b0",
     ),
     "craters-kth": (
         {
@@ -98,12 +104,12 @@ RECIPES = {
             },
         },
         GRID,
-        "19e0374a27a66eca559674fe9e17fa64ef8a826333526a70be1bc2fe5fe67898",
+        "e0dce6bba82565eabbe16231656bf59e9b1a4b846bd11d9f3eb0de492ff98ae3",
     ),
     "craters-li": (
         {"base": {"generator": "fbm", "relief_m": 0.3}, "cr": LI_CRATERS},
         GRID,
-        "8a1a4e131c567810042ba4c38ecb41c52e1c942cacd26159c61951dfdf1445d0",
+        "978e7a135dd5529066518e0f8cd9f369f25a5d48b86632ed66f02bfaf0160678",
     ),
     "multifractal-product": (
         {
@@ -111,25 +117,25 @@ RECIPES = {
             "m": {"generator": "multifractal", "combine": "product", "M": [4, 8, 16], "wm": {"n_max": 200, "band_limited": True}},
         },
         GRID,
-        "dbb87cc62897f6bc90bcdc7c228bce024008ace00866ed2e0348bd5633ace245",
+        "7ba9d417543c26c61230107a27e1e650618b8bb96d18ff78cc4f3384c2a78812",
     ),
 }
 #: sha256 of the terrains with a W-M layer under the default ``method = "nufft"`` (same keys)
 NUFFT = {
-    ('multifractal-cratered', 0): "0a33f34c46b40b326d5bdaaecee6feff576a53821c1cd1e66c650473ce41eea7",
-    ('multifractal-cratered', 1): "9d834483a88ab7a66840e37a7da809e1850b6109c3b662c362f48bd5ae350765",
-    ('paper-d2.3', 0): "fa35cd20be7e5976b0775115cb5cb445d7292536cb73e4c9973d10a77e914a9c",
-    ('paper-d2.3', 1): "69f87ea50f3ac35320127ee1a79cf927ebc527233f3a18407680481b7004c7cf",
-    ('paper-d2.45', 0): "d7ebe94e1174d0435e56aa75e56d3ebbcf5d50af1c28b417976f9d729fa261bd",
-    ('paper-d2.45', 1): "19955865bf03e72301e27cf4b48bbf92ab546ee7a154dc2793c468c9b2c9f6a4",
-    ('paper-d2.6', 0): "1e50aa9163c396810182c39e7aa0fc93a4216bbc3ebce77f939d30ec9bb94782",
-    ('paper-d2.6', 1): "3d068500187e1457e216e5c47663cd869876b32f8c8aeb051685b337e5d9b3b3",
-    'full': "fa2fe9de43f58f7982cdc8e6b64979c1916d30776de7ab0581d2c5f31522d923",
-    'multifractal-product': "fb01e2b4d194926108c31a7a2edc68749d040bde7f4fe9ae9f39dff8502c917a",
-    'wm': "cedae6f2a76c96b5f34d1da6921b707afad41296e6b6e877eb4f268ea2a5f1f5",
-    'wm-metres': "d869afa7d942baa084836b72ca2133d5826567013696fcc344b8447b31ff1989",
+    ('multifractal-cratered', 0): "de962c48add44c8bc55044f128c89c2be7d9b12ac555418d84f66030008ecfd0",
+    ('multifractal-cratered', 1): "51ab0189a84d2d2e408db58028f54baec7a5132df7f0274032b650eb56970aa1",
+    ('paper-d2.3', 0): "a9f18ffeff1d4ab916df1910f9a6bbee4d9fbf63cf6a282ff8659088117686bc",
+    ('paper-d2.3', 1): "96f8d90a84b923e827c21129cf8a0e0157c9a6afd1818cd68d0a51ffa0ab50a8",
+    ('paper-d2.45', 0): "30947d815d53343bf96e90a83bc705ebe335ec21e00e6e9134a3825e650d5d22",
+    ('paper-d2.45', 1): "8a62df43b9cc5f5a38eb701d7ad87f9034b51c7d9dde43250a1f0885ef54f73a",
+    ('paper-d2.6', 0): "854be351b3f4036742e43a21703b863178fa1ac081ca0a8bbd012e62f011b24b",
+    ('paper-d2.6', 1): "bde6a19ade6671495008848f8030ce6f7122c855f61b97c5448280015f384aba",
+    'full': "deaccc13168d076f2619e172289c7144d7ceb9c90115a391b84af82db03056a1",
+    'multifractal-product': "7ba9d417543c26c61230107a27e1e650618b8bb96d18ff78cc4f3384c2a78812",
+    'wm': "88b6cfa67c819bda2a4b0f03d4d526c1b5550196c35dceb5712ffa2a625a73c9",
+    'wm-metres': "427426666a94cac9b1f8782870bb9393124d694b5853e7849a13a63b0446041c",
 }
-CRATER_FILE_SHA = "68e8c099924714ca34dd07e2d333601f2edacb79786fcaf2a8025e59a79e1195"
+CRATER_FILE_SHA = "abbc9152c04a32914ade990ec232885466248affccaa6d9880ab764431a96e74"
 
 
 def sha(hm) -> str:
@@ -182,3 +188,13 @@ def test_crater_file_layer_is_bit_identical(tmp_path):
     path = write_craters(recipe_craters(sampled, 5)["cr"], tmp_path / "craters.csv")
     layers = {"base": {"generator": "fbm", "relief_m": 0.3}, "cr": {"generator": "craters", "crater_file": str(path)}}
     assert sha(generate_terrain(recipe_from_dict({"grid": GRID, "layers": layers}), 3)) == CRATER_FILE_SHA
+
+
+def test_unquantised_terrain_is_deterministic_on_one_machine():
+    """``quantise = "none"``: same seed, same bits, but only on one machine (the bits depend on the CPU)."""
+    recipe = apply_overrides(load_recipe("paper-d2.45"), {**SMALL, "grid.quantise": "none"})
+    a, b = generate_terrain(recipe, 4), generate_terrain(recipe, 4)
+    assert sha(a) == sha(b)
+    quantised = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), SMALL), 4)
+    assert sha(a) != sha(quantised)
+    assert np.max(np.abs(a.z - quantised.z)) <= quantised.relief_m / 65535 / 2 * (1 + 1e-9)

@@ -129,7 +129,8 @@ def test_dem_import_npy_with_sidecar_fills_gaps_and_resamples(tmp_path):
         generate_dem(DEMConfig(dem=raw), GridConfig(rows=40, cols=40, cell_size_m=1.0), np.random.default_rng(0))
     # the recipe names the file; loading the recipe reads it
     recipe = recipe_from_dict(
-        {"grid": {"rows": 65, "cols": 65, "cell_size_m": 0.5}, "layers": {"base": {"generator": "dem", "path": str(p)}}}
+        {"grid": {"rows": 65, "cols": 65, "cell_size_m": 0.5, "quantise": "none"},
+         "layers": {"base": {"generator": "dem", "path": str(p)}}}
     )
     np.testing.assert_array_equal(generate_terrain(recipe, 0).z[::2, ::2][known], base.z[known])
 

@@ -26,10 +26,14 @@ def test_paper_presets_exist():
 
 
 def test_layers_sum_product_and_independent_rngs():
-    one = recipe_from_dict(_wm_recipe())
-    two = recipe_from_dict(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "weight": 0.5}))
-    prod = recipe_from_dict(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "combine": "product"}))
-    only_b = recipe_from_dict(
+    def unquantised(data):  # the layer arithmetic itself, before the 16-bit levels
+        data["grid"]["quantise"] = "none"
+        return recipe_from_dict(data)
+
+    one = unquantised(_wm_recipe())
+    two = unquantised(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "weight": 0.5}))
+    prod = unquantised(_wm_recipe(b={"generator": "wm", "M": 3, "n_max": 10, "combine": "product"}))
+    only_b = unquantised(
         {"grid": {"rows": 30, "cols": 40, "cell_size_m": 0.1}, "layers": {"b": {"generator": "wm", "M": 3, "n_max": 10}}}
     )
     a = generate_terrain(one, 5).z
@@ -43,7 +47,27 @@ def test_relief_and_grid_injection():
     data["recipe"]["relief_m"] = 2.0
     hm = generate_terrain(recipe_from_dict(data), 1)
     assert hm.shape == (30, 40) and hm.cell_size_m == 0.1
-    assert hm.relief_m == pytest.approx(2.0) and hm.z_min_m == 0.0
+    assert hm.relief_m == 2.0 and hm.z_min_m == 0.0  # exactly: the 16-bit levels span [0, relief]
+
+
+def test_terrain_is_quantised_to_the_png_levels_by_default(tmp_path):
+    from offroadbench.io.png16 import encode_png16, read_png16, write_png16
+
+    data = _wm_recipe()
+    data["recipe"]["relief_m"] = 2.0
+    hm = generate_terrain(recipe_from_dict(data), 1)
+    data["grid"]["quantise"] = "none"
+    raw = generate_terrain(recipe_from_dict(data), 1)
+    step = 2.0 / 65535
+    levels = encode_png16(hm)
+    assert levels.min() == 0 and levels.max() == 65535
+    np.testing.assert_array_equal(hm.z, levels * step)  # z_min + level * relief / 65535
+    assert np.max(np.abs(hm.z - raw.z)) <= step / 2 * (1 + 1e-9)
+    write_png16(hm, tmp_path / "t.png")
+    assert read_png16(tmp_path / "t.png").z.tobytes() == hm.z.tobytes()  # the PNG is the terrain, bit for bit
+    with pytest.raises(InputError, match="quantise"):
+        data["grid"]["quantise"] = "float32"
+        recipe_from_dict(data)
 
 
 def test_overrides_and_ids():

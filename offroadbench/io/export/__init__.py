@@ -2,7 +2,8 @@
 
 ``export_heightmap(hm, "gazebo", out_dir, name="t")`` writes every file of one format into
 ``out_dir`` as one transaction (:mod:`offroadbench.io.export._staging`): the files appear together
-or, on any error, not at all. ``read_export(out_dir, "gazebo", name="t")`` reads them back the way
+or, on any error, not at all. Where they may go is the one output-path policy of
+:mod:`offroadbench.io.outputs`. ``read_export(out_dir, "gazebo", name="t")`` reads them back the way
 the target tool would (its documented mapping from file to world), as a Heightmap.
 
 Placement convention (shared/DESIGN.md): ``z[r, c]`` is the height in metres at
@@ -28,10 +29,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from offroadbench.analysis.relief import tail_report
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.io.export._staging import check_output_dir, staged_dir
+from offroadbench.io.export._staging import staged_dir
+from offroadbench.io.outputs import check_output_dir
 from offroadbench.registry import Registry
 
 __all__ = ["EXPORTERS", "Exporter", "ExportResult", "check_name", "check_output_dir", "export_heightmap", "read_export"]
@@ -118,13 +119,13 @@ def export_heightmap(
     meta: Mapping[str, Any] | None = None,
     **options: Any,
 ) -> ExportResult:
-    """Write ``hm`` in format ``fmt`` into ``out_dir`` (created if missing; its parent must exist).
+    """Write ``hm`` in format ``fmt`` into ``out_dir`` (created with its missing parents).
 
     ``name`` is the stem of the written files, ``meta`` extra keys for sidecars (recipe, seed, crs,
-    ...), ``options`` format options (``stride`` for obj). All or nothing: on any error no file is left.
-    A map whose top or bottom 0.1 % of samples span more than half its relief (the paper presets'
-    corner spire, :mod:`offroadbench.analysis.relief`) is exported as it is, with a logged warning
-    and a note: the spike sets the 16-bit step of the image formats.
+    ...), ``options`` format options (``stride`` for obj). All or nothing: on any error no file is
+    left (nor a parent directory created for it). The heights are exported as they are; whether a
+    spike dominates the relief (and so the 16-bit step of the image formats) is
+    offroadbench.analysis.relief's question, which ``offroadbench export`` asks and reports.
     """
     exporter = EXPORTERS.get(fmt)
     check_name(name)
@@ -133,15 +134,10 @@ def export_heightmap(
         allowed = ", ".join(exporter.options) or "none"
         raise InputError(f"export format {fmt!r} takes no option {', '.join(unknown)}; its options: {allowed}")
     exporter.check_available()
-    tails = tail_report(hm)
-    if tails.dominated:
-        log.warning("export %s: %s", fmt, tails.message())
     out = Path(out_dir)
     with staged_dir(out) as stage:
         notes = exporter.write(hm, stage, name, dict(meta or {}), **options)
         rel = sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file())
-    if tails.dominated:
-        notes = [*notes, "warning: " + tails.message()]
     files = tuple(out / p for p in rel)
     log.info("export %s: wrote %d file(s) to %s", fmt, len(files), out)
     return ExportResult(files=files, notes=tuple(notes))

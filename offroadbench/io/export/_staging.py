@@ -8,7 +8,9 @@ when the block ends without an error do the files appear in the output directory
   Files they replace are set aside first and put back if a later move fails, so a crash or a full
   disk half way leaves the directory as it was.
 
-On any error the staging directory is deleted.
+On any error the staging directory is deleted. Where the output may go is the one output-path
+policy of offroadbench.io.outputs: a missing output directory and its missing parents are created
+(and removed again if the export fails); the nearest existing ancestor must accept a new file.
 """
 
 from __future__ import annotations
@@ -22,46 +24,31 @@ from typing import Iterator
 
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import current_umask
+from offroadbench.io.outputs import check_output_dir, created_dirs
 
-__all__ = ["check_output_dir", "staged_dir"]
-
-
-def check_output_dir(out_dir: str | Path) -> Path:
-    """``out_dir`` if it is a writable directory, or can be created in a writable existing parent."""
-    d = Path(out_dir)
-    if d.exists():
-        if not d.is_dir():
-            raise InputError(f"output directory {d}: exists and is not a directory")
-        if not os.access(d, os.W_OK | os.X_OK):
-            raise InputError(f"output directory {d}: is not writable")
-        return d
-    parent = d.parent if str(d.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"output directory {d}: parent {parent} does not exist or is not a directory")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"output directory {d}: parent {parent} is not writable")
-    return d
+__all__ = ["staged_dir"]
 
 
 @contextlib.contextmanager
 def staged_dir(out_dir: str | Path) -> Iterator[Path]:
     """Yield an empty staging directory; on success its contents appear in ``out_dir`` (see module doc)."""
-    out_dir = check_output_dir(out_dir)
+    out_dir = check_output_dir(out_dir, "output directory")
     fresh = not out_dir.exists()
     parent = out_dir.parent if fresh else out_dir
-    try:
-        stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name or 'export'}.", suffix=".tmp", dir=parent))
-    except OSError as exc:
-        raise InputError(f"output directory {out_dir}: cannot write there ({exc.strerror})") from None
-    try:
-        yield stage
-        if fresh:
-            os.chmod(stage, 0o777 & ~current_umask())  # mkdtemp makes 0700; give the usual directory mode
-            os.rename(stage, out_dir)
-        else:
-            _merge_into(stage, out_dir)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+    with created_dirs(parent):  # missing parents, removed again if the export fails
+        try:
+            stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name or 'export'}.", suffix=".tmp", dir=parent))
+        except OSError as exc:
+            raise InputError(f"output directory {out_dir}: cannot write there ({exc.strerror})") from None
+        try:
+            yield stage
+            if fresh:
+                os.chmod(stage, 0o777 & ~current_umask())  # mkdtemp makes 0700; give the usual directory mode
+                os.rename(stage, out_dir)
+            else:
+                _merge_into(stage, out_dir)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
 
 
 def _check_merge(stage: Path, out_dir: Path) -> None:

@@ -180,16 +180,27 @@ def grid_coordinates(cfg: WMConfig, grid: GridConfig) -> tuple[np.ndarray, np.nd
     return x0 + np.arange(grid.cols) * step, x0 + np.arange(grid.rows) * step
 
 
+def _powers(base: float, exponents) -> np.ndarray:
+    """``base ** e`` for each exponent, by the C library's ``pow`` one at a time (float64).
+
+    Not ``np.power``: numpy's SIMD ``power`` loops differ between CPUs in the last bit, and the
+    frequency ``gamma^n`` of a high harmonic (up to ~1e60 for D_high near 3) multiplies every
+    coordinate before the cosine, so one ulp of it becomes a different phase: the D_high = 2.9
+    surface then differed by 2e-3 of its range between an AVX-512 and a baseline x86-64 CPU.
+    """
+    return np.array([math.pow(float(base), float(e)) for e in np.asarray(exponents, dtype=float).ravel()])
+
+
 def kept_harmonics(cfg: WMConfig, grid: GridConfig) -> np.ndarray:
     """The frequency indices n that are evaluated on ``grid``, after the tolerance and band-limit cuts."""
     n = np.arange(cfg.n_min, n_max_effective(cfg, grid) + 1)
     if cfg.amplitude_tol > 0:
-        rel = float(cfg.gamma) ** ((cfg.D - 3.0) * (n - cfg.n_min))
+        rel = _powers(cfg.gamma, (cfg.D - 3.0) * (n - cfg.n_min))
         n = n[rel >= cfg.amplitude_tol]
     if cfg.band_limited:
         # spatial frequency gamma^n / L cycles per unit; Nyquist is 1 / (2 step)
         nyquist = 0.5 / grid_step(cfg, grid)
-        n = n[float(cfg.gamma) ** n.astype(float) / cfg.L <= nyquist]
+        n = n[_powers(cfg.gamma, n) / cfg.L <= nyquist]
     return n
 
 
@@ -207,10 +218,10 @@ def _term_table(cfg: WMConfig, grid: GridConfig, phases: np.ndarray):
     n = kept_harmonics(cfg, grid)
     m = np.arange(1, cfg.M + 1)
     theta = np.pi * m / cfg.M
-    k = 2.0 * np.pi * np.power(float(cfg.gamma), n.astype(float)) / cfg.L
+    k = 2.0 * np.pi * _powers(cfg.gamma, n) / cfg.L
     u = np.outer(np.cos(theta), k).ravel()
     v = np.outer(np.sin(theta), k).ravel()
-    amp = np.tile(np.power(float(cfg.gamma), (cfg.D - 3.0) * n), cfg.M)
+    amp = np.tile(_powers(cfg.gamma, (cfg.D - 3.0) * n), cfg.M)
     phi = phases[:, n - cfg.n_min].ravel()
     return u, v, amp, phi
 

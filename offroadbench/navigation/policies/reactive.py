@@ -1,96 +1,20 @@
-"""Closed-loop policies: observation -> (v, omega), stress-tested by a study exactly like a planner.
-
-A policy sees what an agent of ``offroadbench/Traverse-v0`` sees (offroadbench.navigation.observation:
-the goal in the heading frame, attitude, rates, body velocity and a height patch) and returns the
-env's action, ``(v, omega)`` in m/s and rad/s, clipped to the vehicle's limits. The trial runner
-calls it at the control rate and applies the same failure rules and metrics as for a planned path,
-so ``[planner] name = "reactive"`` in a study puts a policy on the same missions as ``straight``.
-
-A policy is an object with ``reset(problem)`` (called once per mission with the
-:class:`~offroadbench.navigation.planners.PlanningProblem`: a trained RL policy ignores it, a
-model-predictive controller may read the map from it) and ``act(observation) -> (v, omega)``.
-The registry holds :class:`PolicySpec` entries whose ``make(cfg, context)`` builds one. Register in
-the same process with :func:`register_policy`, or from an installed package with an entry point::
-
-    [project.entry-points."offroadbench.policies"]
-    my-rl = "my_package:POLICY"           # a PolicySpec
-
-A stable-baselines3 model fits in a few lines: ``act = lambda obs: model.predict(obs, deterministic=True)[0]``.
-"""
+"""``reactive``: pure pursuit to the goal, bent away from steep steps seen in the height patch."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Protocol
+from typing import Mapping
 
 import numpy as np
 
 from offroadbench.config import check_int, check_range
-from offroadbench.navigation.observation import ObservationConfig
-from offroadbench.navigation.planners import NoConfig, PlanningProblem, VehicleEnvelope, entry_config
-from offroadbench.registry import Registry
+from offroadbench.navigation.drivers import PolicyContext, register_policy
+from offroadbench.navigation.problem import PlanningProblem
 
-__all__ = ["Policy", "PolicyContext", "PolicySpec", "POLICIES", "register_policy", "make_policy",
-           "ReactiveConfig", "ReactivePolicy"]
+__all__ = ["ReactiveConfig", "ReactivePolicy"]
 
 
-class Policy(Protocol):
-    def reset(self, problem: PlanningProblem) -> None: ...
-
-    def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]: ...
-
-
-@dataclass(frozen=True, kw_only=True)
-class PolicyContext:
-    """What a policy is built with: the observation layout, the vehicle and the control rate."""
-
-    observation: ObservationConfig = ObservationConfig()
-    vehicle: VehicleEnvelope = VehicleEnvelope()
-    track_m: float = 0.571
-    """Distance between the left and right wheels, m."""
-    control_rate_hz: int = 20
-    """How often ``act`` is called per simulated second."""
-
-
-@dataclass(frozen=True)
-class PolicySpec:
-    """A registry entry: ``make(cfg, context) -> Policy``, its config class and a one-line summary."""
-
-    make: Callable[[Any, PolicyContext], Policy]
-    config: type = NoConfig
-    summary: str = ""
-
-
-def _as_spec(name: str, obj: object) -> PolicySpec:
-    if isinstance(obj, PolicySpec):
-        return obj
-    raise TypeError(f"policy {name!r}: expected a PolicySpec, got {type(obj).__name__}")
-
-
-#: name -> PolicySpec; installed packages add entries through the ``offroadbench.policies`` group
-POLICIES: Registry[PolicySpec] = Registry("policy", entry_point_group="offroadbench.policies", adapt=_as_spec)
-
-
-def register_policy(name: str, *, config: type = NoConfig, summary: str = ""):
-    """Decorator: register a class (or factory) ``make(cfg, context)`` as policy ``name``. Policy and
-    planner names share the ``[planner] name`` namespace; a planner of the same name wins."""
-
-    def deco(make):
-        doc = (make.__doc__ or "").strip().splitlines()
-        POLICIES.add(name, PolicySpec(make, config, summary or (doc[0] if doc else "")))
-        return make
-
-    return deco
-
-
-def make_policy(name: str, cfg: Any, context: PolicyContext) -> Policy:
-    """Build the registered policy ``name`` (``cfg`` as in planners.entry_config)."""
-    spec = POLICIES.get(name)
-    return spec.make(entry_config("policy", name, cfg, spec.config), context)
-
-
-# ---------------------------------------------------------------------------- reactive
 @dataclass(frozen=True, kw_only=True)
 class ReactiveConfig:
     """Settings of the ``reactive`` policy."""
@@ -116,7 +40,7 @@ class ReactiveConfig:
         check_range(self, "slow_down", self.slow_down, lo=0, hi=1)
 
 
-@register_policy("reactive", config=ReactiveConfig,
+@register_policy("reactive", config=ReactiveConfig, needs=frozenset({"vehicle"}),
                  summary="pure pursuit to the goal, bent away from steep steps seen in the height patch")
 class ReactivePolicy:
     """A reactive, terrain-aware policy on the observation alone.

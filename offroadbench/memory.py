@@ -1,0 +1,117 @@
+"""The memory model: how much a piece of work needs, how much the machine has, and the check
+every command runs before it starts.
+
+Two estimates, both upper bounds of the measured peak (benchmarks/RESULTS.md):
+
+* :func:`grid_bytes`: generating and analysing a rows x cols terrain (``generate``, ``analyze``,
+  ``roughness-study``, ``drive``, ``export``), :data:`GRID_BYTES_PER_CELL` per cell;
+* :func:`world_bytes`: a trial worker holding one terrain and its PyBullet world (``study run``),
+  the map's cells plus PyBullet's transient copy of one heightfield tile's triangles.
+
+:func:`check_memory` refuses work whose estimate exceeds :func:`available_memory_bytes` with one
+line naming the estimate (``--force`` or ``OFFROADBENCH_NO_MEMORY_CHECK=1`` skips it);
+:func:`workers_that_fit` is the default worker count of a study.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from offroadbench.errors import InputError
+
+__all__ = [
+    "GRID_BYTES_PER_CELL", "WORKER_BYTES_PER_CELL", "TILE_BUILD_BYTES_PER_CELL", "WORKER_BASE_BYTES",
+    "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "available_memory_bytes", "check_memory",
+    "check_recipe_memory", "workers_that_fit", "format_bytes",
+]
+
+
+#: bytes per grid cell that generating and classifying a terrain keeps alive at its peak
+#: (float64 heights, W-M layers and products, gradient and class maps, closing masks)
+GRID_BYTES_PER_CELL = 80
+
+#: set to 1 to skip the memory estimate check (same as --force)
+NO_MEMORY_CHECK_ENV = "OFFROADBENCH_NO_MEMORY_CHECK"
+
+
+def grid_bytes(rows: int, cols: int) -> int:
+    """Peak memory estimate of building and analysing a rows x cols terrain, bytes."""
+    return int(rows) * int(cols) * GRID_BYTES_PER_CELL
+
+
+def available_memory_bytes() -> int | None:
+    """Memory this process may still use: MemAvailable, capped by a cgroup limit; None if unknown."""
+    avail = None
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                avail = int(line.split()[1]) * 1024
+                break
+    except (OSError, ValueError):
+        pass
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            text = Path(limit_file).read_text().strip()
+            if text == "max":
+                continue
+            room = int(text) - int(Path(usage_file).read_text().strip())
+            avail = room if avail is None else min(avail, room)
+        except (OSError, ValueError):
+            continue
+    return avail
+
+
+def check_recipe_memory(recipe, force: bool = False) -> None:
+    """Refuse a recipe whose grid would not fit in memory (see :func:`check_memory`)."""
+    rows, cols = int(recipe.grid.rows), int(recipe.grid.cols)
+    check_memory(grid_bytes(rows, cols), f"{recipe.name}: a {rows}x{cols} grid", force)
+
+
+def check_memory(estimate_bytes: int, what: str, force: bool = False) -> None:
+    """Refuse ``what`` up front if its memory estimate exceeds the memory available."""
+    if force or os.environ.get(NO_MEMORY_CHECK_ENV, "") not in ("", "0"):
+        return
+    avail = available_memory_bytes()
+    if avail is not None and estimate_bytes > avail:
+        raise InputError(
+            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available; "
+            f"make it smaller, or pass --force (or set {NO_MEMORY_CHECK_ENV}=1) to try anyway"
+        )
+
+
+def format_bytes(n: int) -> str:
+    """``n`` bytes as "1.2 GB" (from 128 MiB) or "45 MB"."""
+    return f"{n / 2**30:.1f} GB" if n >= 2**27 else f"{n / 2**20:.0f} MB"
+
+
+#: memory a trial worker keeps per cell of its map (heights, class maps, the heightfields), bytes
+WORKER_BYTES_PER_CELL = 60
+#: PyBullet's transient triangle copy while one heightfield tile's heights are written, per cell of
+#: the tile (sim/world.py): ~700 MB for an untiled 1009^2 map, ~45 MB for a 256-cell tile
+TILE_BUILD_BYTES_PER_CELL = 690
+#: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes.
+#: With these, a 1009^2 worker is estimated at 266 MiB tiled (measured peak 203 MB) and 923 MiB
+#: untiled (860 MB; benchmarks/RESULTS.md, "Heightfield tiles")
+WORKER_BASE_BYTES = 160 * 2**20
+
+
+def world_bytes(rows: int, cols: int, tile_cells: int) -> int:
+    """Peak memory estimate of a trial worker on a rows x cols map built as heightfield tiles of at
+    most ``tile_cells`` cells (``SimConfig.heightfield_tile_cells``; 0: one heightfield), bytes."""
+    from offroadbench.sim.config import tile_spans  # pure config code: no pybullet
+
+    tile_rows = max(b - a for a, b in tile_spans(int(rows) - 1, tile_cells)) + 1
+    tile_cols = max(b - a for a, b in tile_spans(int(cols) - 1, tile_cells)) + 1
+    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * int(rows) * int(cols) + TILE_BUILD_BYTES_PER_CELL * tile_rows * tile_cols
+
+
+def workers_that_fit(per_worker_bytes: int) -> int:
+    """As many workers as both the cores and the available memory allow (at least one)."""
+    workers = os.cpu_count() or 1
+    avail = available_memory_bytes()
+    if avail is not None:
+        workers = max(1, min(workers, avail // per_worker_bytes))
+    return workers
