@@ -81,12 +81,22 @@ def frame_indices(n_samples: int, rate_hz: float, *, fps: float = 10.0, max_fram
     return idx + [n_samples - 1] * round(hold_s * fps)
 
 
-def _crop(hm: Heightmap, xy: np.ndarray, pad_m: float) -> tuple[slice, slice, tuple[float, float, float, float]]:
-    """Rows/cols of the map around the points, and the crop's extent (x0, x1, y0, y1) in metres."""
+def _crop(hm: Heightmap, xy: np.ndarray, pad_m: float, min_aspect: float = 0.7
+          ) -> tuple[slice, slice, tuple[float, float, float, float]]:
+    """Rows/cols of the map around the points (the shorter side widened to at least ``min_aspect``
+    of the longer, so a straight path still shows its surroundings), and the crop's extent
+    (x0, x1, y0, y1) in metres."""
     cell = hm.cell_size_m
-    x0, y0 = np.maximum(np.nanmin(xy, axis=0) - pad_m, 0.0)
-    x1 = min(float(np.nanmax(xy[:, 0])) + pad_m, hm.width_m)
-    y1 = min(float(np.nanmax(xy[:, 1])) + pad_m, hm.height_m)
+    lo = np.nanmin(xy, axis=0) - pad_m
+    hi = np.nanmax(xy, axis=0) + pad_m
+    span = hi - lo
+    want = np.maximum(span, min_aspect * span.max())
+    mid = (lo + hi) / 2
+    size = np.array([hm.width_m, hm.height_m])
+    lo = np.clip(mid - want / 2, 0.0, None)
+    hi = np.minimum(lo + want, size)
+    lo = np.maximum(hi - want, 0.0)
+    (x0, y0), (x1, y1) = lo, hi
     c0, c1 = math.floor(x0 / cell), math.ceil(x1 / cell) + 1
     r0, r1 = math.floor(y0 / cell), math.ceil(y1 / cell) + 1
     return slice(r0, r1), slice(c0, c1), (c0 * cell - cell / 2, (c1 - 1) * cell + cell / 2,
@@ -118,7 +128,7 @@ class TrialView:
         fig = new_figure(figsize=figsize)[0]
         fig.clear()
         self.fig = fig
-        grid = fig.add_gridspec(3, 2, width_ratios=(1.0, 1.05))
+        grid = fig.add_gridspec(3, 2, width_ratios=(1.1, 1.0))
         ax = fig.add_subplot(grid[:, 0])
         shade = hillshade(hm) if shade is None else shade
         ax.imshow(shade[rows, cols], cmap="gray", origin="lower", extent=extent, vmin=0, vmax=1,
