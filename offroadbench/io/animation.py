@@ -17,7 +17,7 @@ from pathlib import Path
 
 from offroadbench.errors import InputError
 
-__all__ = ["ANIMATION_SUFFIXES", "SharedPaletteGifWriter", "check_animation_path", "save_animation"]
+__all__ = ["ANIMATION_SUFFIXES", "check_animation_path", "save_animation"]
 
 ANIMATION_SUFFIXES = (".gif", ".mp4")
 
@@ -35,6 +35,7 @@ def _ffmpeg() -> str | None:
 
 
 def _gif_writer_class():
+    """The GIF writer class (built on first use: it subclasses matplotlib.animation's writer)."""
     from matplotlib import animation
 
     class SharedPaletteGifWriter(animation.AbstractMovieWriter):
@@ -72,12 +73,6 @@ def _gif_writer_class():
                                  duration=int(round(1000 / self.fps)), loop=0)
 
     return SharedPaletteGifWriter
-
-
-def __getattr__(name: str):  # the writer class needs matplotlib.animation: built on first use
-    if name == "SharedPaletteGifWriter":
-        return _gif_writer_class()
-    raise AttributeError(name)
 
 
 def check_animation_path(path: str | Path, flag: str = "--animate") -> Path:
