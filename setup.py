@@ -1,6 +1,6 @@
 """Package layout for setuptools; the metadata lives in pyproject.toml.
 
-The data folders stay at the top of the repository (``terrains/``, ``vehicles/``, ``experiments/``)
+The data folders stay at the top of the repository (``terrains/``, ``vehicles/``, ``experiments/``, ``soils/``)
 and are mapped into the package as ``offroadbench.data.<folder>``, so an installed wheel carries
 them and ``offroadbench.resources`` finds them with ``importlib.resources`` in an editable install
 too. This file only exists because ``pyproject.toml`` cannot combine package discovery with such a
@@ -14,6 +14,7 @@ DATA = {
     "terrains": ["*.toml", "*.npy", "*.json", "*.png"],
     "vehicles": ["*.toml", "*.urdf", "*.sdf", "*.xml", "*.obj", "*.stl", "*.dae", "*.png"],
     "experiments": ["*.toml"],
+    "soils": ["*.toml"],
 }
 #: sub-folders that stay in the repository (committed study outputs)
 KEEP_OUT = {"experiments": ["results", "results.*"]}

@@ -18,12 +18,34 @@ place and at 1 m/s, headings 0 / 22.5 / 45 deg) and the median turn-in-place rat
 
     .venv/bin/python benchmarks/bench_sim.py --contact [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
 
+``--soil`` instead compares ``terramechanics`` (lunar regolith) with ``coulomb`` on small lunar-mare
+maps (513^2 at 5 cm, 15 m missions, lunar gravity): the same missions run with each model in turn
+(interleaved, so machine load hits both alike); it prints each model's RTF and their ratio.
+
+    .venv/bin/python benchmarks/bench_sim.py --soil [--seeds 1,2] [--missions 4]
+
 ``--iterations 50,30,20`` instead compares Bullet solver iteration counts (``SimConfig.
 solver_iterations``) at the default contact model and rate: per count, the RTF on the same missions
 (in rounds, as above) and its ratio to the first count, successes, wheel penetration, flat-ground
 pitch jitter, the sanity scenarios and the rows of the vehicle check (``sim.check``) that fail.
 
     .venv/bin/python benchmarks/bench_sim.py --iterations 50,30,20,12 [--preset paper-d2.6] [--seeds 1,2] [--missions 10]
+
+``--paired`` measures PyBullet's wasted work (issue 25) with paired runs on the paper's missions:
+terrain 0 of each D of the paper study (root seed 2023, 1009^2, 35 m missions), every mission
+driven by every variant in turn (variants interleaved mission by mission, so machine load hits
+all alike), ratios from the one run. Variants: ``main`` (cone friction on, the tyre loop of
+``--old-rev``, i.e. the code before this change), ``cone-off``, ``lean`` (the lean tyre loop, cone on), ``new`` (both:
+today's default) and ``main+0.1mm`` (main with a 0.1 mm higher spawn: the chaos yardstick). Per
+variant: the trial-time and per-simulated-second ratios to ``main``, successes, outcome flips
+against ``main`` and the median ratio of RMS vertical acceleration over the trials both succeeded.
+
+    .venv/bin/python benchmarks/bench_sim.py --paired [--missions 8] [--old-rev main]
+
+``--engines`` compares physics engines and rates the same way (the first variant is the reference;
+``contact.FIELD=VALUE`` sets a field of the MuJoCo world's ContactTuning):
+
+    .venv/bin/python benchmarks/bench_sim.py --engines 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'
 """
 
 from __future__ import annotations
@@ -151,6 +173,40 @@ def compare_contact(args) -> None:
               flush=True)
 
 
+def compare_soil(args) -> None:
+    from offroadbench.terrain.recipe import apply_overrides
+
+    recipe = apply_overrides(load_recipe("lunar-mare"), {"grid.rows": 513, "grid.cols": 513,
+                                                         "layers.craters.population.d_max_m": 6.0})
+    models = ("coulomb", "terramechanics")
+    clock = {m: [0.0, 0.0] for m in models}
+    outcomes = {m: [] for m in models}
+    husky = load_vehicle("husky")
+    for seed in (int(s) for s in args.seeds.split(",")):
+        hm = generate_terrain(recipe, seed)
+        rc = RoughnessConfig()
+        closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
+        mcfg = MissionConfig(count=args.missions, length_m=15.0, border_m=2.0)
+        missions = sample_missions(hm, closed, mcfg, np.random.default_rng(seed))
+        worlds = {m: World(hm, husky, SimConfig(tyre_model=m, soil="lunar-regolith", gravity_m_s2=1.62))
+                  for m in models}
+        try:
+            for mission in missions:
+                for m in models:  # interleaved, mission by mission
+                    tw = time.perf_counter()
+                    r, _ = run_mission(worlds[m], mission)
+                    clock[m][1] += time.perf_counter() - tw
+                    clock[m][0] += r.sim_time_s + worlds[m].sim.settle_time_s
+                    outcomes[m].append(r.failure_reason or "ok")
+        finally:
+            for w in worlds.values():
+                w.close()
+    rtf = {m: clock[m][0] / clock[m][1] for m in models}
+    for m in models:
+        print(f"{m:15s} RTF {rtf[m]:6.1f}  simulated {clock[m][0]:7.1f} s  outcomes {' '.join(outcomes[m])}")
+    print(f"RTF ratio terramechanics / coulomb: {rtf['terramechanics'] / rtf['coulomb']:.2f}", flush=True)
+
+
 def compare_iterations(args) -> None:
     from offroadbench.sim.check import check_vehicle
 
@@ -188,6 +244,152 @@ def compare_iterations(args) -> None:
         print("      outcomes: " + " ".join(r.failure_reason or f"{r.sim_time_s:.0f}s" for r in rs))
 
 
+def _old_tyres(rev: str):
+    """CoulombTyres as ``sim/contact.py`` of git revision ``rev`` defines it (loaded from ``git show``)."""
+    import subprocess
+    import types
+
+    root = Path(__file__).resolve().parents[1]
+    src = subprocess.run(["git", "show", f"{rev}:offroadbench/sim/contact.py"], cwd=root, check=True,
+                         capture_output=True, text=True).stdout
+    mod = types.ModuleType(f"contact_{rev}")
+    exec(compile(src, f"{rev}:contact.py", "exec"), mod.__dict__)
+    return mod.CoulombTyres
+
+
+PAIRED = {  # variant -> (SimConfig changes, old tyre loop?)
+    "main": ({"cone_friction": True}, True),
+    "cone-off": ({"cone_friction": False}, True),
+    "lean": ({"cone_friction": True}, False),
+    "new": ({}, False),
+    "main+0.1mm": ({"cone_friction": True, "spawn_clearance_m": SimConfig().spawn_clearance_m + 1e-4}, True),
+}
+
+
+def paired(args) -> None:
+    import offroadbench.sim.world as world_mod
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.navigation.missions import sample_mission
+    from offroadbench.seeding import mission_seed, terrain_seed
+    from offroadbench.terrain.recipe import apply_overrides
+
+    old, lean = _old_tyres(args.old_rev), world_mod.CoulombTyres
+    husky = load_vehicle("husky")
+    wall = {v: 0.0 for v in PAIRED}
+    simt = {v: 0.0 for v in PAIRED}
+    res = {v: [] for v in PAIRED}
+    rc = RoughnessConfig(border_m=5.0)
+    mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
+    print(f"paired variants {list(PAIRED)}; terrain 0 of each D (root seed 2023), {args.missions} missions each; "
+          f"old tyre loop from {args.old_rev}", flush=True)
+    for d in (2.3, 2.45, 2.6):
+        hm = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d}),
+                              terrain_seed(2023, 0))
+        closed = classify_terrain(hm, rc).closed
+        missions = [sample_mission(hm, closed, mcfg, k, mission_seed(2023, 0, k)) for k in range(args.missions)]
+        worlds = {}
+        for v, (changes, use_old) in PAIRED.items():
+            world_mod.CoulombTyres = old if use_old else lean
+            try:
+                worlds[v] = World(hm, husky, dataclasses.replace(SimConfig(), **changes))
+            finally:
+                world_mod.CoulombTyres = lean
+        try:
+            for m in missions:
+                for v, w in worlds.items():
+                    t0 = time.perf_counter()
+                    r, _ = run_mission(w, m)
+                    wall[v] += time.perf_counter() - t0
+                    simt[v] += r.sim_time_s + w.sim.settle_time_s
+                    res[v].append(r)
+        finally:
+            for w in worlds.values():
+                w.close()
+        print(f"  D = {d}: done", flush=True)
+    base = res["main"]
+    print(f"{'variant':12s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} {'rms_az ratio':>12s} "
+          f"{'pen_med_mm':>10s}")
+    for v in PAIRED:
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(base, res[v]))
+        both = [(a, b) for a, b in zip(base, res[v]) if a.success and b.success]
+        az = np.median([b.rms_vertical_accel_m_s2 / a.rms_vertical_accel_m_s2 for a, b in both]) if both else np.nan
+        pen = np.median([1000 * r.max_penetration_m for r in res[v]])
+        print(f"{v:12s} {wall['main'] / wall[v]:10.3f} {(wall['main'] / simt['main']) / (wall[v] / simt[v]):9.3f} "
+              f"{sum(r.success for r in res[v]):>3d}/{len(res[v]):<4d} {flips:5d} {az:12.3f} {pen:10.1f}", flush=True)
+
+
+def _parse_variant(text: str) -> tuple[str, dict]:
+    """``NAME:key=value,key=value`` (SimConfig fields) -> (NAME, changes)."""
+    name, _, rest = text.partition(":")
+    changes = {}
+    for item in filter(None, rest.split(",")):
+        key, _, value = item.partition("=")
+        changes[key] = int(value) if value.lstrip("-").isdigit() else value
+    return name, changes
+
+
+def engines(args) -> None:
+    """Paired runs of physics engines / rates on the paper missions (as ``--paired``)."""
+    from offroadbench.analysis.roughness import classify_terrain
+    from offroadbench.navigation.missions import sample_mission
+    from offroadbench.seeding import mission_seed, terrain_seed
+    from offroadbench.sim import open_world
+    from offroadbench.terrain.recipe import apply_overrides
+
+    variants = [_parse_variant(v) for v in args.engines.split(";")]
+    names = [n for n, _ in variants]
+    wall = dict.fromkeys(names, 0.0)
+    simt = dict.fromkeys(names, 0.0)
+    build = dict.fromkeys(names, 0.0)
+    res = {n: [] for n in names}
+    rc = RoughnessConfig(border_m=5.0)
+    mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
+    print(f"engines {variants}; terrain 0 of each D (root seed 2023), {args.missions} missions each", flush=True)
+    for d in (2.3, 2.45, 2.6):
+        hm = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d}),
+                              terrain_seed(2023, 0))
+        closed = classify_terrain(hm, rc).closed
+        missions = [sample_mission(hm, closed, mcfg, k, mission_seed(2023, 0, k)) for k in range(args.missions)]
+        worlds = {}
+        for n, changes in variants:
+            t0 = time.perf_counter()
+            tuning = {k.split(".", 1)[1]: v for k, v in changes.items() if k.startswith("contact.")}
+            sim = dataclasses.replace(SimConfig(), **{k: v for k, v in changes.items() if not k.startswith("contact.")})
+            if tuning:  # MuJoCo contact settings (offroadbench.sim.mujoco_world.ContactTuning)
+                from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld
+
+                worlds[n] = MuJoCoWorld(hm, "husky", sim, ContactTuning(**tuning))
+            else:
+                worlds[n] = open_world(hm, "husky", sim)
+            build[n] += time.perf_counter() - t0
+        try:
+            for m in missions:
+                for n, w in worlds.items():
+                    t0 = time.perf_counter()
+                    r, _ = run_mission(w, m)
+                    wall[n] += time.perf_counter() - t0
+                    simt[n] += r.sim_time_s + w.sim.settle_time_s
+                    res[n].append(r)
+        finally:
+            for w in worlds.values():
+                w.close()
+        print(f"  D = {d}: done", flush=True)
+    ref = names[0]
+    print(f"{'variant':14s} {'build_s':>7s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} "
+          f"{'rms_az':>7s} {'az ratio':>8s} {'pitch ratio':>11s} {'pen_med_mm':>10s}")
+    for n in names:
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(res[ref], res[n]))
+        both = [(a, b) for a, b in zip(res[ref], res[n]) if a.success and b.success]
+        az = np.median([b.rms_vertical_accel_m_s2 / a.rms_vertical_accel_m_s2 for a, b in both]) if both else np.nan
+        pr = np.median([b.rms_pitch_rate_deg_s / a.rms_pitch_rate_deg_s for a, b in both]) if both else np.nan
+        ok = [r.rms_vertical_accel_m_s2 for r in res[n] if r.success]
+        pen = np.median([1000 * r.max_penetration_m for r in res[n]])
+        print(f"{n:14s} {build[n]:7.2f} {wall[ref] / wall[n]:10.3f} {(wall[ref] / simt[ref]) / (wall[n] / simt[n]):9.3f} "
+              f"{sum(r.success for r in res[n]):>3d}/{len(res[n]):<4d} {flips:5d} {np.median(ok) if ok else np.nan:7.3f} "
+              f"{az:8.3f} {pr:11.3f} {pen:10.1f}", flush=True)
+        print("      outcomes: " + " ".join(r.failure_reason or "ok" for r in res[n]), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default=None, help="terrain preset (default paper-d2.45; --contact: paper-d2.6)")
@@ -196,7 +398,24 @@ def main() -> None:
     ap.add_argument("--missions", type=int, default=None, help="missions per terrain (default 5; --contact: 10)")
     ap.add_argument("--contact", action="store_true", help="compare the tyre-terrain contact models")
     ap.add_argument("--iterations", default=None, help="compare solver iteration counts, e.g. 50,30,20")
+    ap.add_argument("--paired", action="store_true", help="PyBullet's wasted work: paired variants (issue 25)")
+    ap.add_argument("--old-rev", default="main", help="--paired: git revision of the old tyre loop")
+    ap.add_argument("--engines", default=None,
+                    help="paired engines, e.g. 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'")
+    ap.add_argument("--soil", action="store_true", help="compare terramechanics with coulomb on lunar-mare")
     args = ap.parse_args()
+    if args.soil:
+        args.missions = args.missions or 4
+        compare_soil(args)
+        return
+    if args.engines:
+        args.missions = args.missions or 8
+        engines(args)
+        return
+    if args.paired:
+        args.missions = args.missions or 8
+        paired(args)
+        return
     if args.iterations:
         args.preset = args.preset or "paper-d2.6"
         args.missions = args.missions or 10

@@ -5,14 +5,15 @@ installed wheel works from any directory:
 
 * ``offroadbench.data.terrains``: terrain presets (``<name>.toml``) and ``data/sample-dem.npy``;
 * ``offroadbench.data.vehicles``: one folder per vehicle, holding ``vehicle.toml`` and its URDF;
-* ``offroadbench.data.experiments``: study TOMLs (``smoke.toml``, ``majhor2023.toml``, ...).
+* ``offroadbench.data.experiments``: study TOMLs (``smoke.toml``, ``majhor2023.toml``, ...);
+* ``offroadbench.data.soils``: soil parameter sets (``<name>.toml``, offroadbench.sim.terramechanics).
 
-In the repository these are the top-level folders ``terrains/``, ``vehicles/`` and
-``experiments/``; ``setup.py`` maps them into the package at build time (editable installs too).
+In the repository these are the top-level folders ``terrains/``, ``vehicles/``,
+``experiments/`` and ``soils/``; ``setup.py`` maps them into the package at build time (editable installs too).
 
 **Search path.** The environment variable ``OFFROADBENCH_PATH`` adds user folders: a list of
 directories separated by ``os.pathsep`` (``:`` on Linux and macOS, ``;`` on Windows), each holding
-any of ``terrains/``, ``vehicles/`` and ``experiments/`` laid out like the shipped ones. They are
+any of ``terrains/``, ``vehicles/``, ``experiments/`` and ``soils/`` laid out like the shipped ones. They are
 searched in order, before the shipped data, and the first folder holding a name wins, so a user
 preset can replace a shipped one of the same name. The variable is read on every lookup.
 """
@@ -34,6 +35,7 @@ __all__ = [
     "terrain_presets",
     "vehicle_files",
     "study_files",
+    "soil_files",
     "sample_dem",
     "package_dir",
 ]
@@ -41,7 +43,7 @@ __all__ = [
 #: environment variable holding the user search path (os.pathsep-separated directories)
 ENV_VAR = "OFFROADBENCH_PATH"
 #: the kinds of data, each a sub-folder of a search-path directory and a package under offroadbench.data
-KINDS = ("terrains", "vehicles", "experiments")
+KINDS = ("terrains", "vehicles", "experiments", "soils")
 
 
 def _as_path(resource, what: str) -> Path:
@@ -112,6 +114,11 @@ def vehicle_files() -> dict[str, Path]:
 def study_files() -> dict[str, Path]:
     """{study name: TOML path} of every ``experiments/<name>.toml`` (``smoke``, ``majhor2023``, ...)."""
     return _first_found("experiments", "*.toml")
+
+
+def soil_files() -> dict[str, Path]:
+    """{soil name: TOML path} of every ``soils/<name>.toml`` (``lunar-regolith``, ``lete-sand``, ...)."""
+    return _first_found("soils", "*.toml")
 
 
 def sample_dem() -> Path:

@@ -96,8 +96,8 @@ def test_study_terrain_j_is_generate_with_the_shown_seed(tmp_path, capsys):
     (task,) = tasks
     built = []
 
-    def no_trials(hm, missions, cell):
-        built.append(hm)
+    def no_trials(prepared, settings):
+        built.append(prepared.hm)
         return iter(())
 
     messages = list(run_terrain(task, no_trials))

@@ -13,7 +13,7 @@ import sys
 from offroadbench.errors import InputError, StudyError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
-COMMAND_MODULES = ("terrain", "study", "drive", "export", "vehicle", "config")
+COMMAND_MODULES = ("terrain", "study", "drive", "export", "vehicle", "soil", "config")
 
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 1

@@ -54,7 +54,8 @@ def format_drive_run(run, label: str) -> str:
     medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
         f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
-        f"planner {run.planner}, physics {run.sim.physics_rate_hz} Hz, gravity {run.sim.gravity_m_s2:g} m/s^2",
+        f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz, "
+        f"gravity {run.sim.gravity_m_s2:g} m/s^2",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
         f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
@@ -106,8 +107,8 @@ def write_drive_run(run, out: Path) -> list[str]:
 
 
 def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
-    """The settings tables of ``--set SECTION.KEY=VALUE`` (plus ``--physics-rate-hz``, ``--gravity``,
-    ``--border-m``) and the remaining recipe overrides."""
+    """The settings tables of ``--set SECTION.KEY=VALUE`` (plus ``--physics-rate-hz``, ``--engine``,
+    ``--gravity``, ``--border-m``) and the remaining recipe overrides."""
     from offroadbench.cli._common import parse_sets
 
     tables: dict[str, dict] = {name: {} for name in SET_SECTIONS}
@@ -124,6 +125,8 @@ def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
             recipe_sets.append(item)
     if args.physics_rate_hz is not None:
         tables["sim"]["physics_rate_hz"] = args.physics_rate_hz
+    if args.engine is not None:
+        tables["sim"]["engine"] = args.engine
     if args.gravity is not None:
         tables["sim"]["gravity_m_s2"] = args.gravity
     if args.border_m is not None:
@@ -192,10 +195,16 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
-    if recipe is not None:
+    if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
         from offroadbench.cli.terrain import warn_relief_tails
 
         warn_relief_tails(hm, label)
+        sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
+    else:  # a PNG: those of the recipe in its sidecar, if any
+        from offroadbench.bodies import terrain_gravity_and_soil
+        from offroadbench.io.png16 import read_png16_metadata
+
+        sim = sim.for_terrain(*terrain_gravity_and_soil(read_png16_metadata(args.terrain).get("recipe")))
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
                              length_m=args.length_m, vehicle=vehicle, sim=sim, controller=controller, rules=rules,
@@ -238,7 +247,8 @@ def register(sub) -> None:
                    help="no mission start or goal closer than this to the map edge, m (default 5, the paper's; "
                    "smaller maps need less, e.g. 2 on a 12.8 m map)")
     p.add_argument("--gravity", type=positive_float, default=None, metavar="M_S2",
-                   help="magnitude of gravity, m/s^2 (default 9.81; the Moon: 1.62); same as --set sim.gravity_m_s2=G")
+                   help="magnitude of gravity, m/s^2 (default: the terrain recipe's body, else Earth's 9.81; the Moon: "
+                   "1.62); same as --set sim.gravity_m_s2=G")
     p.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
                    help="write an animation of one trial (the first that failed, else mission 0): the "
                    "footprint moving over the hillshade and class map along its planned and driven paths, "
@@ -252,6 +262,7 @@ def register(sub) -> None:
     p.add_argument("--planner", default="straight",
                    help="planner or policy (built-in: straight, astar, lattice, reactive; installed plug-ins too)")
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
+    p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",
                    help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_drive)

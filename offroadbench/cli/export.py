@@ -46,10 +46,10 @@ def cmd_export(args: argparse.Namespace) -> int:
             meta["crs"] = recipe.data["recipe"]["crs"]
         name = args.name or f"{recipe.name}_seed{args.seed}"
     else:
-        from offroadbench.io.png16 import png_sidecar_meta
+        from offroadbench.io.png16 import read_png16_metadata
 
         meta = {"source": str(args.terrain)}
-        side = png_sidecar_meta(args.terrain)
+        side = read_png16_metadata(args.terrain)
         crs = side.get("crs") or ((side.get("recipe") or {}).get("recipe") or {}).get("crs")
         if crs:  # the generating recipe's CRS (the lunar presets' Moon CRS), kept in a GeoTIFF
             meta["crs"] = crs

@@ -38,7 +38,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     from offroadbench.sim.check import check_vehicle
 
     spec = load_vehicle(args.name)
-    sim = SimConfig() if args.tyre_model is None else SimConfig(tyre_model=args.tyre_model)
+    changes = {k: v for k, v in (("tyre_model", args.tyre_model), ("engine", args.engine),
+                                 ("physics_rate_hz", args.physics_rate_hz)) if v is not None}
+    sim = SimConfig(**changes)
     with bar("checking", unit="step") as progress:
         rows = check_vehicle(spec, sim, progress=progress)
     if args.json:
@@ -66,4 +68,7 @@ def register(sub) -> None:
                    help='print a JSON list of {"name", "measured", "expected", "unit", "ok", ...}')
     c.add_argument("--tyre-model", choices=TYRE_MODELS, default=None,
                    help="override SimConfig.tyre_model (default: the package default)")
+    c.add_argument("--engine", default=None,
+                   help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
+    c.add_argument("--physics-rate-hz", type=int, default=None, help="override SimConfig.physics_rate_hz")
     c.set_defaults(func=cmd_check)

@@ -48,11 +48,11 @@ __all__ = [
     "encode_png16",
     "decode_png16",
     "sidecar_path",
+    "read_png16_metadata",
     "png_metadata",
     "write_png16",
     "read_png16",
     "png_shape",
-    "png_sidecar_meta",
     "ue_z_range_m",
     "ue_landscape_settings",
     "ue_heights_m",
@@ -236,11 +236,19 @@ def read_png16(
     return decode_png16(q, cell_size_m, z_min_m, z_min_m + relief_m)
 
 
-def png_sidecar_meta(path: str | Path) -> dict[str, Any]:
-    """The JSON sidecar of a PNG heightmap as a dict ({} when there is none): cell size, z range and,
-    for a generated terrain, its recipe (whose ``[recipe] crs`` an export keeps)."""
-    found = _metadata_for(Path(path), {})
-    return dict(found[1]) if found is not None else {}
+def read_png16_metadata(path: str | Path) -> dict[str, Any]:
+    """The metadata stored with a PNG heightmap (sidecar, else text chunks; {} if none), e.g. the
+    ``recipe`` it was generated from."""
+    from PIL import Image
+
+    p = Path(path)
+    try:
+        with Image.open(p) as img:
+            text = dict(getattr(img, "text", {}) or {})
+    except Exception:  # a damaged file: read_png16 reports it
+        text = {}
+    meta = _metadata_for(p, text)
+    return {} if meta is None else dict(meta[1])
 
 
 def _metadata_for(png: Path, text: Mapping[str, str]) -> tuple[str, dict[str, Any]] | None:

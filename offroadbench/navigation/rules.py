@@ -8,6 +8,10 @@ A trial ends, checked in this order at every telemetry sample:
   so the tilt catches a vehicle lying on a corner (roll and pitch both 60 deg: tilt 75.5 deg);
 * ``off_map``: the base left the map horizontally, or fell ``fall_depth_m`` below its lowest point;
 * success (end reason ``""``): the base within ``goal_tolerance_m`` of the goal (horizontal);
+* ``entrapped`` (soft soil; only when the caller gives the wheels' slip and sinkage, i.e. with the
+  ``terramechanics`` tyre model): the mean wheel slip above ``entrap_slip`` and the deepest wheel
+  sinkage above ``entrap_sinkage_fraction`` of the wheel radius at every sample of the last
+  ``entrap_window_s``: the wheels dig in instead of driving (Spirit at Troy, 2009);
 * ``stuck``: the base stayed within ``stuck_distance_m`` of where it was one stuck window ago
   for the whole window (paper: 0.2 m in 30 s);
 * ``timeout``: the caller's clock passed ``timeout_factor`` times the nominal time (path length
@@ -37,7 +41,7 @@ __all__ = ["FAILURE_REASONS", "FailureRules", "stuck_window_s", "unreachable", "
 log = logging.getLogger(__name__)
 
 #: failure_reason values; "" means success
-FAILURE_REASONS = ("tipped", "stuck", "timeout", "off_map")
+FAILURE_REASONS = ("tipped", "stuck", "timeout", "off_map", "entrapped")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -61,6 +65,12 @@ class FailureRules:
     """The mission succeeds when the vehicle's centre is this close to the goal (horizontal), m."""
     fall_depth_m: float = 1.0
     """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
+    entrap_slip: float = 0.8
+    """A trial fails as ``entrapped`` while the mean wheel slip stays above this ..."""
+    entrap_sinkage_fraction: float = 0.3
+    """... and the deepest wheel sinkage above this fraction of the wheel radius ..."""
+    entrap_window_s: float = 5.0
+    """... for this long, seconds."""
 
     def __post_init__(self) -> None:
         check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
@@ -70,6 +80,9 @@ class FailureRules:
         check_range(self, "timeout_factor", self.timeout_factor, lo=1.0)
         check_range(self, "goal_tolerance_m", self.goal_tolerance_m, lo=0, lo_open=True)
         check_range(self, "fall_depth_m", self.fall_depth_m, lo=0, lo_open=True)
+        check_range(self, "entrap_slip", self.entrap_slip, lo=0, hi=1)
+        check_range(self, "entrap_sinkage_fraction", self.entrap_sinkage_fraction, lo=0)
+        check_range(self, "entrap_window_s", self.entrap_window_s, lo=0, lo_open=True)
 
 
 def stuck_window_s(rules: FailureRules, timeout_s: float) -> float:
@@ -136,17 +149,31 @@ class RuleChecker:
     """
 
     def __init__(self, rules: FailureRules, bounds, goal_xy, *, timeout_s: float, sample_rate_hz: float,
-                 mission_length_m: float) -> None:
+                 mission_length_m: float, wheel_radius_m: float | None = None) -> None:
         self.rules = rules
         self.bounds = tuple(bounds)
         self.goal = (float(goal_xy[0]), float(goal_xy[1]))
         self.window_s = stuck_window_s(rules, timeout_s)
         self.window = max(1, int(round(self.window_s * sample_rate_hz)))
         self.xy_hist: list[tuple[float, float]] = []
+        self.entrap_window = max(1, round(rules.entrap_window_s * sample_rate_hz))
+        self._entrap_limit_m = None if wheel_radius_m is None else rules.entrap_sinkage_fraction * wheel_radius_m
+        self._dug_in = 0  # consecutive samples with slip and sinkage over the entrapment limits
         for why in unreachable(rules, timeout_s, mission_length_m):
             _warn_once(why)
 
-    def check(self, pos, roll: float, pitch: float) -> str | None:
-        """Record the sample and return the end reason (``""`` = success), or None to go on."""
+    def check(self, pos, roll: float, pitch: float, slip: float | None = None,
+              sinkage_m: float | None = None) -> str | None:
+        """Record the sample and return the end reason (``""`` = success), or None to go on.
+
+        ``slip`` (mean wheel slip) and ``sinkage_m`` (deepest wheel sinkage) feed the ``entrapped``
+        rule when the checker knows the wheel radius; None skips it."""
         self.xy_hist.append((pos[0], pos[1]))
-        return end_reason(self.rules, self.bounds, self.goal, pos, roll, pitch, self.xy_hist, self.window)
+        reason = end_reason(self.rules, self.bounds, self.goal, pos, roll, pitch, self.xy_hist, self.window)
+        if reason is None or reason == "stuck":
+            dug_in = (self._entrap_limit_m is not None and slip is not None and sinkage_m is not None
+                      and slip > self.rules.entrap_slip and sinkage_m > self._entrap_limit_m)
+            self._dug_in = self._dug_in + 1 if dug_in else 0
+            if self._dug_in >= self.entrap_window:
+                return "entrapped"
+        return reason

@@ -11,7 +11,8 @@ from offroadbench.plots.style import class_legend_handles, draw_border, draw_cla
 
 __all__ = ["plot_missions", "plot_trajectories", "plot_timeseries"]
 
-_OUTCOME_COLOURS = {"": "white", "tipped": "magenta", "stuck": "red", "timeout": "black", "off_map": "cyan"}
+_OUTCOME_COLOURS = {"": "white", "tipped": "magenta", "stuck": "red", "timeout": "black", "off_map": "cyan",
+                    "entrapped": "orange"}
 
 
 def _class_axes(hm: Heightmap, classes: np.ndarray, border_m: float | None, title: str):

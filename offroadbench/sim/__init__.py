@@ -1,8 +1,10 @@
-"""Traversal trials in PyBullet: the only package that imports pybullet.
+"""Traversal trials: the only package that talks to a physics engine (PyBullet by default; the
+engine boundary is offroadbench.sim.engine).
 
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
-load_vehicle, World, TrialResult, run_mission, run_missions, drive_missions / DriveRun, and
-import_pybullet_quietly (for application entry points: the CLI and the study workers).
+load_vehicle, World (PyBullet), open_world / TrialWorld / VehicleGeometry / ENGINES (the engine
+boundary, offroadbench.sim.engine), TrialResult, run_mission, run_missions, drive_missions / DriveRun,
+and import_pybullet_quietly (for application entry points: the CLI and the study workers).
 
 The names load lazily (PEP 562), so importing a config (``offroadbench.sim.config``) or this
 package does not import pybullet; only touching ``World`` or the runner does.
@@ -23,11 +25,19 @@ _EXPORTS = {
     "list_vehicles": "vehicle",
     "vehicle_from_table": "vehicle",
     "World": "world",
+    "TrialWorld": "engine",
+    "VehicleGeometry": "engine",
+    "ENGINES": "engine",
+    "open_world": "engine",
     "TrialResult": "runner",
     "FAILURE_REASONS": "runner",
     "TELEMETRY_COLUMNS": "runner",
     "run_mission": "runner",
-    "run_missions": "runner",
+    "run_missions": "pipeline",
+    "TrialSettings": "pipeline",
+    "PreparedTerrain": "pipeline",
+    "prepare_terrain": "pipeline",
+    "drive_terrain": "pipeline",
     "DriveRun": "batch",
     "drive_missions": "batch",
     "import_pybullet_quietly": "_banner",

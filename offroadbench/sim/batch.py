@@ -19,14 +19,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 
-from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
+from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.heightmap import Heightmap
-from offroadbench.navigation.missions import Mission, MissionConfig, sample_mission
-from offroadbench.progress import ProgressFn, report
+from offroadbench.navigation.missions import Mission, MissionConfig
+from offroadbench.progress import ProgressFn
 from offroadbench.seeding import mission_seed
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
 
@@ -117,32 +117,20 @@ def drive_missions(
     raised before any physics runs.
     """
     from offroadbench.navigation.planners import PlannerChoice, planner_from_table
+    from offroadbench.sim.pipeline import TrialSettings, drive_terrain, prepare_terrain
     from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
     choice = planner if isinstance(planner, PlannerChoice) else planner_from_table({"name": planner}, where="planner")
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    closed = classify_terrain(hm, roughness).closed
     mcfg = MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m)
+    settings = TrialSettings(vehicle=spec, sim=sim, controller=controller, rules=rules, missions=mcfg,
+                             roughness=roughness, planner=choice)
     mseeds = tuple(mission_seed(seed, 0, k) for k in range(n))
-    missions = tuple(sample_mission(hm, closed, mcfg, k, s) for k, s in enumerate(mseeds))
-    kwargs = dict(planner=choice, classes=closed, border_m=mcfg.border_m, controller=controller, rules=rules)
-    results, telemetry, paths = _drive(hm, missions, spec, sim, kwargs, progress)
+    prepared = prepare_terrain(hm, terrain_seed, settings, list(enumerate(mseeds)))
+    records = list(drive_terrain(prepared, settings, progress=progress))
     return DriveRun(
-        heightmap=hm, closed=closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
-        missions=missions, mission_seeds=mseeds, terrain_seed=terrain_seed, results=tuple(results), telemetry=telemetry, planner=choice.name, paths=paths,
+        heightmap=hm, closed=prepared.maps.closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
+        missions=prepared.missions, mission_seeds=mseeds, terrain_seed=terrain_seed,
+        results=tuple(r.result for r in records), telemetry={r.result.mission_index: r.telemetry for r in records},
+        planner=choice.name, paths={r.result.mission_index: r.path_xy for r in records},
     )
-
-
-def _drive(hm, missions: Sequence[Mission], vehicle, sim, kwargs, progress):
-    from offroadbench.sim.runner import drive_mission
-    from offroadbench.sim.world import World
-
-    results, telemetry, paths = [], {}, {}
-    with World(hm, vehicle, sim) as world:
-        for i, mission in enumerate(missions):
-            rec = drive_mission(world, mission, **kwargs)
-            results.append(rec.result)
-            telemetry[mission.index] = rec.telemetry
-            paths[mission.index] = rec.path_xy
-            report(progress, i + 1, len(missions))
-    return results, telemetry, paths

@@ -40,6 +40,19 @@ contact model and skid-steer drive the trials use:
 - **highest step climbed** at cruise speed from 1.5 m away (bisection on the height of a step
   across a 2 cm grid). Expected: the geometric bound of :func:`step_bound_m` (wheel radius, chassis nose, belly clearing the edge); pass: 0.6-1.05x.
 
+**Soft soil** (:func:`soft_soil_checks`, the ``terramechanics`` tyre model on lunar regolith in
+lunar gravity, offroadbench.sim.terramechanics):
+
+- **sinkage at rest** against the Wong-Reece sinkage that carries a quarter of the weight; pass:
+  within 15 %.
+- **steepest grade climbed from rest** (as on rigid ground), against the quasi-static soil limit
+  :func:`soil_climb_limit_deg` at slip 0.75 (the largest slip at which the test's 0.5 m/s wheel
+  speed still gains its 1 m in 10 s); pass: within 3 deg; the note gives the rigid-ground figure.
+- **drawbar pull at 20 % slip**: the vehicle drives on flat soil while a horizontal force on the
+  chassis, fed back on the mean wheel slip, holds the slip at 0.2; the force is the vehicle's
+  drawbar pull, against four times a wheel's Wong-Reece pull at a quarter of the weight; pass:
+  within 10 % of the expected pull or 1 % of the weight.
+
 All measurements are in SI units; angles are reported in degrees.
 """
 
@@ -51,16 +64,20 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
-import pybullet as pb
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
+from offroadbench.sim.engine import ENGINE_TYRE_MODELS, TrialWorld, open_world
 from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.world import World
 
-__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG"]
+__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
+           "soft_soil_checks", "soil_climb_limit_deg", "SOFT_SOIL", "SOFT_SOIL_GRAVITY_M_S2"]
+
+#: soil and gravity of the soft-soil rows
+SOFT_SOIL = "lunar-regolith"
+SOFT_SOIL_GRAVITY_M_S2 = 1.62
 
 #: yaw-rate commands of the tracking checks, rad/s (capped at the vehicle's limit)
 YAW_COMMANDS_RAD_S = (0.25, 0.5, 1.0, 2.0)
@@ -99,29 +116,29 @@ class CheckResult:
 
 
 # ---------------------------------------------------------------------------- helpers
-def _set_gravity(world: World, tilt_rad: float, about: str) -> None:
+def _set_gravity(world: TrialWorld, tilt_rad: float, about: str) -> None:
     """Gravity turned by ``tilt_rad`` about the world x (``about="x"``, downhill toward -y) or y
     axis (downhill toward -x): a flat world becomes a uniform slope of that angle."""
     g = world.sim.gravity_m_s2
     s, c = g * math.sin(tilt_rad), g * math.cos(tilt_rad)
     vec = (0.0, -s, -c) if about == "x" else (-s, 0.0, -c)
-    pb.setGravity(*vec, physicsClientId=world.client_id)
+    world.set_gravity(*vec)
 
 
-def _yaw(world: World) -> float:
+def _yaw(world: TrialWorld) -> float:
     _, q, _, _ = world.base_state()
     r = world.rotation_matrix(q)
     return math.atan2(r[3], r[0])
 
 
-def _run(world: World, seconds: float, each: Callable[[], None] | None = None) -> None:
+def _run(world: TrialWorld, seconds: float, each: Callable[[], None] | None = None) -> None:
     for _ in range(int(round(seconds * world.sim.physics_rate_hz))):
         world.step()
         if each is not None:
             each()
 
 
-def _mean_yaw_rate(world: World, v: float, omega: float, heading: float, seconds: float = 3.0,
+def _mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, seconds: float = 3.0,
                    at: tuple[float, float] | None = None) -> float:
     """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega),
     started at rest at ``at`` (default: the middle of the map)."""
@@ -135,30 +152,17 @@ def _mean_yaw_rate(world: World, v: float, omega: float, heading: float, seconds
     return float((y[-1] - y[0]) / ((len(y) - 1) / world.sim.physics_rate_hz))
 
 
-def _com_height(world: World) -> float:
+def _com_height(world: TrialWorld) -> float:
     """Height of the whole vehicle's centre of mass above the ground (flat map, z = 0), metres."""
-    cid, body = world.client_id, world.vehicle_id
-    total = pb.getDynamicsInfo(body, -1, physicsClientId=cid)[0]
-    z = total * world.base_state()[0][2]
-    for link in range(pb.getNumJoints(body, physicsClientId=cid)):
-        m = pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
-        z += m * pb.getLinkState(body, link, physicsClientId=cid)[0][2]
-        total += m
-    return z / total - world.hm.z_max_m
+    return world.centre_of_mass_m()[2] - world.hm.z_max_m
 
 
-def _total_mass(world: World) -> float:
-    cid, body = world.client_id, world.vehicle_id
-    return sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
-               for link in range(-1, pb.getNumJoints(body, physicsClientId=cid)))
+def _left_load(world: TrialWorld) -> float:
+    """Summed normal force on the left wheels in the last step, N."""
+    return sum(world.wheel_loads_n()[: len(world.spec.left_wheel_joints)])
 
 
-def _wheel_load(world: World, joints: Sequence[int]) -> float:
-    """Summed normal force on the given wheels in the last step, N."""
-    return sum(c[9] for c in world.terrain_contacts() if c[3] in joints)
-
-
-def _ramp_tilt(world: World, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
+def _ramp_tilt(world: TrialWorld, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
                end_deg: float = 80.0) -> float:
     """Tilt gravity about x from ``start_deg`` at ``rate_deg_s`` until ``stop()``; the angle, deg."""
     n = int(round((end_deg - start_deg) / rate_deg_s * world.sim.physics_rate_hz))
@@ -194,7 +198,7 @@ def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
 
 
 # ---------------------------------------------------------------------------- the checks
-def _yaw_tracking(world: World, headings_deg, commands) -> list[CheckResult]:
+def _yaw_tracking(world: TrialWorld, headings_deg, commands) -> list[CheckResult]:
     spec = world.spec
     cruise = min(1.0, spec.max_speed_m_s)
     rows = []
@@ -210,7 +214,7 @@ def _yaw_tracking(world: World, headings_deg, commands) -> list[CheckResult]:
     return rows
 
 
-def _drift(world: World) -> CheckResult:
+def _drift(world: TrialWorld) -> CheckResult:
     spec = world.spec
     v = min(1.0, spec.max_speed_m_s)
     heading = math.radians(22.5)
@@ -230,7 +234,7 @@ def _drift(world: World) -> CheckResult:
                     f"open loop at {v:g} m/s, heading 22.5 deg; {along:.1f} m driven")
 
 
-def _stopping(world: World) -> CheckResult:
+def _stopping(world: TrialWorld) -> CheckResult:
     spec = world.spec
     v = spec.max_speed_m_s
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
@@ -246,10 +250,9 @@ def _stopping(world: World) -> CheckResult:
     end = world.base_state()[0]
     dist = math.hypot(end[0] - start[0], end[1] - start[1])
     mu = spec.wheel_friction * world.sim.terrain_friction
-    n = len(world.wheel_joints)
-    cid, body = world.client_id, world.vehicle_id
-    spin = sum(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1] for j in world.wheel_joints)
-    m_eff = _total_mass(world) + spin / spec.wheel_radius_m**2
+    n = len(spec.wheel_joints)
+    spin = sum(world.geometry.wheel_spin_inertia_kg_m2)
+    m_eff = world.geometry.mass_kg + spin / spec.wheel_radius_m**2
     motors = n * spec.wheel_torque_limit_nm / (spec.wheel_radius_m * m_eff)
     decel = min(spec.max_accel_m_s2, mu * world.sim.gravity_m_s2, motors)
     expected = speed * speed / (2.0 * decel)
@@ -260,21 +263,20 @@ def _stopping(world: World) -> CheckResult:
 
 def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckResult, float, float]:
     grippy = dataclasses.replace(sim, terrain_friction=max(sim.terrain_friction, 5.0 / spec.wheel_friction))
-    with World(hm, spec, grippy) as world:
+    with open_world(hm, spec, grippy) as world:
         c = hm.width_m / 2.0
         world.spawn(c, c, 0.0)
         h = _com_height(world)
         expected = math.degrees(math.atan2(spec.track_m / 2.0, h))
         # downhill toward -y: the right side; the left (uphill) wheels unload at the tip angle
-        left = world.left_joints
-        angle = _ramp_tilt(world, 1.0, lambda: _wheel_load(world, left) <= 0.0, start_deg=expected - 15.0)
+        angle = _ramp_tilt(world, 1.0, lambda: _left_load(world) <= 0.0, start_deg=expected - 15.0)
     row = _abs_row("static tip angle (tilt table)", angle, expected, "deg", 2.0,
                    f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground; "
                    "grippy table so the vehicle cannot slide")
     return row, expected, h
 
 
-def _side_slope(world: World, tip_deg: float) -> CheckResult:
+def _side_slope(world: TrialWorld, tip_deg: float) -> CheckResult:
     spec = world.spec
     mu = spec.wheel_friction * world.sim.terrain_friction
     slide = math.degrees(math.atan(mu))
@@ -282,10 +284,9 @@ def _side_slope(world: World, tip_deg: float) -> CheckResult:
     c = world.hm.width_m / 2.0
     world.spawn(c, c, 0.0)
     y0 = world.base_state()[0][1]
-    left = world.left_joints
 
     def moved() -> bool:
-        return abs(world.base_state()[0][1] - y0) > 0.02 or _wheel_load(world, left) <= 0.0
+        return abs(world.base_state()[0][1] - y0) > 0.02 or _left_load(world) <= 0.0
 
     angle = _ramp_tilt(world, 1.0, moved, start_deg=max(0.0, min(20.0, expected - 10.0)))
     _set_gravity(world, 0.0, "x")
@@ -309,7 +310,7 @@ def _stability(tip_deg: float, mu: float) -> CheckResult:
                        f"rolls over at {tip_deg:.1f} deg, slides at atan(mu) = {slide:.1f} deg (mu = {mu:g})")
 
 
-def _climbs(world: World, grade_deg: float) -> bool:
+def _climbs(world: TrialWorld, grade_deg: float) -> bool:
     """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 10 s when its wheel
     speed is ramped gently (0.5 m/s^2 at the tyre, to 0.5 m/s), as a driver would start on a hill."""
     spec = world.spec
@@ -358,18 +359,15 @@ def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float
     return math.degrees(lo)
 
 
-def _climb(world: World, com_height_m: float) -> CheckResult:
+def _climb(world: TrialWorld, com_height_m: float) -> CheckResult:
     """``com_height_m``: the centre of mass over the ground of the settled vehicle (a failed climb
     may leave the vehicle on its back)."""
     spec = world.spec
     grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
     mu = spec.wheel_friction * world.sim.terrain_friction
-    cid, body = world.client_id, world.vehicle_id
-    world.spawn(world.hm.width_m / 2.0, world.hm.height_m / 2.0, 0.0)  # upright, heading +x, for the wheelbase
-    half_base = 0.5 * (max(pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints)
-                       - min(pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints))
-    per_axle = len(world.wheel_joints) // 2
-    expected = climb_limit_deg(_total_mass(world), com_height_m, half_base, per_axle, spec.wheel_radius_m,
+    half_base = 0.5 * world.geometry.wheelbase_m
+    per_axle = len(spec.wheel_joints) // 2
+    expected = climb_limit_deg(world.geometry.mass_kg, com_height_m, half_base, per_axle, spec.wheel_radius_m,
                                spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2)
     grip = math.degrees(math.atan(mu))
     note = (f"quasi-static limit with load transfer to the rear axle, per-axle grip (mu = {mu:g}) and motor "
@@ -398,7 +396,7 @@ def _step_world(height_m: float, spec: VehicleSpec) -> Heightmap:
 
 def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float) -> bool:
     hm = _step_world(height_m, spec)
-    with World(hm, spec, sim) as world:
+    with open_world(hm, spec, sim) as world:
         world.spawn(2.5, hm.height_m / 2.0, 0.0)
         world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
         for _ in range(int(round(10.0 * sim.physics_rate_hz))):
@@ -454,10 +452,10 @@ def check_vehicle(
     quick = dataclasses.replace(sim, settle_time_s=min(sim.settle_time_s, 0.5))
     flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
     rows: list[CheckResult] = []
-    total = 6
+    total = 7
     tip_row, tip_deg, com_h = _tip_angle(spec, quick, flat)
     report(progress, 1, total)
-    with World(flat, spec, quick) as world:
+    with open_world(flat, spec, quick) as world:
         rows += _yaw_tracking(world, headings_deg, yaw_commands_rad_s)
         report(progress, 2, total)
         rows.append(_drift(world))
@@ -468,20 +466,93 @@ def check_vehicle(
         rows.append(_side_slope(world, tip_deg))
         rows.append(_climb(world, com_h))
         report(progress, 4, total)
-        c = flat.width_m / 2.0
-        world.spawn(c, c, 0.0)
-        belly, wheelbase, overhang = _geometry(world)
+        geo = world.geometry
     report(progress, 5, total)
-    rows.append(_step(spec, quick, belly, wheelbase, overhang))
+    rows.append(_step(spec, quick, geo.belly_m, geo.wheelbase_m, geo.overhang))
     report(progress, 6, total)
+    if "terramechanics" in ENGINE_TYRE_MODELS.get(sim.engine, ()):  # the soft-soil rows need that tyre model
+        rows += soft_soil_checks(spec, sim)
+    report(progress, 7, total)
     return rows
 
 
-def _geometry(world: World) -> tuple[float, float, bool]:
-    """(belly height above the ground, wheelbase, whether the chassis reaches further forward than
-    the front tyres) of the settled vehicle on flat ground at heading 0, metres."""
-    cid, body = world.client_id, world.vehicle_id
-    lo, hi = pb.getAABB(body, -1, physicsClientId=cid)
-    wheels_x = [pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints]
-    front_tyre = max(pb.getAABB(body, j, physicsClientId=cid)[1][0] for j in world.wheel_joints)
-    return lo[2] - world.hm.z_max_m, max(wheels_x) - min(wheels_x), hi[0] > front_tyre + 1e-3
+def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
+                         n_wheels: int = 4) -> float:
+    """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
+    weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
+    from offroadbench.sim.terramechanics import static_sinkage, wheel_forces
+
+    def margin(theta: float) -> float:
+        load = mass_kg * g * math.cos(theta) / n_wheels
+        h = static_sinkage(soil, radius_m, width_m, load, slip)
+        return n_wheels * float(wheel_forces(soil, radius_m, width_m, h, slip)[1]) - mass_kg * g * math.sin(theta)
+
+    lo, hi = 0.0, 0.5 * math.pi
+    if margin(lo) < 0.0:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
+    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
+    spec = world.spec
+    world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
+    rate = world.sim.physics_rate_hz
+    weight = world.geometry.mass_kg * world.sim.gravity_m_s2
+    drag, pulls = 0.0, []
+    n = int(round(seconds * rate))
+    for k in range(n):
+        world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / rate), 0.0, spec))
+        world.push_base(-drag, 0.0, 0.0)
+        world.step()
+        measured = world.wheel_slip()
+        if measured is not None and k > rate:
+            drag = drag + 0.5 * weight * (slip - measured) / rate  # integral feedback (a push if negative)
+        if k >= n - 2 * rate:
+            pulls.append(drag)
+    return sum(pulls) / len(pulls)
+
+
+def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
+    """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
+    from offroadbench.sim.terramechanics import load_soil, static_sinkage, wheel_forces
+
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    if spec.wheel_width_m is None:
+        return []
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soil = load_soil(SOFT_SOIL)
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    r, b = spec.wheel_radius_m, spec.wheel_width_m
+    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
+    with open_world(flat, spec, soft) as world:
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        mass = world.geometry.mass_kg
+        n = len(spec.wheel_joints)
+        load = mass * g / n
+        sink = world.wheel_penetration_m()
+        expected_sink = static_sinkage(soil, r, b, load)
+        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        pull = _tow_pull(world, 0.2)
+    h20 = static_sinkage(soil, r, b, load, 0.2)
+    expected_pull = n * float(wheel_forces(soil, r, b, h20, 0.2)[1])
+    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n)
+    mu = spec.wheel_friction * sim.terrain_friction
+    return [
+        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
+                   f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
+        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+                 f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
+                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
+        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
+                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
+                    "within 10 % or 1 % of the weight",
+                    f"{where}; {n} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+    ]
+

@@ -6,16 +6,20 @@ carry ``[sim]``, ``[controller]`` and ``[rules]`` tables.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
+from offroadbench.sim.engine import ENGINE_TYRE_MODELS, ENGINES
 
-__all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "tile_spans"]
+__all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
 #: values of SimConfig.tyre_model
-TYRE_MODELS = ("bullet", "coulomb")
+TYRE_MODELS = ("bullet", "coulomb", "terramechanics")
+#: gravity of a trial whose study and terrain name none, m/s^2
+EARTH_GRAVITY_M_S2 = 9.81
 #: smallest tiled heightfield side, cells (smaller tiles only add bodies and seams)
 MIN_TILE_CELLS = 16
 
@@ -38,8 +42,9 @@ class SimConfig:
     """Time the vehicle rests with braked wheels after spawning, before the clock starts, s."""
     spawn_clearance_m: float = 0.02
     """Gap between the lowest point of the vehicle and the highest terrain under it at spawn, m."""
-    gravity_m_s2: float = 9.81
-    """Magnitude of gravity, m/s^2."""
+    gravity_m_s2: float | None = None
+    """Magnitude of gravity, m/s^2. None: the terrain's body (its recipe's ``[body]``,
+    offroadbench.bodies), else Earth's 9.81 (:meth:`for_terrain`)."""
     terrain_friction: float = 1.0
     """Friction coefficient of the terrain; Bullet multiplies it with the vehicle's."""
     heightfield_tile_cells: int = 256
@@ -53,7 +58,22 @@ class SimConfig:
     tyre_model: str = "coulomb"
     """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
     the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
-    off; Coulomb forces against each contact's slip velocity, applied every step)."""
+    off; Coulomb forces against each contact's slip velocity, applied every step) or
+    ``terramechanics`` (Bullet's wheel-terrain contact off; Wong-Reece soft-soil forces on each wheel
+    every step, offroadbench.sim.soil_contact, on the soil ``soil``)."""
+    soil: str | None = None
+    """Soil of the ``terramechanics`` tyre model: a soil name (``soils/*.toml``) or TOML path. None:
+    the terrain's (its recipe's ``[soil] name``), else offroadbench.sim.terramechanics.DEFAULT_SOIL."""
+    cone_friction: bool | None = None
+    """PyBullet's friction cone (``enableConeFriction``) for the contacts Bullet's solver owns:
+    ``None`` (default) switches it off under the ``coulomb`` tyre model, where the wheels' Bullet
+    friction is 0 and the cone's rows for their contacts are wasted solver work (about 17 % of
+    the solver's time; the chassis' contacts then get Bullet's friction pyramid), and keeps it on
+    under the other tyre models. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
+    engine: str = "pybullet"
+    """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
+    default) or ``mujoco`` (offroadbench.sim.mujoco_world; ``pip install 'offroadbench[mujoco]'``).
+    Both run the same trial, tyre model, telemetry and failure rules."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -72,9 +92,28 @@ class SimConfig:
             )
         check_range(self, "settle_time_s", self.settle_time_s, lo=0)
         check_range(self, "spawn_clearance_m", self.spawn_clearance_m, lo=0)
-        check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)
+        if self.gravity_m_s2 is not None:
+            check_range(self, "gravity_m_s2", self.gravity_m_s2, lo=0)
+        if self.soil is not None and (not isinstance(self.soil, str) or not self.soil):
+            raise InputError(f"SimConfig.soil = {self.soil!r}; must be a soil name or a .toml path")
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
+        check_choice(self, "engine", self.engine, ENGINES.names())
+        models = ENGINE_TYRE_MODELS.get(self.engine, TYRE_MODELS)
+        if self.tyre_model not in models:
+            raise InputError(f"SimConfig.tyre_model = {self.tyre_model!r} is not implemented on engine "
+                             f"{self.engine!r}; allowed there: {', '.join(models)}")
+        if self.cone_friction is not None and not isinstance(self.cone_friction, bool):
+            raise InputError(f"SimConfig.cone_friction = {self.cone_friction!r}: allowed true, false or unset")
+
+    def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> SimConfig:
+        """This config with the terrain's gravity and soil where it leaves them open (None), and
+        Earth's gravity and the default soil where the terrain names none either."""
+        from offroadbench.sim.terramechanics import DEFAULT_SOIL
+
+        g = self.gravity_m_s2 if self.gravity_m_s2 is not None else gravity_m_s2
+        return dataclasses.replace(self, gravity_m_s2=EARTH_GRAVITY_M_S2 if g is None else float(g),
+                                   soil=self.soil or soil or DEFAULT_SOIL)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -47,6 +47,10 @@ Two remedies, chosen with :attr:`offroadbench.sim.config.SimConfig.tyre_model`:
 
 Both models keep Bullet's normal contact (with the vehicle's tyre stiffness and damping) and the
 velocity-controlled, torque-limited wheel motors.
+
+A third model, ``terramechanics``, puts the wheels on soft soil: Bullet's wheel-terrain contact is
+switched off and Wong-Reece soil forces replace both the normal contact and the friction
+(offroadbench.sim.soil_contact, offroadbench.sim.terramechanics).
 """
 
 from __future__ import annotations
@@ -55,15 +59,103 @@ import math
 
 import pybullet as pb
 
-__all__ = ["CoulombTyres"]
+__all__ = ["CoulombBristles", "CoulombTyres"]
+
+
+class CoulombBristles:
+    """The engine-neutral core of the ``coulomb`` tyre model: one bristle per wheel.
+
+    An engine's adapter (:class:`CoulombTyres` for PyBullet, offroadbench.sim.mujoco_world for
+    MuJoCo) sums each wheel's terrain contacts of the last step into :attr:`acc` (slot ``7 i``:
+    the normal force, then the force-weighted point and normal, 3 each), marks the wheels touched
+    in :attr:`touch`, and asks :meth:`wheel_force` for each touched wheel's friction force.
+    ``mu`` is the tyre-terrain friction coefficient, ``stiffness_n_m`` and ``damping_n_s_m`` the
+    bristle's tangential stiffness and damping per contact, ``dt_s`` the physics step.
+    """
+
+    def __init__(self, n_wheels: int, mu: float, dt_s: float, stiffness_n_m: float, damping_n_s_m: float) -> None:
+        self.n = n_wheels
+        self._mu = mu
+        self._dt = dt_s
+        self._k = stiffness_n_m
+        self._c = damping_n_s_m
+        # per-wheel state in flat lists, allocated once: each step only overwrites floats, so the
+        # loop allocates no list or dict of its own (the engine's query results aside)
+        self.acc = [0.0] * (7 * n_wheels)  # summed fn, fn * point (3), fn * normal (3)
+        self._zero = [0.0] * (7 * n_wheels)
+        self.touch = [False] * n_wheels  # the wheel has a loaded terrain contact this step
+        self._bristle = [0.0] * (3 * n_wheels)  # bristle deflection, m
+        self._held = [False] * n_wheels  # the wheel's bristle carries a deflection from the last step
+
+    def reset(self) -> None:
+        """Forget the bristle deflections (after the vehicle is teleported)."""
+        held = self._held
+        for i in range(self.n):
+            held[i] = False
+
+    def clear(self) -> None:
+        """Start a step's contact sums: zero :attr:`acc` and :attr:`touch`."""
+        self.acc[:] = self._zero
+        touch = self.touch
+        for i in range(self.n):
+            touch[i] = False
+
+    def release_untouched(self) -> None:
+        """Forget the bristles of the wheels not touched this step."""
+        touch, held = self.touch, self._held
+        for i in range(self.n):
+            if not touch[i]:
+                held[i] = False
+
+    def wheel_force(self, i: int, centre: tuple, lin: tuple, ang: tuple) -> tuple[float, float, float, float, float, float]:
+        """(force x, y, z in N; point of application x, y, z in m), world frame, of touched wheel
+        ``i`` whose centre of mass is at ``centre`` with linear velocity ``lin`` and angular
+        velocity ``ang`` (world frame). Updates the wheel's bristle."""
+        acc = self.acc
+        b = 7 * i
+        fn = acc[b]
+        px, py, pz = acc[b + 1] / fn, acc[b + 2] / fn, acc[b + 3] / fn
+        snx, sny, snz = acc[b + 4], acc[b + 5], acc[b + 6]
+        norm = math.sqrt(snx * snx + sny * sny + snz * snz)
+        nx, ny, nz = snx / norm, sny / norm, snz / norm  # on the terrain, pointing at the wheel
+        cx, cy, cz = centre
+        vx, vy, vz = lin
+        wx, wy, wz = ang
+        rx, ry, rz = px - cx, py - cy, pz - cz
+        # velocity of the wheel's material point at the contact: v + w x r
+        ux = vx + wy * rz - wz * ry
+        uy = vy + wz * rx - wx * rz
+        uz = vz + wx * ry - wy * rx
+        un = ux * nx + uy * ny + uz * nz
+        sx, sy, sz = ux - un * nx, uy - un * ny, uz - un * nz  # tangential slip
+        bristle, j = self._bristle, 3 * i
+        if self._held[i]:  # keep the stored deflection in the current tangent plane
+            dx, dy, dz = bristle[j], bristle[j + 1], bristle[j + 2]
+            dn = dx * nx + dy * ny + dz * nz
+            dx, dy, dz = dx - dn * nx, dy - dn * ny, dz - dn * nz
+        else:
+            dx = dy = dz = 0.0
+        dt, k, cdamp = self._dt, self._k, self._c
+        dx, dy, dz = dx + sx * dt, dy + sy * dt, dz + sz * dt
+        fx, fy, fz = -(k * dx + cdamp * sx), -(k * dy + cdamp * sy), -(k * dz + cdamp * sz)
+        f = math.sqrt(fx * fx + fy * fy + fz * fz)
+        limit = self._mu * fn
+        if f > limit:  # sliding: the Coulomb limit, and the bristle at its stretched length
+            s = limit / f
+            fx, fy, fz = fx * s, fy * s, fz * s
+            dx, dy, dz = -fx / k, -fy / k, -fz / k
+        bristle[j], bristle[j + 1], bristle[j + 2] = dx, dy, dz
+        self._held[i] = True
+        return fx, fy, fz, px, py, pz
 
 
 class CoulombTyres:
-    """Coulomb tyre forces against the slip, applied before each physics step (``coulomb`` model).
+    """Coulomb tyre forces against the slip, applied before each PyBullet step (``coulomb`` model).
 
     ``mu`` is the tyre-terrain friction coefficient (the vehicle's wheel friction times the
     terrain's, as Bullet would combine them); ``stiffness_n_m`` and ``damping_n_s_m`` are the
-    bristle's tangential stiffness and damping per contact; ``dt_s`` is the physics step.
+    bristle's tangential stiffness and damping per contact; ``dt_s`` is the physics step. The
+    force law is :class:`CoulombBristles`'.
     """
 
     def __init__(self, cid: int, body: int, terrain: frozenset[int], wheels: list[int], mu: float, dt_s: float,
@@ -71,75 +163,54 @@ class CoulombTyres:
         self._cid = cid
         self._body = body
         self._terrain = terrain
-        self._wheel_set = frozenset(wheels)
-        self._mu = mu
-        self._dt = dt_s
-        self._k = stiffness_n_m
-        self._c = damping_n_s_m
-        self._bristle: dict[int, list[float]] = {}
+        self._wheels = sorted(wheels)
+        #: wheel link -> its slot in the bristles (fixed at construction)
+        self._slot = {link: i for i, link in enumerate(self._wheels)}
+        self.bristles = CoulombBristles(len(self._wheels), mu, dt_s, stiffness_n_m, damping_n_s_m)
 
     def reset(self) -> None:
         """Forget the bristle deflections (after the vehicle is teleported)."""
-        self._bristle.clear()
+        self.bristles.reset()
 
     def apply(self) -> None:
-        """Apply one step's friction forces from the contacts of the last step."""
+        """Apply one step's friction forces from the contacts of the last step.
+
+        Plain Python floats throughout (no numpy: a scalar numpy op costs more than the arithmetic,
+        and its SIMD dispatch could differ between CPUs); the arithmetic, its order and so its
+        results are those of the first implementation, bit for bit.
+        """
         cid, body = self._cid, self._body
         contacts = pb.getContactPoints(bodyA=body, physicsClientId=cid)
-        terrain = self._terrain
+        terrain, slot, core = self._terrain, self._slot, self.bristles
+        core.clear()
+        acc, touch = core.acc, core.touch
         # a sphere on a heightfield touches several triangles: sum each wheel's normal forces and
         # apply its friction at their force-weighted point, along their force-weighted normal
-        by_wheel: dict[int, list[float]] = {}
+        any_touch = False
         for c in contacts:
             fn = c[9]
-            if fn > 0.0 and c[3] in self._wheel_set and c[2] in terrain:
-                acc = by_wheel.setdefault(c[3], [0.0] * 7)
+            if fn > 0.0 and c[2] in terrain:
+                i = slot.get(c[3])
+                if i is None:
+                    continue
+                touch[i] = any_touch = True
                 p, n = c[5], c[7]
-                acc[0] += fn
-                acc[1] += fn * p[0]
-                acc[2] += fn * p[1]
-                acc[3] += fn * p[2]
-                acc[4] += fn * n[0]
-                acc[5] += fn * n[1]
-                acc[6] += fn * n[2]
-        if not by_wheel:
-            self._bristle.clear()
+                b = 7 * i
+                acc[b] += fn
+                acc[b + 1] += fn * p[0]
+                acc[b + 2] += fn * p[1]
+                acc[b + 3] += fn * p[2]
+                acc[b + 4] += fn * n[0]
+                acc[b + 5] += fn * n[1]
+                acc[b + 6] += fn * n[2]
+        core.release_untouched()
+        if not any_touch:
             return
-        links = sorted(by_wheel)
-        states = pb.getLinkStates(body, links, computeLinkVelocity=1, physicsClientId=cid)
-        for link, st in zip(links, states):
-            fn, spx, spy, spz, snx, sny, snz = by_wheel[link]
-            px, py, pz = spx / fn, spy / fn, spz / fn
-            norm = math.sqrt(snx * snx + sny * sny + snz * snz)
-            nx, ny, nz = snx / norm, sny / norm, snz / norm  # on the terrain, pointing at the wheel
-            cx, cy, cz = st[0]
-            vx, vy, vz = st[6]
-            wx, wy, wz = st[7]
-            rx, ry, rz = px - cx, py - cy, pz - cz
-            # velocity of the wheel's material point at the contact: v + w x r
-            ux = vx + wy * rz - wz * ry
-            uy = vy + wz * rx - wx * rz
-            uz = vz + wx * ry - wy * rx
-            un = ux * nx + uy * ny + uz * nz
-            sx, sy, sz = ux - un * nx, uy - un * ny, uz - un * nz  # tangential slip
-            d = self._bristle.get(link)
-            if d is None:
-                d = [0.0, 0.0, 0.0]
-            else:  # keep the stored deflection in the current tangent plane
-                dn = d[0] * nx + d[1] * ny + d[2] * nz
-                d = [d[0] - dn * nx, d[1] - dn * ny, d[2] - dn * nz]
-            dt = self._dt
-            d = [d[0] + sx * dt, d[1] + sy * dt, d[2] + sz * dt]
-            k, cdamp = self._k, self._c
-            fx, fy, fz = -(k * d[0] + cdamp * sx), -(k * d[1] + cdamp * sy), -(k * d[2] + cdamp * sz)
-            f = math.sqrt(fx * fx + fy * fy + fz * fz)
-            limit = self._mu * fn
-            if f > limit:  # sliding: the Coulomb limit, and the bristle at its stretched length
-                s = limit / f
-                fx, fy, fz = fx * s, fy * s, fz * s
-                d = [-fx / k, -fy / k, -fz / k]
-            self._bristle[link] = d
-            pb.applyExternalForce(body, link, [fx, fy, fz], [px, py, pz], pb.WORLD_FRAME, physicsClientId=cid)
-        for link in list(self._bristle):
-            if link not in by_wheel:
-                del self._bristle[link]
+        states = pb.getLinkStates(body, self._wheels, computeLinkVelocity=1, physicsClientId=cid)
+        wheels = self._wheels
+        for i in range(core.n):
+            if touch[i]:
+                st = states[i]
+                fx, fy, fz, px, py, pz = core.wheel_force(i, st[0], st[6], st[7])
+                pb.applyExternalForce(body, wheels[i], (fx, fy, fz), (px, py, pz), pb.WORLD_FRAME,
+                                      physicsClientId=cid)

@@ -71,7 +71,7 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.skid_steer import wheel_speeds
 from offroadbench.sim.runner import body_frame, body_velocity, vehicle_envelope
 from offroadbench.sim.vehicle import VehicleSpec
-from offroadbench.sim.world import World
+from offroadbench.sim.engine import TrialWorld, open_world
 
 __all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",
            "STATE_FIELDS"]
@@ -173,7 +173,7 @@ class TraverseEnv(gym.Env):
         self.hm = _terrain(terrain, terrain_seed, overrides)
         self.closed_classes = classify_terrain(self.hm, roughness).closed  # the map the trials' missions use
         self._mission_cfg = MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m)
-        self._world: World | None = World(self.hm, vehicle, sim)
+        self._world: TrialWorld | None = open_world(self.hm, vehicle, sim)
         spec = self._world.spec
         self.vehicle = spec
         self.envelope = vehicle_envelope(self._world)
@@ -269,7 +269,7 @@ class TraverseEnv(gym.Env):
         super().close()
 
     # ------------------------------------------------------------------ helpers
-    def _require_world(self) -> World:
+    def _require_world(self) -> TrialWorld:
         if self._world is None:
             raise RuntimeError("the environment is closed")
         return self._world

@@ -19,29 +19,25 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from offroadbench.errors import InputError
-from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
+from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
-from offroadbench.progress import ProgressFn, report
-from offroadbench.sim.config import ControllerConfig, SimConfig
+from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.vehicle import VehicleSpec
-from offroadbench.sim.world import World
+from offroadbench.sim.engine import TrialWorld
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
-           "run_missions", "vehicle_envelope", "body_velocity", "body_frame"]
+           "vehicle_envelope", "body_velocity", "body_frame"]
 
 #: telemetry columns, each a 1-D array sampled at SimConfig.telemetry_rate_hz
 TELEMETRY_COLUMNS = (
@@ -95,6 +91,10 @@ class TrialResult:
     """Mission goal y on the map, metres."""
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
+    mean_slip: float = float("nan")
+    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
+    deepest soil sinkage."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -111,7 +111,7 @@ class TrialResult:
     __hash__ = None  # type: ignore[assignment]  # NaN-aware equality has no matching hash
 
 
-def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
+def body_frame(world: TrialWorld, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
     """(roll, pitch, yaw, body roll rate, body pitch rate, body yaw rate) from the base quaternion
     and world angular velocity; angles as in metrics.roll_pitch_yaw_from_quat (scalar, fast path)."""
     r = world.rotation_matrix(quat)  # row-major 3x3, body -> world
@@ -126,33 +126,22 @@ def body_frame(world: World, quat: tuple, ang_world: tuple) -> tuple[float, floa
             r[2] * wx + r[5] * wy + r[8] * wz)
 
 
-def vehicle_envelope(world: World) -> VehicleEnvelope:
-    """The footprint (overall length and width, from the links' bounding boxes at rest, heading +x)
-    and limits of ``world``'s vehicle, for planners: the belly's height above the wheels' bottoms,
-    and the step limit (the spec's ``rated_step_m``, else offroadbench.sim.check.step_bound_m of
-    that geometry, the bound ``offroadbench vehicle check`` tests). Moves the vehicle: call it
-    before ``spawn``."""
-    import pybullet as pb
-
+def vehicle_envelope(world: TrialWorld) -> VehicleEnvelope:
+    """The footprint and limits of ``world``'s vehicle, for planners, from its measured geometry
+    (``world.geometry``, offroadbench.sim.engine.VehicleGeometry): overall length and width, the
+    belly's height above the wheels' bottoms, and the step limit (the spec's ``rated_step_m``, else
+    offroadbench.sim.check.step_bound_m of that geometry, the bound ``offroadbench vehicle check``
+    tests)."""
     from offroadbench.sim.check import step_bound_m
 
-    cid, body = world.client_id, world.vehicle_id
-    pb.resetBasePositionAndOrientation(body, [0.0, 0.0, world.hm.z_max_m + 10.0], [0, 0, 0, 1], physicsClientId=cid)
-    boxes = [pb.getAABB(body, link, physicsClientId=cid) for link in range(-1, pb.getNumJoints(body, physicsClientId=cid))]
-    lo = np.min([b[0] for b in boxes], axis=0)
-    hi = np.max([b[1] for b in boxes], axis=0)
-    spec = world.spec
-    wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in world.wheel_joints]
-    wheels_x = [pb.getLinkState(body, j, physicsClientId=cid)[0][0] for j in world.wheel_joints]
-    belly = float(boxes[0][0][2] - min(w[0][2] for w in wheels))
-    overhang = boxes[0][1][0] > max(w[1][0] for w in wheels) + 1e-3
+    spec, geo = world.spec, world.geometry
     step = spec.rated_step_m
     if step is None:
-        step = step_bound_m(spec.wheel_radius_m, belly, max(wheels_x) - min(wheels_x), overhang)
-    return VehicleEnvelope(length_m=float(hi[0] - lo[0]), width_m=float(hi[1] - lo[1]),
+        step = step_bound_m(spec.wheel_radius_m, geo.belly_m, geo.wheelbase_m, geo.overhang)
+    return VehicleEnvelope(length_m=geo.length_m, width_m=geo.width_m,
                            max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
                            max_slope=spec.wheel_friction * world.sim.terrain_friction,
-                           max_step_m=float(step), ground_clearance_m=belly, wheel_radius_m=spec.wheel_radius_m)
+                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m)
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,7 +156,7 @@ class TrialRecord:
 
 
 def drive_mission(
-    world: World,
+    world: TrialWorld,
     mission: Mission,
     *,
     planner: PlannerChoice = PlannerChoice(),
@@ -201,7 +190,7 @@ def drive_mission(
     goal = np.asarray(mission.goal_xy_m, dtype=float)
     v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
-    policy = tracker = None
+    policy = tracker = replanner = None
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
@@ -214,6 +203,9 @@ def drive_mission(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
         policy.reset(problem)
+    elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
+        replanner = Replanner(lambda p: plan(planner, p), problem, mission, planner.perception)
+        waypoints = replanner.waypoints
     else:
         waypoints = plan(planner, problem)
     if policy is None:
@@ -224,13 +216,15 @@ def drive_mission(
     timeout_s = rules.timeout_factor * length / v_nominal
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
     checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
-                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m)
+                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
+                          wheel_radius_m=spec.wheel_radius_m)
     fill_m = hm.z_min_m - rules.fall_depth_m
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
 
     rows: list[tuple] = []
+    slips: list[float] = []
     cmd_v = cmd_w = 0.0
     reason = "timeout"
     traversal_time = float("nan")
@@ -243,6 +237,8 @@ def drive_mission(
             roll, pitch, yaw, *rates = body_frame(world, quat, ang)
         if ctrl_tick:
             if policy is None:
+                if replanner is not None and replanner.update(pos[:2]) is not None:
+                    tracker = make_tracker(replanner.waypoints, spec, controller)
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
@@ -251,13 +247,16 @@ def drive_mission(
                 cmd_w = min(max(float(a[1]), -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
-            progress = tracker.progress(np.array(pos[:2])) if tracker is not None else mission.length_m - math.hypot(
+            progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
                 goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
                 (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
-            done = checker.check(pos, roll, pitch)
+            slip = world.wheel_slip()
+            if slip is not None:
+                slips.append(slip)
+            done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
             if done is not None:
                 reason = done
                 end_step = k
@@ -269,16 +268,19 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    return TrialRecord(result, tel, np.asarray(waypoints, dtype=float))
+    if slips:
+        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
+    path = replanner.trace if replanner is not None else waypoints
+    return TrialRecord(result, tel, np.asarray(path, dtype=float))
 
 
-def run_mission(world: World, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
+def run_mission(world: TrialWorld, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:
     """:func:`drive_mission`, returning (result, telemetry columns)."""
     rec = drive_mission(world, mission, **kwargs)
     return rec.result, rec.telemetry
 
 
-def body_velocity(world: World, quat: tuple, lin: tuple) -> tuple[float, float, float]:
+def body_velocity(world: TrialWorld, quat: tuple, lin: tuple) -> tuple[float, float, float]:
     """The base's velocity in the body frame (forward, left, up), m/s."""
     r = world.rotation_matrix(quat)  # row-major, body -> world
     return tuple(r[i] * lin[0] + r[i + 3] * lin[1] + r[i + 6] * lin[2] for i in range(3))
@@ -305,42 +307,3 @@ def _result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialRe
         goal_y_m=float(mission.goal_xy_m[1]),
         heading_deg=float(np.degrees(mission.heading_rad)),
     )
-
-
-def run_missions(
-    hm: Heightmap,
-    missions: Sequence[Mission],
-    *,
-    vehicle: VehicleSpec | str = "husky",
-    planner: PlannerChoice = PlannerChoice(),
-    classes: np.ndarray | None = None,
-    border_m: float = 0.0,
-    controller: ControllerConfig = ControllerConfig(),
-    sim: SimConfig = SimConfig(),
-    rules: FailureRules = FailureRules(),
-    progress: ProgressFn | None = None,
-    telemetry_dir: str | Path | None = None,
-) -> list[TrialResult]:
-    """Run every mission on one terrain (built once) and return one TrialResult per mission.
-
-    ``planner``, ``classes`` and ``border_m`` as in :func:`drive_mission`. With ``telemetry_dir``
-    the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
-    offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.
-    """
-    from offroadbench.io.telemetry import save_telemetry
-
-    out_dir = Path(telemetry_dir) if telemetry_dir is not None else None
-    if out_dir is not None and not out_dir.is_dir():
-        raise InputError(f"telemetry_dir {out_dir} is not a directory")
-    results: list[TrialResult] = []
-    with World(hm, vehicle, sim) as world:
-        for i, mission in enumerate(missions):
-            rec = drive_mission(world, mission, planner=planner, classes=classes, border_m=border_m,
-                                controller=controller, rules=rules)
-            results.append(rec.result)
-            if out_dir is not None:
-                save_telemetry(rec.telemetry, out_dir / f"mission_{mission.index:03d}.npz")
-                save_telemetry({"x_m": rec.path_xy[:, 0], "y_m": rec.path_xy[:, 1]},
-                               out_dir / f"mission_{mission.index:03d}_path.npz")
-            report(progress, i + 1, len(missions))
-    return results

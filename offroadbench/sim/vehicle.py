@@ -36,6 +36,9 @@ class VehicleSpec:
     """Names of the right-side wheel joints."""
     wheel_radius_m: float
     """Rolling radius of the wheels, metres."""
+    wheel_width_m: float | None = None
+    """Width of the tyre's tread, metres (the ``terramechanics`` tyre model's b; None: that model
+    cannot be used)."""
     track_m: float
     """Lateral distance between left and right wheel centres, metres."""
     max_speed_m_s: float
@@ -84,6 +87,8 @@ class VehicleSpec:
         for name in ("rated_climb_grade_deg", "rated_side_slope_deg"):
             if getattr(self, name) is not None:
                 check_range(self, name, getattr(self, name), lo=0, hi=90, lo_open=True)
+        if self.wheel_width_m is not None:
+            check_range(self, "wheel_width_m", self.wheel_width_m, lo=0, lo_open=True)
         if self.rated_step_m is not None:
             check_range(self, "rated_step_m", self.rated_step_m, lo=0, lo_open=True)
         if self.wheel_spin_inertia_kg_m2 is not None:

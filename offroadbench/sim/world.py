@@ -52,6 +52,16 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   results then differ in the last digits from a fresh World (solver and contact state carried
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
+
+- Under the ``coulomb`` tyre model Bullet's friction cone is off (``enableConeFriction = 0``,
+  SimConfig.cone_friction): the wheels' Bullet friction is 0 there, so the cone's solver rows for
+  their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
+  benchmarks/RESULTS.md, 'Issue 25').
+
+This module (with ``contact.py`` and the terramechanics adapter ``soil_contact.py``) is the only
+code that calls pybullet for a trial: :class:`World` implements offroadbench.sim.engine.TrialWorld,
+the engine boundary, for PyBullet; the vehicle's geometry is measured once, at load
+(:meth:`World._measure_geometry`).
 """
 
 from __future__ import annotations
@@ -72,6 +82,7 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
 from offroadbench.sim.contact import CoulombTyres
+from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["World"]
@@ -80,11 +91,13 @@ log = logging.getLogger(__name__)
 
 
 class World:
-    """One terrain and one vehicle in a private PyBullet DIRECT client. Use as a context manager."""
+    """One terrain and one vehicle in a private PyBullet DIRECT client. Use as a context manager.
+
+    The PyBullet implementation of offroadbench.sim.engine.TrialWorld (engine ``pybullet``)."""
 
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig()) -> None:
         self.hm = hm
-        self.sim = sim
+        self.sim = sim.for_terrain()  # Earth's gravity and the default soil where nothing names them
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
         self._cid = pb.connect(pb.DIRECT)
@@ -98,6 +111,7 @@ class World:
             log.info("heightfield %dx%d built in %.2f s (%d tiles)", hm.rows, hm.cols, time.perf_counter() - t0,
                      len(self.terrain_bodies))
             self.vehicle_id = self._load_vehicle()
+            self.geometry = self._measure_geometry()
         except BaseException:
             self.close()
             raise
@@ -117,6 +131,8 @@ class World:
 
     @property
     def client_id(self) -> int:
+        """The PyBullet client (for tests that inspect the engine; the package never uses it
+        outside this module)."""
         return self._cid
 
     # ------------------------------------------------------------------ building
@@ -127,8 +143,17 @@ class World:
             numSubSteps=0,
             numSolverIterations=self.sim.solver_iterations,
             deterministicOverlappingPairs=1,
+            enableConeFriction=int(self.cone_friction),
             physicsClientId=self._cid,
         )
+
+    @property
+    def cone_friction(self) -> bool:
+        """Whether Bullet's friction cone is on (SimConfig.cone_friction; default: off under the
+        ``coulomb`` tyre model, whose wheels have no Bullet friction)."""
+        if self.sim.cone_friction is not None:
+            return self.sim.cone_friction
+        return self.sim.tyre_model != "coulomb"
 
     def _build_terrain(self) -> tuple[int, ...]:
         """One static body per heightfield tile (:func:`tile_spans`), all with the map's height range."""
@@ -190,7 +215,7 @@ class World:
         tyre = {}
         if spec.tyre_stiffness_n_m is not None:
             tyre = {"contactStiffness": spec.tyre_stiffness_n_m, "contactDamping": spec.tyre_damping_n_s_m}
-        coulomb = self.sim.tyre_model == "coulomb"
+        coulomb = self.sim.tyre_model in ("coulomb", "terramechanics")
         for j in self.wheel_joints:
             pb.changeDynamics(body, j, lateralFriction=0.0 if coulomb else spec.wheel_friction, **tyre,
                               physicsClientId=cid)
@@ -199,7 +224,11 @@ class World:
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
                                   physicsClientId=cid)
         self._tyres = None
-        if coulomb:
+        if self.sim.tyre_model == "terramechanics":
+            from offroadbench.sim.soil_contact import make_soil_tyres
+
+            self._tyres = make_soil_tyres(self, body)
+        elif coulomb:
             n_links = pb.getNumJoints(body, physicsClientId=cid)
             mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
             share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
@@ -209,6 +238,31 @@ class World:
                                        spec.wheel_friction * self.sim.terrain_friction, dt,
                                        stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
         return body
+
+    def _measure_geometry(self) -> VehicleGeometry:
+        """The vehicle as loaded (offroadbench.sim.engine.VehicleGeometry): in the air at
+        (0, 0, z_max + 10 m), heading 0, wheels at joint angle 0, from the links' bounding boxes."""
+        cid, body = self._cid, self.vehicle_id
+        base = [0.0, 0.0, self.hm.z_max_m + 10.0]
+        pb.resetBasePositionAndOrientation(body, base, [0, 0, 0, 1], physicsClientId=cid)
+        for j in self.wheel_joints:
+            pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
+        n_links = pb.getNumJoints(body, physicsClientId=cid)
+        boxes = [pb.getAABB(body, link, physicsClientId=cid) for link in range(-1, n_links)]
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
+        wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in self.wheel_joints]
+        centres = [pb.getLinkState(body, j, physicsClientId=cid)[0] for j in self.wheel_joints]
+        return VehicleGeometry(
+            mass_kg=sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links)),
+            wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1]
+                                           for j in self.wheel_joints),
+            wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
+            length_m=float(hi[0] - lo[0]),
+            width_m=float(hi[1] - lo[1]),
+            belly_m=float(boxes[0][0][2] - min(w[0][2] for w in wheels)),
+            overhang=bool(boxes[0][1][0] > max(w[1][0] for w in wheels) + 1e-3),
+        )
 
     # ------------------------------------------------------------------ vehicle state
     def _bottom_offset(self) -> float:
@@ -291,14 +345,55 @@ class World:
         terrain = self._terrain_set
         return [c for c in pb.getContactPoints(bodyA=self.vehicle_id, physicsClientId=self._cid) if c[2] in terrain]
 
+    def wheel_loads_n(self) -> tuple[float, ...]:
+        """Each wheel's summed normal force from the terrain in the last step, N (left wheels, then right)."""
+        loads = dict.fromkeys(self.wheel_joints, 0.0)
+        for c in self.terrain_contacts():
+            if c[3] in loads:
+                loads[c[3]] += c[9]
+        return tuple(loads[j] for j in self.wheel_joints)
+
+    def centre_of_mass_m(self) -> tuple[float, float, float]:
+        """The whole vehicle's centre of mass in the world, m (mass-weighted link centres)."""
+        cid, body = self._cid, self.vehicle_id
+        total = pb.getDynamicsInfo(body, -1, physicsClientId=cid)[0]
+        base = pb.getBasePositionAndOrientation(body, physicsClientId=cid)[0]
+        acc = [total * base[0], total * base[1], total * base[2]]
+        for link in range(pb.getNumJoints(body, physicsClientId=cid)):
+            m = pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
+            p = pb.getLinkState(body, link, physicsClientId=cid)[0]
+            acc = [acc[0] + m * p[0], acc[1] + m * p[1], acc[2] + m * p[2]]
+            total += m
+        return acc[0] / total, acc[1] / total, acc[2] / total
+
+    def push_base(self, fx: float, fy: float, fz: float) -> None:
+        """An external force on the chassis at its centre of mass during the next step, N (world frame)."""
+        pos = pb.getBasePositionAndOrientation(self.vehicle_id, physicsClientId=self._cid)[0]
+        pb.applyExternalForce(self.vehicle_id, -1, [fx, fy, fz], pos, pb.WORLD_FRAME, physicsClientId=self._cid)
+
+    def set_gravity(self, gx: float, gy: float, gz: float) -> None:
+        """Gravity vector, m/s^2."""
+        pb.setGravity(gx, gy, gz, physicsClientId=self._cid)
+
     def wheel_penetration_m(self) -> float:
-        """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres."""
+        """Deepest penetration of any wheel into the terrain in the last step (0 if none), metres;
+        with the ``terramechanics`` tyre model, the deepest soil sinkage."""
+        if self.sim.tyre_model == "terramechanics":
+            return max((v[0] for v in self._tyres.last.values()), default=0.0)
         worst = 0.0
         wheels = self.wheel_joints
         for c in self.terrain_contacts():
             if c[3] in wheels and -c[8] > worst:
                 worst = -c[8]
         return worst
+
+    def wheel_slip(self) -> float | None:
+        """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
+        or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
+        if self.sim.tyre_model != "terramechanics" or not self._tyres.last:
+            return None
+        slips = [v[1] for v in self._tyres.last.values()]
+        return sum(slips) / len(slips)
 
     def ray_height(self, x_m: float, y_m: float) -> float:
         """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN off the map).

@@ -20,8 +20,10 @@ __all__ = ["held_fixed", "report_title"]
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
     ("sim", "gravity_m_s2", "gravity (m/s^2)"),
+    ("sim", "engine", "physics engine"),
     ("sim", "physics_rate_hz", "physics rate (Hz)"),
     ("sim", "tyre_model", "tyre model"),
+    ("sim", "soil", "soil (terramechanics tyres)"),
     ("controller", "cruise_speed_m_s", "cruise speed (m/s)"),
     ("controller", "lookahead_m", "pure-pursuit lookahead (m)"),
     ("missions", "length_m", "mission length (m)"),
@@ -39,13 +41,25 @@ def _sections(meta: dict[str, Any], cell: int = 0) -> dict[str, Any]:
             out[name] = build_section(name, info["settings"].get(name, {}), where=f"cell {cell} [{name}]")
         except Exception:  # noqa: BLE001  (a vehicle or plug-in of the run missing here: show the raw table)
             out[name] = dict(info["settings"].get(name, {}))
+    out["sim"] = _on_terrain(out["sim"], info.get("recipe"))
     return out
+
+
+def _on_terrain(sim: Any, recipe: Any) -> Any:
+    """The sim settings with the terrain's gravity and soil where the study leaves them open (as a
+    trial resolves them)."""
+    if not hasattr(sim, "for_terrain"):
+        return sim
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    return sim.for_terrain(*terrain_gravity_and_soil(recipe))
 
 
 def _default(name: str) -> Any:
     from offroadbench.study.spec import build_section
 
-    return build_section(name, {}, where="defaults")
+    cfg = build_section(name, {}, where="defaults")
+    return _on_terrain(cfg, None) if name == "sim" else cfg
 
 
 def _fmt(v: Any) -> str:
@@ -88,7 +102,9 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
                      "note": ("changed: " + ", ".join(sorted(diff))) if diff else "defaults"})
     for table, field, label in _SHOWN:
         cfg = secs[table]
-        if dataclasses.is_dataclass(cfg):
+        if field == "soil" and getattr(cfg, "tyre_model", "") != "terramechanics":
+            continue  # the soil acts only through the terramechanics tyres
+        if dataclasses.is_dataclass(cfg) and hasattr(cfg, field):
             add(label, f"{table}.{field}", getattr(cfg, field), getattr(_default(table), field))
     rules = secs["rules"]
     if dataclasses.is_dataclass(rules):
@@ -124,7 +140,8 @@ def report_title(meta: dict[str, Any]) -> str:
     if "planner.name" not in axes and getattr(planner, "name", "straight") != "straight":
         extra.append(f"{getattr(planner, 'kind', 'planner')} `{planner.name}`")
     sim = secs["sim"]
-    if "sim.gravity_m_s2" not in axes and dataclasses.is_dataclass(sim) and sim.gravity_m_s2 != _default("sim").gravity_m_s2:
+    if ("sim.gravity_m_s2" not in axes and dataclasses.is_dataclass(sim)
+            and sim.gravity_m_s2 != _default("sim").gravity_m_s2):  # not Earth's (set, or the recipe's body)
         extra.append(f"gravity {sim.gravity_m_s2:g} m/s^2")
     vehicle = secs["vehicle"]
     if "vehicle.name" not in axes and getattr(vehicle, "name", "husky") != "husky":

@@ -31,6 +31,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -75,16 +76,14 @@ def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
 # ---------------------------------------------------------------------------- figures
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
-    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.seeding import terrain_seed
-    from offroadbench.study.spec import build_section
-    from offroadbench.terrain.recipe import generate_terrain, recipe_from_dict
+    from offroadbench.sim.pipeline import prepare_terrain
+    from offroadbench.study.spec import CellPlan
 
-    info = meta["cells"][cell]
-    seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=info["seed_key"])
-    hm = generate_terrain(recipe_from_dict(info["recipe"]), seed)
-    rcfg = build_section("roughness", info["settings"].get("roughness", {}), "report")
-    maps = classify_terrain(hm, rcfg)
+    plan = CellPlan.from_meta(meta, cell)
+    seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=plan.key)
+    prepared = prepare_terrain(plan.recipe(), seed, plan.trial_settings, [])
+    hm, maps, rcfg = prepared.hm, prepared.maps, plan.trial_settings.roughness
     t = trials[(trials["cell"] == cell) & (trials["terrain"] == terrain)]
     title = (f"Terrain {terrain} of {short_label(stats.group_labels(meta)[cell])} (seed {seed}); "
              "missions: white = success, black = failure")
@@ -101,7 +100,8 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[list[str], dict[str, pd.DataFrame]]:
+def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None
+                        ) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
     if not ref:
@@ -138,7 +138,8 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
                 rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'])} → {short_label(mine.loc[i, 'to'])}",
                              "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
-                             "same direction": same})
+                             "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
+                                                                         mine.loc[i, "to"], p_abs)})
         df = pd.DataFrame(rows)
         tables["reference_median_changes.csv"] = df
         lines += [
@@ -164,6 +165,45 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame) -> tuple[lis
         tables["reference_outliers.csv"] = df
         lines += ["### 1.5 IQR outliers", "", markdown_table(df), ""]
     return lines, tables
+
+
+def _terrain_verdict(terrain: pd.DataFrame | None, name: str, frm: str, to: str, paper: float) -> dict[str, Any]:
+    """The terrain-level columns of one paper claim: our per-terrain change, its Holm p, and whether
+    it is significant at the terrain level in the paper's direction."""
+    if terrain is None or terrain.empty:
+        return {}
+    hit = terrain[(terrain["quantity"] == name) & (terrain["from"] == frm) & (terrain["to"] == to)]
+    if hit.empty:
+        return {"terrains": math.nan, "terrain-level p (Holm)": math.nan, "significant at the terrain level": "–"}
+    r = hit.iloc[0]
+    if math.isnan(paper) or paper == 0:
+        verdict = "–"
+    elif not r["significant"]:
+        verdict = "no"
+    else:
+        verdict = "yes" if np.sign(paper) == np.sign(r["mean_change"]) else "no (opposite direction)"
+    return {"terrains": int(r["terrains"]), "terrain-level p (Holm)": r["p_holm"],
+            "significant at the terrain level": verdict}
+
+
+def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
+                             study: dict[str, Any], pairs: list[tuple[int, int]] | None = None
+                             ) -> tuple[list[str], pd.DataFrame]:
+    """Changes between groups (consecutive, or ``pairs``) tested with the terrain as the unit
+    (stats.terrain_changes)."""
+    paired = bool(study.get("paired_terrains", True))
+    tab = stats.terrain_changes(trials, terrains, labels, names, paired=paired, pairs=pairs)
+    how = ("per-terrain differences (terrain j of every group shares its seed): mean with a 95 % terrain-bootstrap "
+           "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
+           if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
+           "Mann-Whitney U p (in the p_wilcoxon column)")
+    shown = tab.assign(step=[f"{short_label(a)} → {short_label(b)}" for a, b in zip(tab["from"], tab["to"])])
+    shown = shown[["quantity", "step", *[c for c in tab.columns if c not in ("quantity", "from", "to")]]]
+    text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
+            "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
+            "of successful trials.")
+    title = "## Changes at the terrain level" + ("" if pairs is None else ": every group against the first")
+    return [title, "", text, "", markdown_table(shown), ""], tab
 
 
 # ---------------------------------------------------------------------------- report
@@ -301,6 +341,15 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
                   "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
                   markdown_table(changes), ""]
+        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
+        lines += terrain_lines
+    elif len(labels) > 1 and study["grid"] and all(_numeric(a["values"]) for a in study["grid"]):
+        # several numeric axes (a sensitivity study): every cell against the first
+        names = ["success_rate_pct", *stats.METRICS]
+        first = min(labels)
+        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(
+            trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
+        lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
@@ -314,7 +363,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary)
+    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
@@ -325,13 +374,19 @@ def _numeric(values) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
-def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None]:
-    """(planner column, the one numeric grid column or None) of a study with a planner axis."""
+def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str]]:
+    """(planner column, the level column or None, the other grid columns) of a study with a planner
+    axis. The level is the one numeric axis, or the one numeric recipe axis (e.g. ``D_high``) when
+    there are several; every other axis (``band_limited``, ``map_noise_m``, ...) is a stratum."""
     columns = meta["columns"]
     axes = meta["study"]["grid"]
     planner = columns.get("planner.name")
-    numeric = [columns[a["key"]] for a in axes if _numeric(a["values"])]
-    return planner, (numeric[0] if len(numeric) == 1 else None)
+    numeric = [a["key"] for a in axes if _numeric(a["values"])]
+    if len(numeric) > 1:
+        numeric = [k for k in numeric if k.startswith("recipe.")]
+    level = columns[numeric[0]] if len(numeric) == 1 else None
+    strata = [columns[a["key"]] for a in axes if columns[a["key"]] not in (planner, level)]
+    return planner, level, strata
 
 
 def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason: int = 2) -> pd.DataFrame:
@@ -345,18 +400,19 @@ def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason:
     return pd.DataFrame(rows)
 
 
-def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None):
+def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None,
+                  strata: Sequence[str] = ()):
     """Planned and driven paths of every planner on one mission (the one whose outcomes differ most
     between planners, at the middle level), over the closed class map."""
-    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.io.telemetry import load_telemetry
     from offroadbench.plots.study import fig_paths
+    from offroadbench.sim.pipeline import prepare_terrain
     from offroadbench.study.runner import telemetry_paths
     from offroadbench.study.spec import CellPlan
-    from offroadbench.study.tasks import sample_mission
-    from offroadbench.terrain.recipe import generate_terrain
 
     t = trials
+    for col in strata:  # one stratum: the first value of every other axis
+        t = t[t[col] == t[col].min()]
     if level is not None:
         levels = sorted(t[level].unique())
         t = t[t[level] == levels[len(levels) // 2]]
@@ -364,12 +420,10 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     terrain, mission = spread.sort_values(ascending=False, kind="stable").index[0]
     rows = t[(t["terrain"] == terrain) & (t["mission"] == mission)]
     first = rows.iloc[0]
-    info = meta["cells"][int(first["cell"])]
-    plan = CellPlan(index=int(first["cell"]), values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
-                    settings=info["settings"])
-    hm = generate_terrain(plan.recipe(), int(first["terrain_seed"]))
-    closed = classify_terrain(hm, plan.section("roughness")).closed
-    m = sample_mission(hm, closed, plan.section("missions"), int(mission), int(first["mission_seed"]))
+    plan = CellPlan.from_meta(meta, int(first["cell"]))
+    prepared = prepare_terrain(plan.recipe(), int(first["terrain_seed"]), plan.trial_settings,
+                               [(int(mission), int(first["mission_seed"]))])
+    hm, closed, m = prepared.hm, prepared.maps.closed, prepared.missions[0]
     drawn = []
     for r in rows.itertuples(index=False):
         tel_p, path_p = telemetry_paths(run_dir, r.cell, r.terrain, r.mission)
@@ -386,51 +440,87 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     return fig_paths(hm, closed, plan.section("missions").border_m, m, drawn, title=title)
 
 
+def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: list[str]) -> list[str]:
+    """Each planner's terrain-level advantage over the baseline per stratum (rows) and level (columns):
+    how it changes with, e.g., the planner map's error or the band limit."""
+    p = paired[paired[level] != "all"].copy()
+    p["cell"] = [f"{d:+.0f} [{lo:+.0f}, {hi:+.0f}]{' *' if sig else ''}" for d, lo, hi, sig in
+                 zip(p["terrain_diff_pct"], p["terrain_ci95_low"], p["terrain_ci95_high"], p["significant"])]
+    wide = p.pivot_table(index=[group, *strata], columns=level, values="cell", aggfunc="first").reset_index()
+    wide.columns = [str(c) if c in (group, *strata) else f"{level} = {c}" for c in wide.columns]
+    return ["### Advantage over the baseline per " + " and ".join(f"`{c}`" for c in strata), "",
+            "Mean per-terrain success difference in points with its 95 % terrain-bootstrap interval; "
+            "`*`: significant at the terrain level (Holm).", "", markdown_table(wide), ""]
+
+
 def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path
                      ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
     """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
     from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study import stress
 
-    group, level = _stress_axes(meta)
+    group, level, strata = _stress_axes(meta)
     if group is None:
         return [], {}, {}
     planners = sorted(trials[group].unique())
     baseline = "straight" if "straight" in planners else planners[0]
     lines = ["## Planner stress test", "",
              f"Planners: {', '.join(f'`{p}`' for p in planners)}; every planner drove the same missions "
-             "(same terrain and mission seeds). Intervals are 95 %: Wilson score intervals for success rates, "
-             "percentile bootstrap over terrains (2000 resamples) for breaking points; paired comparisons are "
-             f"exact McNemar tests against `{baseline}` on the missions where exactly one of the two succeeded.",
+             "(same terrain and mission seeds). The unit of the tests is the terrain (the missions of one "
+             "terrain are not independent): Wilson intervals of success rates treat missions as independent "
+             "and are only descriptive; breaking points come from a logistic fit of success on the level, "
+             "clustered by terrain, with Fieller intervals; paired comparisons against "
+             f"`{baseline}` test the per-terrain success differences (exact sign-flip and Wilcoxon tests, "
+             "Durkalski's cluster-adjusted McNemar, terrain-bootstrap interval), Holm-adjusted over the table.",
              ""]
     figures: dict[str, Any] = {}
     tables: dict[str, pd.DataFrame] = {}
     if level is not None:
-        by = stress.success_by_level(trials, group, level)
+        by = stress.success_by_level(trials, group, level, by=strata)
         tables["planner_success.csv"] = by
-        figures["planner_success.png"] = fig_success_vs_level(by, group, level)
+        figs = []
+        for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
+            name = f"planner_success_{i}.png" if strata else "planner_success.png"
+            figures[name] = fig = fig_success_vs_level(part, group, level)
+            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,)))
+            if where:
+                fig.axes[0].set_title(f"Success per planner, {where} (95 % Wilson)", fontsize=10)
+            figs.append(f"![success{': ' + where if where else ''}]({name})")
         shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low": 100 * by["ci95_low"],
-                             "95 % CI high": 100 * by["ci95_high"]})[[group, level, "successes", "trials", "success (%)",
-                                                                     "95 % CI low", "95 % CI high"]]
-        bp = stress.breaking_points(trials, group, level)
+                             "95 % CI high": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
+                                                                     "success (%)", "95 % CI low", "95 % CI high"]]
+        bp = stress.breaking_points(trials, group, level, by=strata)
         tables["breaking_points.csv"] = bp
         lo_lv, hi_lv = min(trials[level]), max(trials[level])
 
         def fmt(v: float) -> str:
-            return f"> {hi_lv:g}" if v == math.inf else (f"< {lo_lv:g}" if v == -math.inf else f"{v:.3f}")
+            return "–" if math.isnan(v) else ("+inf" if v == math.inf else ("-inf" if v == -math.inf else f"{v:.3f}"))
 
-        bp_shown = pd.DataFrame({group: bp[group], f"{level} at 50 % success": [fmt(v) for v in bp["breaking_point"]],
-                                 "95 % interval": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])]})
-        lines += ["### Success against " + level, "", "![success](planner_success.png)", "",
+        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} at 50 % (logistic)": [
+            fmt(v) + (" (extrapolated)" if e else "") for v, e in zip(bp["breaking_point"], bp["extrapolated"])],
+            "95 % interval (Fieller)": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])],
+            "terrains": bp["terrains"], "first level < 50 %": [f"> {hi_lv:g}" if v == math.inf else f"{v:g}"
+                                                              for v in bp["first_level_below"]]})
+        lines += ["### Success against " + level, "", *figs, "",
                   markdown_table(shown), "",
                   "### Breaking points", "",
-                  f"The {level} at which the success rate first falls below 50 % (linear interpolation between "
-                  f"the studied values; `> {hi_lv:g}`: not within the studied range).", "",
-                  markdown_table(bp_shown), ""]
-    paired = stress.paired_table(trials, group, level, baseline)
+                  f"The {level} at which the fitted success probability is 50 % (logistic regression of trial "
+                  "success on the level, covariance clustered by terrain; `–`: success or failure is separated "
+                  f"by the level, no fit; an infinite end: the data do not bound it); studied: {lo_lv:g}-{hi_lv:g}.",
+                  "", markdown_table(bp_shown), ""]
+    paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
-        lines += ["### Paired comparisons on the same missions", "", markdown_table(paired), ""]
+        cols = [group, "versus", *strata, level or "level", "terrains", "pairs", "only this", "only baseline",
+                "terrain_diff_pct", "terrain_ci95_low", "terrain_ci95_high", "bootstrap_distinct", "p_sign_flip",
+                "p_wilcoxon", "p_durkalski", "p_holm", "significant", "mcnemar_p_missions"]
+        lines += ["### Paired comparisons on the same missions", "",
+                  "Per-terrain success difference in points (mean over terrains, 95 % terrain-bootstrap interval "
+                  "and its distinct resamples); `significant`: Holm-adjusted sign-flip p < 0.05. "
+                  "`mcnemar_p_missions` treats missions as independent and is shown only for comparison.", "",
+                  markdown_table(paired[cols]), ""]
+        if strata and level:
+            lines += _advantage_by_stratum(paired, group, level, strata)
     reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
     reasons.columns.name = None
     tables["planner_failures.csv"] = reasons.reset_index()
@@ -442,13 +532,13 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   "Each command re-runs one trial bit for bit from the run directory and draws it "
                   "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
     ok = trials[trials["success"].astype(bool)]
-    keys = [group] + ([level] if level else [])
+    keys = [group, *strata] + ([level] if level else [])
     rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
         f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
     tables["planner_metrics.csv"] = rms
     lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
     try:
-        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level)
+        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level, strata)
         lines += ["### Planned and driven paths", "", "![paths](planner_paths.png)", ""]
     except (OSError, KeyError, IndexError) as exc:  # a partial run without telemetry: say so, do not fail
         lines += [f"(No path figure: {exc}.)", ""]

@@ -39,18 +39,15 @@ worker anywhere can turn back into configs without reading files.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from offroadbench.config import check_int, config_id, from_dict, load_toml, to_dict
+from offroadbench.config import check_int, config_id, load_toml, to_dict
 from offroadbench.errors import InputError
-from offroadbench.analysis.roughness import RoughnessConfig
-from offroadbench.navigation.missions import MissionConfig
-from offroadbench.navigation.planners import planner_from_table
-from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
-from offroadbench.sim.vehicle import vehicle_from_table
+from offroadbench.sim.pipeline import SETTINGS_TABLES, TrialSettings
 from offroadbench import seeding
 
 __all__ = [
@@ -64,25 +61,9 @@ __all__ = [
 ]
 
 
-def _config_builder(cls: type) -> Callable[[dict, str], Any]:
-    """A builder that fills and validates ``cls`` from a settings table."""
-
-    def build(table: dict, where: str):
-        return from_dict(cls, table, where=where)
-
-    return build
-
-
-#: settings tables of a study -> fn(table, where) that builds and validates their config
-SECTIONS: dict[str, Callable[[dict, str], Any]] = {
-    "roughness": _config_builder(RoughnessConfig),
-    "missions": _config_builder(MissionConfig),
-    "vehicle": vehicle_from_table,
-    "controller": _config_builder(ControllerConfig),
-    "sim": _config_builder(SimConfig),
-    "rules": _config_builder(FailureRules),
-    "planner": planner_from_table,
-}
+#: settings tables of a study -> fn(table, where) that builds and validates their config (the
+#: parts of :class:`offroadbench.sim.pipeline.TrialSettings`)
+SECTIONS: Mapping[str, Callable[[dict, str], Any]] = SETTINGS_TABLES
 
 #: what ``[study] telemetry`` may keep
 TELEMETRY_CHOICES = ("none", "failed", "all")
@@ -229,14 +210,29 @@ class CellPlan:
     settings: Mapping[str, Mapping[str, Any]]
     """Settings tables with the cell's grid values applied."""
 
+    @classmethod
+    def from_meta(cls, meta: Mapping[str, Any], index: int) -> "CellPlan":
+        """Cell ``index`` as a run directory's stored meta data holds it (``Store.meta()``)."""
+        info = meta["cells"][index]
+        return cls(index=index, values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
+                   settings=info["settings"])
+
     def recipe(self):
         from offroadbench.terrain.recipe import recipe_from_dict
 
         return recipe_from_dict(dict(self.recipe_data), source=f"cell {self.index}")
 
+    @functools.cached_property
+    def trial_settings(self) -> TrialSettings:
+        """The cell's :class:`~offroadbench.sim.pipeline.TrialSettings`, built once (``vehicle.toml``
+        read once) and kept with the plan."""
+        return TrialSettings.from_tables(self.settings, where=f"cell {self.index}")
+
     def section(self, name: str):
-        """The frozen config of one of the cell's settings tables."""
-        return build_section(name, self.settings.get(name, {}), where=f"cell {self.index} [{name}]")
+        """The frozen config of one of the cell's settings tables (a part of :attr:`trial_settings`)."""
+        if name not in SECTIONS:
+            raise InputError(f"cell {self.index}: unknown settings table {name!r}; known: {', '.join(SECTIONS)}")
+        return getattr(self.trial_settings, name)
 
 
 def build_section(name: str, table: Mapping[str, Any], where: str):
@@ -291,8 +287,7 @@ def plan_cells(study: StudyConfig, base_dir: Path | None = None, check_sections:
             settings={k: v for k, v in settings.items() if v},
         )
         if check_sections:
-            for name in SECTIONS:
-                plan.section(name)
+            plan.trial_settings  # builds and validates every table once
         plans.append(plan)
     return plans
 

@@ -1,5 +1,7 @@
 """The paper's statistics (Majhor & Bos 2023, Sec. 2.4, 3): medians, IQR (Eq. 6), 1.5 IQR outliers
-(Eq. 7-8), per-terrain success rate (Eq. 5), and the group tables of a study.
+(Eq. 7-8), per-terrain success rate (Eq. 5), and the group tables of a study; and, beyond the
+paper, :func:`terrain_changes`: each change between consecutive groups tested with the terrain as
+the unit (offroadbench.study.clustered).
 
 Quartiles use the ``hazen`` definition (the p-th percentile sits at rank n p / 100 + 1/2),
 which is MATLAB's ``prctile``, the tool the paper's box plots come from (red medians, red "+"
@@ -9,6 +11,8 @@ same numbers (``Axes.bxp``), so tables and plots agree exactly.
 
 from __future__ import annotations
 
+import itertools
+import math
 from typing import Any, Sequence
 
 import numpy as np
@@ -29,6 +33,8 @@ __all__ = [
     "group_labels",
     "success_boxes",
     "metric_boxes",
+    "terrain_values",
+    "terrain_changes",
 ]
 
 QUANTILE_METHOD = "hazen"
@@ -149,3 +155,79 @@ def median_changes(summary: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
             rows.append({"quantity": name, "from": groups[i], "to": groups[i + 1], "median_from": med[i],
                          "median_to": med[i + 1], "change": change, "change_pct": pct})
     return pd.DataFrame(rows)
+
+
+def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
+    """One row per (cell, terrain), one column per quantity: the per-terrain success rate (Eq. 5),
+    class areas in % (``area_<class>_pct``), and each Fig. 7 metric's median over the terrain's
+    successful trials (NaN when it had none)."""
+    out = terrain_success(trials).set_index(["cell", "terrain"])[["success_rate_pct"]]
+    ter = terrains.set_index(["cell", "terrain"])
+    ok = trials[trials["success"].astype(bool)]
+    for name in names:
+        if name.startswith("area_") and name.endswith("_pct") and name[:-4] in ter:
+            out[name] = 100.0 * ter[name[:-4]].reindex(out.index)
+        elif name in METRICS and name in ok:
+            out[name] = ok.groupby(["cell", "terrain"])[name].median().reindex(out.index)
+    return out.reset_index()
+
+
+def terrain_changes(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: Sequence[str],
+                    paired: bool = True, seed: int = 0, n_boot: int = 2000,
+                    pairs: Sequence[tuple[int, int]] | None = None) -> pd.DataFrame:
+    """Each change between consecutive groups (or between the cells of ``pairs``, (from, to)), with
+    the terrain as the unit.
+
+    Paired terrains (terrain j of every cell from the same seed): per-terrain differences d_j (later
+    minus earlier group), their mean with a terrain-bootstrap 95 % interval and its number of
+    distinct resamples, the terrains that moved up / down, the Wilcoxon signed-rank p and the exact
+    sign-flip p. Unpaired: the difference of the per-terrain means with an interval from resampling
+    each group's terrains, and the Mann-Whitney U p (in ``p_wilcoxon``'s place; no sign-flip p).
+    ``p_holm`` is Holm's adjustment of ``p_wilcoxon`` over every row; ``significant`` = p_holm < 0.05.
+    Terrains without a value (no successful trial for a metric) are left out of that row.
+    """
+    from scipy.stats import mannwhitneyu
+
+    from offroadbench.study.clustered import (
+        cluster_bootstrap,
+        holm,
+        sign_flip_test,
+        wilcoxon_test,
+    )
+
+    rng = np.random.default_rng(seed)
+    vals = terrain_values(trials, terrains, names)
+    cells = sorted(labels)
+    rows = []
+    for name in names:
+        if name not in vals:
+            continue
+        for c0, c1 in (pairs if pairs is not None else itertools.pairwise(cells)):
+            a = vals[vals["cell"] == c0].set_index("terrain")[name]
+            b = vals[vals["cell"] == c1].set_index("terrain")[name]
+            row: dict[str, Any] = {"quantity": name, "from": labels[c0], "to": labels[c1]}
+            if paired:
+                d = (b - a.reindex(b.index)).dropna().to_numpy(float)
+                boot = cluster_bootstrap(d, np.mean, rng, n_boot)
+                row.update(terrains=d.size, mean_change=boot.estimate, ci95_low=boot.low, ci95_high=boot.high,
+                           bootstrap_distinct=f"{boot.distinct} of {min(boot.possible, n_boot)}",
+                           up=int((d > 0).sum()), down=int((d < 0).sum()),
+                           p_wilcoxon=wilcoxon_test(d) if d.size else math.nan,
+                           p_sign_flip=sign_flip_test(d, rng=rng) if d.size else math.nan)
+            else:
+                x, y = a.dropna().to_numpy(float), b.dropna().to_numpy(float)
+                bx = cluster_bootstrap(x, np.mean, rng, n_boot)
+                by = cluster_bootstrap(y, np.mean, rng, n_boot)
+                diffs = (y[rng.integers(0, y.size, (n_boot, y.size))].mean(axis=1)
+                         - x[rng.integers(0, x.size, (n_boot, x.size))].mean(axis=1)) if x.size and y.size else []
+                lo, hi = np.percentile(diffs, [2.5, 97.5]) if len(diffs) else (math.nan, math.nan)
+                p = float(mannwhitneyu(x, y).pvalue) if x.size and y.size else math.nan
+                row.update(terrains=int(min(x.size, y.size)), mean_change=by.estimate - bx.estimate, ci95_low=lo,
+                           ci95_high=hi, bootstrap_distinct="–", up=math.nan, down=math.nan, p_wilcoxon=p,
+                           p_sign_flip=math.nan)
+            rows.append(row)
+    out = pd.DataFrame(rows)
+    if not out.empty:
+        out["p_holm"] = holm(out["p_wilcoxon"])
+        out["significant"] = out["p_holm"] < 0.05
+    return out

@@ -1,32 +1,45 @@
 """Statistics of a planner stress test: success against a difficulty axis per planner, the
-breaking point, and paired comparisons on the same missions.
+breaking point, and paired comparisons on the same missions, with the terrain as the unit.
 
 * **Success with its interval.** The Wilson score interval (Wilson 1927) of a binomial proportion,
   ``(p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n)``: it stays inside [0, 1] and keeps its
-  coverage for small n and for p near 0 or 1, where the normal (Wald) interval fails.
-* **Breaking point.** The value of the difficulty axis (e.g. ``D_high``) at which a planner's
-  success rate first falls below 50 %, by linear interpolation between the two neighbouring axis
-  values. Its 95 % interval is a percentile bootstrap over terrains: terrain j is resampled as a
-  whole, with the same draw at every axis value (the study's terrains are paired, so terrain j of
-  every cell shares its seed). A resample that never falls below 50 % has no breaking point inside
-  the studied range; the interval's end is then reported as ``> max``.
+  coverage for small n and for p near 0 or 1, where the normal (Wald) interval fails. It treats the
+  missions as independent, so it is a lower bound on the uncertainty (the terrain-level tests below
+  are what claims rest on).
+* **Breaking point.** The value of the difficulty axis (e.g. ``D_high``) at which a planner's fitted
+  success probability is 50 %: a logistic regression of trial success on the axis value, with a
+  covariance robust to the missions of one terrain being correlated (clustered by terrain index;
+  terrain j of every cell shares its seed when the study pairs terrains), and Fieller's interval
+  (offroadbench.study.clustered). An end of the interval may be unbounded (the data do not locate
+  the crossing); a fitted crossing outside the studied range is an extrapolation and the report
+  says so. The first studied level with under 50 % success is listed beside it, without
+  interpolation.
 * **Paired comparisons.** Every planner drove the same missions (same terrain seed and mission
-  seed), so two planners are compared on the pairs where exactly one of them succeeded: with n10
-  missions that only A completed and n01 that only B completed, the exact McNemar test is the
-  two-sided binomial test of n10 against n10 + n01 trials at p = 1/2 (McNemar 1947; the exact form
-  is the sign test on the discordant pairs).
+  seed). The unit is the terrain: per terrain k, b_k missions only A completed and c_k only B
+  completed out of n_k; the difference (b_k - c_k) / n_k is tested with the exact sign-flip test
+  and the Wilcoxon signed-rank test, and the missions with Durkalski et al.'s (2003)
+  cluster-adjusted McNemar test; the mean difference has a terrain-bootstrap interval (with its
+  number of distinct resamples). Holm's (1979) adjustment runs over all rows of the table (the
+  family of comparisons a report makes). The exact McNemar test that treats the missions as
+  independent (McNemar 1947) is kept for comparison only.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["wilson_interval", "breaking_point", "bootstrap_breaking_point", "mcnemar_exact", "success_by_level",
-           "paired_table", "breaking_points"]
+__all__ = [
+    "breaking_points",
+    "first_level_below",
+    "mcnemar_exact",
+    "paired_table",
+    "success_by_level",
+    "wilson_interval",
+]
 
 #: the two-sided 95 % normal quantile
 Z95 = 1.959963984540054
@@ -44,38 +57,12 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
     return max(0.0, min(p, centre - half)), min(1.0, max(p, centre + half))
 
 
-def breaking_point(levels: Sequence[float], rates: Sequence[float], threshold: float = 0.5) -> float:
-    """First level at which ``rates`` falls below ``threshold``, linearly interpolated; ``-inf`` if
-    the first level is already below it, ``+inf`` if no level is."""
-    x = np.asarray(levels, dtype=float)
-    y = np.asarray(rates, dtype=float)
-    if len(y) == 0:
-        return math.nan
-    if y[0] < threshold:
-        return -math.inf
-    for i in range(1, len(y)):
-        if y[i] < threshold:
-            return float(x[i - 1] + (y[i - 1] - threshold) / (y[i - 1] - y[i]) * (x[i] - x[i - 1]))
+def first_level_below(levels: Sequence[float], rates: Sequence[float], threshold: float = 0.5) -> float:
+    """The first studied level whose rate is below ``threshold`` (``+inf`` if none is); no interpolation."""
+    for x, y in zip(levels, rates):
+        if y < threshold:
+            return float(x)
     return math.inf
-
-
-def bootstrap_breaking_point(success: np.ndarray, levels: Sequence[float], rng: np.random.Generator,
-                             n_boot: int = 2000, threshold: float = 0.5) -> tuple[float, float]:
-    """95 % percentile interval of the breaking point, resampling terrains.
-
-    ``success[t, l, m]``: outcome (0/1, NaN = missing) of mission m on terrain t at level l.
-    Infinite breaking points (never / always below the threshold) sort to the ends.
-    """
-    s = np.asarray(success, dtype=float)
-    n_t = s.shape[0]
-    draws = rng.integers(0, n_t, size=(n_boot, n_t))
-    points = np.empty(n_boot)
-    for b in range(n_boot):
-        sample = s[draws[b]]
-        rates = np.nanmean(sample.reshape(n_t, len(levels), -1).transpose(1, 0, 2).reshape(len(levels), -1), axis=1)
-        points[b] = breaking_point(levels, rates, threshold)
-    lo, hi = np.percentile(points, [2.5, 97.5], method="inverted_cdf")
-    return float(lo), float(hi)
 
 
 def mcnemar_exact(n10: int, n01: int) -> float:
@@ -88,58 +75,106 @@ def mcnemar_exact(n10: int, n01: int) -> float:
     return float(binomtest(n10, n, 0.5, alternative="two-sided").pvalue)
 
 
-def success_by_level(trials: pd.DataFrame, group: str, level: str) -> pd.DataFrame:
-    """Per group (planner) and level (D): trials, successes, rate and its Wilson interval."""
+def success_by_level(trials: pd.DataFrame, group: str, level: str, by: Sequence[str] = ()) -> pd.DataFrame:
+    """Per group (planner), stratum (the other grid axes ``by``) and level (D): trials, successes,
+    rate and its Wilson interval."""
+    keys = [group, *by, level]
     rows = []
-    for (g, x), t in trials.groupby([group, level], sort=True):
+    for vals, t in trials.groupby(keys, sort=True):
         n, k = len(t), int(t["success"].astype(bool).sum())
         lo, hi = wilson_interval(k, n)
-        rows.append({group: g, level: x, "trials": n, "successes": k, "success_rate": k / n,
+        rows.append({**dict(zip(keys, vals)), "trials": n, "successes": k, "success_rate": k / n,
                      "ci95_low": lo, "ci95_high": hi})
     return pd.DataFrame(rows)
 
 
-def breaking_points(trials: pd.DataFrame, group: str, level: str, seed: int = 0, n_boot: int = 2000) -> pd.DataFrame:
-    """Breaking point and bootstrap interval per group (see the module docstring)."""
-    rng = np.random.default_rng(seed)
+def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: float = 0.5,
+                    by: Sequence[str] = ()) -> pd.DataFrame:
+    """Logistic breaking point per group (and stratum ``by``) with its Fieller interval (see the
+    module docstring).
+
+    Columns: the group, ``breaking_point`` (NaN when the fit does not exist: success or failure is
+    separated by the level), ``ci95_low``, ``ci95_high``, ``slope`` (per unit of the level),
+    ``extrapolated`` (the point lies outside the studied levels), ``terrains`` (clusters),
+    ``first_level_below`` (observed), ``levels``.
+    """
+    from offroadbench.study.clustered import breaking_point_logistic, fit_logistic
+
     levels = sorted(trials[level].unique())
+    keys = [group, *by]
     rows = []
-    for g, t in trials.groupby(group, sort=True):
-        by = success_by_level(t, group, level)
-        point = breaking_point(by[level], by["success_rate"])
-        terrains = sorted(t["terrain"].unique())
-        missions = sorted(t["mission"].unique())
-        cube = np.full((len(terrains), len(levels), len(missions)), np.nan)
-        ti = {v: i for i, v in enumerate(terrains)}
-        li = {v: i for i, v in enumerate(levels)}
-        mi = {v: i for i, v in enumerate(missions)}
-        for r in t.itertuples(index=False):
-            cube[ti[r.terrain], li[getattr(r, level)], mi[r.mission]] = float(bool(r.success))
-        lo, hi = bootstrap_breaking_point(cube, levels, rng, n_boot)
-        rows.append({group: g, "breaking_point": point, "ci95_low": lo, "ci95_high": hi,
+    for vals, t in trials.groupby(keys, sort=True):
+        rates = t.groupby(level, sort=True)["success"].mean()
+        fit = fit_logistic(t[level].to_numpy(float), t["success"].astype(float).to_numpy(), t["terrain"].to_numpy())
+        point, lo, hi = breaking_point_logistic(fit, threshold)
+        rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,))), "breaking_point": point,
+                     "ci95_low": lo, "ci95_high": hi, "slope": fit.slope,
+                     "extrapolated": bool(math.isfinite(point) and not (min(levels) <= point <= max(levels))),
+                     "terrains": fit.clusters,
+                     "first_level_below": first_level_below(rates.index, rates.to_numpy(float), threshold),
                      "levels": f"{min(levels):g}-{max(levels):g}"})
     return pd.DataFrame(rows)
 
 
-def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: str) -> pd.DataFrame:
-    """Each group against ``baseline`` on the same (terrain, mission) at each level and pooled:
-    both / only this / only baseline / neither succeeded, and the exact McNemar p-value."""
-    key = ["terrain", "mission"] + ([level] if level else [])
+def _terrain_row(p: pd.DataFrame, rng: np.random.Generator, n_boot: int) -> dict:
+    """Terrain-level statistics of one comparison; ``p`` has columns terrain, a, b (booleans)."""
+    from offroadbench.study.clustered import (
+        cluster_bootstrap,
+        durkalski_mcnemar,
+        sign_flip_test,
+        wilcoxon_test,
+    )
+
+    per = p.assign(b10=p["a"] & ~p["b"], b01=~p["a"] & p["b"]).groupby("terrain").agg(
+        n=("a", "size"), b10=("b10", "sum"), b01=("b01", "sum"))
+    d = 100.0 * (per["b10"] - per["b01"]).to_numpy(float) / per["n"].to_numpy(float)
+    boot = cluster_bootstrap(d, np.mean, rng, n_boot)
+    _, p_durk = durkalski_mcnemar(per["b10"], per["b01"], per["n"])
+    return {"terrains": len(per), "terrain_diff_pct": boot.estimate, "terrain_ci95_low": boot.low,
+            "terrain_ci95_high": boot.high, "bootstrap_distinct": f"{boot.distinct} of {min(boot.possible, n_boot)}",
+            "p_sign_flip": sign_flip_test(d, rng=rng), "p_wilcoxon": wilcoxon_test(d), "p_durkalski": p_durk}
+
+
+def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: str, seed: int = 0,
+                 n_boot: int = 2000, by: Sequence[str] = ()) -> pd.DataFrame:
+    """Each group against ``baseline`` on the same (terrain, mission) at each level and pooled.
+
+    Mission counts (both / only this / only baseline / neither) and the exact McNemar p that treats
+    missions as independent (``mcnemar_p_missions``, for comparison only); then the terrain-level
+    statistics: ``terrains``, the mean per-terrain success difference in points with its terrain
+    bootstrap interval and distinct resamples, ``p_sign_flip``, ``p_wilcoxon``, ``p_durkalski``, and
+    ``p_holm`` (Holm over the sign-flip p of every row) with ``significant`` = p_holm < 0.05.
+    ``by``: the other grid axes (strata); each stratum is compared within itself, at each level and
+    pooled over its levels.
+    """
+    rng = np.random.default_rng(seed)
+    by = list(by)
+    key = ["terrain", "mission", *by] + ([level] if level else [])
     base = trials[trials[group] == baseline].set_index(key)["success"].astype(bool)
     rows = []
     for g in sorted(trials[group].unique()):
         if g == baseline:
             continue
         other = trials[trials[group] == g].set_index(key)["success"].astype(bool)
-        both = other.to_frame("a").join(base.to_frame("b"), how="inner")
-        parts = list(both.groupby(level, sort=True)) if level else []
-        parts.append(("all", both))
-        for x, p in parts:
+        both = other.to_frame("a").join(base.to_frame("b"), how="inner").reset_index()
+        strata = list(both.groupby(by, sort=True)) if by else [((), both)]
+        parts = []
+        for sv, sp in strata:
+            sv = sv if isinstance(sv, tuple) else (sv,)
+            parts += [(sv, x, p) for x, p in (sp.groupby(level, sort=True) if level else [])]
+            parts.append((sv, "all", sp))
+        for sv, x, p in parts:
             n10 = int((p["a"] & ~p["b"]).sum())
             n01 = int((~p["a"] & p["b"]).sum())
-            rows.append({group: g, "versus": baseline, level or "level": x, "pairs": len(p),
+            rows.append({group: g, "versus": baseline, **dict(zip(by, sv)), level or "level": x, "pairs": len(p),
                          "both": int((p["a"] & p["b"]).sum()), "only this": n10, "only baseline": n01,
                          "neither": int((~p["a"] & ~p["b"]).sum()),
                          "success_diff_pct": 100.0 * (p["a"].mean() - p["b"].mean()),
-                         "mcnemar_p": mcnemar_exact(n10, n01)})
-    return pd.DataFrame(rows)
+                         "mcnemar_p_missions": mcnemar_exact(n10, n01), **_terrain_row(p, rng, n_boot)})
+    out = pd.DataFrame(rows)
+    if not out.empty:
+        from offroadbench.study.clustered import holm
+
+        out["p_holm"] = holm(out["p_sign_flip"])
+        out["significant"] = out["p_holm"] < 0.05
+    return out

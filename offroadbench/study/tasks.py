@@ -10,11 +10,12 @@ machine) runs it without reading the study file. :func:`run_terrain` yields mess
   ``kept`` is None, or ``{"telemetry": columns, "path_xy": waypoints}`` when the task's
   ``telemetry`` setting keeps this trial's telemetry (``failed``: failed trials only; ``all``).
 
-The trial function is a parameter (``trial_fn(hm, missions, cell) -> iterator of rows``, or of
-``TrialRecord``s that carry telemetry), so tests and benchmarks can swap the physics for a cheap
-stand-in; :func:`sim_trials` is the real one (PyBullet, through ``offroadbench.sim``). It drives
-with the cell's ``[planner]`` (a planner or a policy), which sees the closed class map of the
-cell's own ``[roughness]`` config and plans inside the ``[missions]`` border.
+The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
+``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
+can swap the physics for a cheap stand-in; :func:`~offroadbench.sim.pipeline.drive_terrain` is the
+real one (PyBullet). The terrain, its class maps and its missions come from
+:func:`~offroadbench.sim.pipeline.prepare_terrain` with the cell's
+:class:`~offroadbench.sim.pipeline.TrialSettings`, built once per cell.
 
 Replays. :func:`replay_trial` re-runs one stored trial from the run directory alone (its recipe,
 settings and seeds) and says whether the new row equals the stored one.
@@ -29,16 +30,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping
 
-from offroadbench.navigation.missions import sample_mission
+from offroadbench.sim.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["TerrainTask", "TrialFn", "run_terrain", "collect_terrain", "sim_trials", "keeps_telemetry",
-           "Replay", "replay_trial"]
+__all__ = ["TerrainTask", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry", "Replay", "replay_trial"]
 
-#: ``trial_fn(hm, missions, cell) -> iterator of TrialResult.as_row() dicts, one per mission, in order``
-TrialFn = Callable[[Any, Sequence[Any], CellPlan], Iterator[Mapping[str, Any]]]
+#: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
+#: prepared mission, in order`` (see :func:`offroadbench.sim.pipeline.drive_terrain`)
+TrialFn = Callable[[PreparedTerrain, TrialSettings], Iterator[Any]]
 
 
 @dataclass(frozen=True)
@@ -60,22 +61,16 @@ def keeps_telemetry(setting: str, success: bool) -> bool:
 
 def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[tuple]:
     """Build the task's terrain once and run all its pending missions, yielding messages."""
-    from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.terrain.recipe import generate_terrain
-
-    trial_fn = trial_fn or sim_trials
+    trial_fn = trial_fn or drive_terrain
     cell = task.cell
+    settings = cell.trial_settings
     t0 = time.perf_counter()
-    hm = generate_terrain(cell.recipe(), task.terrain_seed)
-    rcfg = cell.section("roughness")
-    maps = classify_terrain(hm, rcfg)
-    mcfg = cell.section("missions")
-    missions = [sample_mission(hm, maps.closed, mcfg, k, seed) for k, seed in task.missions]
-    stats = {f"area_{k}": v for k, v in maps.fractions.items()}
+    prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
+    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()}
     stats["build_s"] = time.perf_counter() - t0
     yield ("terrain", cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
-    for mission, item in zip(missions, trial_fn(hm, missions, cell)):
+    for mission, item in zip(prepared.missions, trial_fn(prepared, settings)):
         k = mission.index
         kept = None
         if hasattr(item, "result"):  # a TrialRecord
@@ -94,33 +89,6 @@ def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[
     return list(run_terrain(task, trial_fn))
 
 
-# ---------------------------------------------------------------------------- physics
-def _closed_classes(hm, cell: CellPlan):
-    from offroadbench.analysis.roughness import classify_terrain
-
-    return classify_terrain(hm, cell.section("roughness")).closed
-
-
-def _drive_kwargs(hm, cell: CellPlan) -> dict[str, Any]:
-    """The planner, class map and border of the cell's trials (the class map only when the
-    planner's or policy's registry entry declares that it needs it)."""
-    choice = cell.section("planner")
-    return {"planner": choice, "classes": _closed_classes(hm, cell) if "classes" in choice.needs else None,
-            "border_m": cell.section("missions").border_m,
-            "controller": cell.section("controller"), "rules": cell.section("rules")}
-
-
-def sim_trials(hm, missions, cell: CellPlan) -> Iterator[Any]:
-    """The real trials (PyBullet): one World per terrain, one TrialRecord per mission as it finishes."""
-    from offroadbench.sim import World
-    from offroadbench.sim.runner import drive_mission
-
-    kwargs = _drive_kwargs(hm, cell)
-    with World(hm, cell.section("vehicle"), cell.section("sim")) as world:
-        for mission in missions:
-            yield drive_mission(world, mission, **kwargs)
-
-
 # ---------------------------------------------------------------------------- replay
 @dataclass(frozen=True, eq=False)
 class Replay:
@@ -132,11 +100,24 @@ class Replay:
     """The stored row of the trial."""
     identical: bool
     """Whether every field of the new row equals the stored one (NaN equal to NaN)."""
-    hm: Any
-    classes: Any
-    """The closed class map of the cell's roughness config."""
+    prepared: PreparedTerrain
+    """The terrain, its class maps and the one mission, as driven."""
     cell: CellPlan
-    mission: Any
+
+    @property
+    def hm(self):
+        """The terrain."""
+        return self.prepared.hm
+
+    @property
+    def classes(self):
+        """The closed class map of the cell's roughness config."""
+        return self.prepared.maps.closed
+
+    @property
+    def mission(self):
+        """The mission driven."""
+        return self.prepared.missions[0]
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -151,10 +132,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     import json
 
     from offroadbench.errors import InputError
-    from offroadbench.sim import World
-    from offroadbench.sim.runner import drive_mission
     from offroadbench.study.store import Store
-    from offroadbench.terrain.recipe import generate_terrain
 
     with Store(run_dir) as store:
         meta = store.meta()
@@ -164,17 +142,11 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
         raise InputError(f"{run_dir}: no stored trial cell {cell}, terrain {terrain}, mission {mission} "
                          f"(cells 0-{len(meta.get('cells', [])) - 1}; see `study export` for the stored keys)")
     tseed, mseed, text = hit
-    info = meta["cells"][cell]
-    plan = CellPlan(index=cell, values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
-                    settings=info["settings"])
-    hm = generate_terrain(plan.recipe(), tseed)
-    closed = _closed_classes(hm, plan)
-    m = sample_mission(hm, closed, plan.section("missions"), mission, mseed)
-    kwargs = _drive_kwargs(hm, plan)
-    kwargs["classes"] = closed
-    with World(hm, plan.section("vehicle"), plan.section("sim")) as world:
-        rec = drive_mission(world, m, **kwargs)
+    plan = CellPlan.from_meta(meta, cell)
+    settings = plan.trial_settings
+    prepared = prepare_terrain(plan.recipe(), tseed, settings, [(mission, mseed)])
+    rec = next(iter(drive_terrain(prepared, settings)))
     stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too
     identical = set(new) == set(stored) and all(_same(new[k], stored[k]) for k in new)
-    return Replay(record=rec, stored=stored, identical=identical, hm=hm, classes=closed, cell=plan, mission=m)
+    return Replay(record=rec, stored=stored, identical=identical, prepared=prepared, cell=plan)

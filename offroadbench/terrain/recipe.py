@@ -18,6 +18,11 @@ Format (``terrains/*.toml``)::
     generator = "multifractal"
     D_high = 2.45            # every other key goes to the generator's frozen config
 
+Optional tables: ``[soil] name = "lunar-regolith"`` (the soil of the ``terramechanics`` tyre model,
+``soils/*.toml``) and ``[body] name = "moon"`` (``earth``, ``moon``, ``mars``) or
+``[body] gravity_m_s2 = 1.62`` (offroadbench.bodies): trials on the terrain use them unless the
+study's ``[sim]`` sets ``soil`` or ``gravity_m_s2``.
+
 Layer keys besides the config: ``generator`` (required, a name in the terrain registry),
 ``combine`` (``replace`` | ``sum`` | ``product`` for generators, ``apply`` for modifiers; the
 first layer must be a generator and defaults to ``replace``, later generators to ``sum``) and
@@ -47,6 +52,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from offroadbench import resources
+from offroadbench.bodies import body_gravity
 from offroadbench.config import check_int, check_range, config_id, from_dict, load_toml, set_dotted
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
@@ -72,7 +78,7 @@ __all__ = [
 
 COMBINE_MODES = ("replace", "sum", "product", "apply")
 _LAYER_KEYS = ("generator", "combine", "weight")
-_TOP_KEYS = ("recipe", "grid", "layers")
+_TOP_KEYS = ("recipe", "grid", "layers", "soil", "body")
 _RECIPE_KEYS = ("name", "description", "relief_m", "crs")
 
 
@@ -98,6 +104,12 @@ class Recipe:
     layers: tuple[Layer, ...]
     data: Mapping[str, Any]
     source: str = ""
+    soil: str | None = None
+    """``[soil] name``: the soil of the terramechanics tyre model (offroadbench.sim.terramechanics)."""
+    body: str = "earth"
+    """``[body]``: the body the terrain lies on (offroadbench.bodies)."""
+    gravity_m_s2: float | None = None
+    """Surface gravity of ``body``, m/s^2 (None: no ``[body]``; trials then use Earth's)."""
 
     def terrain_id(self, seed: int | None) -> str:
         """Stable id of (recipe data, seed): same recipe and seed, same id."""
@@ -236,6 +248,8 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
         _build_layer(lname, tbl, i == 0, where) for i, (lname, tbl) in enumerate(layers_tbl.items())
     )
     name = str(meta.get("name", Path(source).stem if source else "recipe"))
+    soil = _soil_name(data.get("soil"), where)
+    body, gravity = body_gravity(data["body"], f"{where}: [body]") if "body" in data else ("earth", None)
     return Recipe(
         name=name,
         description=str(meta.get("description", "")),
@@ -244,7 +258,21 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
         layers=layers,
         data=copy.deepcopy(dict(data)),
         source=source,
+        soil=soil,
+        body=body,
+        gravity_m_s2=gravity,
     )
+
+
+def _soil_name(table: Any, where: str) -> str | None:
+    """The ``[soil] name`` of a recipe (a soil name or .toml path, checked when a trial loads it)."""
+    if table is None:
+        return None
+    _check_keys(table, ("name",), f"{where}: [soil]")
+    name = table.get("name")
+    if not isinstance(name, str) or not name:
+        raise InputError(f"{where}: soil.name = {name!r}; must be a soil name (soils/*.toml) or a .toml path")
+    return name
 
 
 def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:

@@ -128,6 +128,17 @@ def test_results_are_plain_json_rows(checked):
         assert isinstance(d["ok"], bool) and math.isfinite(d["measured"])
 
 
+def test_soft_soil_rows_show_sinkage_and_a_lower_climb_than_rigid_ground(checked):
+    name, rows = checked
+    soft = _rows(rows, "soft soil")
+    assert len(soft) == 3 and all(r.ok for r in soft), (name, soft)
+    sink = next(r for r in soft if "sinkage" in r.name)
+    assert 0.001 < sink.measured < 0.05  # mm to cm under the vehicle's load, lunar gravity
+    soft_climb = next(r for r in soft if "grade" in r.name).measured
+    rigid_climb = next(r for r in rows if r.name == "steepest grade climbed from rest").measured
+    assert soft_climb < rigid_climb - 5.0, (name, soft_climb, rigid_climb)
+
+
 def test_climb_limit_formula():
     # no load transfer (h = 0) and strong motors: the grip limit atan(mu)
     assert climb_limit_deg(50.0, 0.0, 0.25, 2, 0.15, 1e6, 0.8) == pytest.approx(math.degrees(math.atan(0.8)), abs=1e-6)

@@ -1,5 +1,7 @@
-"""Physics sanity tests of the traversal trials (issue 3): short missions on small maps."""
+"""Physics sanity tests of the traversal trials (issue 3): short missions on small maps, on every
+physics engine (offroadbench.sim.engine; MuJoCo when installed)."""
 
+import importlib.util
 import math
 
 import numpy as np
@@ -9,9 +11,15 @@ from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rou
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.telemetry import load_telemetry
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
-from offroadbench.sim import FAILURE_REASONS, TELEMETRY_COLUMNS, ControllerConfig, FailureRules, World, run_mission, run_missions
+from offroadbench.sim import (FAILURE_REASONS, TELEMETRY_COLUMNS, ControllerConfig, FailureRules, SimConfig, World,
+                              open_world, run_mission, run_missions)
+from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
 
 CELL = 0.05
+
+#: every engine, MuJoCo skipped when its package is missing
+ENGINES = ["pybullet", pytest.param("mujoco", marks=pytest.mark.skipif(
+    importlib.util.find_spec("mujoco") is None, reason="mujoco not installed (pip install 'offroadbench[mujoco]')"))]
 
 
 def _strip(z_of_x: np.ndarray, rows: int = 81) -> Heightmap:
@@ -19,13 +27,14 @@ def _strip(z_of_x: np.ndarray, rows: int = 81) -> Heightmap:
     return Heightmap(np.tile(z_of_x, (rows, 1)), CELL)
 
 
-def _drive(hm, mission, **kw):
-    with World(hm) as world:
+def _drive(hm, mission, engine="pybullet", **kw):
+    with open_world(hm, "husky", SimConfig(engine=engine)) as world:
         return run_mission(world, mission, **kw)
 
 
-def test_flat_ground_10_m_in_about_10_s_with_quiet_attitude():
-    r, tel = _drive(Heightmap.flat(81, 321, CELL, z_m=0.4), Mission.between(0, (3, 2), (13, 2)))
+@pytest.mark.parametrize("engine", ENGINES)
+def test_flat_ground_10_m_in_about_10_s_with_quiet_attitude(engine):
+    r, tel = _drive(Heightmap.flat(81, 321, CELL, z_m=0.4), Mission.between(0, (3, 2), (13, 2)), engine)
     assert r.success and r.failure_reason == ""
     # 9.5 m to the 0.5 m goal circle at 1 m/s plus the jerk-limited ramps at both ends
     assert 9.5 <= r.traversal_time_s <= 11.5
@@ -39,19 +48,21 @@ def test_flat_ground_10_m_in_about_10_s_with_quiet_attitude():
     assert set(tel) == set(TELEMETRY_COLUMNS)
 
 
-def test_15_degree_ramp_is_climbed():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_15_degree_ramp_is_climbed(engine):
     x = np.arange(321) * CELL
     hm = _strip(np.tan(np.radians(15)) * np.clip(x - 4.0, 0, None))
-    r, tel = _drive(hm, Mission.between(0, (2, 2), (13, 2)))
+    r, tel = _drive(hm, Mission.between(0, (2, 2), (13, 2)), engine)
     assert r.success
     assert r.max_abs_pitch_deg == pytest.approx(15, abs=2.5)  # it really was on the ramp
     assert tel["z_m"][-1] - tel["z_m"][0] > 2.0
 
 
-def test_vertical_wall_ends_stuck():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_vertical_wall_ends_stuck(engine):
     x = np.arange(501) * CELL
     hm = _strip(np.where(x >= 8.0, 1.0, 0.0))  # a 1 m step across the path
-    r, tel = _drive(hm, Mission.between(0, (3, 2), (23, 2)))
+    r, tel = _drive(hm, Mission.between(0, (3, 2), (23, 2)), engine)
     assert r.failure_reason == "stuck" and not r.success
     assert math.isnan(r.traversal_time_s)
     # stuck is declared once the vehicle has stayed within 0.2 m for 30 s
@@ -59,14 +70,16 @@ def test_vertical_wall_ends_stuck():
     assert tel["x_m"].max() < 8.0
 
 
-def test_vehicle_spawned_on_its_side_ends_tipped():
-    r, _ = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (13, 2)), spawn_roll_rad=math.pi / 2)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_vehicle_spawned_on_its_side_ends_tipped(engine):
+    r, _ = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (13, 2)), engine, spawn_roll_rad=math.pi / 2)
     assert r.failure_reason == "tipped"
     assert r.max_abs_roll_deg > 75
 
 
-def test_driving_off_the_edge_ends_off_map():
-    r, tel = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (25, 2)))  # goal beyond x = 16 m
+@pytest.mark.parametrize("engine", ENGINES)
+def test_driving_off_the_edge_ends_off_map(engine):
+    r, tel = _drive(Heightmap.flat(81, 321, CELL), Mission.between(0, (3, 2), (25, 2)), engine)  # goal beyond x = 16 m
     assert r.failure_reason == "off_map"
     assert tel["x_m"][-1] > 16.0 - 0.5
 
@@ -86,6 +99,38 @@ def test_timeout_is_a_multiple_of_the_nominal_time():
     rules = FailureRules(stuck_window_s=1000.0, stuck_window_max_fraction=2.0)  # never stuck: held at the wall until 3 x 20 s
     r, _ = _drive(hm, Mission.between(0, (3, 2), (23, 2)), rules=rules)
     assert r.failure_reason == "timeout" and r.sim_time_s == pytest.approx(60.0, abs=0.02)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_small_step_is_climbed_and_a_high_one_is_not(engine):
+    """The Husky climbs 6 cm (well under its 0.13 m belly and 0.165 m tyre radius) and not 30 cm
+    (above both), driving at cruise speed from 3 m away."""
+    x = np.arange(321) * CELL
+    for height, climbs in ((0.06, True), (0.30, False)):
+        r, tel = _drive(_strip(np.where(x >= 5.0, height, 0.0)), Mission.between(0, (2, 2), (12, 2)), engine)
+        assert r.success == climbs, (height, r.failure_reason)
+        assert (tel["x_m"].max() > 6.0) == climbs
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("heading_deg", [0.0, 22.5, 45.0])
+def test_yaw_rate_tracks_the_command_at_any_heading(engine, heading_deg):
+    """A 1 rad/s turn in place, and a 0.5 rad/s turn at 1 m/s, give the commanded yaw rate (after
+    the wheel-speed saturation) within 15 %, whatever the heading against the world axes."""
+    with open_world(Heightmap.flat(121, 121, 0.1), "husky", SimConfig(engine=engine)) as world:
+        for v, w in ((0.0, 1.0), (1.0, 0.5)):
+            world.spawn(6.0, 6.0, math.radians(heading_deg))
+            world.command_wheels(*wheel_speeds(v, w, world.spec))
+            yaws = []
+            for k in range(180):  # 3 s at 60 Hz; the second half counts
+                world.step()
+                if k >= 90:
+                    q = world.base_state()[1]
+                    r = world.rotation_matrix(q)
+                    yaws.append(math.atan2(r[3], r[0]))
+            rate = (np.unwrap(yaws)[-1] - np.unwrap(yaws)[0]) / ((len(yaws) - 1) * world.dt_s)
+            expected = achievable_twist(v, w, world.spec)[1]
+            assert 0.85 <= rate / expected <= 1.15, (v, w, rate, expected)
 
 
 @pytest.fixture(scope="module")
@@ -109,6 +154,18 @@ def test_wheel_penetration_stays_under_3_cm_on_rough_terrain(rough):
     assert all(r.failure_reason in ("", *FAILURE_REASONS) and r.success == (r.failure_reason == "") for r in results)
     # the terrain is rough for the vehicle: it shakes far more than on flat ground
     assert np.median([r.rms_pitch_rate_deg_s for r in results]) > 5.0
+
+
+@pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="mujoco not installed")
+def test_mujoco_results_are_bit_identical_in_any_mission_order(rough):
+    """MuJoCo's world resets all its state before a mission (mj_resetData): a mission's result is
+    the same bit for bit whatever ran before it, in a fresh world or a used one."""
+    hm, missions = rough
+    sim = SimConfig(engine="mujoco")
+    forward = run_missions(hm, missions, sim=sim)
+    backward = run_missions(hm, missions[::-1], sim=sim)
+    assert backward[::-1] == forward
+    assert run_missions(hm, missions[1:2], sim=sim)[0] == forward[1]
 
 
 def test_results_do_not_depend_on_earlier_missions_and_repeat_exactly(rough, tmp_path):

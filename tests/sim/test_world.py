@@ -8,7 +8,7 @@ import pytest
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim import SimConfig, VehicleSpec, World, list_vehicles, load_vehicle
+from offroadbench.sim import SimConfig, TrialWorld, VehicleSpec, World, list_vehicles, load_vehicle
 
 CELL = 0.05
 
@@ -35,7 +35,6 @@ def test_terrain_sits_where_the_heightmap_says():
 
 
 def test_settled_vehicle_rests_on_the_heightmap_surface():
-
     hm = _smooth_map()
     with World(hm) as world:
         world.spawn(4.0, 3.0, math.radians(30))
@@ -90,6 +89,44 @@ def test_urdf_has_real_masses_and_inertias():
             assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)  # drive train added
 
 
+def test_vehicle_geometry_is_the_urdf_measured_once():
+    """World.geometry (offroadbench.sim.engine.VehicleGeometry) against the Husky URDF's numbers:
+    chassis box 0.9874 x 0.5709 x 0.2475 m centred on base_link, wheel axles 0.256 m fore/aft,
+    0.2854 m to the side and 0.0910 m below base_link, chassis centre of mass 0.0618 m below it,
+    tyre radius 0.1651 m, masses 46.034 + 4 x 2.637 kg."""
+    with World(Heightmap.flat(41, 41, CELL)) as world:
+        geo = world.geometry
+        assert isinstance(world, TrialWorld)
+    assert geo.mass_kg == pytest.approx(46.034 + 4 * 2.637)
+    assert geo.wheel_spin_inertia_kg_m2 == pytest.approx((1.0,) * 4)  # the drive train of vehicle.toml
+    for (x, y, z), (sx, sy) in zip(geo.wheel_centres_m, [(1, 1), (-1, 1), (1, -1), (-1, -1)]):
+        assert (x, y, z) == pytest.approx((sx * 0.256, sy * 0.2854, -0.0910 + 0.0618), abs=1e-9)
+    assert geo.wheelbase_m == pytest.approx(0.512)
+    # bounding boxes carry Bullet's 1 mm collision margin on the box
+    assert geo.length_m == pytest.approx(0.9874, abs=3e-3)
+    assert geo.width_m == pytest.approx(2 * 0.2854 + 2 * 0.1651, abs=3e-3)
+    assert geo.belly_m == pytest.approx(0.0910 + 0.1651 - 0.2475 / 2, abs=2e-3)
+    assert geo.overhang  # the box reaches 0.49 m forward, the front tyres 0.256 + 0.165 = 0.42 m
+
+
+def test_engine_reads_loads_centre_of_mass_and_gravity():
+    """On flat ground the wheels carry the vehicle's weight; the centre of mass sits where the URDF
+    puts it (0.189 m above the ground, less the tyres' sink); tilting gravity unloads the uphill side."""
+    hm = Heightmap.flat(81, 81, CELL)
+    with World(hm) as world:
+        world.spawn(2.0, 2.0, 0.0)
+        loads = world.wheel_loads_n()
+        assert len(loads) == 4 and min(loads) > 0
+        assert sum(loads) == pytest.approx(world.geometry.mass_kg * world.sim.gravity_m_s2, rel=0.05)
+        assert world.centre_of_mass_m()[2] == pytest.approx(0.189, abs=0.005)
+        g = world.sim.gravity_m_s2
+        world.set_gravity(0.0, -g * math.sin(math.radians(20)), -g * math.cos(math.radians(20)))
+        for _ in range(30):
+            world.step()
+        left, right = sum(world.wheel_loads_n()[:2]), sum(world.wheel_loads_n()[2:])
+        assert left < right  # downhill toward -y: the right side carries more
+
+
 def test_close_is_clean_and_idempotent():
     import pybullet as pb
 
@@ -126,6 +163,18 @@ def test_sim_config_validation():
         SimConfig(physics_rate_hz=50, telemetry_rate_hz=20)
     with pytest.raises(InputError, match="physics_rate_hz"):
         SimConfig(physics_rate_hz=10)
+    with pytest.raises(InputError, match="engine = 'bullet' is not known; allowed: .*pybullet"):
+        SimConfig(engine="bullet")
+    with pytest.raises(InputError, match="cone_friction"):
+        SimConfig(cone_friction="yes")
+
+
+def test_cone_friction_is_off_where_the_tyre_model_owns_the_friction():
+    hm = Heightmap.flat(41, 41, CELL)
+    for sim, cone in ((SimConfig(), False), (SimConfig(tyre_model="bullet"), True),
+                      (SimConfig(cone_friction=True), True), (SimConfig(tyre_model="bullet", cone_friction=False), False)):
+        with World(hm, "husky", sim) as world:
+            assert world.cone_friction is cone
 
 
 class _DirectBuildWorld(World):

@@ -168,15 +168,15 @@ import os, time
 from pathlib import Path
 
 
-def hang_once(hm, missions, cell):
+def hang_once(prepared, settings):
     \"\"\"Real trials, except that the first call on the cluster hangs (a stuck simulation).\"\"\"
-    from offroadbench.study.tasks import sim_trials
+    from offroadbench.sim.pipeline import drive_terrain
 
     marker = Path(os.environ["OFFROADBENCH_TEST_HANG_MARKER"])
     if not marker.exists():
         marker.write_text("hung")
         time.sleep(3600)
-    yield from sim_trials(hm, missions, cell)
+    yield from drive_terrain(prepared, settings)
 """
 
 

@@ -27,9 +27,10 @@ STUDY = {
 }
 
 
-def fake_trials(hm, missions, cell):
+def fake_trials(prepared, settings):
     """A deterministic stand-in for a trial: a pure function of the terrain along the mission line."""
-    for m in missions:
+    hm = prepared.hm
+    for m in prepared.missions:
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         t = np.linspace(0.0, 1.0, 61)
         z = hm.height_at(sx + t * (gx - sx), sy + t * (gy - sy))
@@ -48,8 +49,8 @@ def fake_trials(hm, missions, cell):
 def failing_after(limit):
     """fake_trials that raises on terrain 1's mission 2 (a crash in the middle of a study)."""
 
-    def trials(hm, missions, cell):
-        for row in fake_trials(hm, missions, cell):
+    def trials(prepared, settings):
+        for row in fake_trials(prepared, settings):
             if row["mission_index"] == 2 and limit["armed"]:
                 raise RuntimeError("simulated crash")
             yield row

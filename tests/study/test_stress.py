@@ -4,14 +4,15 @@ section of a study with a planner axis, on a cheap stand-in for the physics."""
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from offroadbench.study import load, run_study, study_from_dict
 from offroadbench.study.report import build_report
 from offroadbench.study.spec import plan_cells
 from offroadbench.study.stress import (
-    bootstrap_breaking_point,
-    breaking_point,
+    breaking_points,
+    first_level_below,
     mcnemar_exact,
     paired_table,
     wilson_interval,
@@ -37,15 +38,60 @@ def test_wilson_interval_contains_the_rate_exactly():
     assert wilson_interval(10, 10)[1] == 1.0 and wilson_interval(0, 7)[0] == 0.0
 
 
-def test_breaking_point_interpolates_the_first_crossing():
-    assert breaking_point([2.3, 2.5, 2.7], [0.9, 0.6, 0.2]) == pytest.approx(2.55)
-    assert breaking_point([2.3, 2.5], [0.9, 0.8]) == math.inf
-    assert breaking_point([2.3, 2.5], [0.4, 0.8]) == -math.inf
-    # a sharp drop between the same two levels on every terrain: the interval is that step's crossing
-    s = np.zeros((10, 3, 4))
-    s[:, 0], s[:, 1] = 1.0, 0.75
-    lo, hi = bootstrap_breaking_point(s, [2.3, 2.5, 2.7], np.random.default_rng(0), n_boot=200)
-    assert lo == hi == pytest.approx(2.5 + 0.25 / 0.75 * 0.2)
+def test_first_level_below_does_not_interpolate():
+    assert first_level_below([2.3, 2.5, 2.7], [0.9, 0.6, 0.2]) == 2.7
+    assert first_level_below([2.3, 2.5], [0.9, 0.8]) == math.inf
+    assert first_level_below([2.3, 2.5], [0.4, 0.8]) == 2.3
+
+
+def _synthetic_trials(n_terrains, levels, missions, d50, width, rng, planner="p"):
+    rows = []
+    for j in range(n_terrains):
+        shift = rng.normal(0, 0.02)
+        for x in levels:
+            prob = 1 / (1 + np.exp((x - d50 - shift) / width))
+            for m in range(missions):
+                rows.append({"planner": planner, "D_high": x, "terrain": j, "mission": m,
+                             "success": bool(rng.random() < prob)})
+    return pd.DataFrame(rows)
+
+
+def test_logistic_breaking_points_locate_a_known_crossing():
+    rng = np.random.default_rng(2)
+    t = pd.concat([_synthetic_trials(30, [2.3, 2.6, 2.8, 2.9, 2.95, 2.99], 8, 2.85, 0.04, rng, "a"),
+                   _synthetic_trials(30, [2.3, 2.6, 2.8, 2.9, 2.95, 2.99], 8, 2.95, 0.03, rng, "b")])
+    bp = breaking_points(t, "planner", "D_high").set_index("planner")
+    for name, truth in (("a", 2.85), ("b", 2.95)):
+        r = bp.loc[name]
+        assert r["ci95_low"] < truth < r["ci95_high"] and r["ci95_high"] - r["ci95_low"] < 0.1
+        assert r["terrains"] == 30 and not r["extrapolated"]
+    assert bp.loc["a", "breaking_point"] < bp.loc["b", "breaking_point"]
+    # a planner that never fails has no fitted crossing: nothing is invented
+    never = _synthetic_trials(6, [2.3, 2.6], 8, 9.0, 0.01, rng)
+    assert math.isnan(breaking_points(never, "planner", "D_high")["breaking_point"].iloc[0])
+
+
+def test_paired_table_is_terrain_level():
+    # the pilot of issue 22: at one level astar beats straight on 13 missions, 7 of them on one
+    # terrain; per terrain [7, 1, 1, 1, 1, 2] of 8 missions
+    rows = []
+    wins = [7, 1, 1, 1, 1, 2]
+    for j, w in enumerate(wins):
+        for m in range(8):
+            rows.append({"planner": "straight", "D_high": 2.9, "terrain": j, "mission": m, "success": m >= w})
+            rows.append({"planner": "astar", "D_high": 2.9, "terrain": j, "mission": m, "success": True})
+    t = pd.DataFrame(rows)
+    tab = paired_table(t, "planner", "D_high", "straight")
+    r = tab[tab["D_high"] == 2.9].iloc[0]
+    assert r["only this"] == 13 and r["only baseline"] == 0 and r["terrains"] == 6
+    assert r["mcnemar_p_missions"] == pytest.approx(2 * 0.5 ** 13)
+    assert r["p_sign_flip"] == pytest.approx(2 / 64) and r["p_wilcoxon"] == pytest.approx(2 / 64)
+    assert r["p_durkalski"] == pytest.approx(0.085, abs=5e-4)
+    assert r["terrain_diff_pct"] == pytest.approx(100 * 13 / 48)
+    assert r["terrain_ci95_low"] >= 100 / 8 and r["terrain_ci95_high"] <= 100 * 7 / 8
+    # two rows (level and pooled, the same p): Holm gives 2 x 2/64 = 0.0625 to both. With 6
+    # terrains a difference that was "p < 1e-3" over missions is not a terrain-level claim here
+    assert r["p_holm"] == pytest.approx(2 * 2 / 64) and not r["significant"]
 
 
 def test_exact_mcnemar_is_the_binomial_sign_test_on_discordant_pairs():
@@ -65,10 +111,11 @@ STUDY = {
 }
 
 
-def fake_planner_trials(hm, missions, cell):
+def fake_planner_trials(prepared, settings):
     """Success falls with the terrain's steepness along the line; the 'astar' cells tolerate more."""
-    tolerance = {"straight": 1.2, "astar": 2.0}[cell.values["planner.name"]]
-    for m in missions:
+    tolerance = {"straight": 1.2, "astar": 2.0}[settings.planner.name]
+    hm = prepared.hm
+    for m in prepared.missions:
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         t = np.linspace(0.0, 1.0, 61)
         z = hm.height_at(sx + t * (gx - sx), sy + t * (gy - sy))
@@ -100,9 +147,44 @@ def test_report_of_a_planner_study(tmp_path):
     paired = rep.tables["paired_tests.csv"]
     pooled = paired[paired["D_high"] == "all"].iloc[0]
     assert pooled["only baseline"] == 0 and pooled["only this"] > 0  # astar tolerates strictly more
-    assert pooled["mcnemar_p"] == pytest.approx(mcnemar_exact(int(pooled["only this"]), 0))
+    assert pooled["mcnemar_p_missions"] == pytest.approx(mcnemar_exact(int(pooled["only this"]), 0))
+    assert pooled["terrains"] == 4 and 0 <= pooled["p_sign_flip"] <= 1 and "p_holm" in paired
     assert paired_table(df, "planner", None, "straight").shape[0] == 1
     bp = rep.tables["breaking_points.csv"].set_index("planner")
-    assert bp.loc["straight", "breaking_point"] <= bp.loc["astar", "breaking_point"]
+    assert set(bp.columns) >= {"breaking_point", "ci95_low", "ci95_high", "terrains", "first_level_below"}
+    assert bp.loc["straight", "first_level_below"] <= bp.loc["astar", "first_level_below"]
     assert "offroadbench study replay" in rep.tables["replay_examples.csv"]["replay"].iloc[0]
     assert "planner_paths.png" in rep.figures and "planner_success.png" in rep.figures
+
+
+def fake_noisy_map_trials(prepared, settings):
+    """As fake_planner_trials, but astar's tolerance shrinks with the planner map's error."""
+    perception = settings.planner.perception
+    noise = perception.map_noise_m if perception is not None else 0.0
+    tolerance = {"straight": 1.2, "astar": 2.0 - 16 * noise}[settings.planner.name]
+    for row in fake_planner_trials(prepared, settings):
+        ok = row["rms_vertical_accel_m_s2"] < tolerance
+        yield {**row, "success": ok, "failure_reason": "" if ok else "stuck"}
+
+
+def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
+    data = {**STUDY, "grid": {"planner.name": ["straight", "astar"], "recipe.layers.base.D_high": [2.3, 2.9],
+                              "recipe.layers.base.wm.band_limited": [False, True],
+                              "planner.map_noise_m": [0.0, 0.05]}}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path, executor="inline", trial_fn=fake_noisy_map_trials)
+    rep = build_report(tmp_path)
+    paired = rep.tables["paired_tests.csv"]
+    assert {"band_limited", "map_noise_m", "D_high"} <= set(paired.columns)
+    # one row per (stratum, level) and one pooled row per stratum: 4 strata x (2 levels + 1)
+    assert len(paired) == 4 * 3
+    pooled = paired[paired["D_high"] == "all"].set_index(["band_limited", "map_noise_m"])
+    for band in (False, True):
+        # the planner's advantage shrinks with the map error
+        assert pooled.loc[(band, 0.05), "terrain_diff_pct"] <= pooled.loc[(band, 0.0), "terrain_diff_pct"]
+    assert pooled.loc[(False, 0.0), "terrain_diff_pct"] > pooled.loc[(False, 0.05), "terrain_diff_pct"] == 0
+    assert "### Advantage over the baseline per `band_limited` and `map_noise_m`" in rep.markdown
+    by = rep.tables["planner_success.csv"]
+    assert len(by) == 2 * 2 * 2 * 2 and {"band_limited", "map_noise_m"} <= set(by.columns)
+    assert len(rep.tables["breaking_points.csv"]) == 2 * 4
+    assert {f"planner_success_{i}.png" for i in range(4)} <= set(rep.figures)

@@ -30,6 +30,8 @@ PRESETS = {
     ("lunar-highland", 1): "a53539fe18fa400073a94e53c044c00937950769cc50a3372d463c0335b7933e",
     ("lunar-mare", 0): "bec3e10a9364d20d641eab46005110a18739258d6b7e3e06ba5fa7b02bcc593d",
     ("lunar-mare", 1): "6f32b18524e3918b428b9de035914cd78e6693d529f3cc6d8e8af781aa281234",
+    ("lunar-mare-3.5ga", 0): "d7006abb89e78146bd3742178fc0d7d591a6e4c52204d7bb8c7c1e716252ef7a",
+    ("lunar-mare-3.5ga", 1): "4842e7ef98042595a9e4b40f6cd8641800ed73de5cd04454dbad534e8f877150",
     ("multifractal-cratered", 0): "de962c48add44c8bc55044f128c89c2be7d9b12ac555418d84f66030008ecfd0",
     ("multifractal-cratered", 1): "51ab0189a84d2d2e408db58028f54baec7a5132df7f0274032b650eb56970aa1",
     ("paper-d2.3", 0): "a9f18ffeff1d4ab916df1910f9a6bbee4d9fbf63cf6a282ff8659088117686bc",

@@ -15,6 +15,18 @@ Two ways to draw the diameters:
   crater is the one with ``A N_cum(d_n) = n``: ``d_n = (c A / n)^(1/k)`` (for k = 2 this is
   Yoshikawa & Nishiguchi 2001's ``d_k = sqrt(10^-1.42 A / n)``).
 
+Dated populations (``age_ga``). Instead of (k, c), a population can take a surface age: the
+cumulative density is the lunar production function of Neukum, Ivanov & Hartmann 2001 (Space Sci.
+Rev. 96, 55-87; their 11th-degree polynomial in log10 D, D in km, valid 0.01-300 km) scaled to the
+age by the lunar chronology function of the same paper, ``N(1 km) = 5.44e-14 (exp(6.93 T) - 1) +
+8.38e-4 T`` per km^2 (T in Ga): ``N(D, T) = N_PF(D) / N_PF(1 km) * N(1 km, T)``. Rover-scale craters
+lie below the polynomial's range; below 10 m the production is continued as a power law with the
+polynomial's slope at 10 m (-3.16), and at every size the density is capped at the lunar
+equilibrium of Trask 1966, ``N_eq = 10^-1.1 D^-2`` (any length unit, per unit area): old mare
+surfaces are saturated at these sizes, as observed. The coefficients are those the ``craterstats``
+package ships for "Moon, Neukum et al. (2001)"; that package is not a dependency here (its 3.6
+release imports ``scipy.integrate.simps``, which scipy 1.14 removed).
+
 Positions are uniform over the map (overlaps allowed, Yoshikawa & Nishiguchi 2001, Sec. 5.1), ages are uniform in
 [0, max_age] (Martin et al. 2014's "simple linear age distribution": a constant impact rate), and the
 craters are returned oldest first (Martin et al. 2014, Sec. III.C). Degradation follows Martin et al. 2014, Eq. (11).
@@ -43,7 +55,19 @@ __all__ = [
     "kth_largest_diameters",
     "degradation_from_age",
     "sample_population",
+    "neukum_production_km2",
+    "neukum_chronology_n1_km2",
+    "dated_cumulative_density",
 ]
+
+#: Neukum et al. 2001 lunar production function: log10 N = sum a_j (log10 D)^j, D km, N per km^2
+#: (a0 as published; it cancels in the scaling to an age)
+NEUKUM_2001_PF = (-3.0876, -3.557528, 0.781027, 1.021521, -0.156012, -0.444058, 0.019977, 0.086850,
+                  -0.005874, -0.006809, 8.25e-4, 5.54e-5)
+#: smallest diameter of the production polynomial's validity, km (Ivanov, Neukum & Wagner 2001)
+NEUKUM_PF_D_MIN_KM = 0.01
+#: lunar equilibrium (Trask 1966): N_eq = EQUILIBRIUM_C D^-2, per unit area in the same length unit
+EQUILIBRIUM_C = 10.0 ** -1.1
 
 SAMPLINGS = ("inversion", "kth_largest")
 #: Above this many expected craters a population is refused (memory and time guard).
@@ -76,8 +100,13 @@ class PopulationConfig:
     """sigma_b / sigma_x of Martin et al. 2014, Eq. (11), relative surface density; 1 unless materials differ."""
     profile: str = "martin2014"
     """Crater profile name (a key of offroadbench.terrain.craters.PROFILES)."""
+    age_ga: float | None = None
+    """Surface age, Ga: sizes from the lunar production and chronology functions (Neukum et al.
+    2001) capped at the lunar equilibrium (Trask 1966) instead of (k, c); None uses (k, c)."""
 
     def __post_init__(self) -> None:
+        if self.age_ga is not None:
+            check_range(self, "age_ga", self.age_ga, lo=0, lo_open=True, hi=4.5)
         check_range(self, "k", self.k, lo=0, lo_open=True, hi=6)
         check_range(self, "c", self.c, lo=0)
         check_range(self, "d_min_m", self.d_min_m, lo=0, lo_open=True)
@@ -91,9 +120,45 @@ class PopulationConfig:
         get_profile(self.profile)
 
 
+def neukum_production_km2(diameter_km) -> np.ndarray:
+    """Neukum et al. 2001 lunar production polynomial: craters >= D per km^2 (D km; its 1 Ga-scale
+    form, N(1 km) = 10^a0). Below 0.01 km continued with the polynomial's slope there."""
+    d = np.asarray(diameter_km, dtype=float)
+    x0 = math.log10(NEUKUM_PF_D_MIN_KM)
+    x = np.log10(np.maximum(d, NEUKUM_PF_D_MIN_KM))
+    log_n = sum(a * x**j for j, a in enumerate(NEUKUM_2001_PF))
+    slope = sum(j * a * x0 ** (j - 1) for j, a in enumerate(NEUKUM_2001_PF) if j > 0)
+    log_n = np.where(d < NEUKUM_PF_D_MIN_KM, log_n + slope * (np.log10(d) - x0), log_n)
+    return np.power(10.0, log_n)
+
+
+def neukum_chronology_n1_km2(age_ga) -> np.ndarray:
+    """Neukum et al. 2001 lunar chronology: craters >= 1 km per km^2 on a surface of age T (Ga)."""
+    t = np.asarray(age_ga, dtype=float)
+    return 5.44e-14 * np.expm1(6.93 * t) + 8.38e-4 * t
+
+
+def dated_cumulative_density(age_ga: float, diameter_m) -> np.ndarray:
+    """Craters >= D per m^2 on a lunar surface of age ``age_ga`` (module docstring), D in metres."""
+    d_km = np.asarray(diameter_m, dtype=float) / 1000.0
+    production = neukum_production_km2(d_km) * (neukum_chronology_n1_km2(age_ga) / neukum_production_km2(1.0))
+    equilibrium = EQUILIBRIUM_C * np.power(d_km, -2.0)
+    return np.minimum(production, equilibrium) * 1e-6  # per km^2 -> per m^2
+
+
 def cumulative_density(cfg: PopulationConfig, diameter_m) -> np.ndarray:
-    """N_cum(D) = c D^-k: craters per m^2 with diameter >= D (Martin et al. 2014, Eq. 12)."""
+    """N_cum(D): craters per m^2 with diameter >= D: c D^-k (Martin et al. 2014, Eq. 12), or the
+    dated density of ``age_ga`` (:func:`dated_cumulative_density`)."""
+    if cfg.age_ga is not None:
+        return dated_cumulative_density(cfg.age_ga, diameter_m)
     return cfg.c * np.power(np.asarray(diameter_m, dtype=float), -cfg.k)
+
+
+def _inverse_cumulative(cfg: PopulationConfig, n_per_m2) -> np.ndarray:
+    """Diameter D in [d_min, d_max] with N_cum(D) = n (log-log interpolation on a fine grid), m."""
+    d = np.geomspace(cfg.d_min_m, cfg.d_max_m, 512)
+    log_n = np.log(cumulative_density(cfg, d))
+    return np.exp(np.interp(-np.log(np.asarray(n_per_m2, dtype=float)), -log_n, np.log(d)))
 
 
 def expected_count(cfg: PopulationConfig, area_m2: float) -> float:
@@ -120,6 +185,10 @@ def _check_count(n: float, what: str) -> None:
 def sample_diameters_inversion(cfg: PopulationConfig, area_m2: float, rng: np.random.Generator) -> np.ndarray:
     """Per-bin Poisson counts and inversion sampling (Li et al. 2022, Eq. 17-21), largest bin first."""
     _check_count(expected_count(cfg, area_m2), "the expected count")
+    if cfg.age_ga is not None:  # one Poisson count, diameters by inverting the dated N_cum
+        n_lo, n_hi = cumulative_density(cfg, [cfg.d_max_m, cfg.d_min_m])
+        n = int(rng.poisson(area_m2 * (n_hi - n_lo)))
+        return np.sort(_inverse_cumulative(cfg, n_lo + (n_hi - n_lo) * rng.random(n)))[::-1]
     edges = size_bins(cfg)
     out = []
     for lo, hi in zip(edges[:-1][::-1], edges[1:][::-1]):
@@ -131,6 +200,11 @@ def sample_diameters_inversion(cfg: PopulationConfig, area_m2: float, rng: np.ra
 
 def kth_largest_diameters(cfg: PopulationConfig, area_m2: float) -> np.ndarray:
     """Yoshikawa & Nishiguchi 2001, Eq. (9) for slope k: d_n = (c A / n)^(1/k), keeping d_min <= d_n <= d_max, largest first."""
+    if cfg.age_ga is not None:  # the n-th largest has A N_cum(d_n) = n
+        n_lo, n_hi = (area_m2 * float(v) for v in cumulative_density(cfg, [cfg.d_max_m, cfg.d_min_m]))
+        _check_count(n_hi, "the count")
+        n = np.arange(max(1, math.ceil(n_lo * (1 - 1e-12))), math.floor(n_hi * (1 + 1e-12)) + 1, dtype=float)
+        return _inverse_cumulative(cfg, n / area_m2)
     ca = cfg.c * area_m2
     n_max = math.floor(ca * cfg.d_min_m ** (-cfg.k) * (1 + 1e-12))
     _check_count(n_max, "the count")

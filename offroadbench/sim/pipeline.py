@@ -1,0 +1,226 @@
+"""The one trial pipeline: settings, a prepared terrain, and the function that drives its missions.
+
+Every place that drives a terrain's missions (a study worker, ``offroadbench drive``, ``study
+replay``, the report's replay figure, :func:`run_missions`) goes through
+the same three steps:
+
+1. :class:`TrialSettings`: every setting of a trial (vehicle, physics, controller, failure rules,
+   missions, roughness classes, planner or policy, observation), frozen and nested, built once
+   (:meth:`TrialSettings.from_tables` from a study cell's or a command's TOML tables).
+2. :func:`prepare_terrain`: the terrain (a Heightmap, or a recipe and a seed), its roughness class
+   maps (Majhor & Bos 2023, Eq. 3-4 and the closing, computed once and shared by the mission
+   sampler and the planners), and its missions, each drawn alone from its seed (Sec. 2.3).
+3. :func:`drive_terrain`: one World for the terrain, one :class:`~offroadbench.sim.runner.TrialRecord`
+   per mission, in the prepared order. Each mission gets a freshly loaded vehicle
+   (:meth:`~offroadbench.sim.world.World.spawn`), so a record does not depend on the order.
+
+Importing this module does not import pybullet; :func:`drive_terrain` does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
+
+import numpy as np
+
+from offroadbench.analysis.roughness import ClassMaps, RoughnessConfig, classify_terrain
+from offroadbench.config import from_dict
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.navigation.drivers import PlannerChoice, planner_from_table
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_mission
+from offroadbench.navigation.observation import ObservationConfig
+from offroadbench.progress import ProgressFn, report
+from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
+from offroadbench.sim.vehicle import VehicleSpec, load_vehicle, vehicle_from_table
+
+if TYPE_CHECKING:
+    from offroadbench.sim.runner import TrialResult
+
+__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions"]
+
+
+def _builder(cls: type):
+    def build(table: Mapping[str, Any], where: str):
+        return from_dict(cls, dict(table), where=where)
+
+    return build
+
+
+#: TOML table name -> fn(table, where) building that part of :class:`TrialSettings`
+SETTINGS_TABLES = {
+    "roughness": _builder(RoughnessConfig),
+    "missions": _builder(MissionConfig),
+    "vehicle": vehicle_from_table,
+    "controller": _builder(ControllerConfig),
+    "sim": _builder(SimConfig),
+    "rules": _builder(FailureRules),
+    "planner": planner_from_table,
+}
+
+
+def _default_vehicle() -> VehicleSpec:
+    return load_vehicle("husky")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrialSettings:
+    """Everything that decides how a terrain's missions are driven, except the terrain and seeds."""
+
+    vehicle: VehicleSpec = field(default_factory=_default_vehicle)
+    """The vehicle (``[vehicle]``: a name and VehicleSpec fields; default the Husky)."""
+    sim: SimConfig = SimConfig()
+    """Physics settings (``[sim]``)."""
+    controller: ControllerConfig = ControllerConfig()
+    """Path tracking and speed profile (``[controller]``)."""
+    rules: FailureRules = FailureRules()
+    """When a trial ends and why (``[rules]``)."""
+    missions: MissionConfig = MissionConfig()
+    """How missions are drawn (``[missions]``); ``count`` is not used here (the caller lists the missions)."""
+    roughness: RoughnessConfig = RoughnessConfig()
+    """Roughness classes and closing of the class map (``[roughness]``)."""
+    planner: PlannerChoice = PlannerChoice()
+    """The planner or policy that drives (``[planner]``; default ``straight``, the paper's)."""
+    observation: ObservationConfig = ObservationConfig()
+    """What a policy observes (the Gymnasium env's observation)."""
+
+    @classmethod
+    def from_tables(cls, tables: Mapping[str, Mapping[str, Any]], where: str = "settings") -> "TrialSettings":
+        """Settings from TOML tables by name (:data:`SETTINGS_TABLES`); a missing table takes its defaults.
+
+        Unknown tables and keys are InputErrors naming them (``where`` prefixes the message).
+        """
+        unknown = sorted(set(tables) - set(SETTINGS_TABLES))
+        if unknown:
+            raise InputError(f"{where}: unknown table(s) {', '.join(unknown)}; known: {', '.join(SETTINGS_TABLES)}")
+        built = {name: SETTINGS_TABLES[name](dict(tables.get(name, {})), f"{where} [{name}]")
+                 for name in SETTINGS_TABLES}
+        return cls(**built)
+
+    def replace(self, **changes: Any) -> "TrialSettings":
+        """A copy with some parts replaced (``dataclasses.replace``)."""
+        return dataclasses.replace(self, **changes)
+
+    def drive_kwargs(self, maps: ClassMaps | None) -> dict[str, Any]:
+        """Keyword arguments of :func:`offroadbench.sim.runner.drive_mission` for these settings."""
+        return {"planner": self.planner, "classes": None if maps is None else maps.closed,
+                "border_m": self.missions.border_m, "controller": self.controller, "rules": self.rules,
+                "observation": self.observation}
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedTerrain:
+    """A terrain ready to drive: its heights, class maps and missions (in driving order)."""
+
+    hm: Heightmap
+    """The terrain."""
+    maps: ClassMaps | None
+    """Its roughness classes and closed map (None only for missions given directly to a
+    driver that needs no class map)."""
+    missions: tuple[Mission, ...]
+    """The missions, in the order they are driven."""
+    terrain_seed: int | None = None
+    """The seed the terrain was generated from (None for a terrain read from a file)."""
+    mission_seeds: tuple[int | None, ...] = ()
+    """Each mission's seed (:func:`offroadbench.seeding.mission_seed`), same order."""
+    gravity_m_s2: float | None = None
+    """The gravity of the terrain's body (``[body]`` of its recipe; None: not named)."""
+    soil: str | None = None
+    """The terrain's soil (``[soil]`` of its recipe; None: not named)."""
+
+    def sim_for(self, sim: SimConfig) -> SimConfig:
+        """``sim`` with this terrain's gravity and soil where ``sim`` leaves them open (SimConfig.for_terrain)."""
+        return sim.for_terrain(self.gravity_m_s2, self.soil)
+
+
+def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
+                    missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
+                    gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
+    """The terrain, its class maps and its missions.
+
+    ``terrain`` is a Heightmap (``seed`` is then only recorded; ``gravity_m_s2`` and ``soil`` say
+    its body's gravity and its soil, if known) or a recipe
+    (:class:`offroadbench.terrain.recipe.Recipe`, generated with ``seed``; its ``[body]`` and
+    ``[soil]`` give gravity and soil). ``missions`` are
+    ``(index, mission_seed)`` pairs, each drawn alone on the closed class map (Majhor & Bos 2023,
+    Sec. 2.3), or Mission objects used as they are; either way in the order they will be driven.
+    """
+    if isinstance(terrain, Heightmap):
+        hm = terrain
+    else:
+        from offroadbench.terrain.recipe import generate_terrain
+
+        hm = generate_terrain(terrain, seed)
+        gravity_m_s2, soil = terrain.gravity_m_s2, terrain.soil
+    maps = classify_terrain(hm, settings.roughness)
+    items = list(missions)
+    if items and isinstance(items[0], Mission):
+        drawn, seeds = tuple(items), (None,) * len(items)
+    else:
+        drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s)) for k, s in items)
+        seeds = tuple(int(s) for _, s in items)
+    return PreparedTerrain(hm=hm, maps=maps, missions=drawn, terrain_seed=seed, mission_seeds=seeds,
+                           gravity_m_s2=gravity_m_s2, soil=soil)
+
+
+def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
+                  progress: ProgressFn | None = None) -> Iterator[Any]:
+    """Drive every prepared mission in one world of ``sim.engine`` (offroadbench.sim.engine.open_world); yield one TrialRecord per mission as it finishes."""
+    from offroadbench.sim.runner import drive_mission
+    from offroadbench.sim.engine import open_world
+
+    needs = settings.planner.needs
+    if "classes" in needs and prepared.maps is None:
+        raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
+    kwargs = settings.drive_kwargs(prepared.maps if "classes" in needs else None)
+    n = len(prepared.missions)
+    with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
+        for i, mission in enumerate(prepared.missions):
+            yield drive_mission(world, mission, **kwargs)
+            report(progress, i + 1, n)
+
+
+def run_missions(
+    hm: Heightmap,
+    missions: Sequence[Mission],
+    *,
+    vehicle: VehicleSpec | str = "husky",
+    planner: PlannerChoice = PlannerChoice(),
+    classes: np.ndarray | None = None,
+    border_m: float = 0.0,
+    controller: ControllerConfig = ControllerConfig(),
+    sim: SimConfig = SimConfig(),
+    rules: FailureRules = FailureRules(),
+    progress: ProgressFn | None = None,
+    telemetry_dir: str | Path | None = None,
+) -> list[TrialResult]:
+    """Run every mission on one terrain (built once) and return one TrialResult per mission.
+
+    ``planner``, ``classes`` (a closed class map, used as it is) and ``border_m`` as in
+    :func:`offroadbench.sim.runner.drive_mission`; the missions are driven through
+    :func:`drive_terrain`, in the order given. With ``telemetry_dir``
+    the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
+    offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.
+    """
+    from offroadbench.io.telemetry import save_telemetry
+
+    out_dir = Path(telemetry_dir) if telemetry_dir is not None else None
+    if out_dir is not None and not out_dir.is_dir():
+        raise InputError(f"telemetry_dir {out_dir} is not a directory")
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    settings = TrialSettings(vehicle=spec, sim=sim, controller=controller, rules=rules, planner=planner,
+                             missions=MissionConfig(border_m=border_m))
+    maps = None if classes is None else ClassMaps(classes=np.asarray(classes), closed=np.asarray(classes),
+                                                  cell_size_m=hm.cell_size_m, border_m=border_m)
+    prepared = PreparedTerrain(hm=hm, maps=maps, missions=tuple(missions))
+    results = []
+    for rec in drive_terrain(prepared, settings, progress=progress):
+        results.append(rec.result)
+        if out_dir is not None:
+            index = rec.result.mission_index
+            save_telemetry(rec.telemetry, out_dir / f"mission_{index:03d}.npz")
+            save_telemetry({"x_m": rec.path_xy[:, 0], "y_m": rec.path_xy[:, 1]}, out_dir / f"mission_{index:03d}_path.npz")
+    return results

@@ -1,0 +1,1 @@
+"""Soil parameter sets (``*.toml``, offroadbench.sim.terramechanics), shipped as ``offroadbench.data.soils``."""

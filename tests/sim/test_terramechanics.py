@@ -1,0 +1,222 @@
+"""Wong-Reece terramechanics: the force code against an independent quadrature, the tables against
+the integrals, the shipped soils, and the tyre model in the physics engine on flat ground."""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, optimize
+
+from offroadbench.errors import InputError
+from offroadbench.sim.terramechanics import (
+    build_tables,
+    list_soils,
+    load_soil,
+    static_sinkage,
+    wheel_forces,
+)
+
+R, B = 0.1651, 0.1143  # the Husky's wheel
+SHIPPED = {"lunar-regolith", "lunar-simulant-ishigami2007", "lete-sand", "clayey-soil", "snow"}
+#: agreement of the force code (Gauss-Legendre) with adaptive quadrature, relative to the load scale
+QUAD_TOL = 1e-3
+
+
+def _reference(soil, h, s):
+    """(F_z, F_x, T) of Wong & Reece 1967 / Ishigami et al. 2007, Eq. 5-7, by scipy.integrate.quad,
+    written out again here from the papers' equations (independent of the force code)."""
+    t1 = math.acos(1.0 - h / R)
+    tm = (soil.a0 + soil.a1 * abs(s)) * t1
+    k = soil.k_c / B + soil.k_phi
+    tan_phi = math.tan(math.radians(soil.friction_angle_deg))
+
+    def sigma(t):
+        eq = t if t >= tm else t1 - t / tm * (t1 - tm)
+        return k * (R * (math.cos(eq) - math.cos(t1))) ** soil.n if math.cos(eq) > math.cos(t1) else 0.0
+
+    def tau(t):
+        if s >= 0:
+            j = R * ((t1 - t) - (1 - s) * (math.sin(t1) - math.sin(t)))
+        else:
+            j = R * ((1 + s) * (t1 - t) - (math.sin(t1) - math.sin(t)))
+        return math.copysign(1.0, j) * (soil.cohesion_pa + sigma(t) * tan_phi) * (1 - math.exp(-abs(j) / soil.shear_modulus_m))
+
+    def quad(f):
+        return integrate.quad(f, 0.0, t1, points=[tm], epsabs=1e-10, epsrel=1e-10, limit=200)[0]
+
+    fz = R * B * quad(lambda t: tau(t) * math.sin(t) + sigma(t) * math.cos(t))
+    fx = R * B * quad(lambda t: tau(t) * math.cos(t) - sigma(t) * math.sin(t))
+    torque = R * R * B * quad(tau)
+    return fz, fx, torque
+
+
+def test_shipped_soils_load_with_valid_values():
+    assert SHIPPED <= set(list_soils())
+    for name in SHIPPED:
+        soil = load_soil(name)
+        assert soil.name == name and soil.description
+        assert soil.modulus(B) > 0
+
+
+def test_unknown_soil_names_the_known_ones():
+    with pytest.raises(InputError, match="lunar-regolith"):
+        load_soil("lunar-regolit")
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_force_code_matches_independent_quadrature(name):
+    soil = load_soil(name)
+    for h in (0.003, 0.02, 0.06):
+        for s in (-0.5, 0.0, 0.1, 0.3, 0.6, 0.9):
+            fz, fx, torque = (float(v) for v in wheel_forces(soil, R, B, h, s))
+            rz, rx, rt = _reference(soil, h, s)
+            scale = max(abs(rz), 1.0)
+            assert abs(fz - rz) <= QUAD_TOL * scale, (h, s)
+            assert abs(fx - rx) <= QUAD_TOL * scale, (h, s)
+            assert abs(torque - rt) <= QUAD_TOL * scale * R, (h, s)
+
+
+def test_tables_interpolate_the_integrals_and_keep_the_series_spring():
+    soil = load_soil("lunar-regolith")
+    k = 5.0e4
+    tables = build_tables(soil, R, B, k)
+    for delta in (0.004, 0.015, 0.04):
+        for s in (0.0, 0.2, 0.55, 0.9):
+            h, fz, fx, torque = tables.lookup(delta, s)
+            assert delta - (h + fz / k) == pytest.approx(0.0, abs=2e-4)
+            ez, ex, et = (float(v) for v in wheel_forces(soil, R, B, h, s))
+            assert fz == pytest.approx(ez, rel=0.03, abs=0.5)
+            assert fx == pytest.approx(ex, rel=0.05, abs=0.5)
+            assert torque == pytest.approx(et, rel=0.05, abs=0.1)
+
+
+def test_drawbar_pull_rises_with_slip_and_sinkage_with_load():
+    soil = load_soil("lunar-regolith")
+    h = static_sinkage(soil, R, B, 130.0)
+    fx = [float(wheel_forces(soil, R, B, h, s)[1]) for s in np.linspace(0.0, 0.9, 10)]
+    assert fx[0] < 0.0 < fx[-1]  # compaction resistance at zero slip, traction at high slip
+    assert all(b >= a - 1e-9 for a, b in itertools.pairwise(fx))
+    assert static_sinkage(soil, R, B, 22.0) < h
+
+
+@pytest.fixture(scope="module")
+def flat():
+    from offroadbench.heightmap import Heightmap
+
+    return Heightmap.flat(81, 81, 0.1)
+
+
+@pytest.mark.parametrize("gravity", [9.81, 1.625])
+def test_vehicle_settles_at_the_static_sinkage_and_drives(flat, gravity):
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.skid_steer import wheel_speeds
+
+    sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=gravity)
+    with World(flat, "husky", sim) as world:
+        world.spawn(2.0, 4.0, 0.0)
+        share = world._tyres._share
+        expected = static_sinkage(load_soil("lunar-regolith"), R, B, share * gravity)
+        assert world.wheel_penetration_m() == pytest.approx(expected, rel=0.1)
+        assert world.wheel_slip() == pytest.approx(0.0, abs=0.02)
+        x0 = world.base_state()[0][0]
+        for k in range(240):  # ramp to 0.5 m/s, as the speed profile does
+            world.command_wheels(*wheel_speeds(min(0.5, 0.5 * k / 60), 0.0, world.spec))
+            world.step()
+        pos = world.base_state()[0]
+        assert pos[0] - x0 > 1.0
+        assert 0.0 < world.wheel_slip() < 0.6  # drives with slip
+        assert abs(pos[1] - 4.0) < 0.05
+        assert world.wheel_penetration_m() >= expected  # slip sinkage: deeper than at rest
+
+
+#: rig tolerance: sinkage within 1 %, drawbar pull within 1 % of the load, torque within 1 % of load x radius
+RIG_TOL = 0.01
+
+
+@pytest.mark.parametrize("name,load_n,gravity", [("lunar-regolith", 22.9, 1.62), ("lete-sand", 138.8, 9.81)])
+def test_single_wheel_rig_in_the_engine_matches_independent_quadrature(name, load_n, gravity):
+    """Done-when of issue 21: the engine rig agrees with the integrals, computed here by scipy
+    quadrature with the sinkage solved by brentq, over slip 0-0.9."""
+    from offroadbench.sim.soil_check import SLIPS, rig_curve
+
+    soil = load_soil(name)
+    rig = rig_curve(soil, R, B, load_n, gravity_m_s2=gravity)
+    for i, s in enumerate(SLIPS):
+        h = optimize.brentq(lambda h, s=s: _reference(soil, h, s)[0] - load_n, 1e-7, 0.7 * R, xtol=1e-9)
+        _, fx, torque = _reference(soil, h, s)
+        assert rig.sinkage_m[i] == pytest.approx(h, rel=RIG_TOL), s
+        assert abs(rig.drawbar_pull_n[i] - fx) <= RIG_TOL * load_n, s
+        assert abs(rig.torque_nm[i] - torque) <= RIG_TOL * load_n * R, s
+
+
+def test_soil_check_command_prints_and_plots(tmp_path, capsys):
+    from offroadbench.cli import main
+
+    out = tmp_path / "check.png"
+    assert main(["soil", "check", "snow", "--gravity", "1.62", "--plot", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "soil check: snow" in text and "0.900" in text
+    assert out.stat().st_size > 0
+    assert main(["soil", "check", "sno"]) == 2
+
+
+def test_slip_is_higher_on_a_slope(flat):
+    """Lunar regolith, lunar gravity: climbing a 8 deg grade at 0.3 m/s takes more slip than the flat."""
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.check import _set_gravity
+    from offroadbench.sim.skid_steer import wheel_speeds
+
+    sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
+    slips = []
+    with World(flat, "husky", sim) as world:
+        for grade in (0.0, 8.0):
+            world.spawn(2.0, 4.0, 0.0)
+            _set_gravity(world, math.radians(grade), "y")
+            samples = []
+            for k in range(300):
+                world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / 60), 0.0, world.spec))
+                world.step()
+                if k >= 180:
+                    samples.append(world.wheel_slip())
+            slips.append(sum(samples) / len(samples))
+            _set_gravity(world, 0.0, "y")
+    assert 0.0 < slips[0] < slips[1] < 1.0, slips
+
+
+def test_deep_snow_ramp_entraps_where_rigid_ground_climbs():
+    """A 20 deg ramp after 3 m of flat: on snow (Earth gravity, ~12 cm sinkage) the Husky digs in and
+    the trial ends ``entrapped``; on rigid ground (mu 0.8 allows 38 deg) it reaches the goal."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.runner import drive_mission
+
+    x = np.arange(241) * 0.1
+    hm = Heightmap(np.tile(math.tan(math.radians(20.0)) * np.maximum(0.0, x - 6.0), (81, 1)), 0.1)
+    mission = Mission.between(0, (3.0, 4.0), (20.0, 4.0))
+    outcome = {}
+    for model in ("terramechanics", "coulomb"):
+        with World(hm, "husky", SimConfig(tyre_model=model, soil="snow", gravity_m_s2=9.81)) as world:
+            outcome[model] = drive_mission(world, mission).result
+    assert outcome["terramechanics"].failure_reason == "entrapped"
+    assert outcome["terramechanics"].max_penetration_m > 0.3 * R
+    assert outcome["coulomb"].success
+    assert outcome["terramechanics"].mean_slip > 0.5 and math.isnan(outcome["coulomb"].mean_slip)
+
+
+def test_soils_on_the_search_path_add_to_and_replace_the_shipped_ones(tmp_path, monkeypatch):
+    from offroadbench import resources
+
+    shipped = (resources.shipped("soils") / "lunar-regolith.toml").read_text()
+    (tmp_path / "soils").mkdir()
+    (tmp_path / "soils" / "my-sand.toml").write_text(shipped.replace('name = "lunar-regolith"', 'name = "my-sand"'))
+    (tmp_path / "soils" / "snow.toml").write_text(shipped.replace('name = "lunar-regolith"', 'name = "snow"')
+                                                  .replace("cohesion_pa = 170.0", "cohesion_pa = 999.0"))
+    monkeypatch.setenv(resources.ENV_VAR, str(tmp_path))
+    assert {"my-sand", "snow", "lunar-regolith"} <= set(list_soils())
+    assert load_soil("snow").cohesion_pa == 999.0
+    with pytest.raises(InputError, match="no \\[soil\\] table"):
+        bad = tmp_path / "bad.toml"
+        bad.write_text("[other]\nx = 1\n")
+        load_soil(bad)

@@ -1,0 +1,189 @@
+"""A sample of the numbers in experiments/results/*/README.md, recomputed from the committed tables.
+
+Each sample is a regular expression that finds a number in a README and a function that computes it
+from the study's trial table. The trial table is ``trials.parquet`` in the results folder when it is
+committed (one row per trial, as ``offroadbench study export DIR --format parquet`` writes it);
+until then, trials are rebuilt from the report's own ``terrains.csv`` (per-terrain trial and success
+counts, enough for every success statistic), and metric medians are read from its ``summary.csv``.
+A README that no longer states a sampled number fails with the sample's name: re-point the sample.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+RESULTS = Path(__file__).resolve().parents[2] / "experiments" / "results"
+
+
+def trial_table(folder: Path) -> pd.DataFrame:
+    """The trial table of a results folder: trials.parquet, or trials rebuilt from terrains.csv."""
+    parquet = folder / "trials.parquet"
+    if parquet.is_file():
+        return pd.read_parquet(parquet)
+    ter = pd.read_csv(folder / "terrains.csv")
+    keys = [c for c in ter.columns if c not in {"terrain_seed", "trials", "successes", "success_rate_pct"}
+            and not c.startswith("area_")]
+    rows = []
+    for r in ter.to_dict("records"):
+        for m in range(int(r["trials"])):
+            rows.append({**{k: r[k] for k in keys}, "mission": m, "success": m < r["successes"]})
+    return pd.DataFrame(rows)
+
+
+def per_terrain_rate(trials: pd.DataFrame, by: str) -> pd.DataFrame:
+    """Per-terrain success rate (Eq. 5 of Majhor & Bos 2023), terrains as rows, ``by`` as columns."""
+    return trials.groupby([by, "terrain"])["success"].mean().mul(100).unstack(by)
+
+
+@dataclass(frozen=True)
+class Sample:
+    name: str
+    folder: str
+    pattern: str
+    """A regex on the README whose groups are the stated numbers."""
+    compute: Callable[[Path], list[float]]
+    """The same numbers from the folder's tables."""
+    tol: float = 0.0
+    """Absolute tolerance after the README's rounding (half a unit of its last digit is added)."""
+
+
+def _successes(folder: Path) -> list[float]:
+    t = trial_table(folder)
+    return list(t.groupby("D_high")["success"].sum().astype(float))
+
+
+def _median_rates(folder: Path) -> list[float]:
+    return list(per_terrain_rate(trial_table(folder), "D_high").median())
+
+
+def _pooled_fall(folder: Path) -> list[float]:
+    rate = trial_table(folder).groupby("D_high")["success"].mean() * 100
+    return [float(rate.iloc[1] - rate.iloc[2])]
+
+
+def _correlation_and_counts(folder: Path) -> list[float]:
+    p = per_terrain_rate(trial_table(folder), "D_high")
+    lo, hi = p.columns.min(), p.columns.max()
+    d = p[hi] - p[lo]
+    return [float(p[lo].corr(p[hi])), float((d < 0).sum()), float((d == 0).sum()), float((d > 0).sum())]
+
+
+def _low_area_changes(folder: Path) -> list[float]:
+    ter = pd.read_csv(folder / "terrains.csv")
+    med = ter.groupby("D_high")["area_low"].median() * 100
+    return list(np.diff(med.to_numpy()))
+
+
+def _metric_medians(metric: str) -> Callable[[Path], list[float]]:
+    def compute(folder: Path) -> list[float]:
+        parquet = folder / "trials.parquet"
+        if parquet.is_file():
+            t = pd.read_parquet(parquet)
+            return list(t[t["success"].astype(bool)].groupby("D_high")[metric].median())
+        return list(pd.read_csv(folder / "summary.csv")[f"median_{metric}"])
+
+    return compute
+
+
+def _planner_successes(folder: Path) -> list[float]:
+    t = trial_table(folder)
+    table = t.groupby(["D_high", "planner"])["success"].sum().unstack("planner")
+    return [float(v) for v in table[["straight", "astar", "lattice", "reactive"]].to_numpy().ravel()]
+
+
+def _durkalski_astar(folder: Path) -> list[float]:
+    from offroadbench.study.clustered import durkalski_mcnemar
+
+    t = trial_table(folder)
+    out = []
+    for level in (2.9, 2.95, 2.99):
+        s = t[t["D_high"] == level].groupby(["terrain", "planner"])["success"].agg(["sum", "size"]).unstack("planner")
+        d = s[("sum", "astar")] - s[("sum", "straight")]
+        out.append(durkalski_mcnemar(d.clip(lower=0), (-d).clip(lower=0), s[("size", "astar")])[1])
+    return out
+
+
+def _straight_breaking_point(folder: Path) -> list[float]:
+    from offroadbench.study.stress import breaking_points
+
+    bp = breaking_points(trial_table(folder), "planner", "D_high").set_index("planner")
+    return [float(bp.loc["straight", c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
+
+
+def _terrain_success_changes(folder: Path) -> list[float]:
+    from offroadbench.study.stats import terrain_changes
+
+    t = trial_table(folder)
+    ter = pd.read_csv(folder / "terrains.csv")
+    labels = {c: f"D_high = {d}" for c, d in ter.groupby("cell")["D_high"].first().items()}
+    areas = [f"area_{c}_pct" for c in ("low", "semi", "high")]
+    tab = terrain_changes(t, ter, labels, ["success_rate_pct", *areas]).iloc[0]
+    return [-tab["mean_change"], tab["ci95_low"], tab["ci95_high"], tab["down"], tab["up"], tab["p_wilcoxon"],
+            tab["p_holm"]]
+
+
+_NUM = r"(-?\d+(?:\.\d+)?)"
+SAMPLES = [
+    Sample("majhor2023 successful trials", "majhor2023",
+           rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
+    Sample("majhor2023 median per-terrain success", "majhor2023",
+           rf"median success rate per terrain \|[^|]*\| {_NUM} / {_NUM} / {_NUM} %", _median_rates),
+    Sample("majhor2023 pooled fall 2.45 -> 2.6", "majhor2023", rf"our pooled rate falls {_NUM} points", _pooled_fall),
+    Sample("majhor2023 per-terrain correlation and counts", "majhor2023",
+           rf"correlates at {_NUM}; going from 2.3 to 2.6,\s+{_NUM} terrains lose success, {_NUM} are unchanged "
+           rf"and {_NUM} gain", _correlation_and_counts),
+    Sample("majhor2023 low-area changes", "majhor2023",
+           rf"low area {_NUM} and {_NUM} points against", _low_area_changes),
+    Sample("majhor2023 RMS vertical acceleration medians", "majhor2023",
+           rf"median RMS vertical acceleration, m/s² \|[^|]*\| {_NUM} / {_NUM} / {_NUM} \(",
+           _metric_medians("rms_vertical_accel_m_s2")),
+    Sample("majhor2023 traversal time medians", "majhor2023",
+           rf"median traversal time, s \|[^|]*\| {_NUM} / {_NUM} / {_NUM} \(", _metric_medians("traversal_time_s")),
+    Sample("majhor2023 terrain-level success changes", "majhor2023",
+           rf"Per-terrain success falls by {_NUM} points \[{_NUM}, {_NUM}\] from 2.3 to 2.45 \({_NUM} terrains down,"
+           rf"\s+{_NUM} up; Wilcoxon p = {_NUM}, Holm {_NUM}\)", _terrain_success_changes),
+    Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
+           rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
+    Sample("planner-stress straight-line breaking point", "planner-stress",
+           rf"`straight` {_NUM} \[{_NUM}, {_NUM}\]", _straight_breaking_point),
+    Sample("planner-stress successes per planner and D", "planner-stress",
+           r"\| D_high \| straight \| astar \| lattice \| reactive \|\n\|[-|]+\|\n"
+           + r"".join(rf"\| [\d.]+ \| \**{_NUM}\** \| \**{_NUM}\** \| \**{_NUM}\** \| \**{_NUM}\** \|\n" for _ in range(5)),
+           _planner_successes),
+]
+
+
+def _decimals(text: str) -> int:
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+@pytest.mark.parametrize("sample", SAMPLES, ids=[s.name for s in SAMPLES])
+def test_readme_number_recomputes_from_the_committed_tables(sample: Sample):
+    folder = RESULTS / sample.folder
+    readme = (folder / "README.md").read_text()
+    hit = re.search(sample.pattern, readme)
+    assert hit, f"{sample.folder}/README.md no longer states '{sample.name}': re-point the sample"
+    stated = hit.groups()
+    computed = sample.compute(folder)
+    assert len(computed) == len(stated)
+    for text, value in zip(stated, computed):
+        half_unit = 0.5 * 10.0 ** -_decimals(text)
+        assert abs(float(text) - value) <= half_unit + sample.tol + 1e-9, (
+            f"{sample.name}: README says {text}, the tables give {value:.4g}")
+
+
+def test_trials_rebuilt_from_terrain_counts_keep_every_count():
+    folder = RESULTS / "majhor2023"
+    ter = pd.read_csv(folder / "terrains.csv")
+    t = trial_table(folder)
+    assert len(t) == ter["trials"].sum() and t["success"].sum() == ter["successes"].sum()
+    rates = per_terrain_rate(t, "D_high")
+    expect = ter.pivot(index="terrain", columns="D_high", values="success_rate_pct")
+    assert np.allclose(rates.to_numpy(), expect.to_numpy())
