@@ -84,8 +84,8 @@ def test_the_documented_ranges_are_the_enforced_ones():
     assert checked > 40
     sim = {f.name: f for f in sections["sim"].fields}
     assert sim["physics_rate_hz"].allowed == "integer 30 .. 2000"
-    assert sim["tyre_model"].allowed == 'one of "bullet", "coulomb"'
-    assert sim["gravity_m_s2"].unit == "m/s^2" and sim["gravity_m_s2"].default == 9.81
+    assert sim["tyre_model"].allowed.startswith('one of "bullet", "coulomb"')
+    assert sim["gravity_m_s2"].unit == "m/s^2" and sim["gravity_m_s2"].allowed == "[0, inf)"
     rules = {f.name: f for f in sections["rules"].fields}
     assert rules["tip_angle_deg"].allowed == "(0, 180]"
 
@@ -94,7 +94,7 @@ def test_config_prints_a_study_that_loads(capsys):
     assert main(["config"]) == 0
     data = tomllib.loads(capsys.readouterr().out)
     study = study_from_dict(data)
-    assert study.root_seed == 0 and data["sim"]["gravity_m_s2"] == 9.81
+    assert study.root_seed == 0 and data["sim"]["physics_rate_hz"] == 60
     assert data["vehicle"] == {"name": "husky"}  # its figures are printed commented out
     plan_cells(study)  # every table validates as printed
 

@@ -60,8 +60,8 @@ def test_study_export_terrains_carry_trials_and_successes(tmp_path):
     from offroadbench.study import run_study, study_from_dict
     from offroadbench.study.spec import plan_cells
 
-    def fake_trials(hm, missions, cell):  # a stand-in for the physics: success on even missions
-        for m in missions:
+    def fake_trials(prepared, settings):  # a stand-in for the physics: success on even missions
+        for m in prepared.missions:
             ok = m.index % 2 == 0
             yield {"mission_index": m.index, "success": ok, "failure_reason": "" if ok else "stuck"}
 

@@ -26,9 +26,10 @@ STUDY = {
 }
 
 
-def fake_trials(hm, missions, cell):
+def fake_trials(prepared, settings):
     """A stand-in for the physics: a pure function of the terrain along the mission line."""
-    for m in missions:
+    hm = prepared.hm
+    for m in prepared.missions:
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         t = np.linspace(0.0, 1.0, 31)
         z = hm.height_at(sx + t * (gx - sx), sy + t * (gy - sy))
