@@ -38,6 +38,7 @@ __all__ = [
     "REFERENCE_PATH",
     "FieldDoc",
     "SectionDoc",
+    "recipe_sections",
     "field_docs",
     "render_reference",
     "render_section_toml",
@@ -88,6 +89,8 @@ class SectionDoc:
     summary: str
     fields: tuple[FieldDoc, ...]
     notes: tuple[str, ...] = ()
+    generator: str = ""
+    """For a recipe layer's tables: the generator or modifier they belong to."""
 
 
 REQUIRED = object()
@@ -351,6 +354,69 @@ def section_names() -> list[str]:
     return [s.name for s in study_sections()]
 
 
+# ---------------------------------------------------------------------------- terrain recipes
+def _nested_sections(key: str, cls: type, summary: str, generator: str) -> list[SectionDoc]:
+    """``key``'s table and, recursively, the tables of its fields that are configs themselves."""
+    from offroadbench.config import _dataclass_type
+
+    fields = field_docs(cls)
+    out = [SectionDoc(key, _qualname(cls), summary, fields, generator=generator)]
+    hints = typing.get_type_hints(cls)
+    for f in fields:
+        sub = _dataclass_type(hints.get(f.name))
+        if sub is not None and sub.__name__.endswith(("Config", "Options")):  # not data (a crater table, a DEM)
+            out += _nested_sections(f"{key}.{f.name}", sub, _first_line(sub), generator)
+    return out
+
+
+#: layer keys that name a file, read when the recipe is loaded (offroadbench.terrain.recipe's file
+#: readers), in place of the data field they fill
+FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
+    "craters": ("craters", (
+        FieldDoc("crater_file", "str", None, "", "a path",
+                 "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
+                 "population (read when the recipe is loaded)."),)),
+    "dem": ("dem", (
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
+                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
+        FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
+        FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
+                 "(filled, Martin et al. 2014, Sec. IV.B)."),
+    )),
+}
+
+
+def recipe_sections() -> list[SectionDoc]:
+    """The tables of a terrain recipe (what ``[recipe_overrides]``, ``recipe.<key>`` grid axes and
+    ``generate --set`` reach): ``[grid]`` and, per built-in generator or modifier, its layer table."""
+    from offroadbench.terrain.grid import GridConfig
+    from offroadbench.terrain.recipe import COMBINE_MODES
+    from offroadbench.terrain.registry import TERRAIN_REGISTRY
+
+    out = [SectionDoc("grid", _qualname(GridConfig), _first_line(GridConfig), field_docs(GridConfig))]
+    names = sorted(n for n, spec in TERRAIN_REGISTRY.items() if spec.config_cls.__module__.startswith("offroadbench."))
+    layer = (
+        FieldDoc("generator", "str", REQUIRED, "", "one of " + ", ".join(f'"{n}"' for n in names),
+                 "The registered generator or modifier of this layer (`offroadbench terrains` lists them)."),
+        FieldDoc("combine", "str", None, "", "one of " + ", ".join(f'"{c}"' for c in COMBINE_MODES),
+                 "How the layer joins the terrain so far: the first generator replaces, later generators sum "
+                 "(or multiply); modifiers apply."),
+        FieldDoc("weight", "float", 1.0, "", "", "Factor on the layer's heights where it is summed."),
+    )
+    out.append(SectionDoc("layers.NAME", "offroadbench.terrain.recipe", "Every layer table (applied in file order).",
+                          layer))
+    for name in names:
+        spec = TERRAIN_REGISTRY.get(name)
+        tables = _nested_sections("layers.NAME", spec.config_cls, f"{spec.kind} `{name}`: {spec.summary}", name)
+        if name in FILE_KEYS:  # the file's keys stand where the data field they fill would
+            data, keys = FILE_KEYS[name]
+            top = tables[0]
+            tables[0] = dataclasses.replace(top, fields=(*keys, *(f for f in top.fields if f.name != data)))
+        out += tables
+    return out
+
+
 # ---------------------------------------------------------------------------- the tables a study writes
 #: the key columns of a study's trial table (offroadbench.study.results.load), before the TrialResult fields
 KEY_COLUMNS = (
@@ -419,6 +485,8 @@ def _toml_value(v: Any) -> str:
 def _md_default(f: FieldDoc) -> str:
     if f.default is REQUIRED:
         return "required"
+    if dataclasses.is_dataclass(f.default):
+        return "table below"
     if f.default is None:
         return "none"
     if isinstance(f.default, dict) and not f.default:
@@ -470,6 +538,22 @@ def render_reference() -> str:
             lines += _md_table(s.fields) + [""]
         for note in s.notes:
             lines += [note, ""]
+    lines += [
+        "## Terrain recipes",
+        "",
+        "The keys a study reaches through `[recipe_overrides]` and `recipe.<key>` grid axes, and "
+        "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
+        "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
+        "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
+        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
+        "",
+    ]
+    for s in recipe_sections():
+        summary = s.summary if s.summary.endswith(".") else s.summary + "."
+        title = f"`[{s.name}]`" + (f' with `generator = "{s.generator}"`' if s.generator else "")
+        lines += [f"### {title}", "", f"{_md_cell(summary)} Source: `{s.source}`.", ""]
+        lines += _md_table(s.fields) + [""]
     lines += [
         "## Tables a study writes",
         "",

@@ -111,3 +111,19 @@ def test_write_reference(tmp_path, capsys):
     out = tmp_path / "new" / "reference.md"
     assert main(["config", "--write-reference", str(out)]) == 0
     assert out.read_text(encoding="utf-8") == reference.render_reference()
+
+
+def test_recipe_tables_are_documented_with_their_file_keys():
+    from offroadbench.terrain.recipe import _FILE_READERS
+    from offroadbench.terrain.registry import TERRAIN_REGISTRY
+
+    assert set(_FILE_READERS) <= set(reference.FILE_KEYS), "document the new file key in reference.FILE_KEYS"
+    sections = reference.recipe_sections()
+    tops = {s.generator: s for s in sections if s.name == "layers.NAME" and s.generator}
+    assert set(tops) == set(TERRAIN_REGISTRY.names())
+    assert [f.name for f in tops["dem"].fields][:1] == ["path"] and "dem" not in {f.name for f in tops["dem"].fields}
+    assert "crater_file" in {f.name for f in tops["craters"].fields}
+    nested = {s.name for s in sections if s.generator == "craters"}
+    assert nested == {"layers.NAME", "layers.NAME.population", "layers.NAME.stamp"}
+    wm = {f.name: f for f in tops["wm"].fields}
+    assert wm["D"].allowed == "(2, 3)"
