@@ -58,7 +58,9 @@ def fig_class_areas(summary: pd.DataFrame):
     x = np.arange(len(summary))
     for ax, cls, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS):
         ax.bar(x, summary[f"median_area_{cls}_pct"], color=colour, edgecolor="black")
-        ax.set_xticks(x, [short_label(g) for g in summary["group"]], fontsize=8)
+        n = summary["terrains"] if "terrains" in summary else [None] * len(summary)
+        ax.set_xticks(x, [short_label(g) + ("" if k is None else f"\nn={int(k)}") for g, k in zip(summary["group"], n)],
+                      fontsize=8)
         ax.set_title(f"{cls} roughness", fontsize=10)
         ax.set_ylabel("median area (%)")
         ax.grid(axis="y", alpha=0.3)
