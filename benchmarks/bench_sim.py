@@ -33,8 +33,8 @@ pitch jitter, the sanity scenarios and the rows of the vehicle check (``sim.chec
 
 ``--paired`` measures PyBullet's wasted work (issue 25) with paired runs on the paper's missions:
 terrain 0 of each D of the paper study (root seed 2023, 1009^2, 35 m missions), every mission
-driven by every variant in turn (variants interleaved mission by mission, so machine load hits
-all alike), ratios from the one run. Variants: ``main`` (cone friction on, the tyre loop of
+driven by every variant in turn (variants interleaved mission by mission, their order rotated
+from one mission to the next, so machine load and order hit all alike), ratios from the one run. Variants: ``main`` (cone friction on, the tyre loop of
 ``--old-rev``, i.e. the code before this change), ``cone-off``, ``lean`` (the lean tyre loop, cone on), ``new`` (both:
 today's default) and ``main+0.1mm`` (main with a 0.1 mm higher spawn: the chaos yardstick). Per
 variant: the trial-time and per-simulated-second ratios to ``main``, successes, outcome flips
@@ -295,8 +295,9 @@ def paired(args) -> None:
             finally:
                 world_mod.CoulombTyres = lean
         try:
-            for m in missions:
-                for v, w in worlds.items():
+            order = list(worlds.items())
+            for i, m in enumerate(missions):
+                for v, w in order[i % len(order):] + order[:i % len(order)]:  # rotated: no variant always last
                     t0 = time.perf_counter()
                     r, _ = run_mission(w, m)
                     wall[v] += time.perf_counter() - t0
@@ -363,8 +364,9 @@ def engines(args) -> None:
                 worlds[n] = open_world(hm, "husky", sim)
             build[n] += time.perf_counter() - t0
         try:
-            for m in missions:
-                for n, w in worlds.items():
+            order = list(worlds.items())
+            for i, m in enumerate(missions):
+                for n, w in order[i % len(order):] + order[:i % len(order)]:  # rotated: no variant always last
                     t0 = time.perf_counter()
                     r, _ = run_mission(w, m)
                     wall[n] += time.perf_counter() - t0

@@ -211,6 +211,8 @@ def load_toml(path: str | Path) -> dict[str, Any]:
         raise InputError(f"TOML file {p}: not valid TOML (not UTF-8 text)") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"TOML file {p}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise InputError(f"TOML file {p}: nested too deeply to be a recipe or study") from None
 
 
 def parse_set_value(text: str) -> Any:

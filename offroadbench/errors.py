@@ -9,3 +9,9 @@ class InputError(ValueError):
 class StudyError(RuntimeError):
     """A study stopped for a reason other than bad input (a worker failed or died, a lost Dask
     scheduler, a hung trial); the trials committed so far stay in the store."""
+
+
+class PluginError(RuntimeError):
+    """A plug-in (planner, policy) broke its contract, e.g. a non-finite action or path, or the
+    simulation state became non-finite: a fault, never a trial outcome. The message names the
+    plug-in and the value; a study stops on it (its trial is not stored, so a resume runs it again)."""

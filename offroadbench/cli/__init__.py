@@ -5,12 +5,13 @@ and exit status 2."""
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import logging
 import os
 import sys
 
-from offroadbench.errors import InputError, StudyError
+from offroadbench.errors import InputError, PluginError, StudyError
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "drive", "export", "vehicle", "soil", "config")
@@ -65,6 +66,9 @@ def main(argv: list[str] | None = None) -> int:
     except StudyError as exc:
         sys.stderr.write(f"offroadbench: study stopped: {_one_line(exc)}\n")
         return EXIT_FAILED
+    except PluginError as exc:
+        sys.stderr.write(f"offroadbench: plug-in fault: {_one_line(exc)}\n")
+        return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")
         return 130
@@ -73,6 +77,12 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 141
+    except OSError as exc:  # after BrokenPipeError, itself an OSError
+        if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        where = f" writing {os.fsdecode(exc.filename)}" if exc.filename else ""
+        sys.stderr.write(f"offroadbench: error: no space left on the device{where}; nothing was left half written\n")
+        return EXIT_FAILED
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -10,6 +10,17 @@ from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path
 
 EXPORT_FORMATS = ("parquet", "csv")
+#: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
+EXIT_TERMINATED = 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during ``study run``: it ends the run as Ctrl-C does (workers stopped, the session
+    recorded as ``interrupted``, every committed trial kept)."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -29,9 +40,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="dask: stop the study (and restart the worker) when one trial runs longer than this, s")
+                     help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
+                          "(default: generous against the trials' nominal time)")
     run.add_argument("--force", action="store_true",
-                     help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
+                     help="skip the up-front memory and study-size estimate checks (memory also "
+                          "OFFROADBENCH_NO_MEMORY_CHECK=1)")
     run.set_defaults(func=cmd_run)
 
     exp = sub.add_parser("export", help="write the trial and terrain tables of a run directory")
@@ -69,6 +82,15 @@ def _run_dir(path: str) -> Path:
     return p
 
 
+def _check_dir_name(name: str, path: Path) -> None:
+    """The study name names the default run directory runs/NAME: it must be one plain path
+    component (not empty, ``.`` or ``..``, no slash, NUL or control character)."""
+    bad = name in ("", ".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 or ord(c) == 127 for c in name)
+    if bad:
+        raise InputError(f"{path}: [study] name = {name!r} cannot name the run directory runs/NAME (it must be one "
+                         "plain file name: no slash, control character, '.' or '..'); rename the study or give --out")
+
+
 def _workers(args: argparse.Namespace, plans) -> int | None:
     """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
     from offroadbench.memory import check_memory, format_bytes, workers_that_fit
@@ -85,14 +107,24 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
 def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.io.inputs import check_input_file
-    from offroadbench.study import load_study, run_study
+    from offroadbench.config import load_toml
+    from offroadbench.study import run_study
+    from offroadbench.study.runner import check_study_size
+    from offroadbench.study.spec import plan_cells, study_from_dict
 
     path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
-    if args.trial_timeout_s is not None and args.executor != "dask":
-        raise InputError("--trial-timeout-s applies to --executor dask only")
-    study, plans = load_study(path)
+    if args.trial_timeout_s is not None and args.executor == "inline":
+        raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
+    study = study_from_dict(load_toml(path), where=str(path))
+    check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
+    try:
+        plans = plan_cells(study, base_dir=path.parent)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    if not args.out:
+        _check_dir_name(study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
@@ -106,9 +138,18 @@ def cmd_run(args: argparse.Namespace) -> int:
         counts["new"] += 1
         counts["ok"] += bool(row["success"])
 
-    with bar(study.name, unit="trial", postfix=success) as progress:
-        summary = run_study(study, plans, out, executor=args.executor, workers=workers,
-                            scheduler=args.scheduler, executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+    import signal
+
+    old = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        with bar(study.name, unit="trial", postfix=success) as progress:
+            summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
+                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+    except Terminated:
+        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        return EXIT_TERMINATED
+    finally:
+        signal.signal(signal.SIGTERM, old)
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
     if summary.done == summary.total and not args.no_report:
@@ -159,21 +200,21 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
 
     from offroadbench.cli._common import created_dirs, save_figure
 
+    from offroadbench.io.export import staged_dir
+
     report = build_report(run_dir, fig4=fig4)
     toml = load_meta(run_dir).get("study_toml")
-    path = out / "report.md"
-    with created_dirs(out):
+    # all or nothing: the report is written beside its folder and swapped in whole, so a killed
+    # report never leaves figures without report.md, nor a new report.md over old figures
+    with created_dirs(out.parent), staged_dir(out) as stage:
         for name, fig in report.figures.items():
-            save_figure(fig, out / name, dpi=110)
+            save_figure(fig, stage / name, dpi=110)
         for name, df in report.tables.items():
-            with atomic_path(out / name) as tmp:
-                df.to_csv(tmp, index=False)
+            df.to_csv(stage / name, index=False)
         if toml:
-            with atomic_path(out / "study.toml") as tmp:
-                tmp.write_text(toml)
-        with atomic_path(path) as tmp:
-            tmp.write_text(report.markdown)
-    return path
+            (stage / "study.toml").write_text(toml)
+        (stage / "report.md").write_text(report.markdown)
+    return out / "report.md"
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -184,6 +225,27 @@ def cmd_report(args: argparse.Namespace) -> int:
     path = write_report(run_dir, out, _parse_fig4(args.fig4))
     print(f"report: {path}")
     return 0
+
+
+def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantise: str) -> str:
+    """A line when the stored trial ran on another platform or offroadbench, saying whether
+    bit-identity is promised here (offroadbench.study.fingerprint); "" when it ran on this one."""
+    from offroadbench.study.fingerprint import describe, identity_promise, platform_fingerprint
+    from offroadbench.study.results import trial_platform
+    from offroadbench.study.runner import code_version
+
+    stored, stored_version = trial_platform(run_dir, cell, terrain, mission)
+    here, version = platform_fingerprint(), code_version()
+    if stored == here and stored_version == version:
+        return ""
+    ok, why = identity_promise(stored, here, quantise, stored_version, version)
+    where = "on another platform" if stored != here else "on this platform"
+    if stored is None:
+        where = "on a platform that was not recorded"
+    elif stored != here:
+        where += f" ({describe(stored)})"
+    verdict = {True: "promised", False: "not promised", None: "not known to be promised"}[ok]
+    return f"the stored trial ran {where}; bit-identity with it is {verdict} here: {why}"
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
@@ -211,6 +273,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if not rep.identical:
         diff = [k for k in rep.stored if str(rep.stored[k]) != str(r.as_row().get(k))]
         print(f"differs in: {', '.join(diff)}", file=sys.stderr)
+    note = _platform_note(run_dir, args.cell, args.terrain, args.mission, rep.cell.recipe().grid.quantise)
+    if note:
+        print(note)
     if args.plot:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay

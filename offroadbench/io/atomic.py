@@ -1,19 +1,24 @@
 """Atomic file output: write to a temporary file beside the target, then rename.
 
-A crash or a bad input never leaves a partial file under the final name.
+A crash or a bad input never leaves a partial file under the final name. Temporary names carry
+the writer's pid, ``.NAME.<pid>.XXXXXXXX.tmp``; the next write to ``NAME`` removes those whose
+process is gone (a killed writer's leftovers), and leaves a live writer's alone. A full disk is an
+OSError that names the final path (:func:`os_error`), which the CLI prints as one line.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Iterator
 
 from offroadbench.errors import InputError
 
-__all__ = ["atomic_path", "check_writable", "current_umask"]
+__all__ = ["DISK_FULL", "atomic_path", "check_writable", "current_umask", "os_error", "remove_stale", "temp_prefix"]
 
 
 def check_writable(path: str | Path) -> Path:
@@ -36,20 +41,86 @@ def current_umask() -> int:
     return mask
 
 
+def temp_prefix(name: str) -> str:
+    """The prefix of this process's temporary files for a target called ``name``."""
+    return f".{name}.{os.getpid()}."
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    return True
+
+
+def remove_stale(directory: str | Path, name: str) -> list[Path]:
+    """Remove ``.NAME.<pid>.*.tmp`` files and directories in ``directory`` whose process is gone."""
+    removed = []
+    head = f".{name}."
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for e in entries:
+        if not (e.name.startswith(head) and e.name.endswith(".tmp")):
+            continue
+        pid = e.name[len(head):].split(".", 1)[0]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        try:
+            if e.is_dir(follow_symlinks=False):
+                shutil.rmtree(e.path, ignore_errors=True)
+            else:
+                os.unlink(e.path)
+            removed.append(Path(e.path))
+        except OSError:
+            pass
+    return removed
+
+
+#: errno values that mean "the disk (or the quota) is full"
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
+
+
+def os_error(exc: OSError, path: str | Path) -> OSError:
+    """A full disk (or quota) as an OSError whose ``filename`` is the output ``path`` (not a
+    temporary name), so the message names what could not be written; other OSErrors unchanged."""
+    if exc.errno in DISK_FULL:
+        return OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(path))
+    return exc
+
+
 @contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
+def atomic_path(path: str | Path, *, sweep: bool = True) -> Iterator[Path]:
     """Yield a temporary path in the target's directory; on success rename it to ``path``.
 
-    On any exception the temporary file is removed and ``path`` is left untouched.
+    On any exception the temporary file is removed and ``path`` is left untouched; a full disk is
+    an OSError naming ``path`` (:func:`os_error`). ``sweep`` first removes the temporary files of killed earlier
+    writers of the same ``path`` (:func:`remove_stale`; it lists the directory, so a caller that
+    writes thousands of files into one directory sweeps once itself and passes False).
     """
     target = check_writable(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    if sweep:
+        remove_stale(target.parent, target.name)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=temp_prefix(target.name), suffix=".tmp", dir=target.parent)
+    except OSError as exc:
+        raise os_error(exc, target) from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:
         yield tmp_path
         os.chmod(tmp_path, 0o666 & ~current_umask())  # mkstemp makes 0600; give the usual file mode
         os.replace(tmp_path, target)
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        err = os_error(exc, target)
+        if err is exc:
+            raise
+        raise err from None
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise

@@ -6,6 +6,13 @@ Encoding: pixel (row r, col c) is ``z[r, c]`` (no flips); the full 0..65535 rang
 
 Metadata is written twice: a sidecar ``NAME.json`` beside ``NAME.png`` (flat keys, read back
 exactly) and PNG ``tEXt`` chunks with the same keys (so the PNG alone still says what it is).
+
+The pair. The sidecar names the PNG it belongs to: ``png_bytes`` (its size) and ``png_sha256``
+(its SHA-256, hex). The PNG is renamed into place first and the sidecar last, so the sidecar is
+the pair's commit record; :func:`read_png16` refuses a sidecar whose size or checksum does not
+match the PNG beside it (a crash between the two renames over an earlier output, or files copied
+from different runs), instead of reading heights against another map's range. Sidecars written
+before these keys existed are read as before.
 Both carry the Unreal Engine Landscape import settings that reproduce the metres
 (:func:`ue_landscape_settings`).
 
@@ -22,6 +29,7 @@ transform (relative 6e-8 of the numbers typed in).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import struct
 from decimal import Decimal
@@ -48,6 +56,7 @@ __all__ = [
     "encode_png16",
     "decode_png16",
     "sidecar_path",
+    "check_sidecar_pair",
     "read_png16_metadata",
     "png_metadata",
     "write_png16",
@@ -171,10 +180,37 @@ def write_png16(hm: Heightmap, path: str | Path, meta: Mapping[str, Any] | None 
     q = encode_png16(hm)
     img = Image.fromarray(q)  # uint16 -> mode "I;16": one 16-bit grayscale channel
     side = sidecar_path(png)
-    with atomic_path(png) as tmp_png, atomic_path(side) as tmp_json:
+    # exits run inner first: the PNG is renamed into place, then the sidecar that names it
+    with atomic_path(side) as tmp_json, atomic_path(png) as tmp_png:
         img.save(tmp_png, format="PNG", pnginfo=info)
+        size, digest = _file_digest(tmp_png)
+        data = {**data, "png_bytes": size, "png_sha256": digest}
         tmp_json.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
     return data
+
+
+def _file_digest(path: Path) -> tuple[int, str]:
+    """(size in bytes, SHA-256 hex) of a file."""
+    h = hashlib.sha256()
+    size = 0
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+            size += len(chunk)
+    return size, h.hexdigest()
+
+
+def check_sidecar_pair(png: Path, meta: Mapping[str, Any], source: str) -> None:
+    """InputError unless the sidecar's ``png_bytes`` and ``png_sha256`` (when present) match ``png``."""
+    if "png_bytes" not in meta and "png_sha256" not in meta:
+        return  # a sidecar of an older offroadbench
+    size, digest = _file_digest(png)
+    if meta.get("png_bytes") != size or meta.get("png_sha256") != digest:
+        raise InputError(
+            f"{source}: belongs to another PNG than {png} (it names {meta.get('png_bytes')!r} bytes, sha256 "
+            f"{str(meta.get('png_sha256'))[:12]}...; the PNG has {size} bytes, sha256 {digest[:12]}...); "
+            "the pair comes from different writes: write the map again"
+        )
 
 
 def read_png16(
@@ -218,6 +254,8 @@ def read_png16(
     meta = _metadata_for(p, text)
     if meta is not None:
         source, meta = meta
+        if source == str(sidecar_path(p)):
+            check_sidecar_pair(p, meta, source)
         cell = _number(meta, "cell_size_m", source, positive=True)
         z_min, z_max = _number(meta, "z_min_m", source), _number(meta, "z_max_m", source)
         if z_max < z_min:
@@ -256,8 +294,10 @@ def _metadata_for(png: Path, text: Mapping[str, str]) -> tuple[str, dict[str, An
     if side.is_file():
         try:
             meta = json.loads(side.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(f"{side}: not valid JSON ({exc})") from None
+        except RecursionError:
+            raise InputError(f"{side}: JSON nested too deeply; a sidecar is a flat JSON object") from None
+        except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError, or an integer of 4300+ digits
+            raise InputError(f"{side}: not valid JSON ({' '.join(str(exc).split())[:200]})") from None
         except OSError as exc:
             raise InputError(f"{side}: cannot be read ({exc.strerror})") from None
         if not isinstance(meta, dict):

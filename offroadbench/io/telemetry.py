@@ -22,15 +22,16 @@ def _suffix(path: Path) -> str:
     return path.suffix
 
 
-def save_telemetry(columns: Mapping[str, np.ndarray], path: str | Path) -> Path:
-    """Write the columns atomically; all must be 1-D and of one length."""
+def save_telemetry(columns: Mapping[str, np.ndarray], path: str | Path, *, sweep: bool = True) -> Path:
+    """Write the columns atomically; all must be 1-D and of one length. ``sweep`` as in
+    :func:`offroadbench.io.atomic.atomic_path`."""
     p = Path(path)
     kind = _suffix(p)
     arrays = {k: np.asarray(v) for k, v in columns.items()}
     lengths = {a.shape for a in arrays.values()}
     if len(lengths) > 1 or any(len(s) != 1 for s in lengths):
         raise InputError(f"telemetry columns must be 1-D arrays of one length, got shapes {sorted(lengths)}")
-    with atomic_path(p) as tmp:
+    with atomic_path(p, sweep=sweep) as tmp:
         if kind == ".npz":
             with open(tmp, "wb") as fh:
                 np.savez_compressed(fh, **arrays)
@@ -38,7 +39,8 @@ def save_telemetry(columns: Mapping[str, np.ndarray], path: str | Path) -> Path:
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            pq.write_table(pa.table(arrays), tmp)
+            with open(tmp, "wb") as fh:  # a file object: pyarrow cannot encode a non-UTF-8 path itself
+                pq.write_table(pa.table(arrays), fh)
     return p
 
 
@@ -53,5 +55,6 @@ def load_telemetry(path: str | Path) -> dict[str, np.ndarray]:
             return {k: data[k] for k in data.files}
     import pyarrow.parquet as pq
 
-    table = pq.read_table(p)
+    with open(p, "rb") as fh:
+        table = pq.read_table(fh)
     return {name: table.column(name).to_numpy() for name in table.column_names}

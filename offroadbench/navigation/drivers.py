@@ -30,7 +30,7 @@ from typing import Any, Callable, Mapping, Protocol
 import numpy as np
 
 from offroadbench.config import from_dict
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, PluginError
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.registry import Registry
@@ -239,7 +239,7 @@ def entry_config(kind: str, name: str, cfg: Any, expected: type) -> Any:
 
 def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
     """Waypoints (N, 2) from a planner, checked: finite, at least two, from exactly the start to
-    exactly the goal, on the map. A plug-in that breaks the contract raises RuntimeError."""
+    exactly the goal, on the map. A plug-in that breaks the contract raises PluginError (a RuntimeError)."""
     if isinstance(choice, str):
         choice = PlannerChoice(choice)
     if choice.kind != "planner":
@@ -254,7 +254,7 @@ def plan(choice: PlannerChoice | str, problem: PlanningProblem) -> np.ndarray:
     elif not np.all((wp[1:-1] >= 0) & (wp[1:-1] <= [problem.hm.width_m, problem.hm.height_m])):
         bad = "leaves the map"  # between the mission's own start and goal (which a test may put off the map)
     if bad:
-        raise RuntimeError(f"planner {choice.name!r} {bad}")
+        raise PluginError(f"planner {choice.name!r} {bad}")
     return wp
 
 

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from offroadbench.sim.config import SimConfig
     from offroadbench.sim.vehicle import VehicleSpec
 
-__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world"]
+__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world", "max_height_near"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -173,6 +173,20 @@ ENGINES.add("mujoco", _lazy("offroadbench.sim.mujoco_world", "MuJoCoWorld", "muj
 
 #: tyre models (SimConfig.tyre_model) each engine implements
 ENGINE_TYRE_MODELS = {"pybullet": ("bullet", "coulomb", "terramechanics"), "mujoco": ("bullet", "coulomb")}
+
+
+def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> float:
+    """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), clipped to the
+    map, metres (where every engine spawns a vehicle clear of the ground); ``z_max`` off the map."""
+    import math
+
+    c0 = max(0, int(math.floor((x_m - radius_m) / hm.cell_size_m)))
+    c1 = min(hm.cols - 1, int(math.ceil((x_m + radius_m) / hm.cell_size_m)))
+    r0 = max(0, int(math.floor((y_m - radius_m) / hm.cell_size_m)))
+    r1 = min(hm.rows - 1, int(math.ceil((y_m + radius_m) / hm.cell_size_m)))
+    if c0 > c1 or r0 > r1:
+        return hm.z_max_m
+    return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
 
 
 def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:

@@ -11,6 +11,13 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   speeds by the skid-steer drive (:func:`offroadbench.sim.skid_steer.wheel_speeds`) and held for one
   control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 Bullet steps).
   Actions outside the Box are clipped. There is no speed profile: the agent commands the wheels.
+  A non-finite action (NaN or infinite in either component) or one that is not two numbers is
+  refused with an InputError before anything reaches the physics: the episode and the world are
+  left as they were (the agent may ``step`` again with a finite action). Clipping NaN has no
+  meaningful value, and a NaN reaching Bullet would poison the world for later episodes.
+- **Episode end**: ``step`` after the episode ended (``terminated`` or ``truncated``) raises
+  RuntimeError; call ``reset``. ``reset(options=...)`` takes None or a dict whose only key is
+  ``"mission"``; anything else is an InputError.
 - **Observation**: a Dict of
   ``state`` (float32, 10): goal x and y in the vehicle's heading frame (m; x forward, y left,
   horizontal), roll and pitch (rad, as in :mod:`offroadbench.navigation.metrics`), body roll, pitch and yaw
@@ -194,11 +201,17 @@ class TraverseEnv(gym.Env):
         self._shade = None  # the terrain's hillshade, for every episode's view
         self._track: dict[str, list[float]] = {}
         self._end_reason: str | None = None
+        self._ended = False
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Sample a mission with the env's generator (or take ``options["mission"]``, a Mission, to
         replay one the trial runner drove) and spawn the vehicle at its start, settled."""
+        if options is not None and not isinstance(options, Mapping):
+            raise InputError(f"reset options must be a dict (or None), got {type(options).__name__}")
+        unknown = sorted(map(str, set(options or {}) - {"mission"}))
+        if unknown:
+            raise InputError(f"reset options: unknown key(s) {', '.join(unknown)}; allowed: mission")
         super().reset(seed=seed)
         world = self._require_world()
         given = (options or {}).get("mission")
@@ -213,6 +226,7 @@ class TraverseEnv(gym.Env):
             self.path_xy = plan(self.planner, problem)
         world.spawn(m.start_xy_m[0], m.start_xy_m[1], m.heading_rad)
         self._ticks = 0
+        self._ended = False
         timeout_s = self.rules.timeout_factor * m.length_m / self.vehicle.max_speed_m_s
         self._timeout_ticks = int(math.ceil(timeout_s * self.cfg.control_rate_hz - 1e-9))
         self._goal = np.asarray(m.goal_xy_m, dtype=float)
@@ -232,7 +246,16 @@ class TraverseEnv(gym.Env):
         world = self._require_world()
         if self.mission is None:
             raise RuntimeError("call reset() before step()")
-        a = np.clip(np.asarray(action, dtype=float).reshape(2), self.action_space.low, self.action_space.high)
+        if self._ended:
+            raise RuntimeError("the episode has ended (terminated or truncated); call reset() before step()")
+        try:
+            a = np.asarray(action, dtype=float).reshape(2)
+        except (TypeError, ValueError):
+            raise InputError(f"action {action!r}: expected (v, omega), two finite numbers") from None
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"action {a.tolist()}: not finite; expected (v, omega), two finite numbers "
+                             "(the step was not taken)")
+        a = np.clip(a, self.action_space.low, self.action_space.high)
         world.command_wheels(*wheel_speeds(float(a[0]), float(a[1]), self.vehicle))
         for _ in range(self._steps_per_tick):
             world.step()
@@ -260,6 +283,7 @@ class TraverseEnv(gym.Env):
         self._record(state, float(a[0]))
         if terminated or truncated:
             self._end_reason = reason or ""
+        self._ended = terminated or truncated
         return self._observation(state), float(reward), terminated, truncated, self._info(state, reason or "")
 
     def close(self) -> None:

@@ -48,7 +48,7 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.contact import CoulombBristles
-from offroadbench.sim.engine import VehicleGeometry
+from offroadbench.sim.engine import VehicleGeometry, max_height_near
 from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["MuJoCoWorld", "MUJOCO_CONTACT"]
@@ -444,15 +444,9 @@ class MuJoCoWorld:
             self.step()
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
-        """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), m."""
-        hm = self.hm
-        c0 = max(0, int(math.floor((x_m - radius_m) / hm.cell_size_m)))
-        c1 = min(hm.cols - 1, int(math.ceil((x_m + radius_m) / hm.cell_size_m)))
-        r0 = max(0, int(math.floor((y_m - radius_m) / hm.cell_size_m)))
-        r1 = min(hm.rows - 1, int(math.ceil((y_m + radius_m) / hm.cell_size_m)))
-        if c0 > c1 or r0 > r1:
-            return hm.z_max_m
-        return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
+        """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres
+        (offroadbench.sim.engine.max_height_near)."""
+        return max_height_near(self.hm, x_m, y_m, radius_m)
 
     def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:
         """Velocity targets of the left and right wheels, rad/s (torque-limited by the actuators)."""

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, PluginError
 from offroadbench.navigation import metrics
 from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig
@@ -204,10 +204,10 @@ def drive_mission(
             control_rate_hz=controller.control_rate_hz))
         policy.reset(problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
-        replanner = Replanner(lambda p: plan(planner, p), problem, mission, planner.perception)
+        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
         waypoints = replanner.waypoints
     else:
-        waypoints = plan(planner, problem)
+        waypoints = plan_within_limits(planner, problem)
     if policy is None:
         tracker = make_tracker(waypoints, spec, controller)
         length = tracker.length_m
@@ -242,11 +242,12 @@ def drive_mission(
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
-                a = policy.act(obs)
-                cmd_v = min(max(float(a[0]), -v_lim), v_lim)
-                cmd_w = min(max(float(a[1]), -w_lim), w_lim)
+                a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
+                cmd_v = min(max(a[0], -v_lim), v_lim)
+                cmd_w = min(max(a[1], -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
         if tel_tick:
+            _check_state(planner.name, k * world.dt_s, pos, quat, lin, ang)
             progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
                 goal[0] - pos[0], goal[1] - pos[1])
             rows.append(
@@ -272,6 +273,74 @@ def drive_mission(
         result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     path = replanner.trace if replanner is not None else waypoints
     return TrialRecord(result, tel, np.asarray(path, dtype=float))
+
+
+def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:
+    """A policy's (v, omega) as two finite floats, else a PluginError naming the policy and value."""
+    try:
+        v, w = (float(x) for x in np.asarray(action, dtype=float).reshape(2))
+    except (TypeError, ValueError):
+        raise PluginError(f"policy {name!r} returned {action!r} at t = {t_s:.2f} s; expected (v, omega), "
+                          "two finite numbers") from None
+    if not (math.isfinite(v) and math.isfinite(w)):
+        raise PluginError(f"policy {name!r} returned a non-finite action ({v!r}, {w!r}) at t = {t_s:.2f} s")
+    return v, w
+
+
+def _check_state(name: str, t_s: float, pos, quat, lin, ang) -> None:
+    """Refuse a non-finite base state (the physics blew up): a fault, not an outcome such as tipped."""
+    if not all(map(math.isfinite, (*pos, *quat, *lin, *ang))):
+        raise PluginError(f"the simulation state became non-finite at t = {t_s:.2f} s (position {tuple(pos)}) "
+                          f"while driving with {name!r}")
+
+
+#: wall-clock seconds a planner may take for one mission (enforced in the main thread; elsewhere a
+#: study's per-trial limit applies)
+PLANNING_LIMIT_S = 120.0
+#: the most waypoints a planned path may have (the tracker's cost grows with them)
+MAX_WAYPOINTS = 100_000
+#: a planned path may be at most this many times the start-goal distance, plus MAX_PATH_EXTRA_M
+MAX_PATH_FACTOR = 20.0
+MAX_PATH_EXTRA_M = 10.0
+
+
+def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.ndarray:
+    """:func:`~offroadbench.navigation.planners.plan` within PLANNING_LIMIT_S, and a path within
+    MAX_WAYPOINTS and MAX_PATH_FACTOR; a planner beyond a limit is a PluginError naming it."""
+    import signal
+    import threading
+
+    def too_slow(signum, frame):
+        raise PluginError(f"planner {planner.name!r} took longer than {PLANNING_LIMIT_S:g} s to plan one mission")
+
+    timed = (threading.current_thread() is threading.main_thread()
+             and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+             and signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0))
+    if timed:
+        signal.signal(signal.SIGALRM, too_slow)
+        signal.setitimer(signal.ITIMER_REAL, PLANNING_LIMIT_S)
+    try:
+        wp = plan(planner, problem)
+    except (PluginError, InputError):
+        raise
+    except Exception as exc:  # a plug-in's own failure: one line naming it (the traceback goes to the log)
+        import logging
+
+        logging.getLogger(__name__).info("planner %r failed", planner.name, exc_info=True)
+        raise PluginError(f"planner {planner.name!r} failed: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}"
+                          ) from exc
+    finally:
+        if timed:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, signal.SIG_DFL)
+    if len(wp) > MAX_WAYPOINTS:
+        raise PluginError(f"planner {planner.name!r} returned {len(wp)} waypoints; at most {MAX_WAYPOINTS} are allowed")
+    straight = math.hypot(problem.goal_xy[0] - problem.start_xy[0], problem.goal_xy[1] - problem.start_xy[1])
+    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist()))
+    if length > MAX_PATH_FACTOR * straight + MAX_PATH_EXTRA_M:
+        raise PluginError(f"planner {planner.name!r} returned a path of {length:.1f} m for a {straight:.1f} m mission; "
+                          f"at most {MAX_PATH_FACTOR:g} x + {MAX_PATH_EXTRA_M:g} m is allowed")
+    return wp
 
 
 def run_mission(world: TrialWorld, mission: Mission, **kwargs) -> tuple[TrialResult, dict[str, np.ndarray]]:

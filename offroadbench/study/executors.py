@@ -7,7 +7,9 @@ executor, a task's results depend only on the task, so all of them give the same
 
 * ``local`` (default): ``workers`` forked processes pull tasks from a queue and stream each
   trial back as soon as it finishes. Workers ignore Ctrl-C (the coordinator stops them) and die
-  with the coordinator (``PR_SET_PDEATHSIG``), so a killed study leaves no orphans behind.
+  with the coordinator (``PR_SET_PDEATHSIG``), so a killed study leaves no orphans behind. With
+  ``trial_timeout_s`` a worker that sends nothing for that long (a terrain build, or one trial,
+  that hangs) is killed and the study stops with a one-line StudyError naming the terrain.
 * ``inline``: runs in the calling process (debugging, profiling).
 * ``dask``: one Dask task per terrain on a ``distributed`` cluster (``scheduler`` address, or a
   ``LocalCluster`` of ``workers`` processes when no address is given). A task's trials arrive
@@ -22,6 +24,7 @@ import os
 import queue
 import signal
 import sys
+import time
 import traceback
 from typing import Callable, Sequence
 
@@ -85,12 +88,14 @@ def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
 def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None:
     _die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the coordinator's SIGTERM handler is not the worker's
     _worker_bootstrap()
     while True:
         task = task_q.get()
         if task is None:
             return
         key = (task.cell.index, task.terrain)
+        result_q.put(("begin", key))
         try:
             for msg in run_terrain(task, trial_fn):
                 if os.getppid() != parent_pid:
@@ -118,10 +123,26 @@ class LocalExecutor:
 
     poll_s = 0.5
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+    def __init__(self, workers: int | None = None, scheduler: str | None = None,
+                 trial_timeout_s: float | None = None) -> None:
         if scheduler:
             raise InputError("--scheduler is only for --executor dask")
         self.workers = workers or os.cpu_count() or 1
+        if trial_timeout_s is not None and not trial_timeout_s > 0:
+            raise InputError(f"trial_timeout_s = {trial_timeout_s!r}; must be > 0 seconds")
+        self.trial_timeout_s = trial_timeout_s
+
+    _timed_out = False
+
+    def _check_time(self, active: dict[tuple[int, int], float]) -> None:
+        if self.trial_timeout_s is None:
+            return
+        now = time.monotonic()
+        for (cell, terrain), since in active.items():
+            if now - since > self.trial_timeout_s:
+                self._timed_out = True
+                raise StudyError(f"cell {cell}, terrain {terrain}: a trial (or the terrain build) ran longer than "
+                                 f"{self.trial_timeout_s:g} s, the per-trial limit; its worker was stopped")
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
         import multiprocessing as mp
@@ -142,8 +163,10 @@ class LocalExecutor:
         for p in procs:
             p.start()
         pending = len(tasks)
+        active: dict[tuple[int, int], float] = {}  # running task -> when it last sent something
         try:
             while pending:
+                self._check_time(active)
                 try:
                     msg = result_q.get(timeout=self.poll_s)
                 except queue.Empty:
@@ -155,7 +178,12 @@ class LocalExecutor:
                         )
                     continue
                 kind = msg[0]
+                if kind in ("begin", "terrain", "trial"):
+                    active[msg[1] if kind == "begin" else (msg[1], msg[2])] = time.monotonic()
+                if kind == "begin":
+                    continue
                 if kind == "done":
+                    active.pop(msg[1], None)
                     pending -= 1
                 elif kind == "error":
                     raise task_failure(msg[1], msg[2], msg[3], msg[4])
@@ -164,7 +192,7 @@ class LocalExecutor:
         finally:
             for p in procs:
                 if p.is_alive():
-                    p.terminate()
+                    p.kill() if self._timed_out else p.terminate()  # a hung trial may ignore SIGTERM
             for p in procs:
                 p.join(timeout=5)
                 if p.is_alive():  # pragma: no cover
@@ -328,10 +356,15 @@ class DaskExecutor:
                 raise StudyError(f"cell {key[0]}, terrain {key[1]} killed every Dask worker that ran it ({exc})")
             if isinstance(exc, TrialTimeout):
                 worker = str(exc).rsplit(" ", 1)[-1]
+                quiet = logging.getLogger("distributed")  # the restart's own ERROR lines: the study says it in one
+                old_level = quiet.level
+                quiet.setLevel(logging.CRITICAL + 1)
                 try:
                     client.restart_workers([worker], timeout=30)
                 except Exception as rexc:  # best effort: the stop below is what matters
-                    log.warning("could not restart the hung Dask worker %s: %s", worker, rexc)
+                    log.info("could not restart the hung Dask worker %s: %s", worker, rexc)
+                finally:
+                    quiet.setLevel(old_level)
                 raise StudyError(str(exc))
             tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
             raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)

@@ -217,6 +217,39 @@ def _sessions(meta: dict[str, Any]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _platforms_section(run_dir: str | Path, meta: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
+    """Which platforms the trials ran on, and whether the project's bit-identity promise covers
+    each against the one that ran the most (offroadbench.study.fingerprint.identity_promise)."""
+    from offroadbench.study.fingerprint import identity_promise
+    from offroadbench.study.results import load_platforms
+    from offroadbench.study.spec import CellPlan
+
+    plats = load_platforms(run_dir)
+    quantise = "png16"
+    for c in meta["cells"]:
+        plan = CellPlan(index=c["index"], values=c["values"], key=c["seed_key"], recipe_data=c["recipe"],
+                        settings=c["settings"])
+        if getattr(plan.recipe().grid, "quantise", "none") == "none":
+            quantise = "none"
+    first = plats.iloc[0] if len(plats) else None
+    covered = []
+    for i, r in plats.iterrows():
+        if i == 0:
+            covered.append("(reference)")
+            continue
+        ok, why = identity_promise(first["fingerprint"], r["fingerprint"], quantise, first["version"], r["version"])
+        covered.append({True: "yes", False: "no", None: "unknown"}[ok] + f": {why}")
+    table = plats.drop(columns=["fingerprint", "version"]).assign(**{"bit-identical to the first": covered})
+    lines = ["## Platforms", ""]
+    if len(plats) <= 1:
+        lines += ["All trials ran on one platform.", ""]
+    else:
+        lines += [f"The trials ran on {len(plats)} platforms (terrain quantise = `{quantise}`). A trial is promised "
+                  "to replay bit for bit on another platform only where the last column says yes.", ""]
+    lines += [markdown_table(table), ""]
+    return lines, table
+
+
 def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
     succ = pd.DataFrame({
         "group": summary["group"], "terrains": summary["terrains"],
@@ -305,6 +338,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "",
         markdown_table(sessions),
         "",
+        *_platforms_section(run_dir, meta)[0],
         "## Roughness classes (Fig. 5)",
         "",
         "![Fig. 5](fig5_class_areas.png)",

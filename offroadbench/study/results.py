@@ -9,6 +9,10 @@ mission, so two runs of the same study give equal frames whatever the order they
 ``load_terrains(DIR)``: grid values, ``cell``, ``terrain``, ``terrain_seed`` and the class area
 fractions ``area_low``, ``area_semi``, ``area_high`` (Sec. 2.4: inside the 5 m border, before
 the closing).
+
+``load_platforms(DIR)``: one row per platform (:mod:`offroadbench.study.fingerprint`) the stored
+trials ran on, with the sessions and the number of trials; ``trial_platform(DIR, cell, terrain,
+mission)``: the platform and offroadbench version of the session that ran one trial.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import pandas as pd
 
 from offroadbench.study.store import Store
 
-__all__ = ["load", "load_terrains", "load_meta", "TIMING_COLUMNS"]
+__all__ = ["TIMING_COLUMNS", "load", "load_meta", "load_platforms", "load_terrains", "trial_platform"]
 
 #: per-run timings kept in the store but left out of the tidy tables (they differ between runs)
 TIMING_COLUMNS = ("build_s",)
@@ -75,3 +79,44 @@ def load_terrains(run_dir: str | Path) -> pd.DataFrame:
         terrains = pd.DataFrame(columns=["cell", "terrain", "terrain_seed"])
     out = _grid_frame(meta).merge(terrains, on="cell", how="inner")
     return out.sort_values(["cell", "terrain"], kind="stable").reset_index(drop=True)
+
+
+def _trial_runs(store: Store) -> dict[tuple[int, int, int], int | None]:
+    return {(c, t, m): rid for c, t, m, _, _, rid in store.trial_telemetry()}
+
+
+def load_platforms(run_dir: str | Path) -> pd.DataFrame:
+    """The platforms the stored trials came from, most trials first: ``platform`` (one line),
+    ``sessions`` (their ids), ``trials``, ``fingerprint`` (the dict; None when not recorded, as
+    in stores of schema 1) and ``version`` (offroadbench of the first of those sessions)."""
+    from offroadbench.study.fingerprint import describe
+
+    with Store(run_dir) as store:
+        runs = {r["id"]: r for r in store.runs()}
+        trial_runs = _trial_runs(store)
+    groups: dict[str, dict[str, Any]] = {}
+
+    def group(fp: dict[str, Any] | None, version: str | None) -> dict[str, Any]:
+        return groups.setdefault(json.dumps(fp, sort_keys=True), {
+            "platform": describe(fp), "sessions": [], "trials": 0, "fingerprint": fp, "version": version})
+
+    for rid in sorted(runs):
+        group(runs[rid]["platform"], runs[rid]["version"])["sessions"].append(rid)
+    for rid in trial_runs.values():  # a trial of a schema-1 store has no session: "not recorded"
+        r = runs.get(rid)
+        group(r["platform"] if r else None, r["version"] if r else None)["trials"] += 1
+    rows = [g | {"sessions": ", ".join(map(str, g["sessions"])) or "-"} for g in groups.values() if g["trials"]]
+    df = pd.DataFrame(rows, columns=["platform", "sessions", "trials", "fingerprint", "version"])
+    return df.sort_values("trials", ascending=False, kind="stable").reset_index(drop=True)
+
+
+def trial_platform(run_dir: str | Path, cell: int, terrain: int, mission: int
+                   ) -> tuple[dict[str, Any] | None, str | None]:
+    """(platform fingerprint, offroadbench version) of the session that ran a stored trial;
+    (None, None) when that was not recorded (a store of schema 1)."""
+    with Store(run_dir) as store:
+        rid = _trial_runs(store).get((cell, terrain, mission))
+        runs = {r["id"]: r for r in store.runs()}
+    if rid not in runs:
+        return None, None
+    return runs[rid]["platform"], runs[rid]["version"]

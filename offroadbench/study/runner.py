@@ -8,6 +8,7 @@ its pending missions). Tasks are ordered terrain-major (terrain 0 of every cell,
 
 from __future__ import annotations
 
+import errno
 import logging
 import time
 from dataclasses import dataclass
@@ -23,13 +24,14 @@ from offroadbench.errors import InputError
 from offroadbench.io.outputs import missing_dirs
 from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
-from offroadbench.study.store import Store, remove_store
-from offroadbench.study.tasks import TerrainTask, TrialFn
+from offroadbench.study.fingerprint import platform_fingerprint
+from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
+from offroadbench.study.tasks import TerrainTask, TrialFn, keeps_telemetry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "plan_tasks", "run_study", "study_meta", "telemetry_paths", "save_trial_telemetry",
-           "worker_memory_bytes"]
+__all__ = ["RunSummary", "StudyEstimate", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+           "save_trial_telemetry", "worker_memory_bytes"]
 
 
 
@@ -39,15 +41,45 @@ def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) 
     return stem.with_name(stem.name + ".parquet"), stem.with_name(stem.name + "_path.parquet")
 
 
-def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> None:
-    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files)."""
+def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> list[str]:
+    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files); returns
+    their paths relative to ``run_dir``, as the trial's row in the store names them. A file that
+    cannot be written (a full disk) is a StudyError naming it; the trial is then not stored."""
     from offroadbench.io.telemetry import save_telemetry
 
     tel_path, path_path = telemetry_paths(run_dir, cell, terrain, mission)
-    tel_path.parent.mkdir(exist_ok=True)
-    save_telemetry(kept["telemetry"], tel_path)
-    xy = kept["path_xy"]
-    save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path)
+    try:
+        tel_path.parent.mkdir(exist_ok=True)
+        save_telemetry(kept["telemetry"], tel_path, sweep=False)  # the run swept its directory at the start
+        xy = kept["path_xy"]
+        save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path, sweep=False)
+    except (OSError, InputError) as exc:
+        if isinstance(exc, InputError):
+            why = str(exc)
+        else:
+            why = "no space left on the device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+        raise StudyError(f"cannot write the telemetry of cell {cell}, terrain {terrain}, mission {mission} "
+                         f"in {tel_path.parent} ({why})") from None
+    return [str(q.relative_to(run_dir)) for q in (tel_path, path_path)]
+
+
+def repair_telemetry(store: Store, run_dir: Path, setting: str) -> list[tuple[int, int, int]]:
+    """Drop the stored trials whose telemetry files are missing, so this run does them again.
+
+    A row names its files (schema 2); a row of a schema-1 store (which committed the row before
+    writing the files) is expected to have them when ``setting`` keeps its telemetry. Returns the
+    (cell, terrain, mission) keys dropped."""
+    missing = []
+    for cell, terrain, mission, success, files, run_id in store.trial_telemetry():
+        if files is None:
+            files = ([str(q.relative_to(run_dir)) for q in telemetry_paths(run_dir, cell, terrain, mission)]
+                     if keeps_telemetry(setting, success) else [])
+        if any(not (run_dir / f).is_file() for f in files):
+            missing.append((cell, terrain, mission, run_id))
+    if missing:
+        log.warning("%s: %d stored trial(s) have no telemetry files; running them again", run_dir, len(missing))
+        store.drop_trials(missing)
+    return [k[:3] for k in missing]
 
 
 @dataclass(frozen=True)
@@ -82,6 +114,91 @@ def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, i
                 tasks.append(TerrainTask(cell=plan, terrain=j, terrain_seed=tseed, missions=pending,
                                          telemetry=study.telemetry))
     return tasks
+
+
+#: the per-trial wall-clock limit by default: this many seconds (a terrain build, planning) plus
+TRIAL_LIMIT_BASE_S = 300.0
+#: ... this many wall seconds per simulated second of a trial's timeout (a real-time factor of 0.1,
+#: against the 25-80 measured: benchmarks/RESULTS.md), plus
+TRIAL_LIMIT_PER_SIM_S = 10.0
+#: ... this many seconds per map cell (building and classifying large maps)
+TRIAL_LIMIT_PER_CELL_S = 20e-6
+#: a planned path may be this many times the mission length (detours) in the default limit
+PATH_ALLOWANCE = 3.0
+
+
+def default_trial_timeout_s(plans: list[CellPlan]) -> float:
+    """The default per-trial wall-clock limit of a study, seconds: generous against the nominal
+    time (``rules.timeout_factor * PATH_ALLOWANCE * mission length / speed`` simulated seconds at
+    a real-time factor of 0.1, plus the terrain build), so only a hung trial reaches it."""
+    worst = 0.0
+    for p in plans:
+        rules, missions, ctrl = p.section("rules"), p.section("missions"), p.section("controller")
+        speed = min(ctrl.cruise_speed_m_s, p.section("vehicle").max_speed_m_s)
+        sim_s = rules.timeout_factor * PATH_ALLOWANCE * missions.length_m / speed
+        cells = int(p.recipe_data["grid"]["rows"]) * int(p.recipe_data["grid"]["cols"])
+        worst = max(worst, TRIAL_LIMIT_BASE_S + TRIAL_LIMIT_PER_SIM_S * sim_s + TRIAL_LIMIT_PER_CELL_S * cells)
+    return worst
+
+
+#: assumed real-time factor of a trial in a study's size estimate (25-80 measured on 2 cores,
+#: benchmarks/RESULTS.md; the estimate stays on the long side)
+ESTIMATE_RTF = 20.0
+#: assumed seconds to build and classify one terrain in the size estimate (a 1009^2 paper map)
+ESTIMATE_TERRAIN_S = 10.0
+#: ``study run`` refuses, without --force, a study of more grid cells than this ...
+MAX_CELLS = 10_000
+#: ... or of more estimated CPU time than this, seconds (7 CPU-days)
+MAX_CPU_S = 7 * 86400.0
+
+
+@dataclass(frozen=True)
+class StudyEstimate:
+    """The size of a study, known before its cells are resolved (:func:`estimate_study`)."""
+
+    cells: int
+    trials: int
+    cpu_s: float
+    """Estimated CPU time: trials x nominal simulated time / ESTIMATE_RTF + terrains x ESTIMATE_TERRAIN_S."""
+
+    def describe(self) -> str:
+        return (f"{self.cells} grid cell(s), {self.trials} trial(s), about {self.cpu_s / 3600:.3g} CPU-hours "
+                f"(trials at a real-time factor of {ESTIMATE_RTF:g}, {ESTIMATE_TERRAIN_S:g} s per terrain)")
+
+
+def estimate_study(study: StudyConfig) -> StudyEstimate:
+    """Cells, trials and CPU time of ``study`` from its config alone (no cell is resolved, so a
+    grid of a million values is judged in seconds). The nominal simulated time of a trial is
+    ``mission length / cruise speed`` with the longest length and slowest speed of the grid."""
+    from offroadbench.navigation.missions import MissionConfig
+    from offroadbench.sim.config import ControllerConfig
+
+    def values(key: str, default: float) -> list[float]:
+        for axis in study.grid:
+            if axis.key == key:
+                return [float(v) for v in axis.values]
+        table, field = key.split(".")
+        return [float(study.settings.get(table, {}).get(field, default))]
+
+    try:
+        length = max(values("missions.length_m", MissionConfig().length_m))
+        speed = min(values("controller.cruise_speed_m_s", ControllerConfig().cruise_speed_m_s))
+        sim_s = length / speed if speed > 0 else float("inf")
+    except (TypeError, ValueError):  # not numbers: resolving the cells will name the bad value
+        sim_s = 0.0
+    terrains = study.n_cells * study.terrains_per_cell
+    cpu = study.n_trials * sim_s / ESTIMATE_RTF + terrains * ESTIMATE_TERRAIN_S
+    return StudyEstimate(cells=study.n_cells, trials=study.n_trials, cpu_s=cpu)
+
+
+def check_study_size(study: StudyConfig, force: bool = False) -> StudyEstimate:
+    """Refuse (InputError with the estimate) a study beyond MAX_CELLS or MAX_CPU_S unless ``force``."""
+    est = estimate_study(study)
+    if not force and (est.cells > MAX_CELLS or not est.cpu_s <= MAX_CPU_S):
+        raise InputError(f"study {study.name!r}: {est.describe()}; more than the {MAX_CELLS} cells or "
+                         f"{MAX_CPU_S / 86400:g} CPU-days run without --force: check the grid and the mission "
+                         "length, or give --force to run it anyway")
+    return est
 
 
 def worker_memory_bytes(plans: list[CellPlan]) -> int:
@@ -163,23 +280,36 @@ def run_study(
     re-raises KeyboardInterrupt; what was committed stays. A run that fails before its first
     trial removes the store (and the directories) it created; one that fails later keeps every
     committed trial and its error says how to resume. ``executor_options`` go to the executor
-    (e.g. ``trial_timeout_s`` for dask).
+    (``trial_timeout_s``: the per-trial wall-clock limit of the ``local`` and ``dask`` executors,
+    default :func:`default_trial_timeout_s`).
     """
-    ex = get_executor(executor, workers, scheduler, **dict(executor_options or {}))
+    options = dict(executor_options or {})
+    if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
+        options["trial_timeout_s"] = default_trial_timeout_s(plans)
+    ex = get_executor(executor, workers, scheduler, **options)
     version = code_version()
+    fingerprint = platform_fingerprint()
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
     made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
-    store = Store(run_dir, create=True)
+    lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
+    try:
+        remove_stale_temp_files(run_dir)
+        store = Store(run_dir, create=True)
+    except BaseException:
+        lock.release()
+        _remove_dirs(made_dirs)
+        raise
     ran = 0
     running = False
     try:
         store.init_meta(study_meta(study, plans, source_text, version))
+        repair_telemetry(store, run_dir, study.telemetry)
         tasks = plan_tasks(study, plans, store.done_trials())
         total = study.n_trials
         done, _ = store.counts()
         report(progress, done, total)
-        run_id = store.start_run(executor, ex.workers, version)
+        run_id = store.start_run(executor, ex.workers, version, fingerprint)
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
         def handle(msg: tuple) -> None:
@@ -189,27 +319,29 @@ def run_study(
                 store.add_terrain(cell, terrain, tseed, stats)
                 return
             _, cell, terrain, mission, tseed, mseed, row, kept = msg
-            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id):
-                if kept is not None:
-                    save_trial_telemetry(run_dir, cell, terrain, mission, kept)
+            files: list[str] = []
+            if kept is not None and not store.has_trial(cell, terrain, mission):
+                # the files first, then the row that names them: a stored trial has its telemetry
+                files = save_trial_telemetry(run_dir, cell, terrain, mission, kept)
+            if store.add_trial(cell, terrain, mission, tseed, mseed, row, run_id=run_id, telemetry=files):
                 ran += 1
                 done += 1
                 if on_trial is not None:
                     on_trial(row)
                 report(progress, done, total)
 
-        status = "interrupted"
+        status, error = "interrupted", None
         running = True
         try:
             ex.run(tasks, trial_fn, handle)
             status = "finished"
         except KeyboardInterrupt:
             raise
-        except BaseException:
-            status = "failed"
+        except BaseException as exc:
+            status, error = "failed", f"{type(exc).__name__}: {exc}"
             raise
         finally:
-            store.finish_run(run_id, status)
+            store.finish_run(run_id, status, error)
         done, successes = store.counts()
     except BaseException as exc:
         stored = store.counts()[0]
@@ -217,12 +349,10 @@ def run_study(
         if store.created and stored == 0:
             # failed before any trial: leave no store (and no directory) behind
             remove_store(run_dir)
-            for d in made_dirs:
-                try:
-                    d.rmdir()
-                except OSError:
-                    break
+            lock.release()
+            _remove_dirs(made_dirs)
             raise
+        lock.release()
         if running and isinstance(exc, (StudyError, InputError)) and stored:
             # keep every finished trial and say how to go on
             hint = (f"{stored} of {study.n_trials} trials are saved in {run_dir}; "
@@ -230,6 +360,22 @@ def run_study(
             raise type(exc)(f"{exc}; {hint}") from None
         raise
     store.close()
+    lock.release()
     return RunSummary(
         run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
     )
+
+
+def _remove_dirs(made: list[Path]) -> None:
+    """Remove the (empty) directories a failed run created, deepest first."""
+    for d in made:
+        try:
+            (d / "telemetry").rmdir()
+        except OSError:
+            pass
+        try:
+            d.rmdir()
+        except OSError:
+            break
+
+

@@ -7,14 +7,26 @@ Tables (``study.sqlite``):
   the store.
 * ``terrains(cell, terrain, terrain_seed, stats)``: one row per built terrain; ``stats`` is JSON
   (class area fractions of Sec. 2.4, missions sampled, build time).
-* ``trials(cell, terrain, mission, terrain_seed, mission_seed, success, row)``: one row per
-  finished trial; ``row`` is the JSON of ``TrialResult.as_row()``.
+* ``trials(cell, terrain, mission, terrain_seed, mission_seed, success, row, telemetry, run_id)``:
+  one row per finished trial; ``row`` is the JSON of ``TrialResult.as_row()``; ``telemetry`` is
+  the JSON list of the trial's telemetry files (relative to the run directory; ``[]`` when none
+  was kept; NULL in stores of schema 1); ``run_id`` is the session that ran it.
 * ``runs``: one row per ``study run`` session (start, end, executor, workers, trials run, host,
-  version): the wall time of the study is read from here.
+  version, and since schema 2 the ``platform`` fingerprint of :mod:`offroadbench.study.fingerprint`
+  as JSON): the wall time of the study, and the platforms its trials came from, are read here.
 
-Safety. Only the coordinating process writes. Every trial is its own transaction, committed
-the moment its result arrives; the primary key (cell, terrain, mission) makes a second copy
-impossible. WAL journal with ``synchronous=NORMAL``: a killed process (SIGKILL included)
+Schema versions. 1: the tables above without ``trials.telemetry``, ``trials.run_id`` and
+``runs.platform`` and ``runs.error``. 2: with them (``error``: the one-line reason a failed
+session stopped, e.g. a plug-in fault). A run (``Store(..., create=True)``) migrates a schema-1 store in
+place (three ``ALTER TABLE ... ADD COLUMN``, in one transaction); readers accept both.
+
+Safety. Only the coordinating process writes, and only while it holds the run directory's lock
+(:class:`RunLock`: ``fcntl.flock`` on ``study.lock``, released by the kernel when the process
+dies), so two runs never share a store. A new store is built under a temporary name and linked
+into place complete (a killed or failed creation leaves no ``study.sqlite``). Every trial is its
+own transaction, committed the moment its result arrives, after its telemetry files are written
+(the row names them), so a stored trial's telemetry exists; the primary key (cell, terrain,
+mission) makes a second copy impossible. WAL journal with ``synchronous=NORMAL``: a killed process (SIGKILL included)
 loses no committed row and leaves a consistent database; only a power cut may lose the last
 few commits. A trial that was in flight when the process died has no row, so the next run
 does it again.
@@ -22,11 +34,13 @@ does it again.
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
 import platform
 import sqlite3
+import tempfile
 import time
 from pathlib import Path
 from typing import Any, Mapping
@@ -35,12 +49,15 @@ from offroadbench.errors import InputError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["STORE_NAME", "SCHEMA_VERSION", "Store", "store_path", "remove_store"]
+__all__ = ["LOCK_NAME", "SCHEMA_VERSION", "STORE_NAME", "RunDirLocked", "RunLock", "Store", "remove_stale_temp_files",
+           "remove_store", "store_path"]
 
 STORE_NAME = "study.sqlite"
+#: the lock file of a run directory (see :class:`RunLock`)
+LOCK_NAME = "study.lock"
 
 #: schema version written to ``PRAGMA user_version``; a store with a higher one is refused
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 #: ``PRAGMA application_id`` of an offroadbench store ("ORB1"); stores made before it was set have 0
 APPLICATION_ID = 0x4F524231
 _TABLES = ("meta", "terrains", "trials", "runs")
@@ -54,12 +71,15 @@ CREATE TABLE IF NOT EXISTS terrains (
 CREATE TABLE IF NOT EXISTS trials (
     cell INTEGER NOT NULL, terrain INTEGER NOT NULL, mission INTEGER NOT NULL,
     terrain_seed INTEGER NOT NULL, mission_seed INTEGER NOT NULL, success INTEGER NOT NULL,
-    row TEXT NOT NULL, PRIMARY KEY (cell, terrain, mission));
+    row TEXT NOT NULL, telemetry TEXT, run_id INTEGER, PRIMARY KEY (cell, terrain, mission));
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
     executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
-    host TEXT, machine TEXT, version TEXT);
+    host TEXT, machine TEXT, version TEXT, platform TEXT, error TEXT);
 """
+#: columns added by schema 2, per table: (name, SQL type)
+_SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
+                    "runs": (("platform", "TEXT"), ("error", "TEXT"))}
 
 
 def store_path(run_dir: str | Path) -> Path:
@@ -82,25 +102,49 @@ class Store:
         self.created = False
         if path.is_dir():
             raise InputError(f"{path}: is a directory, not a study store")
+        if create and path.is_file() and path.stat().st_size == 0:
+            # left by an offroadbench older than atomic creation: it holds nothing; a run (which
+            # holds the directory's lock) replaces it
+            log.warning("%s: is empty (a store whose creation failed); making a new one", path)
+            path.unlink()
         if not path.exists():
             if not create:
                 raise InputError(f"{self.run_dir}: no study results here (no {STORE_NAME})")
             if self.run_dir.exists() and not self.run_dir.is_dir():
                 raise InputError(f"--out {self.run_dir} is a file; give a directory")
             self.run_dir.mkdir(parents=True, exist_ok=True)
-            self.created = True
+            self.created = _create_store(path)
+            if not self.created:  # another process linked its store in first
+                _check_existing(path)
         else:
             _check_existing(path)
         try:
             self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
-            if self.created:
-                self.con.execute(f"PRAGMA application_id={APPLICATION_ID}")
-                self.con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
-                self.con.execute("PRAGMA journal_mode=WAL")
-                self.con.executescript(_SCHEMA)
             self.con.execute("PRAGMA synchronous=NORMAL")
+            if create:
+                self._migrate()
+            self.columns = {t: {r[1] for r in self.con.execute(f"PRAGMA table_info({t})")} for t in ("trials", "runs")}
         except sqlite3.DatabaseError as exc:
             raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
+
+    def _migrate(self) -> None:
+        """Bring a schema-1 store to schema 2 (new nullable columns), in one transaction."""
+        (version,) = self.con.execute("PRAGMA user_version").fetchone()
+        if version >= SCHEMA_VERSION:
+            return
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            for table, columns in _SCHEMA2_COLUMNS.items():
+                have = {r[1] for r in self.con.execute(f"PRAGMA table_info({table})")}
+                for name, kind in columns:
+                    if name not in have:
+                        self.con.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
+            self.con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+            self.con.execute("COMMIT")
+        except BaseException:
+            self.con.execute("ROLLBACK")
+            raise
+        log.info("%s: store schema %d migrated to %d", self.path, version, SCHEMA_VERSION)
 
     def __enter__(self) -> "Store":
         return self
@@ -147,19 +191,22 @@ class Store:
         )
 
     def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping,
-                  run_id: int | None = None) -> bool:
+                  run_id: int | None = None, telemetry: list[str] | None = None) -> bool:
         """Commit one trial at once. Returns False (and stores nothing) if it was already there.
 
-        With ``run_id`` the session's ``trials_run`` counter is raised in the same transaction, so
-        a process killed at any instant leaves the counters summing to the stored trials.
+        ``telemetry`` lists the trial's telemetry files, relative to the run directory, which the
+        caller has written completely before (``[]``: none kept). With ``run_id`` the session's
+        ``trials_run`` counter is raised in the same transaction, so a process killed at any
+        instant leaves the counters summing to the stored trials.
         """
         text = json.dumps(dict(row))
+        files = json.dumps(list(telemetry or []))
         self.con.execute("BEGIN IMMEDIATE")
         try:
             cur = self.con.execute(
-                "INSERT OR IGNORE INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?)",
-                (cell, terrain, mission, terrain_seed, mission_seed, int(bool(row["success"])), text),
+                "INSERT OR IGNORE INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row, "
+                "telemetry, run_id) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (cell, terrain, mission, terrain_seed, mission_seed, int(bool(row["success"])), text, files, run_id),
             )
             if cur.rowcount and run_id is not None:
                 self.con.execute("UPDATE runs SET finished=?, trials_run=trials_run+1 WHERE id=?", (time.time(), run_id))
@@ -175,6 +222,36 @@ class Store:
                 log.warning("trial (%d, %d, %d) ran twice with different results", cell, terrain, mission)
             return False
         return True
+
+    def has_trial(self, cell: int, terrain: int, mission: int) -> bool:
+        return self.con.execute("SELECT 1 FROM trials WHERE cell=? AND terrain=? AND mission=?",
+                                (cell, terrain, mission)).fetchone() is not None
+
+    def trial_telemetry(self) -> list[tuple[int, int, int, bool, list[str] | None, int | None]]:
+        """(cell, terrain, mission, success, telemetry files or None in a schema-1 row, run_id) of every trial."""
+        tel = "telemetry" if "telemetry" in self.columns["trials"] else "NULL"
+        rid = "run_id" if "run_id" in self.columns["trials"] else "NULL"
+        out = []
+        for cell, terrain, mission, success, files, run_id in self.con.execute(
+                f"SELECT cell, terrain, mission, success, {tel}, {rid} FROM trials ORDER BY cell, terrain, mission"):
+            out.append((cell, terrain, mission, bool(success), None if files is None else json.loads(files), run_id))
+        return out
+
+    def drop_trials(self, keys: list[tuple[int, int, int, int | None]]) -> None:
+        """Delete trials ((cell, terrain, mission, run_id)) so the next run does them again; the
+        sessions that ran them count them no more. One transaction."""
+        if not keys:
+            return
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            for cell, terrain, mission, run_id in keys:
+                cur = self.con.execute("DELETE FROM trials WHERE cell=? AND terrain=? AND mission=?", (cell, terrain, mission))
+                if cur.rowcount and run_id is not None:
+                    self.con.execute("UPDATE runs SET trials_run=MAX(trials_run-1, 0) WHERE id=?", (run_id,))
+            self.con.execute("COMMIT")
+        except BaseException:
+            self.con.execute("ROLLBACK")
+            raise
 
     def done_trials(self) -> set[tuple[int, int, int]]:
         return {tuple(r) for r in self.con.execute("SELECT cell, terrain, mission FROM trials")}
@@ -195,22 +272,174 @@ class Store:
         return int(n), int(s)
 
     # ------------------------------------------------------------------ run sessions
-    def start_run(self, executor: str, workers: int, version: str) -> int:
+    def start_run(self, executor: str, workers: int, version: str, fingerprint: Mapping[str, Any] | None = None) -> int:
+        """Open a session; ``fingerprint`` is the platform the trials of this session run on."""
         cur = self.con.execute(
-            "INSERT INTO runs (started, executor, workers, status, host, machine, version) "
-            "VALUES (?, ?, ?, 'running', ?, ?, ?)",
-            (time.time(), executor, workers, platform.node(), machine_description(), version),
+            "INSERT INTO runs (started, executor, workers, status, host, machine, version, platform) "
+            "VALUES (?, ?, ?, 'running', ?, ?, ?, ?)",
+            (time.time(), executor, workers, platform.node(), machine_description(), version,
+             None if fingerprint is None else json.dumps(dict(fingerprint), sort_keys=True)),
         )
         return int(cur.lastrowid)
 
-    def finish_run(self, run_id: int, status: str) -> None:
-        """Close a session. Its ``trials_run`` was counted by :meth:`add_trial`, trial by trial."""
-        self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
+    def finish_run(self, run_id: int, status: str, error: str | None = None) -> None:
+        """Close a session (``error``: why it failed, one line). Its ``trials_run`` was counted by
+        :meth:`add_trial`, trial by trial."""
+        if error is not None and "error" in self.columns["runs"]:
+            self.con.execute("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
+                             (time.time(), status, " ".join(error.split())[:2000], run_id))
+        else:
+            self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
 
     def runs(self) -> list[dict[str, Any]]:
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
         names = [d[0] for d in cur.description]
-        return [dict(zip(names, r)) for r in cur.fetchall()]
+        out = [dict(zip(names, r)) for r in cur.fetchall()]
+        for r in out:  # the fingerprint as a dict (None in sessions of schema-1 stores)
+            r["platform"] = json.loads(r["platform"]) if r.get("platform") else None
+        return out
+
+
+def _create_store(path: Path) -> bool:
+    """Build an empty store of the current schema under a temporary name beside ``path`` and link
+    it into place. Returns False if ``path`` appeared meanwhile (it is left alone). A failure (a
+    full disk) raises an InputError naming the path and leaves no file behind."""
+    tmp = None
+    try:
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        tmp = Path(name)
+        con = sqlite3.connect(tmp, isolation_level=None)
+        try:
+            con.execute(f"PRAGMA application_id={APPLICATION_ID}")
+            con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+            con.execute("PRAGMA journal_mode=WAL")  # kept in the file header
+            con.executescript(_SCHEMA)
+        finally:
+            con.close()  # checkpoints and removes the temporary -wal/-shm
+        os.chmod(tmp, 0o666 & ~_umask())
+        try:
+            os.link(tmp, path)  # never replaces: a store made meanwhile by someone else wins
+        except FileExistsError:
+            return False
+        return True
+    except OSError as exc:
+        raise InputError(f"{path}: cannot create the study store ({_reason(exc)})") from None
+    except sqlite3.DatabaseError as exc:
+        if "full" in str(exc).lower():
+            raise InputError(f"{path}: cannot create the study store (no space left on the device)") from None
+        raise
+    finally:
+        if tmp is not None:
+            for q in (tmp, tmp.with_name(tmp.name + "-wal"), tmp.with_name(tmp.name + "-shm"),
+                      tmp.with_name(tmp.name + "-journal")):
+                q.unlink(missing_ok=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _reason(exc: OSError) -> str:
+    if exc.errno == errno.ENOSPC:
+        return "no space left on the device"
+    return exc.strerror or str(exc)
+
+
+class RunDirLocked(InputError):
+    """Another live process holds the run directory's lock."""
+
+
+class RunLock:
+    """An exclusive, OS-level lock on a run directory while a study runs in it.
+
+    ``fcntl.flock`` on ``DIR/study.lock``, which holds the owner's pid. The kernel releases the
+    lock when the process ends, however it ends (SIGKILL included), so a stale lock never blocks a
+    later run. A second process is refused at once with :class:`RunDirLocked`: "a study is running
+    in DIR (pid N)". The directory is created if missing. On release the lock file is removed
+    while still locked; a process that opened it just before re-checks, after locking, that it
+    locked the file that is at the path, and otherwise tries again.
+    """
+
+    def __init__(self, run_dir: str | Path) -> None:
+        self.run_dir = Path(run_dir)
+        self.path = self.run_dir / LOCK_NAME
+        self.fd: int | None = None
+
+    def acquire(self) -> RunLock:
+        import fcntl
+
+        for _ in range(100):
+            try:
+                self.run_dir.mkdir(parents=True, exist_ok=True)
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
+            except FileNotFoundError:  # the directory was removed by a run that failed meanwhile
+                continue
+            except OSError as exc:
+                raise InputError(f"{self.path}: cannot create the run directory's lock file ({_reason(exc)})") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                pid = self._read_pid(fd)
+                os.close(fd)
+                raise RunDirLocked(f"a study is running in {self.run_dir} (pid {pid}); wait for it to end "
+                                   "or use another --out directory") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if not same:  # locked a file its owner removed as it released it: try again
+                os.close(fd)
+                continue
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            self.fd = fd
+            return self
+        raise RunDirLocked(f"{self.run_dir}: could not lock the run directory (other runs keep starting and stopping)")
+
+    @staticmethod
+    def _read_pid(fd: int) -> str:
+        for _ in range(50):  # the owner writes its pid just after it locks
+            text = os.pread(fd, 32, 0).decode(errors="replace").strip()
+            if text:
+                return text
+            time.sleep(0.01)
+        return "unknown"
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        try:
+            self.path.unlink(missing_ok=True)
+        finally:
+            os.close(self.fd)  # closing the last descriptor releases the flock
+            self.fd = None
+
+    def __enter__(self) -> RunLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def remove_stale_temp_files(run_dir: str | Path) -> list[Path]:
+    """Remove the temporary files a killed run left in ``run_dir`` and its ``telemetry`` folder
+    (``.NAME.XXXX.tmp`` of :func:`offroadbench.io.atomic.atomic_path` and of store creation).
+    Call only while holding the directory's :class:`RunLock`. Returns what was removed."""
+    removed = []
+    for d in (Path(run_dir), Path(run_dir) / "telemetry"):
+        if not d.is_dir():
+            continue
+        for q in d.iterdir():
+            name = q.name
+            if name.startswith(".") and (name.endswith(".tmp") or ".tmp-" in name) and q.is_file():
+                q.unlink(missing_ok=True)
+                removed.append(q)
+    if removed:
+        log.info("%s: removed %d temporary file(s) of an earlier run", run_dir, len(removed))
+    return removed
 
 
 def _check_existing(path: Path) -> None:

@@ -107,8 +107,6 @@ def base(tmp_path_factory) -> Path:
     (b / "corrupt" / "study.sqlite").write_bytes(bytes(db))
     (b / "notdb").mkdir()
     (b / "notdb" / "study.sqlite").write_text("hello, I am a text file\n")
-    (b / "emptydb").mkdir()
-    (b / "emptydb" / "study.sqlite").write_bytes(b"")
     (b / "foreign").mkdir()
     con = sqlite3.connect(b / "foreign" / "study.sqlite")
     con.execute("CREATE TABLE photos (id INTEGER, name TEXT)")
@@ -116,6 +114,18 @@ def base(tmp_path_factory) -> Path:
     con.close()
     _store(b / "other")
     _store(b / "newer", user_version=99)
+    # issue 23: hostile files
+    _png16(b / "deepjson.png", sidecar="[" * 100_000 + "]" * 100_000)
+    _png16(b / "digits.png", sidecar='{"cell_size_m": ' + "9" * 5000 + ', "z_min_m": 0, "z_max_m": 1}')
+    _png16(b / "mixed.png")
+    _png16(b / "other.png", rows=45)
+    (b / "mixed.json").write_text((b / "other.json").read_text())  # a sidecar of another write
+    (b / "deep.toml").write_text("a = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    for stem, name in (("dotdot", ".."), ("newline", "a\\nb"), ("nul", "a\\u0000b"), ("slash", "a/b")):
+        (b / f"{stem}.toml").write_text(STUDY.format(length=2.0).replace('name = "fuzz"', f'name = "{name}"'))
+    big = ", ".join(repr(2.0 + 1e-6 * i) for i in range(20_001))
+    (b / "huge.toml").write_text(STUDY.format(length=2.0).replace('"recipe.layers.base.D_high" = [2.3]',
+                                                                   f'"missions.length_m" = [{big}]'))
     return b
 
 
@@ -193,12 +203,24 @@ CASES = [
     ("run-scheduler-local", ["study", "run", "study.toml", "--scheduler", "tcp://127.0.0.1:1", "--out", "r"]),
     ("run-corrupt-store", ["study", "run", "study.toml", "--out", "corrupt"]),
     ("run-text-store", ["study", "run", "study.toml", "--out", "notdb"]),
-    ("run-empty-store", ["study", "run", "study.toml", "--out", "emptydb"]),
+    # (a 0-byte study.sqlite is no longer refused: stores are created atomically, and a run that
+    # holds the directory's lock replaces such a leftover of an older version; tests/study/test_lock.py)
     ("run-foreign-store", ["study", "run", "study.toml", "--out", "foreign"]),
     ("run-newer-store", ["study", "run", "study.toml", "--out", "newer"]),
     ("run-other-study", ["study", "run", "study.toml", "--out", "other"]),
     ("run-out-proc", ["study", "run", "study.toml", "--out", "/proc/offroadbench"]),
     ("run-no-mission-possible", ["study", "run", "far.toml", "--workers", "1", "--out", "new/far"]),
+    ("run-toml-deep", ["study", "run", "deep.toml", "--out", "r"]),
+    ("run-name-dotdot", ["study", "run", "dotdot.toml"]),
+    ("run-name-newline", ["study", "run", "newline.toml"]),
+    ("run-name-nul", ["study", "run", "nul.toml"]),
+    ("run-name-slash", ["study", "run", "slash.toml"]),
+    ("run-huge-grid", ["study", "run", "huge.toml", "--out", "r"]),
+    ("run-timeout-inline", ["study", "run", "study.toml", "--executor", "inline", "--trial-timeout-s", "5", "--out", "r"]),
+    ("gen-recipe-deep", ["generate", "deep.toml", "-o", "o.png"]),
+    ("ana-sidecar-deep", ["analyze", "deepjson.png"]),
+    ("ana-sidecar-digits", ["analyze", "digits.png"]),
+    ("ana-sidecar-of-another-png", ["analyze", "mixed.png"]),
     # study export / report
     ("sexp-not-a-run", ["study", "export", "adir"]),
     ("sexp-corrupt", ["study", "export", "corrupt"]),

@@ -98,6 +98,8 @@ def test_failed_last_move_restores_the_previous_export(fmt, hm, tmp_path, monkey
         return real_replace(src, dst)
 
     monkeypatch.setattr(_staging.os, "replace", flaky)
+    # the file-by-file fallback (the one-step directory swap: tests/io/test_all_or_nothing.py)
+    monkeypatch.setattr(_staging, "_exchange", lambda a, b: False)
     with pytest.raises(OSError):
         export_heightmap(hm.with_z(hm.z * 2 + 1), fmt, tmp_path, name="t")
     assert _snapshot(tmp_path) == before

@@ -18,6 +18,7 @@ from offroadbench import Heightmap, InputError
 from offroadbench.cli import main
 from offroadbench.io import export as ex
 from offroadbench.io.export import EXPORTERS, export_heightmap
+from offroadbench.io.export import _staging as staging
 from offroadbench.io.export._staging import os as staging_os
 from offroadbench.io.export.gazebo import gazebo_grid_size
 from offroadbench.io.export.grid import read_grid
@@ -290,7 +291,8 @@ def test_failed_move_into_existing_directory_is_rolled_back(hm, tmp_path, monkey
         return real_replace(src, dst)
 
     monkeypatch.setattr(staging_os, "replace", flaky)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(staging, "_exchange", lambda a, b: False)  # the file-by-file fallback
+    with pytest.raises(OSError, match="No space left"):
         export_heightmap(hm, "gazebo", tmp_path, name="g")
     assert listing(tmp_path) == []
 
@@ -308,7 +310,8 @@ def test_failed_move_restores_the_files_it_replaced(hm, tmp_path, monkeypatch):
         return real_replace(src, dst)
 
     monkeypatch.setattr(staging_os, "replace", flaky)
-    with pytest.raises(OSError):
+    monkeypatch.setattr(staging, "_exchange", lambda a, b: False)  # the file-by-file fallback
+    with pytest.raises(OSError, match="No space left"):
         export_heightmap(hm.with_z(hm.z * 2), "gazebo", tmp_path, name="g")
     assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]

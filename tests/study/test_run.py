@@ -142,7 +142,7 @@ def test_store_never_holds_a_trial_twice(tmp_path):
     con = sqlite3.connect(tmp_path / "study.sqlite")
     assert con.execute("PRAGMA integrity_check").fetchone() == ("ok",)
     with pytest.raises(sqlite3.IntegrityError):
-        con.execute("INSERT INTO trials VALUES (0, 0, 0, 1, 2, 1, '{}')")
+        con.execute("INSERT INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) VALUES (0, 0, 0, 1, 2, 1, '{}')")
 
 
 def test_unknown_executor_and_bad_worker_count_are_refused(tmp_path):

@@ -35,7 +35,7 @@ from offroadbench.io.export._staging import staged_dir
 from offroadbench.io.outputs import check_output_dir
 from offroadbench.registry import Registry
 
-__all__ = ["EXPORTERS", "Exporter", "ExportResult", "check_name", "check_output_dir", "export_heightmap", "read_export"]
+__all__ = ["EXPORTERS", "Exporter", "ExportResult", "check_name", "check_output_dir", "export_heightmap", "read_export", "staged_dir"]
 
 log = logging.getLogger(__name__)
 
