@@ -14,10 +14,12 @@ import pandas as pd
 from offroadbench.cli._common import (
     bar,
     check_output_dir,
+    check_output_file,
     created_dirs,
     format_table,
     load_heightmap_arg,
     positive_float,
+    nonnegative_float,
     positive_int,
     save_figure,
     seed_arg,
@@ -30,13 +32,17 @@ _TABLE = (
     ("outcome", "outcome"),
     ("traversal_time_s", "time_s"),
     ("path_length_m", "path_m"),
-    ("max_abs_roll_deg", "max_roll"),
-    ("max_abs_pitch_deg", "max_pitch"),
-    ("rms_vertical_accel_m_s2", "rms_az"),
-    ("rms_pitch_rate_deg_s", "rms_pitch_rate"),
-    ("rms_roll_rate_deg_s", "rms_roll_rate"),
-    ("max_penetration_mm", "pen_mm"),
+    ("max_abs_roll_deg", "max_roll_deg"),
+    ("max_abs_pitch_deg", "max_pitch_deg"),
+    ("rms_vertical_accel_m_s2", "rms_az_m_s2"),
+    ("rms_pitch_rate_deg_s", "rms_pitch_rate_deg_s"),
+    ("rms_roll_rate_deg_s", "rms_roll_rate_deg_s"),
+    ("max_penetration_mm", "max_pen_mm"),
 )
+
+#: ``--set`` prefixes that reach a settings table (a study's tables of the same name); other keys
+#: are recipe keys
+SET_SECTIONS = ("sim", "controller", "rules", "roughness", "vehicle", "planner")
 
 
 def format_drive_run(run, label: str) -> str:
@@ -48,7 +54,8 @@ def format_drive_run(run, label: str) -> str:
     medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
         f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
-        f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz",
+        f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz, "
+        f"gravity {run.sim.gravity_m_s2:g} m/s^2",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
         f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
@@ -56,8 +63,37 @@ def format_drive_run(run, label: str) -> str:
     ])
 
 
-def write_drive_run(run, out: Path, label: str, plot: bool) -> list[str]:
-    """trials.csv, telemetry/mission_NNN.npz and (with ``plot``) the figures; returns what was written."""
+def _plot_paths(out: Path | None, plot: str | bool) -> dict[str, Path]:
+    """The figure files of ``--plot``: bare, in the ``--out`` directory; ``--plot PATH``, the
+    trajectories figure at PATH and the missions and time-series figures beside it."""
+    if plot is True:
+        return {k: out / f"{k}.png" for k in ("missions", "trajectories", "timeseries")}
+    p = Path(plot)
+    return {"trajectories": p, "missions": p.with_name(f"{p.stem}_missions{p.suffix}"),
+            "timeseries": p.with_name(f"{p.stem}_timeseries{p.suffix}")}
+
+
+def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
+    """The missions, trajectories and time-series figures of a DriveRun."""
+    from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
+
+    hm, closed, border = run.heightmap, run.closed, run.mission_config.border_m
+    shown = next((r for r in run.results if r.success), run.results[0])
+    with created_dirs(*{p.parent for p in paths.values()}):
+        save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
+                    paths["missions"])
+        save_figure(plot_trajectories(hm, closed, run.missions, run.telemetry, run.results, border_m=border,
+                                      paths=run.paths, title=f"{label}: trajectories ({run.planner})"),
+                    paths["trajectories"])
+        save_figure(plot_timeseries(run.telemetry[shown.mission_index], title=f"{label}: mission "
+                                    f"{shown.mission_index} ({shown.failure_reason or 'success'})"),
+                    paths["timeseries"])
+    return list(paths.values())
+
+
+def write_drive_run(run, out: Path) -> list[str]:
+    """trials.csv and telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
+    older runs still load with offroadbench.io.telemetry.load_telemetry); returns what was written."""
     from offroadbench.io.atomic import atomic_path
     from offroadbench.io.telemetry import save_telemetry
 
@@ -66,39 +102,103 @@ def write_drive_run(run, out: Path, label: str, plot: bool) -> list[str]:
         with atomic_path(out / "trials.csv") as tmp:
             pd.DataFrame(run.rows()).to_csv(tmp, index=False)
         for index, tel in run.telemetry.items():
-            save_telemetry(tel, tel_dir / f"mission_{index:03d}.npz")
-        written = ["trials.csv", "telemetry/mission_*.npz"]
-        if plot:
-            from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
+            save_telemetry(tel, tel_dir / f"mission_{index:03d}.parquet")
+    return ["trials.csv", "telemetry/mission_*.parquet"]
 
-            hm, closed, border = run.heightmap, run.closed, run.mission_config.border_m
-            save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
-                        out / "missions.png")
-            save_figure(plot_trajectories(hm, closed, run.missions, run.telemetry, run.results, border_m=border,
-                                          paths=run.paths, title=f"{label}: trajectories ({run.planner})"),
-                        out / "trajectories.png")
-            shown = next((r for r in run.results if r.success), run.results[0])
-            save_figure(plot_timeseries(run.telemetry[shown.mission_index], title=f"{label}: mission "
-                                        f"{shown.mission_index} ({shown.failure_reason or 'success'})"),
-                        out / "timeseries.png")
-            written += ["missions.png", "trajectories.png", "timeseries.png"]
-    return written
+
+def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
+    """The settings tables of ``--set SECTION.KEY=VALUE`` (plus ``--physics-rate-hz``, ``--engine``,
+    ``--gravity``, ``--border-m``) and the remaining recipe overrides."""
+    from offroadbench.cli._common import parse_sets
+
+    tables: dict[str, dict] = {name: {} for name in SET_SECTIONS}
+    recipe_sets = []
+    for item in args.set or []:
+        key = item.partition("=")[0].strip()
+        head, dot, rest = key.partition(".")
+        if head in SET_SECTIONS:
+            if not dot or not rest or "." in rest:
+                raise InputError(f"--set {item!r}: a settings key is {head}.FIELD=VALUE")
+            (value,) = parse_sets([item]).values()
+            tables[head][rest] = value
+        else:
+            recipe_sets.append(item)
+    if args.physics_rate_hz is not None:
+        tables["sim"]["physics_rate_hz"] = args.physics_rate_hz
+    if args.engine is not None:
+        tables["sim"]["engine"] = args.engine
+    if args.gravity is not None:
+        tables["sim"]["gravity_m_s2"] = args.gravity
+    if args.border_m is not None:
+        tables["roughness"]["border_m"] = args.border_m
+    return tables, recipe_sets
+
+
+def vehicle_footprint(spec, sim) -> tuple[float, float]:
+    """(length, width) of the vehicle's footprint in metres, from its links' bounding boxes at rest
+    (offroadbench.sim.runner.vehicle_envelope, on a small flat world)."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.sim import World
+    from offroadbench.sim.runner import vehicle_envelope
+
+    with World(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
+        env = vehicle_envelope(world)
+    return env.length_m, env.width_m
+
+
+def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason: str, footprint_m, title: str,
+                          fps: float = 10.0) -> Path:
+    """One trial as a GIF or MP4 (offroadbench.plots.animate): the footprint moving over the
+    hillshade and class map, beside speed, pitch, roll and vertical acceleration; the failure marked."""
+    import numpy as np
+
+    from offroadbench.io.animation import save_animation
+    from offroadbench.plots.animate import TrialView, frame_indices
+
+    view = TrialView(hm, classes, path_xy, footprint_m=footprint_m,
+                     region_xy=np.column_stack([tel["x_m"], tel["y_m"]]), title=title)
+    t = np.asarray(tel["t_s"], float)
+    rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 20.0
+    frames = frame_indices(len(t), rate, fps=fps)
+    with created_dirs(path.parent):
+        return save_animation(view.fig, lambda i: view.draw(tel, i, failure_reason=failure_reason), frames, path,
+                              fps=fps)
 
 
 def cmd_drive(args: argparse.Namespace) -> int:
-    from offroadbench.sim import SimConfig, drive_missions, load_vehicle
-
-    if args.plot and args.out is None:
-        raise InputError("--plot needs --out DIR to write the figures into")
-    out = check_output_dir(args.out, "--out") if args.out else None
-    vehicle = load_vehicle(args.vehicle)
-    changes = {k: v for k, v in (("physics_rate_hz", args.physics_rate_hz), ("engine", args.engine)) if v is not None}
-    sim = SimConfig(**changes)
+    from offroadbench.analysis.roughness import RoughnessConfig
+    from offroadbench.config import from_dict
+    from offroadbench.navigation.planners import planner_from_table
+    from offroadbench.navigation.rules import FailureRules
     from offroadbench.seeding import terrain_seed
+    from offroadbench.sim import ControllerConfig, SimConfig, drive_missions
+    from offroadbench.sim.vehicle import vehicle_from_table
+
+    if args.plot is True and args.out is None:
+        raise InputError("--plot needs --out DIR to write the figures into (or give --plot PATH.png)")
+    out = check_output_dir(args.out, "--out") if args.out else None
+    plots = _plot_paths(out, args.plot) if args.plot else {}
+    for path in plots.values():
+        check_output_file(path, "--plot", suffixes=(".png", ".pdf", ".svg"))
+    if args.animate:
+        from offroadbench.io.animation import check_animation_path
+
+        check_animation_path(args.animate)
+        check_output_file(args.animate, "--animate")
+    tables, recipe_sets = _drive_settings(args)
+    vehicle = vehicle_from_table({"name": args.vehicle, **tables["vehicle"]}, where="--vehicle/--set vehicle.*")
+    sim = from_dict(SimConfig, tables["sim"], where="--set sim.*")
+    controller = from_dict(ControllerConfig, tables["controller"], where="--set controller.*")
+    rules = from_dict(FailureRules, tables["rules"], where="--set rules.*")
+    roughness = from_dict(RoughnessConfig, tables["roughness"], where="--border-m/--set roughness.*")
+    planner = planner_from_table({"name": args.planner, **tables["planner"]}, where="--planner/--set planner.*")
 
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
-    hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=args.set, force=args.force)
-    if recipe is not None:  # the terrain's body and soil
+    hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
+    if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
+        from offroadbench.cli.terrain import warn_relief_tails
+
+        warn_relief_tails(hm, label)
         sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
     else:  # a PNG: those of the recipe in its sidecar, if any
         from offroadbench.bodies import terrain_gravity_and_soil
@@ -107,11 +207,23 @@ def cmd_drive(args: argparse.Namespace) -> int:
         sim = sim.for_terrain(*terrain_gravity_and_soil(read_png16_metadata(args.terrain).get("recipe")))
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
-                             length_m=args.length_m, vehicle=vehicle, sim=sim, planner=args.planner, progress=progress)
+                             length_m=args.length_m, vehicle=vehicle, sim=sim, controller=controller, rules=rules,
+                             roughness=roughness, planner=planner, progress=progress)
     print(format_drive_run(run, label))
+    written = []
     if out is not None:
-        written = write_drive_run(run, out, label, args.plot)
-        print(f"\nwrote {', '.join(f'{out}/{w}' for w in written)}")
+        written += [f"{out}/{w}" for w in write_drive_run(run, out)]
+    if plots:
+        written += [str(p) for p in write_drive_figures(run, label, plots)]
+    if written:
+        print(f"\nwrote {', '.join(written)}")
+    if args.animate:
+        shown = next((r for r in run.results if not r.success), run.results[0])
+        k = shown.mission_index
+        title = f"{label}: mission {k}, {run.planner}, {shown.failure_reason or 'success'}"
+        path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
+                                     shown.failure_reason, vehicle_footprint(vehicle, sim), title)
+        print(f"wrote {path} (mission {k})")
     return 0
 
 
@@ -121,13 +233,31 @@ def register(sub) -> None:
                        "vehicle and print a per-mission table and a summary.")
     p.add_argument("terrain", help="a 16-bit PNG heightmap (with its .json sidecar) or a preset / recipe TOML")
     p.add_argument("--seed", type=seed_arg, default=0,
-                   help="root seed (default 0): a preset's terrain is terrain 0 of it, shown as 'seed N' "
-                   "(generate --seed N rebuilds it), and mission k has seed mission_seed(seed, 0, k)")
+                   help="ROOT seed (default 0), as a study's root_seed: the terrain is terrain 0 of it, whose own "
+                   "seed terrain_seed(seed, 0) is printed as 'seed N' (generate --seed N rebuilds it), and "
+                   "mission k has seed mission_seed(seed, 0, k) (offroadbench.seeding)")
     p.add_argument("--missions", type=positive_int, default=20, help="number of missions (default 20)")
     p.add_argument("--length-m", type=positive_float, default=35.0, help="start-goal distance, m (default 35, paper)")
-    p.add_argument("--out", help="directory for trials.csv, telemetry/ and figures (created if missing)")
-    p.add_argument("--plot", action="store_true", help="write missions.png, trajectories.png, timeseries.png")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="recipe override, e.g. layers.base.D_high=2.6")
+    p.add_argument("--out", help="directory for trials.csv and telemetry/ (Parquet) (created if missing)")
+    p.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
+                   help="write the figures: --plot PATH.png writes the trajectories at PATH and PATH_missions.png, "
+                   "PATH_timeseries.png beside it; a bare --plot writes missions.png, trajectories.png and "
+                   "timeseries.png into --out")
+    p.add_argument("--border-m", type=nonnegative_float, default=None,
+                   help="no mission start or goal closer than this to the map edge, m (default 5, the paper's; "
+                   "smaller maps need less, e.g. 2 on a 12.8 m map)")
+    p.add_argument("--gravity", type=positive_float, default=None, metavar="M_S2",
+                   help="magnitude of gravity, m/s^2 (default: the terrain recipe's body, else Earth's 9.81; the Moon: "
+                   "1.62); same as --set sim.gravity_m_s2=G")
+    p.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
+                   help="write an animation of one trial (the first that failed, else mission 0): the "
+                   "footprint moving over the hillshade and class map along its planned and driven paths, "
+                   "with speed, pitch, roll and vertical acceleration against time and the failure marked "
+                   "(.mp4 needs ffmpeg)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="a setting, repeatable: sim.KEY, controller.KEY, rules.KEY, roughness.KEY, vehicle.KEY or "
+                   "planner.KEY (a study's tables; `offroadbench config SECTION` lists the keys), e.g. "
+                   "sim.gravity_m_s2=1.62; any other key is a recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
     p.add_argument("--planner", default="straight",
                    help="planner or policy (built-in: straight, astar, lattice, reactive; installed plug-ins too)")

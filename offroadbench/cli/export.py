@@ -46,7 +46,13 @@ def cmd_export(args: argparse.Namespace) -> int:
             meta["crs"] = recipe.data["recipe"]["crs"]
         name = args.name or f"{recipe.name}_seed{args.seed}"
     else:
+        from offroadbench.io.png16 import read_png16_metadata
+
         meta = {"source": str(args.terrain)}
+        side = read_png16_metadata(args.terrain)
+        crs = side.get("crs") or ((side.get("recipe") or {}).get("recipe") or {}).get("crs")
+        if crs:  # the generating recipe's CRS (the lunar presets' Moon CRS), kept in a GeoTIFF
+            meta["crs"] = crs
         name = args.name or label
     if args.clip_percentile:
         meta["clip_percentile"] = args.clip_percentile
@@ -58,8 +64,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
         f"({time.perf_counter() - t0:.2f} s)"
     )
-    for note in [*result.notes, *(["warning: " + tails.message()] if tails.dominated else [])]:
-        print(f"  {note}")
+    for note in result.notes:  # the spire warning was logged above: printed once
+        if not note.startswith("warning: "):  # an exporter logs each warning it returns as a note
+            print(f"  {note}")
     for path in result.files:
         print(f"wrote {path}")
     return 0
@@ -67,6 +74,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 def register(sub) -> None:
     from offroadbench.cli._common import int_at_least, seed_arg
+    from offroadbench.cli.terrain import TERRAIN_SEED_HELP
 
     p = sub.add_parser(
         "export",
@@ -76,9 +84,10 @@ def register(sub) -> None:
     )
     p.add_argument("terrain", nargs="?", help="16-bit PNG heightmap, preset name or recipe .toml")
     p.add_argument("--format", help="export format (see --list)")
-    p.add_argument("-o", "--output", help="output directory (created with its missing parents)")
+    p.add_argument("-o", "--output", "--out", dest="output",
+                   help="output directory (created with its missing parents); --out as in the other commands")
     p.add_argument("--list", action="store_true", help="list the export formats and exit")
-    p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="when TERRAIN is a preset: " + TERRAIN_SEED_HELP)
     p.add_argument("--name", help="file name stem (default: PRESET_seedN, or the PNG's stem)")
     p.add_argument("--stride", type=int_at_least(1, "stride"), help="obj only: keep every N-th row and column (default 1)")
     p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,

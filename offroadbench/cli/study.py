@@ -64,8 +64,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rpl.add_argument("--cell", type=int, required=True, help="grid cell index")
     rpl.add_argument("--terrain", type=int, required=True, help="terrain index within the cell")
     rpl.add_argument("--mission", type=int, required=True, help="mission index on the terrain")
-    rpl.add_argument("--plot", action="store_true", help="write the figure (class map, paths, time series)")
+    rpl.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
+                     help="write the figure (class map, paths, time series) to PATH, or with a bare --plot to "
+                     "--out/cell<C>_terrain<T>_mission<M>.png; the telemetry (Parquet) goes beside it")
     rpl.add_argument("--out", help="folder for the figure and telemetry (default: RUN_DIR/replays)")
+    rpl.add_argument("--animate", metavar="OUT.gif|OUT.mp4", default=None,
+                     help="write an animation of the trial: the footprint moving over the hillshade and class "
+                     "map along its planned and driven paths, with speed, pitch, roll and vertical acceleration "
+                     "against time and the failure marked (.mp4 needs ffmpeg)")
     rpl.set_defaults(func=cmd_replay)
 
 
@@ -159,7 +165,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir, "--out")
-    tables = (("trials", load(run_dir)), ("terrains", load_terrains(run_dir)))
+    from offroadbench.study.stats import terrain_success
+
+    trials = load(run_dir)
+    terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
+    terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
+    tables = (("trials", trials), ("terrains", terrains))
     with created_dirs(out):
         for name, df in tables:
             path = out / f"{name}.{args.format}"
@@ -239,11 +250,21 @@ def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantis
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """Replay one trial; exit 1 if it does not reproduce the stored row."""
-    from offroadbench.cli._common import check_output_dir, created_dirs
+    from offroadbench.cli._common import check_output_dir, check_output_file, created_dirs
     from offroadbench.study.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
-    out = check_output_dir(args.out if args.out else run_dir / "replays", "--out") if args.plot else None
+    png = None
+    if args.plot is True:  # a bare --plot: the figure and telemetry into --out (default RUN_DIR/replays)
+        out = check_output_dir(args.out if args.out else run_dir / "replays", "--out")
+        png = out / f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}.png"
+    elif args.plot:
+        png = check_output_file(args.plot, "--plot", suffixes=(".png",))
+    if args.animate:
+        from offroadbench.io.animation import check_animation_path
+
+        check_animation_path(args.animate)
+        check_output_file(args.animate, "--animate")
     rep = replay_trial(run_dir, args.cell, args.terrain, args.mission)
     r = rep.record.result
     name = f"cell{args.cell}_terrain{args.terrain}_mission{args.mission}"
@@ -263,9 +284,18 @@ def cmd_replay(args: argparse.Namespace) -> int:
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
-        with created_dirs(out):  # the output-path policy: missing folders made now, removed on failure
-            with atomic_path(out / f"{name}.png") as tmp:
+        tel = png.with_suffix(".parquet")
+        with created_dirs(png.parent):  # the output-path policy: missing folders made now, removed on failure
+            with atomic_path(png) as tmp:
                 fig.savefig(tmp, format="png", dpi=110)
-            save_telemetry(rep.record.telemetry, out / f"{name}.parquet")
-        print(f"wrote {out / (name + '.png')}, {out / (name + '.parquet')}")
+            save_telemetry(rep.record.telemetry, tel)
+        print(f"wrote {png}, {tel}")
+    if args.animate:
+        from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
+
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
+        path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
+                                     r.failure_reason, footprint, title)
+        print(f"wrote {path}")
     return 0 if rep.identical else 1

@@ -30,6 +30,22 @@ from offroadbench.cli._common import (
 log = logging.getLogger(__name__)
 
 
+#: what ``--seed`` means in the commands that take one terrain (generate, analyze, export)
+TERRAIN_SEED_HELP = ("the terrain's OWN seed (default 0): the integer a study's terrains table and drive print as "
+                     "'seed N'; terrain j of a root seed s (a study's root_seed, drive --seed s with j = 0) is "
+                     "terrain_seed(s, j) (offroadbench.seeding)")
+
+
+def warn_relief_tails(hm, label: str) -> None:
+    """Log, once, that a few extreme samples hold most of the relief (the paper presets' corner spire,
+    offroadbench.analysis.relief), wherever a terrain is generated or read."""
+    from offroadbench.analysis.relief import tail_report
+
+    tails = tail_report(hm)
+    if tails.dominated:
+        log.warning("%s: %s", label, tails.message())
+
+
 # --------------------------------------------------------------------------- commands
 def cmd_terrains(args: argparse.Namespace) -> int:
     from offroadbench import resources
@@ -57,6 +73,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     hm = generate_terrain(recipe, args.seed)
     dt = time.perf_counter() - t0
+    warn_relief_tails(hm, f"{recipe.name} seed {args.seed}")
     with created_dirs(out.parent):
         meta = write_png16(
             hm,
@@ -101,7 +118,7 @@ def format_terrain_report(rep, label: str) -> str:
 
 def cmd_analyze(args: argparse.Namespace) -> int:
     from offroadbench.analysis.describe import describe_terrain
-    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile, tail_report
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
     from offroadbench.analysis.roughness import RoughnessConfig
 
     rcfg = RoughnessConfig(border_m=args.border_m, closing_radius_m=args.closing_radius_m)
@@ -112,9 +129,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         check_output_file(_surface_plot_path(plot), "--plot")
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
     hm = clip_percentile(hm, args.clip_percentile)  # P = 0 (the default) keeps every height
-    tails = tail_report(hm)
-    if tails.dominated:
-        log.warning("%s: %s", label, tails.message())
+    warn_relief_tails(hm, label)
     rep = describe_terrain(hm, rcfg, crater_diameters_m=crater_diameters(recipe, args.seed))
     print(format_terrain_report(rep, label))
     if plot is not None:
@@ -172,7 +187,7 @@ def register(sub) -> None:
 
     p = sub.add_parser("generate", help="generate a terrain and write a 16-bit PNG + JSON sidecar")
     p.add_argument("recipe", help="preset name (see `offroadbench terrains`) or path to a recipe .toml")
-    p.add_argument("--seed", type=seed_arg, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0, help=TERRAIN_SEED_HELP)
     p.add_argument("-o", "--output", required=True, help="output .png (NAME.json is written beside it)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key, e.g. layers.base.D_high=2.6")
     add_force(p)
@@ -180,8 +195,9 @@ def register(sub) -> None:
 
     p = sub.add_parser("analyze", help="roughness classes of a terrain (PNG or preset)")
     p.add_argument("terrain", help="16-bit PNG heightmap, preset name or recipe .toml")
-    p.add_argument("--seed", type=seed_arg, default=0, help="seed when TERRAIN is a preset (default 0)")
-    p.add_argument("--plot", help="write a figure: hillshade beside the class map (paper Fig. 4a)")
+    p.add_argument("--seed", type=seed_arg, default=0, help="when TERRAIN is a preset: " + TERRAIN_SEED_HELP)
+    p.add_argument("--plot", metavar="PATH", help="write the figures: hillshade beside the class map (paper Fig. 4a) at "
+                   "PATH, the surface statistics at PATH_surface")
     p.add_argument("--border-m", type=float_at_least(0, "--border-m"), default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--closing-radius-m", type=float_at_least(0, "--closing-radius-m"), default=0.25, help="closing disk radius, m (default 0.25)")
     p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
@@ -195,7 +211,9 @@ def register(sub) -> None:
     p = sub.add_parser("roughness-study", help="median class areas vs D (paper Fig. 5)")
     p.add_argument("--dims", type=float, nargs="+", default=[2.3, 2.45, 2.6], help="D values of the high-frequency DEM")
     p.add_argument("--terrains", type=positive_int, default=20, help="terrains per D (default 20, as the paper)")
-    p.add_argument("--seed", type=seed_arg, default=0, help="root seed (default 0)")
+    p.add_argument("--seed", type=seed_arg, default=0,
+                   help="ROOT seed (default 0): terrain j of each D is terrain_seed(seed, j), printed in "
+                   "roughness_terrains.csv (generate --seed <it> rebuilds it; offroadbench.seeding)")
     p.add_argument("--recipe", default="paper-d2.45", help="base recipe (default paper-d2.45)")
     p.add_argument("--border-m", type=float_at_least(0, "--border-m"), default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--dim-key", default="layers.base.D_high", help="dotted recipe key that --dims sets")

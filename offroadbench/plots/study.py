@@ -19,15 +19,24 @@ __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig
            "fig_paths", "short_label"]
 
 
+#: below this many samples a box plot also shows every sample
+SHOW_POINTS_BELOW = 10
+
+
 def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -> None:
     """Box plots from box statistics (``median``, ``q1``, ``q3``, ``whislo``, ``whishi``, ``fliers``,
-    ``n``), one per group label."""
+    ``n``, ``values``), one per group label, each labelled with its n; a group of fewer than
+    SHOW_POINTS_BELOW samples also shows its samples (spread sideways by rank, not at random)."""
     boxes = []
-    for label, s in groups.items():
+    for i, (label, s) in enumerate(groups.items()):
         if s["n"] == 0:
             s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": short_label(label), "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+        boxes.append({"label": f"{short_label(label)}\nn={s['n']}", "med": s["median"], "q1": s["q1"], "q3": s["q3"],
                       "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
+        v = np.asarray(s.get("values", ()), dtype=float)
+        if 0 < len(v) < SHOW_POINTS_BELOW:
+            offsets = np.linspace(-0.12, 0.12, len(v)) if len(v) > 1 else np.zeros(1)
+            ax.plot(i + 1 + offsets, v, "o", color="black", ms=3.5, alpha=0.7, zorder=3)
     ax.bxp(boxes, showfliers=True,
            medianprops={"color": "red"},
            boxprops={"color": CLASS_COLOURS[0]},
@@ -49,7 +58,9 @@ def fig_class_areas(summary: pd.DataFrame):
     x = np.arange(len(summary))
     for ax, cls, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS):
         ax.bar(x, summary[f"median_area_{cls}_pct"], color=colour, edgecolor="black")
-        ax.set_xticks(x, [short_label(g) for g in summary["group"]], fontsize=8)
+        n = summary["terrains"] if "terrains" in summary else [None] * len(summary)
+        ax.set_xticks(x, [short_label(g) + ("" if k is None else f"\nn={int(k)}") for g, k in zip(summary["group"], n)],
+                      fontsize=8)
         ax.set_title(f"{cls} roughness", fontsize=10)
         ax.set_ylabel("median area (%)")
         ax.grid(axis="y", alpha=0.3)

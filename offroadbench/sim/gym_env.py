@@ -38,9 +38,12 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
 - **Planner** (optional): ``planner="astar"`` (any registered planner, name or
   :class:`~offroadbench.navigation.planners.PlannerChoice`) plans each episode's mission on the class map;
   the waypoints are in ``info["path_xy"]`` after ``reset`` and drawn by ``render``.
-- **Rendering**: ``render_mode="rgb_array"`` returns a top-down image (uint8, H x W x 3) of the
-  closed class map (paper Fig. 4 colours), the planned path (white), the goal (red) and the
-  vehicle's footprint (black, its front white).
+- **Rendering**: ``render_mode="rgb_array"`` returns the view of a replay animation
+  (:class:`offroadbench.plots.animate.TrialView`, uint8, H x W x 3): the hillshade under the closed
+  class map (paper Fig. 4 colours), the planned path (white, dashed; the start-goal line without a
+  planner), the path driven so far and the vehicle's footprint (its front edge white), beside the
+  episode's speed, pitch, roll and vertical acceleration against time, the end marked.
+  :func:`top_down_image` is the older, cheaper pixel map.
 - **Reward** per control tick of length ``dt``, with ``d`` the horizontal distance to the goal::
 
       r = w_progress * (d_prev - d) - dt * (w_accel * a_z^2 + w_rate * (p^2 + q^2))
@@ -194,6 +197,10 @@ class TraverseEnv(gym.Env):
         })
         self.mission: Mission | None = None
         self.path_xy: np.ndarray | None = None
+        self._view = None  # the rgb_array view of the episode (built at the first render)
+        self._shade = None  # the terrain's hillshade, for every episode's view
+        self._track: dict[str, list[float]] = {}
+        self._end_reason: str | None = None
         self._ended = False
 
     # ------------------------------------------------------------------ gymnasium API
@@ -231,6 +238,8 @@ class TraverseEnv(gym.Env):
         self._vz = state["lin"][2]
         self._rules.xy_hist.append(state["pos"][:2])
         self._state = state
+        self._view, self._end_reason, self._track = None, None, {}
+        self._record(state, 0.0)
         return self._observation(state), self._info(state, "")
 
     def step(self, action):
@@ -271,6 +280,9 @@ class TraverseEnv(gym.Env):
             reward -= cfg.failure_penalty
         if truncated:
             reason = "timeout"
+        self._record(state, float(a[0]))
+        if terminated or truncated:
+            self._end_reason = reason or ""
         self._ended = terminated or truncated
         return self._observation(state), float(reward), terminated, truncated, self._info(state, reason or "")
 
@@ -311,14 +323,37 @@ class TraverseEnv(gym.Env):
                      "roll_rad": float(s["roll"]), "pitch_rad": float(s["pitch"]), "yaw_rad": float(s["yaw"])},
         }
 
+    def _record(self, s: dict, cmd_v: float) -> None:
+        """One sample of the episode's track (the telemetry columns the rgb_array view draws)."""
+        if self.render_mode != "rgb_array":
+            return
+        values = {"t_s": self._ticks * self.dt_s, "x_m": s["pos"][0], "y_m": s["pos"][1], "z_m": s["pos"][2],
+                  "yaw_rad": s["yaw"], "roll_rad": s["roll"], "pitch_rad": s["pitch"], "vx_m_s": s["lin"][0],
+                  "vy_m_s": s["lin"][1], "cmd_v_m_s": cmd_v}
+        for k, v in values.items():
+            self._track.setdefault(k, []).append(float(v))
+
     def render(self) -> np.ndarray | None:
-        """A top-down RGB image (``render_mode="rgb_array"``; see the module docstring), else None."""
+        """The replay view of the episode so far (``render_mode="rgb_array"``; see the module
+        docstring), else None."""
         if self.render_mode != "rgb_array":
             return None
         if self.mission is None:
             raise RuntimeError("call reset() before render()")
-        return top_down_image(self.closed_classes, self.hm.cell_size_m, self._state["pos"], self._state["yaw"],
-                              self.envelope.length_m, self.envelope.width_m, self._goal, self.path_xy)
+        from offroadbench.plots.animate import TrialView
+        from offroadbench.plots.terrain import hillshade
+
+        if self._view is None:
+            m = self.mission
+            path = self.path_xy if self.path_xy is not None else np.array([m.start_xy_m, m.goal_xy_m])
+            if self._shade is None:
+                self._shade = hillshade(self.hm)
+            self._view = TrialView(self.hm, self.closed_classes, path, shade=self._shade,
+                                   footprint_m=(self.envelope.length_m, self.envelope.width_m),
+                                   t_max_s=self._timeout_ticks * self.dt_s,
+                                   title=f"planner {self.planner.name}" if self.planner else "agent")
+        self._view.draw({k: np.asarray(v) for k, v in self._track.items()}, failure_reason=self._end_reason)
+        return self._view.to_rgb()
 
 
 _CLASS_RGB = np.array([[0x1F, 0x5F, 0xBF], [0xF0, 0x8C, 0x1A], [0xF5, 0xE5, 0x2A]], dtype=np.uint8)  # plots.style

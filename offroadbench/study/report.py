@@ -309,10 +309,18 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     n_total = meta["n_trials"]
     grid = ", ".join(f"`{a['key']}` = {list(a['values'])}" for a in study["grid"]) or "none"
+    from offroadbench.study.header import held_fixed, report_title
+
+    fixed = held_fixed(meta)
+    tables["held_fixed.csv"] = fixed
     lines = [
-        f"# Study report: {study['name']}",
+        f"# {report_title(meta)}",
         "",
         study.get("description", ""),
+        "",
+        "What ran (the first cell's resolved settings; `grid axis` where a setting varied):",
+        "",
+        markdown_table(fixed),
         "",
         f"- trials: **{len(trials)} of {n_total}** stored"
         + ("" if len(trials) == n_total else " (**incomplete**: the study has not finished)"),
@@ -356,8 +364,17 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
+        for side in ("from", "to"):  # the sample size behind each median
+            changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
+                                    for g, q in zip(changes[side], changes["quantity"])]
         tables["median_changes.csv"] = changes
-        lines += ["## Changes of the medians between consecutive groups", "", markdown_table(changes), ""]
+        small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
+        lines += ["## Changes of the medians between consecutive groups", "",
+                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median. "
+                  f"A median of n < 10 moves by a whole sample's step (one terrain's success rate is a multiple "
+                  f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
+                  "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
+                  markdown_table(changes), ""]
         terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
         lines += terrain_lines
     elif len(labels) > 1 and study["grid"] and all(_numeric(a["values"]) for a in study["grid"]):

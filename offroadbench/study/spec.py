@@ -326,6 +326,10 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
     bad = sorted(set(head) - set(_STUDY_KEYS))
     if bad:
         raise InputError(f"{where}: [study]: unknown key(s) {', '.join(bad)}; known keys: {', '.join(_STUDY_KEYS)}")
+    missing = [k for k in ("name", "recipe", "root_seed") if k not in head]
+    if missing:
+        raise InputError(f"{where}: [study] is missing {', '.join(missing)} (required: name, recipe, root_seed; "
+                         "e.g. root_seed = 0; `offroadbench config study` prints a [study] table to start from)")
     for name in ("grid", "recipe_overrides", "reference"):
         if not isinstance(data.get(name, {}), dict):
             raise InputError(f"{where}: [{name}] must be a table")

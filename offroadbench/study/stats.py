@@ -54,14 +54,15 @@ CLASSES = CLASS_NAMES
 def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, Any]:
     """Median, quartiles, IQR (Eq. 6), fences (Eq. 7-8), whisker ends and outliers of ``values``.
 
-    NaNs are ignored. An empty input gives n = 0 and NaN statistics.
+    NaNs are ignored. An empty input gives n = 0 and NaN statistics. ``values``: the samples, sorted
+    (box plots of few samples show them).
     """
     x = np.asarray(values, dtype=float)
     x = x[np.isfinite(x)]
     if x.size == 0:
         nan = float("nan")
         return dict(n=0, median=nan, q1=nan, q3=nan, iqr=nan, lower_fence=nan, upper_fence=nan,
-                    whislo=nan, whishi=nan, fliers=np.array([]), n_outliers=0)
+                    whislo=nan, whishi=nan, fliers=np.array([]), n_outliers=0, values=x)
     q1, med, q3 = np.percentile(x, [25, 50, 75], method=QUANTILE_METHOD)
     iqr = q3 - q1
     lo, hi = q1 - whis * iqr, q3 + whis * iqr
@@ -69,7 +70,7 @@ def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, A
     fliers = x[(x < lo) | (x > hi)]
     return dict(n=int(x.size), median=float(med), q1=float(q1), q3=float(q3), iqr=float(iqr),
                 lower_fence=float(lo), upper_fence=float(hi), whislo=float(inside.min()),
-                whishi=float(inside.max()), fliers=fliers, n_outliers=int(fliers.size))
+                whishi=float(inside.max()), fliers=fliers, n_outliers=int(fliers.size), values=np.sort(x))
 
 
 def group_labels(meta: dict[str, Any]) -> dict[int, str]:

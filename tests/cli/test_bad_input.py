@@ -100,6 +100,7 @@ def base(tmp_path_factory) -> Path:
     (b / "study.toml").write_text(STUDY.format(length=2.0))
     (b / "far.toml").write_text(STUDY.format(length=500.0))
     (b / "unknown.toml").write_text(STUDY.format(length=2.0).replace("[roughness]", "[roughness]\nbordr_m = 1"))
+    (b / "noseed.toml").write_text(STUDY.format(length=2.0).replace("root_seed = 3\n", ""))
     _store(b / "corrupt", study_id="damaged")  # a real store whose pages after the header are garbage
     db = bytearray((b / "corrupt" / "study.sqlite").read_bytes())
     db[100:] = b"\x13" * (len(db) - 100)
@@ -178,6 +179,15 @@ CASES = [
     ("drive-length", ["drive", "good.png", "--length-m", "-5", "--out", "d"]),
     ("drive-empty-png", ["drive", "empty.png", "--out", "d"]),
     ("drive-out-under-file", ["drive", "good.png", "--out", "afile/d"]),
+    ("drive-animate-suffix", ["drive", "good.png", "--animate", "d/a.avi"]),
+    ("drive-plot-suffix", ["drive", "good.png", "--plot", "d/a.txt"]),
+    ("drive-set-sim-unknown", ["drive", "good.png", "--set", "sim.nope=1", "--out", "d"]),
+    ("drive-set-sim-range", ["drive", "good.png", "--set", "sim.physics_rate_hz=1", "--out", "d"]),
+    ("drive-gravity-negative", ["drive", "good.png", "--gravity", "-1", "--out", "d"]),
+    ("drive-border-negative", ["drive", "good.png", "--border-m", "-1", "--out", "d"]),
+    # config
+    ("config-unknown-section", ["config", "nosuch"]),
+    ("config-reference-proc", ["config", "--write-reference", "/proc/offroadbench.md"]),
     # export
     ("exp-format", ["export", "good.png", "--format", "nosuch", "-o", "e"]),
     ("exp-out-proc", ["export", "good.png", "--format", "npy", "-o", "/proc/offroadbench"]),
@@ -188,6 +198,7 @@ CASES = [
     ("run-empty", ["study", "run", "empty.toml", "--out", "r"]),
     ("run-syntax", ["study", "run", "bad.toml", "--out", "r"]),
     ("run-unknown-key", ["study", "run", "unknown.toml", "--out", "r"]),
+    ("run-no-root-seed", ["study", "run", "noseed.toml", "--out", "r"]),
     ("run-workers-0", ["study", "run", "study.toml", "--workers", "0", "--out", "r"]),
     ("run-scheduler-local", ["study", "run", "study.toml", "--scheduler", "tcp://127.0.0.1:1", "--out", "r"]),
     ("run-corrupt-store", ["study", "run", "study.toml", "--out", "corrupt"]),
@@ -217,6 +228,8 @@ CASES = [
     ("rep-newer", ["study", "report", "newer"]),
     ("rep-foreign", ["study", "report", "foreign"]),
     ("rep-fig4", ["study", "report", "other", "--fig4", "x"]),
+    ("replay-animate-suffix", ["study", "replay", "other", "--cell", "0", "--terrain", "0", "--mission", "0",
+                               "--animate", "a.avi"]),
 ]
 
 #: cases also run as ordinary cold subprocesses of the console script

@@ -21,8 +21,15 @@ def test_drive_writes_csv_figures_and_prints_summary(tmp_path, capsys):
     assert list(df["mission_seed"]) == [mission_seed(2, 0, 0), mission_seed(2, 0, 1)]
     assert f"paper-d2.3 seed {terrain_seed(2, 0)}" in text
     assert {"success", "failure_reason", "traversal_time_s", "rms_vertical_accel_m_s2"} <= set(df.columns)
-    for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.npz"):
+    for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.parquet"):
         assert (out / name).stat().st_size > 0
+    # units in every header of the per-mission table
+    header = next(line for line in text.splitlines() if line.split()[:2] == ["mission", "outcome"])
+    assert header.split()[2:] == ["time_s", "path_m", "max_roll_deg", "max_pitch_deg", "rms_az_m_s2",
+                                  "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s", "max_pen_mm"]
+    from offroadbench.io.telemetry import load_telemetry
+
+    assert len(load_telemetry(out / "telemetry/mission_000.parquet")["t_s"]) > 10
 
 
 def test_drive_same_seed_same_table(tmp_path):
@@ -41,3 +48,37 @@ def test_drive_bad_input_exits_2_without_output(tmp_path, capsys):
     assert main(["drive", "paper-d2.3", *SMALL, "--vehicle", "tank", "--out", str(out)]) == 2
     assert "unknown vehicle 'tank'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_drive_animate_writes_a_gif_of_one_trial(tmp_path, capsys):
+    from PIL import Image
+
+    gif = tmp_path / "anim" / "trial.gif"
+    assert main(["drive", "paper-d2.3", *SMALL, "--missions", "1", "--animate", str(gif)]) == 0
+    assert f"wrote {gif} (mission 0)" in capsys.readouterr().out
+    with Image.open(gif) as im:
+        assert im.n_frames > 15 and im.size[0] > im.size[1]  # map beside the strip
+    # a wrong suffix is refused before any work, leaving nothing
+    bad = tmp_path / "bad" / "trial.avi"
+    assert main(["drive", "paper-d2.3", *SMALL, "--missions", "1", "--animate", str(bad)]) == 2
+    assert ".gif or .mp4" in capsys.readouterr().err and not bad.parent.exists()
+
+
+def test_drive_on_a_small_map_under_lunar_gravity_with_plot_path(tmp_path, capsys):
+    """A 12.8 m map (the smoke study's) with a 2 m border; gravity from --gravity or --set sim.*;
+    --plot PATH writes the figures without --out."""
+    small = ["--set", "grid.rows=257", "--set", "grid.cols=257", "--length-m", "6", "--seed", "1", "--missions", "1"]
+    fig = tmp_path / "figs" / "drive.png"
+    assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--gravity", "1.62", "--plot", str(fig)]) == 0
+    text = capsys.readouterr().out
+    assert "gravity 1.62 m/s^2" in text
+    assert sorted(p.name for p in fig.parent.iterdir()) == ["drive.png", "drive_missions.png", "drive_timeseries.png"]
+    assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--set", "sim.gravity_m_s2=1.62",
+                 "--set", "rules.tip_angle_deg=60", "--set", "controller.cruise_speed_m_s=0.5"]) == 0
+    assert "gravity 1.62 m/s^2" in capsys.readouterr().out
+    # the paper's 5 m border leaves 2.8 m of a 12.8 m map: too small for 6 m missions
+    assert main(["drive", "paper-d2.3", *small]) == 2
+    assert "too small" in capsys.readouterr().err
+    assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--set", "sim.gravity=1"]) == 2
+    assert "unknown key(s) gravity" in capsys.readouterr().err
+    assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--set", "sim.a.b=1"]) == 2

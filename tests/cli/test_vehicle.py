@@ -10,7 +10,9 @@ from offroadbench.cli import main
 from offroadbench.sim.check import CheckResult
 
 ROWS = [CheckResult("yaw rate in place, heading 0 deg, command 1 rad/s", 0.98, 1.0, "rad/s", True, "0.85-1.1 x expected"),
-        CheckResult("static tip angle (tilt table)", 56.0, 56.7, "deg", True, "within 2 deg", "geometric")]
+        CheckResult("static tip angle (tilt table)", 56.0, 56.7, "deg", True, "within 2 deg", "geometric"),
+        CheckResult("steepest grade climbed from rest", 37.5, 38.7, "deg", True, "within 4 deg",
+                    "the sheet's 45 deg assumes more grip", sheet=45.0)]
 
 
 @pytest.fixture
@@ -29,7 +31,8 @@ def test_json_lists_the_rows(fake_check, capsys):
     assert main(["vehicle", "check", "jackal", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert [d["name"] for d in out] == [r.name for r in ROWS]
-    assert {"name", "measured", "expected", "unit", "ok"} <= set(out[0]) and out[1]["measured"] == 56.0
+    assert {"name", "measured", "expected", "sheet", "unit", "ok"} <= set(out[0]) and out[1]["measured"] == 56.0
+    assert out[2]["sheet"] == 45.0 and out[0]["sheet"] is None
     assert fake_check == [("jackal", "coulomb")]
 
 
@@ -40,7 +43,9 @@ def test_table_and_failing_row_exit_status(fake_check, monkeypatch, capsys):
     finally:
         ROWS.pop()
     out = capsys.readouterr().out
-    assert "static tip angle" in out and "FAIL" in out and "2 of 3 figures within tolerance" in out
+    assert "static tip angle" in out and "FAIL" in out and "3 of 4 figures within tolerance" in out
+    climb = next(line for line in out.splitlines() if line.startswith("steepest grade"))
+    assert "38.700" in climb and " 45 " in climb and " ok " in climb
     assert fake_check == [("husky", "bullet")]
 
 

@@ -1,0 +1,640 @@
+"""The settings reference: every key a study TOML accepts, and every column a study writes.
+
+Everything here is read from the code, so the reference cannot drift from it:
+
+* the settings tables are the config dataclasses behind ``offroadbench.study.spec.SECTIONS``
+  (a table built by ``from_dict(SomeConfig, ...)`` is found automatically, so a new section or
+  field appears in the reference by itself);
+* a key's meaning (with its unit and the paper or source behind it) is the field's docstring,
+  read from the source with :mod:`ast`; its allowed range is read from the ``check_range`` /
+  ``check_int`` / ``check_choice`` calls of the config's ``__post_init__``;
+* the trial columns are the fields of :class:`offroadbench.sim.runner.TrialResult` with their
+  docstrings, after the key columns of :func:`offroadbench.study.results.load`.
+
+``offroadbench config --write-reference docs/reference.md`` rewrites the committed reference
+(``tests/test_reference.py`` fails while it differs from :func:`render_reference`), and
+``offroadbench config [SECTION]`` prints a table's defaults as TOML a study can start from.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import inspect
+import itertools
+import json
+import math
+import re
+import sys
+import textwrap
+import types
+import typing
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "REFERENCE_PATH",
+    "FieldDoc",
+    "SectionDoc",
+    "recipe_sections",
+    "field_docs",
+    "render_reference",
+    "render_section_toml",
+    "section_names",
+    "study_sections",
+    "trial_columns",
+    "unit_of",
+]
+
+#: where the reference lives in the repository
+REFERENCE_PATH = Path("docs") / "reference.md"
+
+#: unit of a field from the end of its name (longest suffix first)
+_UNITS = (
+    ("_n_s_m", "N s/m"), ("_kg_m2", "kg m^2"), ("_rad_s", "rad/s"), ("_deg_s", "deg/s"), ("_m_s3", "m/s^3"),
+    ("_m_s2", "m/s^2"), ("_m_s", "m/s"), ("_n_m", "N/m"), ("_nm", "N m"), ("_1_m", "1/m"), ("_hz", "Hz"),
+    ("_deg", "deg"), ("_rad", "rad"), ("_pct", "%"), ("_mm", "mm"), ("_m", "m"), ("_s", "s"),
+)
+
+
+def unit_of(name: str) -> str:
+    """The SI unit a field or column name carries in its suffix (``lookahead_m`` -> ``m``), or ''."""
+    for suffix, unit in _UNITS:
+        if name.endswith(suffix):
+            return unit
+    return ""
+
+
+@dataclass(frozen=True)
+class FieldDoc:
+    """One key of a settings table (or one column of a table)."""
+
+    name: str
+    type: str
+    default: Any
+    """The default value; :data:`REQUIRED` when the key must be given."""
+    unit: str
+    allowed: str
+    doc: str
+
+
+@dataclass(frozen=True)
+class SectionDoc:
+    """One table of a study TOML: its keys and where they come from."""
+
+    name: str
+    source: str
+    summary: str
+    fields: tuple[FieldDoc, ...]
+    notes: tuple[str, ...] = ()
+    generator: str = ""
+    """For a recipe layer's tables: the generator or modifier they belong to."""
+
+
+REQUIRED = object()
+
+
+# ---------------------------------------------------------------------------- reading the source
+def _class_tree(cls: type) -> ast.ClassDef | None:
+    try:
+        src = textwrap.dedent(inspect.getsource(cls))
+    except (OSError, TypeError):
+        return None
+    for node in ast.parse(src).body:
+        if isinstance(node, ast.ClassDef):
+            return node
+    return None
+
+
+def _attribute_docs(cls: type) -> dict[str, str]:
+    """{field: docstring} of the string literals that follow each annotated field, over the MRO."""
+    out: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        tree = _class_tree(klass) if dataclasses.is_dataclass(klass) else None
+        if tree is None:
+            continue
+        body = tree.body
+        for a, b in itertools.pairwise(body):
+            if (isinstance(a, ast.AnnAssign) and isinstance(a.target, ast.Name) and isinstance(b, ast.Expr)
+                    and isinstance(b.value, ast.Constant) and isinstance(b.value.value, str)):
+                out[a.target.id] = " ".join(inspect.cleandoc(b.value.value).split())
+    return out
+
+
+def _expr_text(node: ast.AST, module: types.ModuleType, env: dict[str, Any]) -> Any:
+    """A keyword argument of a check call as a value (constants, module constants) or as text."""
+    try:
+        return ast.literal_eval(node)
+    except ValueError:
+        pass
+    if isinstance(node, ast.Name):
+        if node.id in env:
+            return env[node.id]
+        if hasattr(module, node.id):
+            return getattr(module, node.id)
+    text = ast.unparse(node)
+    return text.replace("self.", "")
+
+
+def _fmt_num(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:g}"
+    return str(v)
+
+
+def _range_text(call: ast.Call, module: types.ModuleType, env: dict[str, Any]) -> tuple[str, str] | None:
+    """(field, allowed) of a ``check_range`` / ``check_int`` / ``check_choice`` call, or None."""
+    fn = call.func.id if isinstance(call.func, ast.Name) else getattr(call.func, "attr", "")
+    if fn not in ("check_range", "check_int", "check_choice") or len(call.args) < 3:
+        return None
+    field = _expr_text(call.args[1], module, env)
+    if not isinstance(field, str):
+        return None
+    if fn == "check_choice":
+        choices = _expr_text(call.args[3], module, env) if len(call.args) > 3 else "?"
+        if isinstance(choices, (tuple, list, set, frozenset)):
+            choices = ", ".join(f'"{c}"' for c in choices)
+        return field, f"one of {choices}"
+    kw = {k.arg: _expr_text(k.value, module, env) for k in call.keywords}
+    for i, key in enumerate(("lo", "hi"), start=3):
+        if len(call.args) > i:
+            kw[key] = _expr_text(call.args[i], module, env)
+    lo, hi = kw.get("lo"), kw.get("hi")
+    if fn == "check_int":
+        return field, f"integer {_fmt_num(lo) if lo is not None else '-inf'} .. {_fmt_num(hi) if hi is not None else 'inf'}"
+    left = "(" if kw.get("lo_open") or lo is None else "["
+    right = ")" if kw.get("hi_open") or hi is None else "]"
+    return field, f"{left}{_fmt_num(lo) if lo is not None else '-inf'}, {_fmt_num(hi) if hi is not None else 'inf'}{right}"
+
+
+def _walk_checks(stmts: list[ast.stmt], module: types.ModuleType, env: dict[str, Any]) -> Iterator[tuple[str, str]]:
+    for st in stmts:
+        if isinstance(st, ast.For) and isinstance(st.target, ast.Name):
+            try:
+                values = ast.literal_eval(st.iter)
+            except ValueError:
+                values = None
+            if isinstance(values, (tuple, list)):
+                for v in values:
+                    yield from _walk_checks(st.body, module, {**env, st.target.id: v})
+            else:  # a loop over a field's items: the checks inside name the enclosing field
+                yield from _walk_checks(st.body, module, env)
+        elif isinstance(st, ast.If):
+            yield from _walk_checks(st.body, module, env)
+        elif isinstance(st, ast.Expr) and isinstance(st.value, ast.Call):
+            got = _range_text(st.value, module, env)
+            if got:
+                yield got
+
+
+def _allowed_ranges(cls: type) -> dict[str, str]:
+    """{field: allowed values} read from the ``__post_init__`` checks of ``cls`` and its bases."""
+    out: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        tree = _class_tree(klass) if dataclasses.is_dataclass(klass) else None
+        if tree is None:
+            continue
+        module = sys.modules[klass.__module__]
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef) and node.name == "__post_init__":
+                for field, allowed in _walk_checks(node.body, module, {}):
+                    out.setdefault(field, allowed) if field in out else out.__setitem__(field, allowed)
+    return out
+
+
+def _type_text(annotation: Any) -> str:
+    if annotation in (int, float, str, bool):
+        return annotation.__name__
+    origin = typing.get_origin(annotation)
+    if origin in (types.UnionType, typing.Union):
+        return " | ".join("None" if a is type(None) else _type_text(a) for a in typing.get_args(annotation))
+    if origin is tuple:
+        args = typing.get_args(annotation)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return f"list of {_type_text(args[0])}"
+        return "list"
+    if origin is not None:
+        return getattr(origin, "__name__", str(annotation))
+    return getattr(annotation, "__name__", str(annotation))
+
+
+def field_docs(cls: type, *, skip: tuple[str, ...] = (), defaults: Any = None) -> tuple[FieldDoc, ...]:
+    """The keys of config class ``cls``, in declaration order. ``defaults``: an instance whose values
+    stand as the defaults (a vehicle's own values)."""
+    docs = _attribute_docs(cls)
+    ranges = _allowed_ranges(cls)
+    hints = typing.get_type_hints(cls)
+    out = []
+    for f in dataclasses.fields(cls):
+        if not f.init or f.name in skip:
+            continue
+        if defaults is not None:
+            default = getattr(defaults, f.name)
+        elif f.default is not dataclasses.MISSING:
+            default = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            default = REQUIRED
+        out.append(FieldDoc(f.name, _type_text(hints.get(f.name, Any)), default, unit_of(f.name),
+                            ranges.get(f.name, ""), docs.get(f.name, "")))
+    return tuple(out)
+
+
+# ---------------------------------------------------------------------------- the study's tables
+def _builder_class(builder: Any) -> type | None:
+    """The config class a ``SECTIONS`` builder fills (``_config_builder(cls)``'s closure)."""
+    for cell in getattr(builder, "__closure__", None) or ():
+        value = cell.cell_contents
+        if isinstance(value, type) and dataclasses.is_dataclass(value):
+            return value
+    return None
+
+
+def _qualname(cls: type) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
+def _first_line(obj: Any) -> str:
+    doc = inspect.getdoc(obj) or ""
+    return " ".join(doc.split("\n\n")[0].split())
+
+
+def _study_section() -> SectionDoc:
+    from offroadbench.study.spec import StudyConfig
+
+    skip = ("grid", "recipe_overrides", "settings", "reference")
+    notes = (
+        ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
+        "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
+        "`vehicle.name`). Every cell is the cartesian product of the axes, first axis slowest."),
+        ("`[recipe_overrides]`: fixed `\"dotted.key\" = value` changes of the recipe, for every cell "
+        "(the keys of `offroadbench generate --set`)."),
+        ("`[reference]`: published numbers the report sets beside the study's (free-form; "
+        "`offroadbench.study.report`)."),
+    )
+    return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
+                      notes)
+
+
+def _vehicle_section() -> SectionDoc:
+    from offroadbench.sim.vehicle import VehicleSpec, list_vehicles, load_vehicle
+
+    husky = load_vehicle("husky")
+    name = FieldDoc("name", "str", "husky", "", f"a vehicle name ({', '.join(list_vehicles())}) or a vehicle.toml path",
+                    "The vehicle; the other keys change single figures of it.")
+    fields = (name, *field_docs(VehicleSpec, skip=("name", "urdf"), defaults=husky))
+    notes = (("Defaults shown are the Husky's (`vehicles/husky/vehicle.toml`, every figure with its source "
+             "beside it); another `name` brings that vehicle's own values."),)
+    return SectionDoc("vehicle", _qualname(VehicleSpec), _first_line(VehicleSpec), fields, notes)
+
+
+def _driver_entries() -> list[tuple[str, str, Any]]:
+    """(kind, name, spec) of the built-in planners and policies (installed plug-ins left out, so the
+    reference does not depend on what else is installed)."""
+    from offroadbench.navigation.planners import PLANNERS
+    from offroadbench.navigation.policies import POLICIES
+
+    out = []
+    for kind, reg in (("planner", PLANNERS), ("policy", POLICIES)):
+        for name in reg.names():
+            spec = reg.get(name)
+            fn = getattr(spec, "plan", None) or getattr(spec, "make", None)
+            if getattr(fn, "__module__", "").startswith("offroadbench."):
+                out.append((kind, name, spec))
+    return out
+
+
+def _planner_sections() -> list[SectionDoc]:
+    from offroadbench.navigation.planners import NoConfig, PlannerChoice
+
+    entries = _driver_entries()
+    names = ", ".join(f"`{n}`" for _, n, _ in entries)
+    head = SectionDoc(
+        "planner", _qualname(PlannerChoice), _first_line(PlannerChoice),
+        (FieldDoc("name", "str", "straight", "", f"one of {names} (and installed plug-ins)",
+                  "The planner (pure pursuit follows its path) or closed-loop policy that drives every trial; "
+                  "the table's other keys are that entry's settings, below."),),
+    )
+    out = [head]
+    for kind, name, spec in entries:
+        cfg = spec.config
+        fields = () if cfg is NoConfig else field_docs(cfg)
+        summary = f"{kind} `{name}`: {spec.summary}" if spec.summary else f"{kind} `{name}`"
+        out.append(SectionDoc(f"planner.{name}", _qualname(cfg), summary, fields,
+                              ("No settings.",) if not fields else ()))
+    return out
+
+
+def study_sections() -> list[SectionDoc]:
+    """Every table a study TOML accepts, in the order of the file: ``[study]``, then the settings
+    tables of ``offroadbench.study.spec.SECTIONS`` (planners' settings as ``planner.NAME``)."""
+    from offroadbench.study.spec import SECTIONS
+
+    out = [_study_section()]
+    for name, builder in SECTIONS.items():
+        if name == "vehicle":
+            out.append(_vehicle_section())
+        elif name == "planner":
+            out.extend(_planner_sections())
+        else:
+            cls = _builder_class(builder)
+            if cls is None:
+                raise RuntimeError(f"study section [{name}]: no config class found for the reference; "
+                                   "teach offroadbench.reference about it")
+            skip = ("count",) if name == "missions" else ()
+            notes = ("`count` is not a study key: `[study] missions_per_terrain` sets it.",) if skip else ()
+            out.append(SectionDoc(name, _qualname(cls), _first_line(cls), field_docs(cls, skip=skip), notes))
+    return out
+
+
+def section_names() -> list[str]:
+    return [s.name for s in study_sections()]
+
+
+# ---------------------------------------------------------------------------- terrain recipes
+def _nested_sections(key: str, cls: type, summary: str, generator: str) -> list[SectionDoc]:
+    """``key``'s table and, recursively, the tables of its fields that are configs themselves."""
+    from offroadbench.config import _dataclass_type
+
+    fields = field_docs(cls)
+    out = [SectionDoc(key, _qualname(cls), summary, fields, generator=generator)]
+    hints = typing.get_type_hints(cls)
+    for f in fields:
+        sub = _dataclass_type(hints.get(f.name))
+        if sub is not None and sub.__name__.endswith(("Config", "Options")):  # not data (a crater table, a DEM)
+            out += _nested_sections(f"{key}.{f.name}", sub, _first_line(sub), generator)
+    return out
+
+
+#: layer keys that name a file, read when the recipe is loaded (offroadbench.terrain.recipe's file
+#: readers), in place of the data field they fill
+FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
+    "craters": ("craters", (
+        FieldDoc("crater_file", "str", None, "", "a path",
+                 "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
+                 "population (read when the recipe is loaded)."),)),
+    "dem": ("dem", (
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
+                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
+        FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
+        FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
+                 "(filled, Martin et al. 2014, Sec. IV.B)."),
+    )),
+}
+
+
+def recipe_sections() -> list[SectionDoc]:
+    """The tables of a terrain recipe (what ``[recipe_overrides]``, ``recipe.<key>`` grid axes and
+    ``generate --set`` reach): ``[grid]`` and, per built-in generator or modifier, its layer table."""
+    from offroadbench.terrain.grid import GridConfig
+    from offroadbench.terrain.recipe import COMBINE_MODES
+    from offroadbench.terrain.registry import TERRAIN_REGISTRY
+
+    out = [SectionDoc("grid", _qualname(GridConfig), _first_line(GridConfig), field_docs(GridConfig))]
+    names = sorted(n for n, spec in TERRAIN_REGISTRY.items() if spec.config_cls.__module__.startswith("offroadbench."))
+    layer = (
+        FieldDoc("generator", "str", REQUIRED, "", "one of " + ", ".join(f'"{n}"' for n in names),
+                 "The registered generator or modifier of this layer (`offroadbench terrains` lists them)."),
+        FieldDoc("combine", "str", None, "", "one of " + ", ".join(f'"{c}"' for c in COMBINE_MODES),
+                 "How the layer joins the terrain so far: the first generator replaces, later generators sum "
+                 "(or multiply); modifiers apply."),
+        FieldDoc("weight", "float", 1.0, "", "", "Factor on the layer's heights where it is summed."),
+    )
+    out.append(SectionDoc("layers.NAME", "offroadbench.terrain.recipe", "Every layer table (applied in file order).",
+                          layer))
+    for name in names:
+        spec = TERRAIN_REGISTRY.get(name)
+        tables = _nested_sections("layers.NAME", spec.config_cls, f"{spec.kind} `{name}`: {spec.summary}", name)
+        if name in FILE_KEYS:  # the file's keys stand where the data field they fill would
+            data, keys = FILE_KEYS[name]
+            top = tables[0]
+            tables[0] = dataclasses.replace(top, fields=(*keys, *(f for f in top.fields if f.name != data)))
+        out += tables
+    return out
+
+
+# ---------------------------------------------------------------------------- the tables a study writes
+#: the key columns of a study's trial table (offroadbench.study.results.load), before the TrialResult fields
+KEY_COLUMNS = (
+    ("(grid columns)", "", ("One column per grid axis, named by its last key part (`D_high`), `planner` for "
+     "`planner.name`, `vehicle` for `vehicle.name`, or the full key where the last part is ambiguous.")),
+    ("cell", "", "Index of the grid cell (first axis slowest)."),
+    ("terrain", "", "Index j of the terrain within its cell."),
+    ("mission", "", "Index k of the mission on its terrain (the mission sampler's order)."),
+    ("terrain_seed", "", ("Integer seed of the terrain: `offroadbench generate --seed <it>` rebuilds it "
+     "(offroadbench.seeding.terrain_seed).")),
+    ("mission_seed", "", "Integer seed the mission was drawn from (offroadbench.seeding.mission_seed)."),
+)
+
+#: columns of the terrain table (offroadbench.study.results.load_terrains) after the grid columns and keys
+TERRAIN_COLUMNS = (
+    ("area_low", "", ("Fraction of the map inside the border whose Moore gradient is low (Majhor & Bos 2023, "
+     "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
+    ("area_semi", "", "Fraction inside the border that is semi-rough (as above)."),
+    ("area_high", "", "Fraction inside the border that is highly rough (as above)."),
+)
+
+#: meaning of each telemetry column (offroadbench.sim.runner.TELEMETRY_COLUMNS)
+TELEMETRY_DOCS = {
+    "t_s": "Time since the clock started (after settling).",
+    "x_m": "Base position x on the map.", "y_m": "Base position y on the map.", "z_m": "Base height.",
+    "qx": "Base orientation quaternion, x.", "qy": "Quaternion y.", "qz": "Quaternion z.", "qw": "Quaternion w.",
+    "roll_rad": "Roll (Z-Y-X Euler angles).", "pitch_rad": "Pitch.", "yaw_rad": "Yaw, counter-clockwise from +x.",
+    "vx_m_s": "Base velocity x (world).", "vy_m_s": "Base velocity y (world).", "vz_m_s": "Base velocity z (world).",
+    "roll_rate_body_rad_s": "Angular rate about the body x axis.",
+    "pitch_rate_body_rad_s": "Angular rate about the body y axis.",
+    "yaw_rate_body_rad_s": "Angular rate about the body z axis.",
+    "cmd_v_m_s": "Commanded forward speed.", "cmd_omega_rad_s": "Commanded yaw rate.",
+    "progress_m": "Distance gained toward the goal since the start.",
+    "penetration_m": "Deepest wheel-terrain penetration at this sample.",
+}
+
+
+def trial_columns() -> list[FieldDoc]:
+    """The columns of a study's trial table (``offroadbench.study.load``): keys, then every
+    TrialResult field (``mission_index`` is the ``mission`` key)."""
+    from offroadbench.sim.runner import TrialResult
+
+    keys = [FieldDoc(n, "", None, u, "", d) for n, u, d in KEY_COLUMNS]
+    return keys + [f for f in field_docs(TrialResult) if f.name != "mission_index"]
+
+
+# ---------------------------------------------------------------------------- rendering
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, (tuple, list)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    return json.dumps(str(v))
+
+
+def _md_default(f: FieldDoc) -> str:
+    if f.default is REQUIRED:
+        return "required"
+    if dataclasses.is_dataclass(f.default):
+        return "table below"
+    if f.default is None:
+        return "none"
+    if isinstance(f.default, dict) and not f.default:
+        return ""
+    return f"`{_toml_value(f.default)}`"
+
+
+def _md_cell(text: str) -> str:
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = False) -> list[str]:
+    if columns:
+        lines = ["| column | unit | meaning |", "|---|---|---|"]
+        lines += [f"| `{f.name}` | {f.unit} | {_md_cell(f.doc)} |" for f in fields]
+        return lines
+    lines = ["| key | type | default | unit | allowed | meaning |", "|---|---|---|---|---|---|"]
+    for f in fields:
+        lines.append(f"| `{f.name}` | {_md_cell(f.type)} | {_md_cell(_md_default(f))} | {f.unit} | {_md_cell(f.allowed)} | "
+                     f"{_md_cell(f.doc)} |")
+    return lines
+
+
+def render_reference() -> str:
+    """The whole reference as Markdown (the text of ``docs/reference.md``)."""
+    from offroadbench.sim.runner import TELEMETRY_COLUMNS
+
+    lines = [
+        "# offroadbench settings reference",
+        "",
+        ("<!-- Generated from the code by `offroadbench config --write-reference docs/reference.md`; do not edit by hand. "
+        "tests/test_reference.py fails while this file is stale. -->"),
+        "",
+        ("Every key a study TOML accepts (`offroadbench study run STUDY.toml`), with its type, default, "
+        "unit, allowed values and meaning (the field's docstring: the paper or measurement behind the "
+        "default is cited there), and every column of the tables a study writes. "
+        "`offroadbench config [SECTION]` prints a table's defaults as TOML to start a study from. "
+        "Units are SI and are carried by the key's name (`_m`, `_s`, `_hz`, `_deg`, ...)."),
+        "",
+        "## Study TOML",
+        "",
+    ]
+    for s in study_sections():
+        top, _, entry = s.name.partition(".")
+        title = f'`[{top}]` with `name = "{entry}"`' if entry else f"`[{top}]`"
+        summary = s.summary if s.summary.endswith(".") else s.summary + "."
+        lines += [f"### {title}", "", f"{_md_cell(summary)} Source: `{s.source}`.", ""]
+        if s.fields:
+            lines += _md_table(s.fields) + [""]
+        for note in s.notes:
+            lines += [note, ""]
+    lines += [
+        "## Terrain recipes",
+        "",
+        "The keys a study reaches through `[recipe_overrides]` and `recipe.<key>` grid axes, and "
+        "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
+        "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
+        "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
+        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
+        "",
+    ]
+    for s in recipe_sections():
+        summary = s.summary if s.summary.endswith(".") else s.summary + "."
+        title = f"`[{s.name}]`" + (f' with `generator = "{s.generator}"`' if s.generator else "")
+        lines += [f"### {title}", "", f"{_md_cell(summary)} Source: `{s.source}`.", ""]
+        lines += _md_table(s.fields) + [""]
+    lines += [
+        "## Tables a study writes",
+        "",
+        "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
+        "",
+        ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
+        "trials only. Source: `offroadbench.sim.runner.TrialResult`."),
+        "",
+        *_md_table(trial_columns(), columns=True),
+        "",
+        "### Terrains (`offroadbench.study.load_terrains(DIR)`)",
+        "",
+        "One row per terrain: the grid columns, `cell`, `terrain`, `terrain_seed`, then:",
+        "",
+        *_md_table([FieldDoc(n, "", None, u, "", d) for n, u, d in TERRAIN_COLUMNS], columns=True),
+        "",
+        "### Telemetry (`telemetry/` of a run directory or of `drive --out`)",
+        "",
+        ("One row per telemetry sample (`[sim] telemetry_rate_hz`, 20 Hz by default). "
+        "Source: `offroadbench.sim.runner.TELEMETRY_COLUMNS`."),
+        "",
+        *_md_table([FieldDoc(c, "", None, unit_of(c), "", TELEMETRY_DOCS.get(c, "")) for c in TELEMETRY_COLUMNS],
+                   columns=True),
+        "",
+    ]
+    return "\n".join(lines)
+
+
+_SENTENCE_END = re.compile(r"(?<!Sec)(?<!Eq)(?<!Fig)(?<!al)(?<!e\.g)(?<!i\.e)\.\s+(?=[A-Z(`])")
+
+
+def _first_sentence(text: str) -> str:
+    return _SENTENCE_END.split(text, maxsplit=1)[0].rstrip(".")
+
+
+def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str]:
+    """``key = default`` lines, each after a comment; keys from index ``commented_from`` on (and
+    keys without a default) are commented out."""
+    lines = []
+    for i, f in enumerate(s.fields):
+        info = "; ".join(t for t in (f.unit, f.allowed) if t)
+        lines.append(f"# {_first_sentence(f.doc)}" + (f" ({info})" if info else ""))
+        pre = "# " if commented_from is not None and i >= commented_from else ""
+        if f.default is REQUIRED:
+            lines.append(f"# {f.name} = ...   (required)")
+        elif f.default is None:
+            lines.append(f"# {f.name} = ...   (default: none)")
+        else:
+            lines.append(f"{pre}{f.name} = {_toml_value(f.default)}")
+    return lines
+
+
+#: what a freshly printed ``[study]`` table holds for its required keys
+_STUDY_EXAMPLE = {"name": "my-study", "recipe": "paper-d2.45", "root_seed": 0}
+
+
+def render_section_toml(section: str | None = None) -> str:
+    """A study table (or, with ``section=None``, every table) with its defaults, as TOML with a
+    comment per key. The output loads as it is; keys without a default are commented out (in
+    ``[study]`` the required keys get example values)."""
+    sections = study_sections()
+    names = [s.name for s in sections if "." not in s.name]
+    if section is not None and section not in names:
+        from offroadbench.registry import unknown_name
+
+        raise unknown_name("study table", section, names)
+    lines: list[str] = []
+    for s in sections:
+        top = s.name.split(".", 1)[0]
+        if section is not None and top != section:
+            continue
+        if "." in s.name:
+            if s.fields:
+                lines += [f"# with name = \"{s.name.split('.', 1)[1]}\": {s.summary}"]
+                lines += _toml_block(s, commented_from=0) + [""]
+            continue
+        lines += [f"[{s.name}]", f"# {s.summary} ({s.source})"]
+        if s.name == "study":
+            s = dataclasses.replace(s, fields=tuple(
+                dataclasses.replace(f, default=_STUDY_EXAMPLE[f.name]) if f.name in _STUDY_EXAMPLE else f
+                for f in s.fields))
+        # a vehicle's figures stay commented: set here, they would override another vehicle's own
+        lines += _toml_block(s, commented_from=1 if s.name == "vehicle" else None) + [""]
+    return "\n".join(lines).rstrip() + "\n"

@@ -1,0 +1,149 @@
+"""What a study held fixed: the first screen of its report.
+
+A report must say what ran without the reader opening ``study.toml``: the vehicle, the planner or
+policy and its settings, gravity, the physics rate, the tyre model, the failure rules and the
+terrain recipe, each marked when it differs from the package default, and marked as a grid axis
+where it varied. :func:`held_fixed` reads them from the run's stored metadata (the resolved
+settings of each cell), :func:`report_title` names what a reader would otherwise mistake (a
+non-default planner, another gravity).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import pandas as pd
+
+__all__ = ["held_fixed", "report_title"]
+
+#: (table, field, label) of the settings every report header lists
+_SHOWN = (
+    ("sim", "gravity_m_s2", "gravity (m/s^2)"),
+    ("sim", "engine", "physics engine"),
+    ("sim", "physics_rate_hz", "physics rate (Hz)"),
+    ("sim", "tyre_model", "tyre model"),
+    ("sim", "soil", "soil (terramechanics tyres)"),
+    ("controller", "cruise_speed_m_s", "cruise speed (m/s)"),
+    ("controller", "lookahead_m", "pure-pursuit lookahead (m)"),
+    ("missions", "length_m", "mission length (m)"),
+    ("missions", "border_m", "mission border (m)"),
+)
+
+
+def _sections(meta: dict[str, Any], cell: int = 0) -> dict[str, Any]:
+    from offroadbench.study.spec import SECTIONS, build_section
+
+    info = meta["cells"][cell]
+    out = {}
+    for name in SECTIONS:
+        try:
+            out[name] = build_section(name, info["settings"].get(name, {}), where=f"cell {cell} [{name}]")
+        except Exception:  # noqa: BLE001  (a vehicle or plug-in of the run missing here: show the raw table)
+            out[name] = dict(info["settings"].get(name, {}))
+    out["sim"] = _on_terrain(out["sim"], info.get("recipe"))
+    return out
+
+
+def _on_terrain(sim: Any, recipe: Any) -> Any:
+    """The sim settings with the terrain's gravity and soil where the study leaves them open (as a
+    trial resolves them)."""
+    if not hasattr(sim, "for_terrain"):
+        return sim
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    return sim.for_terrain(*terrain_gravity_and_soil(recipe))
+
+
+def _default(name: str) -> Any:
+    from offroadbench.study.spec import build_section
+
+    cfg = build_section(name, {}, where="defaults")
+    return _on_terrain(cfg, None) if name == "sim" else cfg
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:g}"
+    if isinstance(v, (list, tuple)):
+        return ", ".join(map(_fmt, v))
+    return str(v)
+
+
+def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
+    """One row per setting: ``setting``, ``value`` (of the first cell, or ``grid axis``) and
+    ``note`` (``not the default (D)`` where it differs from the package default)."""
+    study = meta["study"]
+    axes = {a["key"] for a in study["grid"]}
+    secs = _sections(meta)
+    rows = []
+
+    def add(setting: str, key: str | None, value: Any, default: Any = None) -> None:
+        if key is not None and key in axes:
+            rows.append({"setting": setting, "value": "grid axis", "note": f"varies: `{key}`"})
+            return
+        note = "" if default is None or value == default else f"not the default ({_fmt(default)})"
+        rows.append({"setting": setting, "value": _fmt(value), "note": note})
+
+    vehicle = secs["vehicle"]
+    add("vehicle", "vehicle.name", getattr(vehicle, "name", vehicle.get("name", "husky") if isinstance(vehicle, dict) else vehicle),
+        "husky")
+    changed = sorted(k for k in study.get("settings", {}).get("vehicle", {}) if k != "name")
+    if changed:
+        rows.append({"setting": "vehicle figures changed", "value": ", ".join(changed), "note": "not the vehicle's own"})
+    planner = secs["planner"]
+    name = getattr(planner, "name", "straight")
+    add(f"{getattr(planner, 'kind', 'planner')}", "planner.name", name, "straight")
+    params = getattr(planner, "params", {})
+    if params and "planner.name" not in axes:
+        default = dataclasses.asdict(type(planner.config)()) if dataclasses.is_dataclass(planner.config) else {}
+        diff = {k: v for k, v in params.items() if default.get(k) != v}
+        rows.append({"setting": f"{name} settings", "value": ", ".join(f"{k} = {_fmt(v)}" for k, v in params.items()),
+                     "note": ("changed: " + ", ".join(sorted(diff))) if diff else "defaults"})
+    for table, field, label in _SHOWN:
+        cfg = secs[table]
+        if field == "soil" and getattr(cfg, "tyre_model", "") != "terramechanics":
+            continue  # the soil acts only through the terramechanics tyres
+        if dataclasses.is_dataclass(cfg) and hasattr(cfg, field):
+            add(label, f"{table}.{field}", getattr(cfg, field), getattr(_default(table), field))
+    rules = secs["rules"]
+    if dataclasses.is_dataclass(rules):
+        default = _default("rules")
+        grid_rules = sorted(k for k in axes if k.startswith("rules."))
+        value = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
+                 f"{_fmt(rules.stuck_window_s)} s; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
+                 f"{_fmt(rules.goal_tolerance_m)} m")
+        diff = [f.name for f in dataclasses.fields(rules) if getattr(rules, f.name) != getattr(default, f.name)]
+        note = (f"varies: {', '.join(grid_rules)}; " if grid_rules else "") + (
+            f"not the default: {', '.join(diff)}" if diff else "the paper's (Sec. 2.4)")
+        rows.append({"setting": "failure rules", "value": value, "note": note})
+    overrides = study.get("recipe_overrides", {})
+    recipe_axes = sorted(k for k in axes if k == "recipe" or k.startswith("recipe."))
+    rows.append({"setting": "terrain recipe", "value": study["recipe"]
+                 + (f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else ""),
+                 "note": f"varies: {', '.join(recipe_axes)}" if recipe_axes else ""})
+    machines = sorted({r.get("machine", "") for r in meta.get("runs", []) if r.get("machine")})
+    versions = sorted({r.get("version", "") for r in meta.get("runs", []) if r.get("version")} | {meta.get("version", "")})
+    rows.append({"setting": "platform", "value": "; ".join(machines) or "unknown", "note": ""})
+    rows.append({"setting": "code version", "value": ", ".join(v for v in versions if v), "note": ""})
+    return pd.DataFrame(rows, columns=["setting", "value", "note"])
+
+
+def report_title(meta: dict[str, Any]) -> str:
+    """``Study report: NAME``, plus a non-default planner and gravity held fixed (a planner
+    benchmark must not read like a straight-line study)."""
+    study = meta["study"]
+    axes = {a["key"] for a in study["grid"]}
+    secs = _sections(meta)
+    extra = []
+    planner = secs["planner"]
+    if "planner.name" not in axes and getattr(planner, "name", "straight") != "straight":
+        extra.append(f"{getattr(planner, 'kind', 'planner')} `{planner.name}`")
+    sim = secs["sim"]
+    if ("sim.gravity_m_s2" not in axes and dataclasses.is_dataclass(sim)
+            and sim.gravity_m_s2 != _default("sim").gravity_m_s2):  # not Earth's (set, or the recipe's body)
+        extra.append(f"gravity {sim.gravity_m_s2:g} m/s^2")
+    vehicle = secs["vehicle"]
+    if "vehicle.name" not in axes and getattr(vehicle, "name", "husky") != "husky":
+        extra.append(f"vehicle `{vehicle.name}`")
+    return f"Study report: {study['name']}" + (f" ({', '.join(extra)})" if extra else "")
