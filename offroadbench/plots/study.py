@@ -31,7 +31,9 @@ def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -
     for i, (label, s) in enumerate(groups.items()):
         if s["n"] == 0:
             s = dict(s, median=np.nan, q1=np.nan, q3=np.nan, whislo=np.nan, whishi=np.nan)
-        boxes.append({"label": f"{short_label(label)}\nn={s['n']}", "med": s["median"], "q1": s["q1"], "q3": s["q3"],
+        many = len(groups) > 4  # many groups: the values only, rotated, the axes' names below
+        text = f"{_values(label)} (n={s['n']})" if many else f"{short_label(label)}\nn={s['n']}"
+        boxes.append({"label": text, "med": s["median"], "q1": s["q1"], "q3": s["q3"],
                       "whislo": s["whislo"], "whishi": s["whishi"], "fliers": s["fliers"]})
         v = np.asarray(s.get("values", ()), dtype=float)
         if 0 < len(v) < SHOW_POINTS_BELOW:
@@ -42,14 +44,24 @@ def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -
            boxprops={"color": CLASS_COLOURS[0]},
            whiskerprops={"color": "black", "linestyle": ":"},
            flierprops={"marker": "+", "markeredgecolor": "red", "linestyle": "none"})
+    if len(groups) > 4:
+        ax.tick_params(axis="x", labelrotation=90, labelsize=7)
+        ax.set_xlabel(" / ".join(part.split(" = ", 1)[0] for part in next(iter(groups)).split(", ")), fontsize=8)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(axis="y", alpha=0.3)
 
 
-def short_label(label: str) -> str:
-    """A group label without spaces around ``=``, to fit under a box."""
-    return label.replace(" = ", "=")
+def _values(label: str) -> str:
+    """The values of a group label ``a = 1, b = x`` as ``1 / x``."""
+    return " / ".join(part.split(" = ", 1)[-1] for part in label.split(", "))
+
+
+def short_label(label: str, one_line: bool = False) -> str:
+    """A group label without spaces around ``=``, one grid axis per line to fit under a box (or on
+    one line, for titles and table cells)."""
+    short = label.replace(" = ", "=")
+    return short if one_line else short.replace(", ", "\n")
 
 
 def fig_class_areas(summary: pd.DataFrame):
@@ -81,10 +93,22 @@ def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: M
     """Fig. 7: box plots of the traversal metrics of successful trials per group; ``boxes`` is metric
     -> group label -> box statistics (offroadbench.study.stats.metric_boxes), ``metrics`` is metric
     -> (title, unit) for the four panels."""
-    fig, axes = new_figure(2, 2, figsize=(9, 6.4))
+    many = max((len(b) for b in boxes.values()), default=0) > 4  # rotated labels need room
+    fig, axes = new_figure(2, 2, figsize=(11, 10) if many else (9, 6.4))
     for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items()):
         _bxp(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Successful trials only", fontsize=10)
+    return fig
+
+
+def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
+    """Soft soil: box plots of the mean wheel slip and the deepest wheel sinkage of every trial per
+    group driven on soil (offroadbench.study.stats.soil_boxes)."""
+    many = max((len(b) for b in boxes.values()), default=0) > 4
+    fig, axes = new_figure(1, len(metrics), figsize=(5.5 * len(metrics), 6.0 if many else 3.6))
+    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items()):
+        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
+    fig.suptitle("Soft soil: every trial (successful or not)", fontsize=10)
     return fig
 
 

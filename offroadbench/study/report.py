@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
+from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_soil, fig_success, short_label
 from offroadbench.study import stats
 from offroadbench.study.results import load, load_meta, load_terrains
 
@@ -85,7 +85,7 @@ def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     prepared = prepare_terrain(plan.recipe(), seed, plan.trial_settings, [])
     hm, maps, rcfg = prepared.hm, prepared.maps, plan.trial_settings.roughness
     t = trials[(trials["cell"] == cell) & (trials["terrain"] == terrain)]
-    title = (f"Terrain {terrain} of {short_label(stats.group_labels(meta)[cell])} (seed {seed}); "
+    title = (f"Terrain {terrain} of {short_label(stats.group_labels(meta)[cell], one_line=True)} (seed {seed}); "
              "missions: white = success, black = failure")
     return fig_missions(hm, maps.classes, maps.closed, rcfg.border_m, t, title=title)
 
@@ -135,7 +135,7 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.
                 p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
                 o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
                 same = _direction_agrees(p_abs, o_abs)
-                rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'])} → {short_label(mine.loc[i, 'to'])}",
+                rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
                              "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
                              "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
@@ -197,7 +197,7 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
            "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
            if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
            "Mann-Whitney U p (in the p_wilcoxon column)")
-    shown = tab.assign(step=[f"{short_label(a)} → {short_label(b)}" for a, b in zip(tab["from"], tab["to"])])
+    shown = tab.assign(step=[f"{short_label(a, True)} → {short_label(b, True)}" for a, b in zip(tab["from"], tab["to"])])
     shown = shown[["quantity", "step", *[c for c in tab.columns if c not in ("quantity", "from", "to")]]]
     text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
             "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
@@ -385,6 +385,16 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
             trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
         lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
+    soil = stats.soil_boxes(trials, labels)
+    if soil:
+        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS)
+        rows = [{"metric": f"{title} ({unit})", "group": g, "n": b["n"], "median": b["median"], "Q1": b["q1"],
+                 "Q3": b["q3"], "max": float(np.nanmax(b["values"])) if b["n"] else math.nan}
+                for m, (title, unit) in stats.SOIL_METRICS.items() for g, b in soil[m].items()]
+        lines += ["## Soft soil: slip and sinkage (every trial)", "", "![Soft soil](fig8_soil.png)", "",
+                  "Mean longitudinal slip of the wheels over the trial and the deepest wheel sinkage "
+                  "(Wong-Reece terramechanics tyre model), over every trial of the groups driven on soil, "
+                  "failed ones included.", "", markdown_table(pd.DataFrame(rows)), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",

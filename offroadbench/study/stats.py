@@ -24,6 +24,8 @@ __all__ = [
     "QUANTILE_METHOD",
     "WHISKER_IQR",
     "METRICS",
+    "SOIL_METRICS",
+    "soil_boxes",
     "CLASSES",
     "box_stats",
     "terrain_success",
@@ -49,6 +51,12 @@ METRICS: dict[str, tuple[str, str]] = {
     "traversal_time_s": ("Traversal time", "s"),
 }
 CLASSES = CLASS_NAMES
+
+#: soft-soil metrics (every trial of a cell driven on soil, ``terramechanics`` tyre model): column -> (title, unit)
+SOIL_METRICS: dict[str, tuple[str, str]] = {
+    "mean_slip": ("Mean wheel slip", "-"),
+    "max_penetration_m": ("Deepest wheel sinkage", "m"),
+}
 
 
 def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, Any]:
@@ -100,6 +108,15 @@ def metric_boxes(trials: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict
     """Fig. 7: metric column -> group label -> :func:`box_stats` over the group's successful trials."""
     ok = trials[trials["success"].astype(bool)]
     return {metric: {labels[c]: box_stats(ok.loc[ok["cell"] == c, metric]) for c in sorted(labels)} for metric in METRICS}
+
+
+def soil_boxes(trials: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict[str, dict[str, Any]]]:
+    """:data:`SOIL_METRICS` -> group label -> :func:`box_stats` over every trial (successful or not)
+    of the groups driven on soil (a finite ``mean_slip``); empty when no group was."""
+    if "mean_slip" not in trials:
+        return {}
+    soil = sorted(c for c in labels if np.isfinite(trials.loc[trials["cell"] == c, "mean_slip"].astype(float)).any())
+    return {m: {labels[c]: box_stats(trials.loc[trials["cell"] == c, m]) for c in soil} for m in SOIL_METRICS} if soil else {}
 
 
 def group_summary(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:
