@@ -38,7 +38,7 @@ def body_gravity(table: Mapping[str, Any], where: str = "[body]") -> tuple[str, 
         if name is not None and not isinstance(name, str):
             raise InputError(f"{where}: name must be a string, got {name!r}")
         return (name or "custom"), float(g)
-    if name not in BODIES:
+    if not isinstance(name, str) or name not in BODIES:
         raise InputError(f"{where}: name = {name!r}; allowed: {', '.join(BODIES)} (or give gravity_m_s2)")
     return name, BODIES[name]
 

@@ -83,7 +83,7 @@ def _openblas() -> dict[str, Any]:
     import numpy
 
     libs = [lib for lib in threadpool_info() if lib.get("internal_api") == "openblas"]
-    root = os.path.dirname(os.path.dirname(numpy.__file__))
+    root = os.path.dirname(os.path.dirname(numpy.__spec__.origin))  # site-packages holding numpy
     ours = [lib for lib in libs if os.path.basename(os.path.dirname(lib.get("filepath", ""))) == "numpy.libs"
             or str(lib.get("filepath", "")).startswith(os.path.join(root, "numpy"))]
     for lib in ours or libs[:1]:

@@ -549,8 +549,10 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   markdown_table(shown), "",
                   "### Breaking points", "",
                   f"The {level} at which the fitted success probability is 50 % (logistic regression of trial "
-                  "success on the level, covariance clustered by terrain; `–`: success or failure is separated "
-                  f"by the level, no fit; an infinite end: the data do not bound it); studied: {lo_lv:g}-{hi_lv:g}.",
+                  "success on the level, covariance clustered by terrain; `–`: no breaking point, either because "
+                  "success or failure is separated by the level (no fit) or because the fitted success does not "
+                  "fall as the level rises; an infinite end: the data do not bound it; 'extrapolated': beyond the "
+                  f"studied levels, a statement about the fitted curve only); studied: {lo_lv:g}-{hi_lv:g}.",
                   "", markdown_table(bp_shown), ""]
     paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:

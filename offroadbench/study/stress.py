@@ -94,7 +94,7 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
     module docstring).
 
     Columns: the group, ``breaking_point`` (NaN when the fit does not exist: success or failure is
-    separated by the level), ``ci95_low``, ``ci95_high``, ``slope`` (per unit of the level),
+    separated by the level, or the fitted success does not fall with the level), ``ci95_low``, ``ci95_high``, ``slope`` (per unit of the level),
     ``extrapolated`` (the point lies outside the studied levels), ``terrains`` (clusters),
     ``first_level_below`` (observed), ``levels``.
     """
@@ -107,6 +107,8 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
         rates = t.groupby(level, sort=True)["success"].mean()
         fit = fit_logistic(t[level].to_numpy(float), t["success"].astype(float).to_numpy(), t["terrain"].to_numpy())
         point, lo, hi = breaking_point_logistic(fit, threshold)
+        if not fit.slope < 0:  # success does not fall as the level rises: no level at which it crosses down
+            point, lo, hi = math.nan, math.nan, math.nan
         rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,))), "breaking_point": point,
                      "ci95_low": lo, "ci95_high": hi, "slope": fit.slope,
                      "extrapolated": bool(math.isfinite(point) and not (min(levels) <= point <= max(levels))),
