@@ -107,11 +107,11 @@ def load_heightmap_arg(
         rows, cols = png_shape(source)
         check_memory(grid_bytes(rows, cols), f"{source}: a {rows}x{cols} heightmap", force)
         return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem, None
-    from offroadbench.terrain.recipe import generate_terrain
+    from offroadbench.terrain.recipe import load_terrain
 
     recipe = load_recipe_with_sets(source, sets)
     check_recipe_memory(recipe, force)
-    return generate_terrain(recipe, seed), f"{recipe.name} seed {seed}", recipe
+    return load_terrain(recipe, seed)[0], f"{recipe.name} seed {seed}", recipe
 
 
 def crater_diameters(recipe, seed: int):

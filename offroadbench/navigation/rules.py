@@ -36,7 +36,8 @@ import numpy as np
 from offroadbench.config import check_range
 from offroadbench.navigation import metrics
 
-__all__ = ["FAILURE_REASONS", "FailureRules", "stuck_window_s", "unreachable", "end_reason", "RuleChecker"]
+__all__ = ["FAILURE_REASONS", "FailureRules", "trial_timeout_s", "stuck_window_s", "unreachable", "end_reason",
+           "RuleChecker"]
 
 log = logging.getLogger(__name__)
 
@@ -83,6 +84,13 @@ class FailureRules:
         check_range(self, "entrap_slip", self.entrap_slip, lo=0, hi=1)
         check_range(self, "entrap_sinkage_fraction", self.entrap_sinkage_fraction, lo=0)
         check_range(self, "entrap_window_s", self.entrap_window_s, lo=0, lo_open=True)
+
+
+def trial_timeout_s(rules: FailureRules, length_m: float, cruise_speed_m_s: float, max_speed_m_s: float) -> float:
+    """The simulated time a trial may take, seconds: ``rules.timeout_factor`` times the nominal time,
+    the path length over the speed it is driven at (the cruise speed, capped by the vehicle's top
+    speed). The one rule for the trial runner and the Gymnasium env."""
+    return rules.timeout_factor * length_m / min(cruise_speed_m_s, max_speed_m_s)
 
 
 def stuck_window_s(rules: FailureRules, timeout_s: float) -> float:

@@ -26,8 +26,9 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   on the vehicle and aligned with its heading (see :func:`height_patch`).
 - **End**: ``terminated`` on success (within ``rules.goal_tolerance_m`` of the goal) or on the
   trial runner's failure rules (offroadbench.navigation.rules: tipped, off_map, success, stuck, with
-  the stuck window capped below the timeout), checked by the same code at the control rate; ``truncated`` at the timeout, ``rules.timeout_factor`` times the mission length
-  over the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
+  the stuck window capped below the timeout), checked by the same code at the control rate; ``truncated`` at the timeout, the trials' rule
+  (offroadbench.navigation.rules.trial_timeout_s): ``rules.timeout_factor`` times the mission length
+  over the trials' cruise speed (ControllerConfig, 1 m/s) capped by the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
   one of ``tipped``, ``stuck``, ``off_map``, ``timeout``; ``info["success"]`` says whether the goal
   was reached.
 - **Pose**: ``info["pose"]`` after ``reset`` and every ``step`` is the base's ground truth,
@@ -73,8 +74,8 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
 from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig, height_patch, observation
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, plan
-from offroadbench.navigation.rules import FailureRules, RuleChecker
-from offroadbench.sim.config import SimConfig
+from offroadbench.navigation.rules import FailureRules, RuleChecker, trial_timeout_s
+from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.skid_steer import wheel_speeds
 from offroadbench.sim.runner import body_frame, body_velocity, vehicle_envelope
 from offroadbench.sim.vehicle import VehicleSpec
@@ -123,22 +124,18 @@ class TraverseConfig:
 
 
 def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None) -> Heightmap:
-    if isinstance(terrain, Heightmap):
-        if overrides:
-            raise InputError("terrain overrides apply to a preset or recipe, not to a Heightmap")
-        return terrain
-    from offroadbench.terrain.recipe import apply_overrides, generate_terrain, load_recipe
+    from offroadbench.terrain.recipe import load_terrain
 
-    recipe = load_recipe(terrain)
-    if overrides is None:
+    if overrides is None and not isinstance(terrain, Heightmap) and not str(terrain).lower().endswith(".png"):
         overrides = DEFAULT_OVERRIDES
-    return generate_terrain(apply_overrides(recipe, overrides), seed)
+    return load_terrain(terrain, seed, overrides)[0]
 
 
 class TraverseEnv(gym.Env):
     """Drive sampled missions on one terrain with (v, omega) commands; see the module docstring.
 
-    ``terrain`` is a preset name, a recipe TOML path or a :class:`Heightmap`. A preset or recipe is
+    ``terrain`` is a preset name, a recipe TOML path, a 16-bit PNG (with its sidecar) or a
+    :class:`Heightmap` (offroadbench.terrain.recipe.load_terrain). A preset or recipe is
     generated with ``terrain_seed``, the integer ``offroadbench generate --seed`` takes and every
     terrain table shows (terrain j of a root seed s is ``offroadbench.seeding.terrain_seed(s, j)``),
     after ``overrides`` (dotted recipe keys; default
@@ -227,7 +224,8 @@ class TraverseEnv(gym.Env):
         world.spawn(m.start_xy_m[0], m.start_xy_m[1], m.heading_rad)
         self._ticks = 0
         self._ended = False
-        timeout_s = self.rules.timeout_factor * m.length_m / self.vehicle.max_speed_m_s
+        timeout_s = trial_timeout_s(self.rules, m.length_m, ControllerConfig().cruise_speed_m_s,
+                                    self.vehicle.max_speed_m_s)  # the trials' rule (navigation.rules)
         self._timeout_ticks = int(math.ceil(timeout_s * self.cfg.control_rate_hz - 1e-9))
         self._goal = np.asarray(m.goal_xy_m, dtype=float)
         self._rules = RuleChecker(self.rules, (self.hm.width_m, self.hm.height_m, self.hm.z_min_m), self._goal,

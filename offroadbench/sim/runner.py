@@ -30,7 +30,7 @@ from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
 from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
-from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker
+from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
@@ -188,7 +188,6 @@ def drive_mission(
     tel_every = sim.physics_rate_hz // sim.telemetry_rate_hz
     tel_dt = 1.0 / sim.telemetry_rate_hz
     goal = np.asarray(mission.goal_xy_m, dtype=float)
-    v_nominal = min(controller.cruise_speed_m_s, spec.max_speed_m_s)
 
     policy = tracker = replanner = None
     needs = planner.needs  # declared on the planner's or policy's registry entry
@@ -213,7 +212,7 @@ def drive_mission(
         length = tracker.length_m
     else:
         length = mission.length_m
-    timeout_s = rules.timeout_factor * length / v_nominal
+    timeout_s = trial_timeout_s(rules, length, controller.cruise_speed_m_s, spec.max_speed_m_s)
     n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
     checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
                           sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,

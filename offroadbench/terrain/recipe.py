@@ -74,6 +74,7 @@ __all__ = [
     "recipe_from_dict",
     "apply_overrides",
     "generate_terrain",
+    "load_terrain",
 ]
 
 COMBINE_MODES = ("replace", "sum", "product", "apply")
@@ -324,3 +325,28 @@ def generate_terrain(recipe: Recipe, seed: int | np.random.SeedSequence) -> Heig
     if recipe.grid.quantise == "png16":
         hm = hm.with_z(quantise(hm.z))
     return hm
+
+
+def load_terrain(source, seed: int | None = None, overrides: Mapping[str, Any] | None = None):
+    """(Heightmap, Recipe or None) from what a user names a terrain by: a Heightmap (as it is), a
+    16-bit PNG path (read with its sidecar; ``seed`` and ``overrides`` do not apply), a Recipe, or a
+    preset name / recipe TOML path (generated with ``seed`` after the dotted ``overrides``).
+
+    The one loader of the CLI commands and the Gymnasium env.
+    """
+    if isinstance(source, Heightmap):
+        if overrides:
+            raise InputError("terrain overrides apply to a preset or recipe, not to a Heightmap")
+        return source, None
+    if isinstance(source, (str, Path)) and str(source).lower().endswith(".png"):
+        from offroadbench.io.png16 import read_png16
+
+        if overrides:
+            raise InputError("--set applies to presets and recipes, not to a PNG heightmap")
+        return read_png16(source), None
+    recipe = source if isinstance(source, Recipe) else load_recipe(source)
+    if overrides:
+        recipe = apply_overrides(recipe, overrides)
+    if seed is None:
+        raise InputError(f"{recipe.name}: a generated terrain needs a seed")
+    return generate_terrain(recipe, seed), recipe
