@@ -266,6 +266,23 @@ PAIRED = {  # variant -> (SimConfig changes, old tyre loop?)
 }
 
 
+
+def _drive_rotated(worlds: dict, missions, wall: dict, simt: dict, res: dict) -> None:
+    """Drive every mission in every variant's world, the variants' order rotated per mission (no
+    variant always last), adding wall time, simulated time and results per variant; closes the worlds."""
+    try:
+        order = list(worlds.items())
+        for i, m in enumerate(missions):
+            for n, w in order[i % len(order):] + order[:i % len(order)]:
+                t0 = time.perf_counter()
+                r, _ = run_mission(w, m)
+                wall[n] += time.perf_counter() - t0
+                simt[n] += r.sim_time_s + w.sim.settle_time_s
+                res[n].append(r)
+    finally:
+        for w in worlds.values():
+            w.close()
+
 def paired(args) -> None:
     import offroadbench.sim.world as world_mod
     from offroadbench.analysis.roughness import classify_terrain
@@ -294,18 +311,7 @@ def paired(args) -> None:
                 worlds[v] = World(hm, husky, dataclasses.replace(SimConfig(), **changes))
             finally:
                 world_mod.CoulombTyres = lean
-        try:
-            order = list(worlds.items())
-            for i, m in enumerate(missions):
-                for v, w in order[i % len(order):] + order[:i % len(order)]:  # rotated: no variant always last
-                    t0 = time.perf_counter()
-                    r, _ = run_mission(w, m)
-                    wall[v] += time.perf_counter() - t0
-                    simt[v] += r.sim_time_s + w.sim.settle_time_s
-                    res[v].append(r)
-        finally:
-            for w in worlds.values():
-                w.close()
+        _drive_rotated(worlds, missions, wall, simt, res)
         print(f"  D = {d}: done", flush=True)
     base = res["main"]
     print(f"{'variant':12s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} {'rms_az ratio':>12s} "
@@ -363,18 +369,7 @@ def engines(args) -> None:
             else:
                 worlds[n] = open_world(hm, "husky", sim)
             build[n] += time.perf_counter() - t0
-        try:
-            order = list(worlds.items())
-            for i, m in enumerate(missions):
-                for n, w in order[i % len(order):] + order[:i % len(order)]:  # rotated: no variant always last
-                    t0 = time.perf_counter()
-                    r, _ = run_mission(w, m)
-                    wall[n] += time.perf_counter() - t0
-                    simt[n] += r.sim_time_s + w.sim.settle_time_s
-                    res[n].append(r)
-        finally:
-            for w in worlds.values():
-                w.close()
+        _drive_rotated(worlds, missions, wall, simt, res)
         print(f"  D = {d}: done", flush=True)
     ref = names[0]
     print(f"{'variant':14s} {'build_s':>7s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} "
