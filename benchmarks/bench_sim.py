@@ -266,6 +266,19 @@ PAIRED = {  # variant -> (SimConfig changes, old tyre loop?)
 }
 
 
+def _paper_terrain(d_high: float, rc, mcfg, n: int):
+    """Terrain 0 of root seed 2023 at ``d_high`` and its first ``n`` missions, as the paper study has them
+    (through offroadbench.sim.pipeline.prepare_terrain)."""
+    from offroadbench.seeding import mission_seed, terrain_seed
+    from offroadbench.sim.pipeline import TrialSettings, prepare_terrain
+    from offroadbench.terrain.recipe import apply_overrides, load_recipe
+
+    recipe = apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d_high})
+    prepared = prepare_terrain(recipe, terrain_seed(2023, 0), TrialSettings(missions=mcfg, roughness=rc),
+                               [(k, mission_seed(2023, 0, k)) for k in range(n)])
+    return prepared.hm, list(prepared.missions)
+
+
 
 def _drive_rotated(worlds: dict, missions, wall: dict, simt: dict, res: dict) -> None:
     """Drive every mission in every variant's world, the variants' order rotated per mission (no
@@ -285,10 +298,6 @@ def _drive_rotated(worlds: dict, missions, wall: dict, simt: dict, res: dict) ->
 
 def paired(args) -> None:
     import offroadbench.sim.world as world_mod
-    from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.navigation.missions import sample_mission
-    from offroadbench.seeding import mission_seed, terrain_seed
-    from offroadbench.terrain.recipe import apply_overrides
 
     old, lean = _old_tyres(args.old_rev), world_mod.CoulombTyres
     husky = load_vehicle("husky")
@@ -300,10 +309,7 @@ def paired(args) -> None:
     print(f"paired variants {list(PAIRED)}; terrain 0 of each D (root seed 2023), {args.missions} missions each; "
           f"old tyre loop from {args.old_rev}", flush=True)
     for d in (2.3, 2.45, 2.6):
-        hm = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d}),
-                              terrain_seed(2023, 0))
-        closed = classify_terrain(hm, rc).closed
-        missions = [sample_mission(hm, closed, mcfg, k, mission_seed(2023, 0, k)) for k in range(args.missions)]
+        hm, missions = _paper_terrain(d, rc, mcfg, args.missions)
         worlds = {}
         for v, (changes, use_old) in PAIRED.items():
             world_mod.CoulombTyres = old if use_old else lean
@@ -337,11 +343,7 @@ def _parse_variant(text: str) -> tuple[str, dict]:
 
 def engines(args) -> None:
     """Paired runs of physics engines / rates on the paper missions (as ``--paired``)."""
-    from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.navigation.missions import sample_mission
-    from offroadbench.seeding import mission_seed, terrain_seed
     from offroadbench.sim import open_world
-    from offroadbench.terrain.recipe import apply_overrides
 
     variants = [_parse_variant(v) for v in args.engines.split(";")]
     names = [n for n, _ in variants]
@@ -353,10 +355,7 @@ def engines(args) -> None:
     mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
     print(f"engines {variants}; terrain 0 of each D (root seed 2023), {args.missions} missions each", flush=True)
     for d in (2.3, 2.45, 2.6):
-        hm = generate_terrain(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d}),
-                              terrain_seed(2023, 0))
-        closed = classify_terrain(hm, rc).closed
-        missions = [sample_mission(hm, closed, mcfg, k, mission_seed(2023, 0, k)) for k in range(args.missions)]
+        hm, missions = _paper_terrain(d, rc, mcfg, args.missions)
         worlds = {}
         for n, changes in variants:
             t0 = time.perf_counter()
