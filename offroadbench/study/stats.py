@@ -176,8 +176,8 @@ def median_changes(summary: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
 
 def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
     """One row per (cell, terrain), one column per quantity: the per-terrain success rate (Eq. 5),
-    class areas in % (``area_<class>_pct``), and each Fig. 7 metric's median over the terrain's
-    successful trials (NaN when it had none)."""
+    class areas in % (``area_<class>_pct``), each Fig. 7 metric's median over the terrain's
+    successful trials (NaN when it had none), and each soil metric's median over all its trials."""
     out = terrain_success(trials).set_index(["cell", "terrain"])[["success_rate_pct"]]
     ter = terrains.set_index(["cell", "terrain"])
     ok = trials[trials["success"].astype(bool)]
@@ -186,6 +186,8 @@ def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence
             out[name] = 100.0 * ter[name[:-4]].reindex(out.index)
         elif name in METRICS and name in ok:
             out[name] = ok.groupby(["cell", "terrain"])[name].median().reindex(out.index)
+        elif name in SOIL_METRICS and name in trials:  # every trial, failed ones included
+            out[name] = trials.groupby(["cell", "terrain"])[name].median().reindex(out.index)
     return out.reset_index()
 
 
