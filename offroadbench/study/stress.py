@@ -315,8 +315,8 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
             continue
         keys = ["terrain", "mission"]
         have = [c for c in ends if c in tb and c in ta]
-        pair = tb.set_index(keys)[["success", *have]].join(ta.set_index(keys)[["success", *have]], how="inner",
-                                                             lsuffix="_t", rsuffix="_c")
+        pair = pd.merge(tb.set_index(keys)[["success", *have]], ta.set_index(keys)[["success", *have]], how="inner",
+                        left_index=True, right_index=True, suffixes=("_t", "_c"))
         same = (np.all([np.isclose(pair[f"{c}_t"], pair[f"{c}_c"]) for c in have], axis=0).mean()
                 if have and len(pair) else math.nan)
         per = pair.groupby(level="terrain").agg(t=("success_t", "mean"), c=("success_c", "mean"))
