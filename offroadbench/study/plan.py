@@ -83,7 +83,10 @@ class Comparison:
     control: Mapping[str, Any]
     """The same grid keys -> the control's values (every other axis equal)."""
     metric: str = "success_rate_pct"
-    """Per-terrain quantity compared (see :data:`METRIC_HELP`)."""
+    """Per-terrain quantity compared: ``success_rate_pct``, ``area_<low|semi|high>_pct``, a traversal metric
+    (``rms_vertical_accel_m_s2``, ``rms_pitch_rate_deg_s``, ``rms_roll_rate_deg_s``, ``traversal_time_s``: median
+    of the terrain's successful trials) or a soil metric (``mean_slip``, ``max_penetration_m``: median of all
+    its trials)."""
     where: Mapping[str, Any] = field(default_factory=dict)
     """Other grid keys -> a value or a list of values: only these strata are tested (default: all)."""
     test: str = "sign_flip"
