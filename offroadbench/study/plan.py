@@ -236,12 +236,13 @@ def expand(plan: AnalysisPlan, cells: Sequence[Mapping[str, Any]]
 
 
 def _pooled(vals: pd.Series, cells: Sequence[int]) -> pd.Series:
-    """Per terrain: the mean of its values over ``cells`` (terrains missing in a cell are left out)."""
+    """Per terrain: the mean of its values over ``cells`` (NaN, so the terrain is left out, where one cell has
+    no value: a metric of successful trials on a terrain without a success there)."""
     have = set(vals.index.get_level_values(0)) if len(vals) else set()
     parts = [vals.xs(c, level="cell") for c in cells if c in have]
     if not parts:
         return pd.Series(dtype=float)
-    return pd.concat(parts, axis=1).mean(axis=1) if len(parts) > 1 else parts[0]
+    return pd.concat(parts, axis=1).mean(axis=1, skipna=False) if len(parts) > 1 else parts[0]
 
 
 def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: str) -> pd.Series:
