@@ -96,7 +96,7 @@ class TrialDone:
         return (self.cell, self.terrain)
 
 
-def unexplained_variance(z: "np.ndarray", twin: "np.ndarray") -> float:
+def unexplained_variance(z, twin) -> float:
     """1 - r^2 of two surfaces of the same shape (r: Pearson correlation of their heights)."""
     import numpy as np
 

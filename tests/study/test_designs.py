@@ -1,7 +1,6 @@
 """The committed study designs: the number of terrains of planner-stress follows from the power
 of its planned tests, simulated on the previous run's per-terrain differences."""
 
-import tomllib
 from pathlib import Path
 
 import pandas as pd

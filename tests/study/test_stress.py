@@ -264,3 +264,26 @@ def test_band_limited_arm_drives_the_aliased_arms_missions_and_the_plan_is_compu
     changed = study_from_dict(data)
     with pytest.raises(InputError, match=r"the \[analysis\] plan differs from the one stored with its 36 trials"):
         run_study(changed, plan_cells(changed), tmp_path, executor="inline", trial_fn=fake_planner_trials)
+
+
+def test_arm_table_pairs_missions_and_reports_the_resolution_statistic():
+    rows = []
+    for j in range(6):
+        for m in range(4):
+            for band in (False, True):
+                # the band-limited arm succeeds on one more mission per terrain; same ends in both arms
+                ok = m < (2 + (1 if band else 0))
+                rows.append({"planner": "straight", "band_limited": band, "terrain": j, "mission": m, "cell": int(band),
+                             "success": ok, "start_x_m": float(m), "start_y_m": 0.0, "goal_x_m": 1.0, "goal_y_m": float(j)})
+    t = pd.DataFrame(rows)
+    ter = pd.DataFrame([{"cell": c, "terrain": j, "area_high": 0.1 * (1 - c) + 0.01,
+                         "twin_unexplained_var": (0.2 + 0.01 * j) if c == 1 else np.nan} for c in (0, 1) for j in range(6)])
+    tab = arm_table(t, "band_limited", False, True, ["planner"], terrains=ter)
+    r = tab.iloc[0]
+    assert r["same_missions"] == 1.0 and r["terrains"] == 6 and r["missions"] == 24
+    assert r["diff_pct"] == pytest.approx(25.0) and r["p_sign_flip"] == pytest.approx(2 / 64)
+    assert r["mean_twin_unexplained_var"] == pytest.approx(0.225)
+    assert r["area_high_control_pct"] == pytest.approx(11.0) and r["area_high_treatment_pct"] == pytest.approx(1.0)
+    # missions drawn separately per arm: said as such
+    moved = t.assign(goal_x_m=np.where(t["band_limited"], 2.0, 1.0))
+    assert arm_table(moved, "band_limited", False, True, ["planner"])["same_missions"].iloc[0] == 0.0
