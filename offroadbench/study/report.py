@@ -12,10 +12,16 @@ writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023
   reasons, run sessions (wall time, machine, version);
 * if the study has a ``[reference]`` table: the published numbers beside ours;
 * if the grid has a ``planner.name`` axis (a planner stress test, see offroadbench.study.stress):
-  success against the numeric axis per planner with Wilson intervals, breaking points with
-  bootstrap intervals, exact McNemar tests on the same missions, outcomes per planner with replay
-  commands for failures, medians of the traversal metrics of successes, and a figure of planned
-  and driven paths on one mission over the class map.
+  success against the numeric axis per planner with terrain-bootstrap intervals, breaking points
+  measured inside the studied levels (isotonic fit, terrain-bootstrap intervals; a logistic fit with
+  its goodness of fit for comparison), terrain-level paired tests on the same missions, the paired
+  aliasing (``band_limited``) and map-error (``map_noise_m``) arms with the per-terrain variance share
+  above Nyquist, outcomes per planner with replay commands for failures, medians of the traversal
+  metrics of successes, and a figure of planned and driven paths on one mission over the class map.
+
+The study's ``[analysis]`` plan (offroadbench.study.plan) is computed first, in "Confirmatory
+analysis"; every later section is marked "(exploratory)". The header names the code's git commit
+and whether its tree was clean, for every session.
 
 Categorical grid axes (planner, vehicle) get no "change between consecutive groups" table.
 

@@ -28,7 +28,11 @@ missions come from another cell's terrain (``[study] missions_from``) draws them
 (same seed) and drives them on its own (:func:`prepare_cell`), and its terrain row records
 ``twin_unexplained_var``: the share of the two surfaces' height variance that one does not
 explain linearly in the other, 1 - r^2 (for a band-limited arm against its aliased twin: the
-share carried by the W-M terms above the grid's Nyquist frequency).
+share carried by the W-M terms above the grid's Nyquist frequency). For one W-M surface (Majhor &
+Bos 2023, Eq. 1) the terms are plane waves with the same phases in both twins, and 1 - r^2 equals
+the amplitude share sum_{n above Nyquist} gamma^(2 (D-3) n) / sum_n gamma^(2 (D-3) n) to within
+1 % (tests/study/test_run_sets.py); on the multifractal product (filtered, multiplied, rescaled
+layers) it is the same measure taken on the finished surface.
 """
 
 from __future__ import annotations

@@ -41,3 +41,23 @@ def test_unexplained_variance_of_a_surface_and_its_smooth_twin():
     # 1 - r^2 of (smooth + noise) against smooth: the noise's share of the variance
     assert unexplained_variance(smooth + noise, smooth) == pytest.approx(k, abs=0.02)
     assert unexplained_variance(smooth, 3 * smooth + 1) == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("D", [2.45, 2.9, 2.99])
+def test_twin_statistic_is_the_variance_share_of_the_terms_above_nyquist(D):
+    """For one W-M surface (Eq. 1) the terms are plane waves of variance a_n^2 / 2 with a_n =
+    gamma^((D-3) n), so the share of the variance above Nyquist is sum_{n > Nyquist} a_n^2 / sum_n a_n^2;
+    1 - r^2 of the aliased surface against its band-limited twin (same phases) measures the same."""
+    import dataclasses
+
+    from offroadbench.terrain.fractal.wm import WMConfig, _powers, generate_wm, kept_harmonics
+    from offroadbench.terrain.grid import GridConfig
+
+    grid = GridConfig(rows=257, cols=257, cell_size_m=0.05, quantise="none")
+    cfg = WMConfig(D=D, M=32, smoothing_sigma_px=0.0)
+    band = dataclasses.replace(cfg, band_limited=True)
+    aliased = generate_wm(cfg, grid, np.random.default_rng(1)).z
+    limited = generate_wm(band, grid, np.random.default_rng(1)).z
+    power = _powers(cfg.gamma, 2 * (cfg.D - 3) * kept_harmonics(cfg, grid)).sum()
+    resolved = _powers(cfg.gamma, 2 * (cfg.D - 3) * kept_harmonics(band, grid)).sum()
+    assert unexplained_variance(aliased, limited) == pytest.approx(1 - resolved / power, abs=0.01, rel=0.03)
