@@ -217,7 +217,7 @@ def describe_breaking_point(point: float, low: float, high: float, levels: Seque
     else:
         head = f"{point:.3f}"
     if low == high == math.inf:
-        return f"{head}; not reached in 95 % or more of the terrain resamples either"
+        return f"{head}; not reached in 97.5 % or more of the terrain resamples either"
     return f"{head}; 95 % interval [{end(low)}, {end(high)}]"
 
 
