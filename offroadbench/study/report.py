@@ -459,13 +459,17 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
+        if bool(study.get("paired_terrains", True)):  # terrain-bootstrap intervals of each change
+            changes = stats.median_change_intervals(trials, terrains, changes, labels)
         for side in ("from", "to"):  # the sample size behind each median
             changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
                                     for g, q in zip(changes[side], changes["quantity"])]
         tables["median_changes.csv"] = changes
         small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
         lines += ["## Changes of the medians between consecutive groups", "",
-                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median. "
+                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median; "
+                  "`ci95_low`/`ci95_high`: a 95 % terrain-bootstrap interval of the change (terrains resampled, "
+                  "the same ones in both groups). "
                   f"A median of n < 10 moves by a whole sample's step (one terrain's success rate is a multiple "
                   f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
                   "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
