@@ -106,8 +106,8 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None
-                        ) -> tuple[list[str], dict[str, pd.DataFrame]]:
+def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
+                        ours_changes: pd.DataFrame | None = None) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
     if not ref:
@@ -132,6 +132,9 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.
         names = sorted((n for n in changes if f"median_{n}" in summary),
                        key=lambda n: order.index(n) if n in order else len(order))
         ours = stats.median_changes(summary, names)
+        if ours_changes is not None and "ci95_low" in ours_changes:  # the report's terrain-bootstrap intervals
+            ours = ours.merge(ours_changes[["quantity", "from", "to", "ci95_low", "ci95_high"]],
+                              on=["quantity", "from", "to"], how="left")
         rows = []
         for name in names:
             mine = ours[ours["quantity"] == name].reset_index(drop=True)
@@ -142,7 +145,9 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.
                 o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
                 same = _direction_agrees(p_abs, o_abs)
                 rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
-                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
+                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs,
+                             **({"ours 95 % low": mine.loc[i, "ci95_low"], "ours 95 % high": mine.loc[i, "ci95_high"]}
+                                if "ci95_low" in mine else {}), "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
                              "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
                                                                          mine.loc[i, "to"], p_abs)})
@@ -510,7 +515,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"))
+    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
+                                                tables.get("median_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
     lines = _mark_exploratory(lines)
