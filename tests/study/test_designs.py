@@ -90,3 +90,16 @@ def test_the_designed_studies_load_with_every_cell_checked(name, cells, trials):
     else:
         first = plans[0].section("vehicle")
         assert (first.wheel_torque_limit_nm, first.wheel_spin_inertia_kg_m2) == (28.0, 1.0)
+
+
+def test_power_script_prints_every_planned_test(monkeypatch, capsys):
+    import sys
+
+    sys.path.insert(0, str(ROOT / "experiments"))
+    import power
+
+    monkeypatch.setattr(sys, "argv", ["power.py", "--n-sim", "5"])
+    power.main()
+    out = capsys.readouterr().out
+    assert "alpha / m = 0.05 / 6" in out
+    assert all(name in out for name, _, _ in power.TESTS + power.NOT_PLANNED)
