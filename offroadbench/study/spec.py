@@ -10,6 +10,8 @@ File layout (every table but ``[study]`` is optional)::
     missions_per_terrain = 20
     paired_terrains = true          # see offroadbench.seeding
     telemetry = "failed"            # keep telemetry of: none | failed | all trials (Parquet)
+    missions_from = { "recipe.layers.base.wm.band_limited" = false }   # optional: draw every cell's
+                                    # missions on that cell's terrain (same seed): arms share missions
 
     [grid]                          # axes of the parameter grid: dotted key = [values]
     "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]
