@@ -2,9 +2,11 @@
 
 The test is the one the study's plan uses: the exact two-sided sign-flip test of the mean per-terrain
 difference, at Holm's strictest level alpha / m (m = the plan's tests; the power of the first Holm
-step, a lower bound for the later ones). The effects are the committed run's per-terrain
-differences (experiments/results/planner-stress/trials.parquet, root_seed 11, 12 terrains: the new
-design's pilot), resampled as the truth (offroadbench.study.clustered.sign_flip_power).
+step, a lower bound for the later ones). The effects are the pilot's per-terrain
+differences, resampled as the truth (offroadbench.study.clustered.sign_flip_power). The pilot is the
+planner-stress run of 2026-11-25 (root_seed 11, 12 terrains x 8 missions per cell), kept as its
+per-terrain success counts in experiments/pilots/planner-stress-2026-11-25.csv so that the design's
+justification does not change when the study is re-run.
 
     python experiments/power.py [--n-sim 400]
 """
@@ -34,11 +36,20 @@ NOT_PLANNED = [("astar: 5 cm map error - true map, 2.99", ("astar", 2.99, False,
 COLS = ["planner", "D_high", "band_limited", "map_noise_m"]
 
 
-def per_terrain(trials: pd.DataFrame, cell: tuple) -> pd.Series:
-    t = trials
+PILOT = HERE / "pilots" / "planner-stress-2026-11-25.csv"
+
+
+def load_pilot() -> pd.DataFrame:
+    """The pilot's per-terrain table: the axes, terrain, terrain_seed, successes and missions."""
+    return pd.read_csv(PILOT)
+
+
+def per_terrain(pilot: pd.DataFrame, cell: tuple) -> pd.Series:
+    """Success rate (percent) per terrain of one cell of the pilot."""
+    t = pilot
     for col, v in zip(COLS, cell):
         t = t[np.isclose(t[col], v)] if isinstance(v, float) else t[t[col] == v]
-    return 100.0 * t.groupby("terrain")["success"].mean()
+    return 100.0 * (t.set_index("terrain")["successes"] / t.set_index("terrain")["missions"])
 
 
 def main() -> None:
@@ -46,7 +57,7 @@ def main() -> None:
     ap.add_argument("--n-sim", type=int, default=400)
     ap.add_argument("--alpha", type=float, default=0.05)
     args = ap.parse_args()
-    trials = pd.read_parquet(HERE / "results" / "planner-stress" / "trials.parquet")
+    trials = load_pilot()
     level = args.alpha / len(TESTS)
     rng = np.random.default_rng(29)
     print(f"exact sign-flip test at alpha / m = {args.alpha} / {len(TESTS)} = {level:.4f} (pilot: 12 terrains)")
