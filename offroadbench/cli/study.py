@@ -56,6 +56,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep = sub.add_parser("report", help="write the Markdown report with figures of a run directory")
     rep.add_argument("run_dir", help="run directory of a study")
     rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained file (figures inline, sortable per-trial "
+                     "table, the replay animations found in RUN_DIR/replays inline and linked from their trials)")
     rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
     rep.set_defaults(func=cmd_report)
 
@@ -193,8 +196,9 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
     return cell, terrain
 
 
-def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
-    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
+def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
+    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
+    ``html`` also the self-contained report.html) to ``out``."""
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
@@ -214,7 +218,11 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
         if toml:
             (stage / "study.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
-    return out / "report.md"
+        if html:
+            from offroadbench.study.html_report import report_html
+
+            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
+    return out / ("report.html" if html else "report.md")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -222,7 +230,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
-    path = write_report(run_dir, out, _parse_fig4(args.fig4))
+    path = write_report(run_dir, out, _parse_fig4(args.fig4), html=args.html)
     print(f"report: {path}")
     return 0
 
