@@ -119,6 +119,8 @@ def _split_row(line: str) -> list[str]:
 
 
 _IMAGE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)$")
+_NUMBER = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$|^\s*(nan|inf|-inf)\s*$")
+_TAGS = re.compile(r"<[^>]+>")
 _BULLET = re.compile(r"^\s*[-*]\s+")
 _RULE = re.compile(r"^\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?$")
 
@@ -189,12 +191,18 @@ def markdown_to_html(md: str, images: Mapping[str, str]) -> str:
     return "\n".join(out)
 
 
+def _td(content: str) -> str:
+    """A table cell; numbers are right-aligned (class ``num``)."""
+    num = _NUMBER.match(_TAGS.sub("", content))
+    return f'<td class="num">{content}</td>' if num else f"<td>{content}</td>"
+
+
 def _table(header: Sequence[str], rows: Sequence[Sequence[str]], cls: str = "sortable", raw: bool = False) -> str:
     """A sortable table; cells are Markdown inline text (``raw``: already HTML)."""
     th = "".join(f"<th>{_inline(h)}</th>" for h in header)
     body = []
     for r in rows:
-        cells = "".join(f"<td>{c if raw else _inline(c)}</td>" for c in r)
+        cells = "".join(_td(c if raw else _inline(c)) for c in r)
         body.append(f"<tr>{cells}</tr>")
     return f'<table class="{cls}"><thead><tr>{th}</tr></thead><tbody>{"".join(body)}</tbody></table>'
 
@@ -263,10 +271,10 @@ def _replays_html(replays: Sequence[ReplayMedia]) -> str:
 _STYLE = """
 body{font-family:system-ui,sans-serif;max-width:1300px;margin:1em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;margin:.5em 0 1.2em;font-size:13px}
-th,td{border:1px solid #ccc;padding:2px 6px;text-align:right}
+th,td{border:1px solid #ccc;padding:2px 6px;text-align:left}
+td.num{text-align:right;font-variant-numeric:tabular-nums}
 th{background:#eee;cursor:pointer;user-select:none;position:sticky;top:0}
 th.asc::after{content:" \\25B2"} th.desc::after{content:" \\25BC"}
-td:first-child,th:first-child{text-align:left}
 figure{margin:.5em 0}figure img,section.replay img,video{max-width:100%}
 code{background:#f4f4f4;padding:0 2px} code.cmd{font-size:11px;white-space:nowrap}
 .scroll{max-height:600px;overflow:auto;border:1px solid #ddd}

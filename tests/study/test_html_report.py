@@ -119,5 +119,5 @@ def test_markdown_subset():
     assert '<h1 id="t">T</h1>' in html
     assert "<code>x&lt;1</code>" in html and "<strong>bold</strong>" in html
     assert "<ul><li>a</li><li>b</li></ul>" in html
-    assert "<th>a</th><th>b</th>" in html and "<td>1</td><td>2</td>" in html
+    assert "<th>a</th><th>b</th>" in html and '<td class="num">1</td><td class="num">2</td>' in html
     assert 'src="data:image/png;base64,AA=="' in html
