@@ -41,9 +41,9 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.clip_percentile:
         hm = clip_percentile(hm, args.clip_percentile)
     if recipe is not None:
-        meta = {"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)}
-        if recipe.data.get("recipe", {}).get("crs"):
-            meta["crs"] = recipe.data["recipe"]["crs"]
+        from offroadbench.cli._common import parse_sets, recipe_meta
+
+        meta = recipe_meta(recipe, args.seed, parse_sets(args.set))
         name = args.name or f"{recipe.name}_seed{args.seed}"
     else:
         from offroadbench.io.png16 import read_png16_metadata

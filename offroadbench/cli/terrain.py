@@ -20,6 +20,8 @@ from offroadbench.cli._common import (
     format_table,
     load_heightmap_arg,
     load_recipe_with_sets,
+    parse_sets,
+    recipe_meta,
     nonnegative_float,
     positive_float,
     positive_int,
@@ -36,14 +38,20 @@ TERRAIN_SEED_HELP = ("the terrain's OWN seed (default 0): the integer a study's 
                      "terrain_seed(s, j) (offroadbench.seeding)")
 
 
-def warn_relief_tails(hm, label: str) -> None:
+#: what the spire warning recommends where the command has no --clip-percentile (drive)
+CLIP_ELSEWHERE = ("to drive a clipped terrain, write it with `offroadbench generate TERRAIN --clip-percentile P "
+                  "-o T.png` (heights clipped to the P..100-P percentiles, not in the paper) and drive T.png")
+
+
+def warn_relief_tails(hm, label: str, remedy: str | None = None) -> None:
     """Log, once, that a few extreme samples hold most of the relief (the paper presets' corner spire,
-    offroadbench.analysis.relief), wherever a terrain is generated or read."""
+    offroadbench.analysis.relief), wherever a terrain is generated or read. ``remedy``: what to do
+    about it in this command (default: its own ``--clip-percentile P``)."""
     from offroadbench.analysis.relief import tail_report
 
     tails = tail_report(hm)
     if tails.dominated:
-        log.warning("%s: %s", label, tails.message())
+        log.warning("%s: %s", label, tails.message(remedy))
 
 
 # --------------------------------------------------------------------------- commands
@@ -67,20 +75,25 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from offroadbench.io.png16 import sidecar_path, write_png16
     from offroadbench.terrain.recipe import generate_terrain
 
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
+
     out = check_output_file(args.output, "-o", suffixes=(".png",))  # fail before the work, not after
+    check_clip_percentile(args.clip_percentile)
     recipe = load_recipe_with_sets(args.recipe, args.set)
     check_recipe_memory(recipe, args.force)
     t0 = time.perf_counter()
     hm = generate_terrain(recipe, args.seed)
     dt = time.perf_counter() - t0
-    warn_relief_tails(hm, f"{recipe.name} seed {args.seed}")
+    meta = recipe_meta(recipe, args.seed, parse_sets(args.set))
+    label = str(meta["label"])
+    if args.clip_percentile:
+        hm = clip_percentile(hm, args.clip_percentile)
+        meta["clip_percentile"] = args.clip_percentile
+    warn_relief_tails(hm, label)
     with created_dirs(out.parent):
-        meta = write_png16(
-            hm,
-            out,
-            meta={"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)},
-        )
-    print(f"{recipe.name} seed {args.seed}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s")
+        meta = write_png16(hm, out, meta=meta)
+    print(f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s"
+          + (f", clipped to the {args.clip_percentile:g}..{100 - args.clip_percentile:g} percentiles" if args.clip_percentile else ""))
     for layer in recipe.layers:
         if hasattr(layer.config, "describe"):
             print(f"  layer {layer.name}: {layer.config.describe(recipe.grid)}")
@@ -190,6 +203,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=seed_arg, default=0, help=TERRAIN_SEED_HELP)
     p.add_argument("-o", "--output", required=True, help="output .png (NAME.json is written beside it)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key, e.g. layers.base.D_high=2.6")
+    p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
+                   help="clip heights to the P..100-P percentiles before writing (not in the paper; e.g. 0.1 removes "
+                   "the paper presets' corner spire, so the 16-bit step follows the bulk; default 0 = keep every height)")
     add_force(p)
     p.set_defaults(func=cmd_generate)
 

@@ -88,8 +88,9 @@ def check_animation_path(path: str | Path, flag: str = "--animate") -> Path:
 
 
 def save_animation(fig, draw_frame: Callable[[int], None], frames: Iterable[int], path: str | Path, *,
-                   fps: float = 10.0, dpi: int = 80) -> Path:
-    """Write ``draw_frame(k)`` for each ``k`` of ``frames`` as one frame of ``path`` (.gif or .mp4)."""
+                   fps: float = 10.0, dpi: int = 80, progress: Callable[[int, int], None] | None = None) -> Path:
+    """Write ``draw_frame(k)`` for each ``k`` of ``frames`` as one frame of ``path`` (.gif or .mp4);
+    ``progress(done, total)`` is called after each frame (offroadbench.progress)."""
     from matplotlib import animation, rc_context
 
     p = check_animation_path(path, "animation")
@@ -108,9 +109,11 @@ def save_animation(fig, draw_frame: Callable[[int], None], frames: Iterable[int]
                 if frames and hasattr(writer, "prime_palette"):
                     draw_frame(frames[-1])  # the last frame shows every line and mark: its colours
                     writer.prime_palette()
-                for k in frames:
+                for done, k in enumerate(frames, 1):
                     draw_frame(k)
                     writer.grab_frame()
+                    if progress is not None:
+                        progress(done, len(frames))
             except BaseException:
                 proc = getattr(writer, "_proc", None)  # an ffmpeg pipe: stop it, write nothing
                 if proc is not None:

@@ -23,6 +23,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.patches import Polygon
+from matplotlib.patheffects import Normal, Stroke
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
@@ -135,7 +136,8 @@ class TrialView:
                   interpolation="nearest")
         ax.imshow(np.asarray(classes)[rows, cols], cmap=class_cmap(), vmin=-0.5, vmax=2.5, origin="lower",
                   extent=extent, alpha=0.45, interpolation="nearest")
-        ax.plot(path[:, 0], path[:, 1], color="white", lw=1.6, ls="--", label="planned")
+        ax.plot(path[:, 0], path[:, 1], color="white", lw=1.6, ls="--", label="planned",
+                path_effects=[Stroke(linewidth=3.2, foreground="black"), Normal()])  # visible in the white legend
         ax.plot(*path[0], "o", color="limegreen", mec="black", ms=7, label="start")
         ax.plot(*path[-1], "o", color="red", mec="black", ms=7, label="goal")
         (self._trail,) = ax.plot([], [], color="black", lw=1.6, label="driven")
