@@ -610,16 +610,47 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
 _STUDY_EXAMPLE = {"name": "my-study", "recipe": "paper-d2.45", "root_seed": 0}
 
 
+#: the study's free-form tables, printed after ``[study]``: (name, comment lines, example lines)
+_FREE_TABLES = (
+    ("grid", (
+        "Axes of the parameter grid: \"dotted.key\" = [values], one cell per combination (first axis slowest).",
+        "Keys: recipe (preset names or paths), recipe.<key of the recipe TOML>, <table>.<key> of a table below.",
+        "No axis: one cell. Uncomment or write your own:",
+    ), (
+        '# "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]',
+        '# "planner.name" = ["straight", "astar"]',
+    )),
+    ("recipe_overrides", (
+        "Fixed \"dotted.key\" = value changes of the recipe, for every cell (the keys of generate --set;",
+        "the recipe's own [grid] and [layers.*] tables: docs/reference.md, Terrain recipes).",
+    ), (
+        '# "grid.rows" = 257',
+        '# "grid.cols" = 257',
+    )),
+)
+
+
+def _free_table(name: str) -> list[str]:
+    for table, comments, examples in _FREE_TABLES:
+        if table == name:
+            return [f"[{table}]", *(f"# {c}" for c in comments), *examples, ""]
+    raise KeyError(name)
+
+
 def render_section_toml(section: str | None = None) -> str:
     """A study table (or, with ``section=None``, every table) with its defaults, as TOML with a
     comment per key. The output loads as it is; keys without a default are commented out (in
-    ``[study]`` the required keys get example values)."""
+    ``[study]`` the required keys get example values; ``[grid]`` and ``[recipe_overrides]`` are
+    printed empty, with commented examples)."""
     sections = study_sections()
     names = [s.name for s in sections if "." not in s.name]
+    free = [t for t, _, _ in _FREE_TABLES]
+    if section in free:
+        return "\n".join(_free_table(section)).rstrip() + "\n"
     if section is not None and section not in names:
         from offroadbench.registry import unknown_name
 
-        raise unknown_name("study table", section, names)
+        raise unknown_name("study table", section, names[:1] + free + names[1:])
     lines: list[str] = []
     for s in sections:
         top = s.name.split(".", 1)[0]
@@ -637,4 +668,7 @@ def render_section_toml(section: str | None = None) -> str:
                 for f in s.fields))
         # a vehicle's figures stay commented: set here, they would override another vehicle's own
         lines += _toml_block(s, commented_from=1 if s.name == "vehicle" else None) + [""]
+        if s.name == "study" and section is None:
+            for table in free:
+                lines += _free_table(table)
     return "\n".join(lines).rstrip() + "\n"

@@ -25,6 +25,7 @@ __all__ = [
     "int_at_least", "seed_arg", "positive_int", "float_at_least", "positive_float", "nonnegative_float",
     "parse_sets", "load_recipe_with_sets", "load_heightmap_arg", "crater_diameters",
     "sets_text", "terrain_label", "recipe_meta", "count_text", "medians_text", "run_caption",
+    "add_plot_option", "plot_path",
     "grid_bytes", "check_memory", "check_recipe_memory", "available_memory_bytes",
     "check_output_file", "check_output_dir", "created_dirs", "save_figure", "format_table", "bar",
 ]
@@ -157,6 +158,20 @@ def crater_diameters(recipe, seed: int):
     if not tables:
         return None
     return np.concatenate([np.asarray(t.diameter_m) for t in tables.values()])
+
+
+def add_plot_option(p: argparse.ArgumentParser, what: str, default: str) -> None:
+    """The one ``--plot [PATH]`` grammar of every command that draws: ``--plot PATH`` writes ``what``
+    at PATH (.png, .pdf or .svg); a bare ``--plot`` writes it at ``default``."""
+    p.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
+                   help=f"write {what} to PATH (.png, .pdf or .svg); a bare --plot writes it to {default}")
+
+
+def plot_path(plot: str | bool | None, default: str | Path) -> Path | None:
+    """The checked figure path of a ``--plot [PATH]`` value (None: no figure)."""
+    if not plot:
+        return None
+    return check_output_file(default if plot is True else plot, "--plot", suffixes=(".png", ".pdf", ".svg"))
 
 
 def save_figure(fig, path: str | Path, dpi: int = 150) -> Path:
