@@ -149,7 +149,13 @@ def cmd_run(args: argparse.Namespace) -> int:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
                                 executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
     except Terminated:
-        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        from offroadbench.study.store import Store
+
+        with Store(out) as store:
+            stored = store.counts()[0]
+        sys.stderr.write(f"offroadbench: terminated; {counts['new']} trial(s) of this run saved, {stored} of "
+                         f"{study.n_trials} stored in {out}; "
+                         "run the same command again to resume\n")
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
