@@ -70,6 +70,23 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def _stuck_window_text(rules: Any, secs: dict[str, Any]) -> str:
+    """The stuck window as the trials applied it: ``30 s``, or, where the mission's timeout caps it
+    (offroadbench.navigation.rules.stuck_window_s), ``15.3 s (30 s capped at 0.5 x the 30.6 s timeout)``."""
+    from offroadbench.navigation.rules import stuck_window_s, trial_timeout_s
+
+    missions, controller, vehicle = secs.get("missions"), secs.get("controller"), secs.get("vehicle")
+    try:
+        timeout = trial_timeout_s(rules, missions.length_m, controller.cruise_speed_m_s, vehicle.max_speed_m_s)
+    except AttributeError:  # a table that did not build here: the configured window
+        return f"{_fmt(rules.stuck_window_s)} s"
+    window = stuck_window_s(rules, timeout)
+    if window >= rules.stuck_window_s:
+        return f"{_fmt(rules.stuck_window_s)} s"
+    return (f"{window:.3g} s ({_fmt(rules.stuck_window_s)} s capped at {_fmt(rules.stuck_window_max_fraction)} x the "
+            f"{timeout:.3g} s timeout of a {_fmt(missions.length_m)} m mission)")
+
+
 def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
     """One row per setting: ``setting``, ``value`` (of the first cell, or ``grid axis``) and
     ``note`` (``not the default (D)`` where it differs from the package default)."""
@@ -111,7 +128,7 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
         default = _default("rules")
         grid_rules = sorted(k for k in axes if k.startswith("rules."))
         value = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
-                 f"{_fmt(rules.stuck_window_s)} s; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
+                 f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
                  f"{_fmt(rules.goal_tolerance_m)} m")
         diff = [f.name for f in dataclasses.fields(rules) if getattr(rules, f.name) != getattr(default, f.name)]
         note = (f"varies: {', '.join(grid_rules)}; " if grid_rules else "") + (
