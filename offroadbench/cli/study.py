@@ -177,6 +177,13 @@ def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.study.stats import terrain_success
 
     trials = load(run_dir)
+    if len(trials):  # each row says what made it: the fixed settings beside the grid axes
+        from offroadbench.study.header import settings_columns
+        from offroadbench.study.results import load_meta
+
+        fixed = settings_columns(load_meta(run_dir))
+        fixed = fixed[["cell", *(c for c in fixed.columns if c not in trials.columns)]]
+        trials = trials.merge(fixed, on="cell", how="left")
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))

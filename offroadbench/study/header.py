@@ -15,7 +15,7 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["held_fixed", "report_title"]
+__all__ = ["held_fixed", "report_title", "settings_columns"]
 
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
@@ -164,3 +164,34 @@ def report_title(meta: dict[str, Any]) -> str:
     if "vehicle.name" not in axes and getattr(vehicle, "name", "husky") != "husky":
         extra.append(f"vehicle `{vehicle.name}`")
     return f"Study report: {study['name']}" + (f" ({', '.join(extra)})" if extra else "")
+
+
+def settings_columns(meta: dict[str, Any]) -> pd.DataFrame:
+    """One row per cell: ``cell`` and the settings of the report header as the cell's trials ran
+    (``vehicle.name``, ``planner.name``, ``sim.gravity_m_s2``, ``sim.engine``, ... , ``recipe``
+    with its fixed overrides), so an exported trial row says what made it without the run's
+    metadata. Grid axes are the table's own columns already and are left out here."""
+    study = meta["study"]
+    overrides = study.get("recipe_overrides", {})
+    axes = {a["key"] for a in study["grid"]}
+    rows = []
+    for info in meta["cells"]:
+        cell = int(info["index"])
+        secs = _sections(meta, cell)
+        row: dict[str, Any] = {"cell": cell}
+        for table, field in (("vehicle", "name"), ("planner", "name"), *((t, f) for t, f, _ in _SHOWN)):
+            cfg = secs[table]
+            value = cfg.get(field) if isinstance(cfg, dict) else getattr(cfg, field, None)
+            if field == "soil" and getattr(cfg, "tyre_model", "") != "terramechanics":
+                continue
+            if f"{table}.{field}" not in axes:
+                row[f"{table}.{field}"] = value
+        rules = secs["rules"]
+        if dataclasses.is_dataclass(rules) and not any(k.startswith("rules.") for k in axes):
+            row["rules"] = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
+                            f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal")
+        if "recipe" not in axes:
+            row["recipe"] = study["recipe"] + (
+                f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else "")
+        rows.append(row)
+    return pd.DataFrame(rows)

@@ -158,3 +158,25 @@ def test_the_rules_row_states_the_capped_stuck_window():
     assert text.startswith(f"{window:.3g} s (30 s capped at 0.5 x the {timeout:.3g} s timeout of a 6 m mission)")
     secs["missions"] = build_section("missions", {"length_m": 35.0}, where="test")
     assert _stuck_window_text(rules, secs) == "30 s"  # the paper's missions keep the paper's window
+
+
+def test_exported_rows_carry_the_fixed_settings(tmp_path, capsys):
+    import pandas as pd
+
+    from offroadbench.study import run_study, study_from_dict
+    from offroadbench.study.spec import plan_cells
+    from tests.study.test_run import STUDY, fake_trials
+
+    study = study_from_dict({**STUDY, "sim": {"gravity_m_s2": 1.62}})
+    run_dir = tmp_path / "run"
+    run_study(study, plan_cells(study), run_dir, executor="inline", trial_fn=fake_trials)
+    code, _, err = run(capsys, "study", "export", str(run_dir), "--format", "csv", "--out", str(tmp_path / "x"))
+    assert code == 0, err
+    rows = pd.read_csv(tmp_path / "x" / "trials.csv")
+    assert len(rows) == 24 and set(rows["D_high"]) == {2.3, 2.6}  # the grid axis, as before
+    assert (rows["sim.gravity_m_s2"] == 1.62).all() and (rows["vehicle.name"] == "husky").all()
+    assert (rows["planner.name"] == "straight").all() and (rows["sim.engine"] == "pybullet").all()
+    assert (rows["missions.length_m"] == 3.0).all()
+    assert rows["recipe"].iloc[0] == "paper-d2.45 with grid.cols = 121, grid.rows = 121"  # as stored (sorted)
+    assert rows["rules"].iloc[0].startswith("tipped > 75 deg; stuck < 0.2 m in ")
+    assert not [c for c in rows.columns if c.startswith("recipe.layers")]  # an axis is not repeated
