@@ -15,7 +15,7 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["held_fixed", "report_title", "settings_columns"]
+__all__ = ["held_fixed", "report_title", "settings_columns", "driver_files"]
 
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
@@ -134,6 +134,7 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
         note = (f"varies: {', '.join(grid_rules)}; " if grid_rules else "") + (
             f"not the default: {', '.join(diff)}" if diff else "the paper's (Sec. 2.4)")
         rows.append({"setting": "failure rules", "value": value, "note": note})
+    rows += _files_rows(meta)
     overrides = study.get("recipe_overrides", {})
     recipe_axes = sorted(k for k in axes if k == "recipe" or k.startswith("recipe."))
     rows.append({"setting": "terrain recipe", "value": study["recipe"]
@@ -195,3 +196,41 @@ def settings_columns(meta: dict[str, Any]) -> pd.DataFrame:
                 f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else "")
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def driver_files(planner: Any) -> dict[str, dict[str, Any]]:
+    """The files a planner's or policy's config names (a trained model: the sb3 example's ``model``),
+    as the study found them when it was created: ``{"planner.FIELD": {"path", "bytes", "sha256"}}``.
+    Stored with the run (``cells[i]["files"]``) and shown in the report's header, so a report says
+    which model drove, not only its (possibly relative, since overwritten) name."""
+    import hashlib
+    from pathlib import Path
+
+    cfg = getattr(planner, "config", None)
+    out: dict[str, dict[str, Any]] = {}
+    if not dataclasses.is_dataclass(cfg):
+        return out
+    for f in dataclasses.fields(cfg):
+        value = getattr(cfg, f.name)
+        if not isinstance(value, str) or not Path(value).suffix or not Path(value).is_file():
+            continue
+        path = Path(value).resolve()
+        digest = hashlib.sha256()
+        with path.open("rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        out[f"planner.{f.name}"] = {"path": str(path), "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+    return out
+
+
+def _files_rows(meta: dict[str, Any]) -> list[dict[str, str]]:
+    """Header rows for the files the cells' drivers named (driver_files), one per distinct file."""
+    seen: dict[tuple[str, str], list[int]] = {}
+    for info in meta["cells"]:
+        for key, f in (info.get("files") or {}).items():
+            seen.setdefault((key, f"{f['path']} ({f['bytes']} bytes, sha256 {f['sha256'][:16]}...)"), []).append(
+                int(info["index"]))
+    n = len(meta["cells"])
+    return [{"setting": f"{key} (file)", "value": text,
+             "note": "" if len(cells) == n else f"cells {', '.join(map(str, cells))}"}
+            for (key, text), cells in seen.items()]

@@ -180,3 +180,28 @@ def test_exported_rows_carry_the_fixed_settings(tmp_path, capsys):
     assert rows["recipe"].iloc[0] == "paper-d2.45 with grid.cols = 121, grid.rows = 121"  # as stored (sorted)
     assert rows["rules"].iloc[0].startswith("tipped > 75 deg; stuck < 0.2 m in ")
     assert not [c for c in rows.columns if c.startswith("recipe.layers")]  # an axis is not repeated
+
+
+def test_the_model_file_that_drove_is_recorded(tmp_path):
+    import dataclasses
+    import hashlib
+
+    from offroadbench.navigation.drivers import PlannerChoice
+    from offroadbench.study.header import _files_rows, driver_files
+
+    @dataclasses.dataclass(frozen=True)
+    class ModelConfig:
+        model: str = ""
+        algorithm: str = "PPO"
+
+    model = tmp_path / "ppo.zip"
+    model.write_bytes(b"weights" * 100)
+    files = driver_files(PlannerChoice("sb3", ModelConfig(model=str(model)), "policy"))
+    assert files == {"planner.model": {"path": str(model.resolve()), "bytes": 700,
+                                       "sha256": hashlib.sha256(b"weights" * 100).hexdigest()}}
+    assert driver_files(PlannerChoice("straight")) == {}
+    assert driver_files(PlannerChoice("sb3", ModelConfig(model=str(tmp_path / "gone.zip")), "policy")) == {}
+    meta = {"cells": [{"index": 0, "files": {}}, {"index": 1, "files": files}]}
+    (row,) = _files_rows(meta)
+    assert row["setting"] == "planner.model (file)" and row["note"] == "cells 1"
+    assert str(model.resolve()) in row["value"] and files["planner.model"]["sha256"][:16] in row["value"]
