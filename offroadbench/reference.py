@@ -377,8 +377,10 @@ FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
                  "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
                  "population (read when the recipe is loaded)."),)),
     "dem": ("dem", (
-        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
-                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy, a geographic .npz "
+                 "with non-square cells, or GeoTIFF), read when the recipe is loaded; `matplotlib:NAME`: a sample "
+                 "file shipped with matplotlib (`matplotlib:jacksboro_fault_dem.npz`, a real DEM); none: the "
+                 "shipped sample DEM."),
         FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
         FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
         FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
@@ -557,10 +559,12 @@ def render_reference() -> str:
     lines += [
         "## Tables a study writes",
         "",
-        "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
+        "### Trials (`offroadbench.study.load(DIR)`, `study export`'s `trials.parquet` or `trials.csv`)",
         "",
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
-        "trials only. Source: `offroadbench.sim.runner.TrialResult`."),
+        "trials only. Source: `offroadbench.sim.runner.TrialResult`. `study export` adds, after these, the "
+        "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
+        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",
