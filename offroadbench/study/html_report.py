@@ -191,19 +191,21 @@ def markdown_to_html(md: str, images: Mapping[str, str]) -> str:
     return "\n".join(out)
 
 
-def _td(content: str) -> str:
-    """A table cell; numbers are right-aligned (class ``num``)."""
-    num = _NUMBER.match(_TAGS.sub("", content))
-    return f'<td class="num">{content}</td>' if num else f"<td>{content}</td>"
+def _is_number(content: str) -> bool:
+    return bool(_NUMBER.match(_TAGS.sub("", content)))
 
 
 def _table(header: Sequence[str], rows: Sequence[Sequence[str]], cls: str = "sortable", raw: bool = False) -> str:
-    """A sortable table; cells are Markdown inline text (``raw``: already HTML)."""
+    """A sortable table; cells are Markdown inline text (``raw``: already HTML). A column whose
+    cells are all numbers (blanks aside) is right-aligned (class ``num``)."""
     th = "".join(f"<th>{_inline(h)}</th>" for h in header)
-    body = []
-    for r in rows:
-        cells = "".join(_td(c if raw else _inline(c)) for c in r)
-        body.append(f"<tr>{cells}</tr>")
+    cells = [[c if raw else _inline(c) for c in r] for r in rows]
+    ncol = max((len(r) for r in cells), default=0)
+    numeric = [any(j < len(r) and _TAGS.sub("", r[j]).strip() for r in cells)
+               and all(j >= len(r) or not _TAGS.sub("", r[j]).strip() or _is_number(r[j]) for r in cells)
+               for j in range(ncol)]
+    body = ["<tr>" + "".join(f'<td class="num">{c}</td>' if numeric[j] else f"<td>{c}</td>" for j, c in enumerate(r))
+            + "</tr>" for r in cells]
     return f'<table class="{cls}"><thead><tr>{th}</tr></thead><tbody>{"".join(body)}</tbody></table>'
 
 
