@@ -126,6 +126,10 @@ def test_config_shows_grid_and_recipe_overrides(capsys):
 
 
 def test_drive_summary_words():
+    from offroadbench.cli._common import run_caption
+    from offroadbench.sim import SimConfig
+
+    assert run_caption(SimConfig(gravity_m_s2=1.62)) == "pybullet, g = 1.62 m/s^2"  # in drive's figure titles
     assert count_text(1, "mission") == "1 mission" and count_text(3, "mission") == "3 missions"
     none = {"successes": 0, "trials": 2, "median_traversal_time_s": math.nan}
     assert "nan" not in medians_text(none) and "no trial succeeded" in medians_text(none)
