@@ -301,7 +301,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))  # the engine and gravity it drove
+        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
@@ -314,7 +317,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
 
-        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, {r.failure_reason or 'success'}"
         footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
         path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
                                      r.failure_reason, footprint, title)
