@@ -223,7 +223,9 @@ def cmd_drive(args: argparse.Namespace) -> int:
     if args.animate:
         shown = next((r for r in run.results if not r.success), run.results[0])
         k = shown.mission_index
-        title = f"{label}: mission {k}, {run.planner}, {shown.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        title = f"{label}: mission {k}, {run.planner}, {run_caption(run.sim)}, {shown.failure_reason or 'success'}"
         path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
                                      shown.failure_reason, vehicle_footprint(vehicle, sim), title)
         print(f"wrote {path} (mission {k})")
