@@ -19,6 +19,7 @@ it with the Agg canvas without touching the process's backend.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -215,7 +216,7 @@ class TrialView:
         self._fail_text.set_text(f"{failure_reason} at {t:.1f} s" if failed else ("success" if last else ""))
         self._fail_text.set_color(FAIL_COLOUR if failed else "green")
         head = f"{self.title}   " if self.title else ""
-        self._head.set_text(f"{head}t = {t:5.1f} s")
+        self._head.set_text("\n".join(textwrap.wrap(f"{head}t = {t:5.1f} s", 120)))  # a long label wraps
 
     def _fit_strips(self) -> None:
         s = self._series
