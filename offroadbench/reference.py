@@ -378,8 +378,10 @@ FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
                  "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
                  "population (read when the recipe is loaded)."),)),
     "dem": ("dem", (
-        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
-                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy, a geographic .npz "
+                 "with non-square cells, or GeoTIFF), read when the recipe is loaded; `matplotlib:NAME`: a sample "
+                 "file shipped with matplotlib (`matplotlib:jacksboro_fault_dem.npz`, a real DEM); none: the "
+                 "shipped sample DEM."),
         FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
         FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
         FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
@@ -577,10 +579,12 @@ def render_reference() -> str:
     lines += [
         "## Tables a study writes",
         "",
-        "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
+        "### Trials (`offroadbench.study.load(DIR)`, `study export`'s `trials.parquet` or `trials.csv`)",
         "",
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
-        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`."),
+        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`. `study export` adds, after these, the "
+        "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
+        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",
@@ -630,16 +634,47 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
 _STUDY_EXAMPLE = {"name": "my-study", "recipe": "paper-d2.45", "root_seed": 0}
 
 
+#: the study's free-form tables, printed after ``[study]``: (name, comment lines, example lines)
+_FREE_TABLES = (
+    ("grid", (
+        "Axes of the parameter grid: \"dotted.key\" = [values], one cell per combination (first axis slowest).",
+        "Keys: recipe (preset names or paths), recipe.<key of the recipe TOML>, <table>.<key> of a table below.",
+        "No axis: one cell. Uncomment or write your own:",
+    ), (
+        '# "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]',
+        '# "planner.name" = ["straight", "astar"]',
+    )),
+    ("recipe_overrides", (
+        "Fixed \"dotted.key\" = value changes of the recipe, for every cell (the keys of generate --set;",
+        "the recipe's own [grid] and [layers.*] tables: docs/reference.md, Terrain recipes).",
+    ), (
+        '# "grid.rows" = 257',
+        '# "grid.cols" = 257',
+    )),
+)
+
+
+def _free_table(name: str) -> list[str]:
+    for table, comments, examples in _FREE_TABLES:
+        if table == name:
+            return [f"[{table}]", *(f"# {c}" for c in comments), *examples, ""]
+    raise KeyError(name)
+
+
 def render_section_toml(section: str | None = None) -> str:
     """A study table (or, with ``section=None``, every table) with its defaults, as TOML with a
     comment per key. The output loads as it is; keys without a default are commented out (in
-    ``[study]`` the required keys get example values)."""
+    ``[study]`` the required keys get example values; ``[grid]`` and ``[recipe_overrides]`` are
+    printed empty, with commented examples)."""
     sections = study_sections()
     names = [s.name for s in sections if "." not in s.name]
+    free = [t for t, _, _ in _FREE_TABLES]
+    if section in free:
+        return "\n".join(_free_table(section)).rstrip() + "\n"
     if section is not None and section not in names:
         from offroadbench.registry import unknown_name
 
-        raise unknown_name("study table", section, names)
+        raise unknown_name("study table", section, names[:1] + free + names[1:])
     lines: list[str] = []
     for s in sections:
         top = s.name.split(".", 1)[0]
@@ -657,4 +692,7 @@ def render_section_toml(section: str | None = None) -> str:
                 for f in s.fields))
         # a vehicle's figures stay commented: set here, they would override another vehicle's own
         lines += _toml_block(s, commented_from=1 if s.name == "vehicle" else None) + [""]
+        if s.name == "study" and section is None:
+            for table in free:
+                lines += _free_table(table)
     return "\n".join(lines).rstrip() + "\n"

@@ -61,6 +61,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep = sub.add_parser("report", help="write the Markdown report with figures of a run directory")
     rep.add_argument("run_dir", help="run directory of a study")
     rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained file (figures inline, sortable per-trial "
+                     "table, the replay animations found in RUN_DIR/replays inline and linked from their trials)")
     rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
     rep.set_defaults(func=cmd_report)
 
@@ -182,7 +185,13 @@ def cmd_run(args: argparse.Namespace) -> int:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
                                 executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
     except Terminated:
-        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        from offroadbench.study.store import Store
+
+        with Store(out) as store:
+            stored = store.counts()[0]
+        sys.stderr.write(f"offroadbench: terminated; {counts['new']} trial(s) of this run saved, {stored} of "
+                         f"{study.n_trials} stored in {out}; "
+                         "run the same command again to resume\n")
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
@@ -204,6 +213,13 @@ def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.study.stats import terrain_success
 
     trials = load(run_dir)
+    if len(trials):  # each row says what made it: the fixed settings beside the grid axes
+        from offroadbench.study.header import settings_columns
+        from offroadbench.study.results import load_meta
+
+        fixed = settings_columns(load_meta(run_dir))
+        fixed = fixed[["cell", *(c for c in fixed.columns if c not in trials.columns)]]
+        trials = trials.merge(fixed, on="cell", how="left")
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))
@@ -229,8 +245,9 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
     return cell, terrain
 
 
-def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
-    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
+def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
+    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
+    ``html`` also the self-contained report.html) to ``out``."""
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
@@ -250,7 +267,11 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
         if toml:
             (stage / "study.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
-    return out / "report.md"
+        if html:
+            from offroadbench.study.html_report import report_html
+
+            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
+    return out / ("report.html" if html else "report.md")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -258,7 +279,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
-    path = write_report(run_dir, out, _parse_fig4(args.fig4))
+    path = write_report(run_dir, out, _parse_fig4(args.fig4), html=args.html)
     print(f"report: {path}")
     return 0
 
@@ -316,7 +337,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))  # the engine and gravity it drove
+        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
@@ -329,7 +353,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
 
-        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, {r.failure_reason or 'success'}"
         footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
         path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
                                      r.failure_reason, footprint, title)

@@ -587,6 +587,12 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
         if tel_p.is_file():
             tel = load_telemetry(tel_p)
             driven = np.column_stack([tel["x_m"], tel["y_m"]])
+        if driven is None:  # [study] telemetry = "failed" keeps none of a success: re-run it, bit for bit
+            from offroadbench.study.tasks import replay_trial
+
+            rec = replay_trial(run_dir, int(r.cell), int(r.terrain), int(r.mission)).record
+            path = np.asarray(rec.path_xy) if path is None else path
+            driven = np.column_stack([rec.telemetry["x_m"], rec.telemetry["y_m"]])
         drawn.append((str(getattr(r, group)), path, driven, r.failure_reason or "success"))
     where = f"{level} = {first[level]}, " if level else ""
     title = f"Terrain {terrain}, mission {mission} ({where}seed {first['terrain_seed']}): planned (dashed) and driven paths"
