@@ -19,7 +19,7 @@ from offroadbench.cli._common import (
 )
 
 
-def format_soil_check(rig, model, gravity_m_s2: float) -> str:
+def format_soil_check(rig, model, gravity_m_s2: float, engine: str = "pybullet") -> str:
     """The per-slip table: engine rig beside the integrals."""
     df = pd.DataFrame({
         "slip": rig.slip,
@@ -31,7 +31,7 @@ def format_soil_check(rig, model, gravity_m_s2: float) -> str:
                 float(abs(rig.torque_nm - model.torque_nm).max()) / (rig.load_n * rig.radius_m))
     return "\n".join([
         (f"soil check: {rig.soil}, wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {rig.load_n:.2f} N "
-        f"(gravity {gravity_m_s2:g} m/s^2; Bekker parameters are from 1 g tests)"),
+         f"(gravity {gravity_m_s2:g} m/s^2; Bekker parameters are from 1 g tests), engine {engine}"),
         format_table(df, "{:.3f}"),
         "",
         f"largest difference engine - integrals: {100 * worst:.2f} % of the load (pull) or load x radius (torque)",
@@ -60,9 +60,10 @@ def cmd_check(args: argparse.Namespace) -> int:
         raise InputError(f"--wheel {args.wheel}: the vehicle has no wheel_width_m")
     load = args.load_n if args.load_n is not None else wheel_load_n(spec, args.gravity)
     with bar("slips", unit="slip") as progress:
-        rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity, progress=progress)
+        rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity,
+                        engine=args.engine, progress=progress)
     model = model_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load)
-    print(format_soil_check(rig, model, args.gravity))
+    print(format_soil_check(rig, model, args.gravity, args.engine))
     if args.plot:
         from offroadbench.plots.soil import plot_soil_check
 
@@ -86,5 +87,8 @@ def register(sub) -> None:
     c.add_argument("--load-n", type=positive_float, default=None,
                    help="wheel load, N (default: a quarter of the vehicle's weight at --gravity)")
     c.add_argument("--gravity", type=positive_float, default=9.81, help="gravity, m/s^2 (default 9.81)")
+    c.add_argument("--engine", default="pybullet",
+                   help="physics engine of the rig (pybullet, the default, or mujoco; the soil's force law is "
+                   "the same code on both)")
     c.add_argument("--plot", metavar="PATH", help="write the figure (.png, .pdf or .svg)")
     c.set_defaults(func=cmd_check)

@@ -1,3 +1,9 @@
 """The MuJoCo engine (``engine = "mujoco"``): world.py (MuJoCoWorld, the TrialWorld, with its URDF ->
 MJCF translation and tyre forces). Importing this package imports no engine; its modules do.
 """
+
+from offroadbench.sim.engine import EngineCapabilities
+
+#: what the MuJoCo engine implements (offroadbench.sim.engine.engine_capabilities)
+CAPABILITIES = EngineCapabilities(tyre_models=("bullet", "coulomb", "terramechanics"),
+                                  soil_rig_module="offroadbench.sim.engines.mujoco.soil_rig")

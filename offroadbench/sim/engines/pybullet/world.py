@@ -58,7 +58,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
   benchmarks/RESULTS.md, 'Issue 25').
 
-This module (with ``contact.py`` and the terramechanics adapter ``soil_contact.py``) is the only
+This package (this module, ``tyres.py`` and the terramechanics adapter ``soil.py``) is the only
 code that calls pybullet for a trial: :class:`World` implements offroadbench.sim.engine.TrialWorld,
 the engine boundary, for PyBullet; the vehicle's geometry is measured once, at load
 (:meth:`World._measure_geometry`).
@@ -101,6 +101,7 @@ class World:
         self.sim = sim.for_terrain()  # Earth's gravity and the default soil where nothing names them
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
+        self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -224,15 +225,16 @@ class World:
                 ixx, _, izz = pb.getDynamicsInfo(body, j, physicsClientId=cid)[2]
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
                                   physicsClientId=cid)
+        if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
+            n_links = pb.getNumJoints(body, physicsClientId=cid)
+            self._mass_kg = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
         self._tyres = None
         if self.sim.tyre_model == "terramechanics":
             from offroadbench.sim.engines.pybullet.soil import make_soil_tyres
 
-            self._tyres = make_soil_tyres(self, body)
+            self._tyres = make_soil_tyres(self, body, self._mass_kg)
         elif coulomb:
-            n_links = pb.getNumJoints(body, physicsClientId=cid)
-            mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
-            share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
+            share = self._mass_kg / len(self.wheel_joints)  # kg carried by one wheel on flat ground
             dt = self.dt_s
             # bristle well inside the explicit step's stability bound (k dt^2/m < 1, c dt/m < 2)
             self._tyres = CoulombTyres(cid, body, self._terrain_set, self.wheel_joints,
@@ -255,7 +257,7 @@ class World:
         wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in self.wheel_joints]
         centres = [pb.getLinkState(body, j, physicsClientId=cid)[0] for j in self.wheel_joints]
         return VehicleGeometry(
-            mass_kg=sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links)),
+            mass_kg=self._mass_kg,
             wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1]
                                            for j in self.wheel_joints),
             wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
