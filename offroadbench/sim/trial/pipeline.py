@@ -40,7 +40,8 @@ from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle, vehicle_fr
 if TYPE_CHECKING:
     from offroadbench.sim.trial.runner import TrialResult
 
-__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions"]
+__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
+           "terrain_body"]
 
 
 def _builder(cls: type):
@@ -136,6 +137,26 @@ class PreparedTerrain:
         return sim.for_terrain(self.gravity_m_s2, self.soil)
 
 
+def terrain_body(terrain: Any = None, recipe: Any = None) -> tuple[float | None, str | None]:
+    """(gravity m/s^2, soil name) that a terrain names, None for what it names none of: the
+    ``[body]`` and ``[soil]`` of its recipe (``recipe``, or ``terrain`` itself when it is a Recipe),
+    or those of the recipe stored in a 16-bit PNG's sidecar (``terrain`` a ``.png`` path); a bare
+    Heightmap names neither. The one place a terrain's body and soil are read; SimConfig.for_terrain
+    then fills what the settings leave open."""
+    from offroadbench.terrain.recipe import Recipe
+
+    if recipe is None and isinstance(terrain, Recipe):
+        recipe = terrain
+    if recipe is not None:
+        return recipe.gravity_m_s2, recipe.soil
+    if isinstance(terrain, (str, Path)) and str(terrain).lower().endswith(".png"):
+        from offroadbench.bodies import terrain_gravity_and_soil
+        from offroadbench.io.png16 import read_png16_metadata
+
+        return terrain_gravity_and_soil(read_png16_metadata(terrain).get("recipe"))
+    return None, None
+
+
 def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
                     missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
                     gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
@@ -154,7 +175,7 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
         from offroadbench.terrain.recipe import generate_terrain
 
         hm = generate_terrain(terrain, seed)
-        gravity_m_s2, soil = terrain.gravity_m_s2, terrain.soil
+        gravity_m_s2, soil = terrain_body(terrain)
     maps = classify_terrain(hm, settings.roughness)
     items = list(missions)
     if items and isinstance(items[0], Mission):
