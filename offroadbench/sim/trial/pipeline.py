@@ -105,13 +105,6 @@ class TrialSettings:
         """A copy with some parts replaced (``dataclasses.replace``)."""
         return dataclasses.replace(self, **changes)
 
-    def drive_kwargs(self, maps: ClassMaps | None) -> dict[str, Any]:
-        """Keyword arguments of :func:`offroadbench.sim.trial.runner.drive_mission` for these settings."""
-        return {"planner": self.planner, "classes": None if maps is None else maps.closed,
-                "border_m": self.missions.border_m, "controller": self.controller, "rules": self.rules,
-                "observation": self.observation}
-
-
 @dataclass(frozen=True, eq=False)
 class PreparedTerrain:
     """A terrain ready to drive: its heights, class maps and missions (in driving order)."""
@@ -196,11 +189,11 @@ def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
     needs = settings.planner.needs
     if "classes" in needs and prepared.maps is None:
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
-    kwargs = settings.drive_kwargs(prepared.maps if "classes" in needs else None)
+    classes = prepared.maps.closed if "classes" in needs else None
     n = len(prepared.missions)
     with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):
-            yield drive_mission(world, mission, **kwargs)
+            yield drive_mission(world, mission, settings=settings, classes=classes)
             report(progress, i + 1, n)
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,6 +36,9 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.controller import make_tracker
 from offroadbench.sim.trial.skid_steer import wheel_speeds
 from offroadbench.sim.engine import TrialWorld
+
+if TYPE_CHECKING:
+    from offroadbench.sim.trial.pipeline import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
            "run_mission", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
@@ -297,9 +301,14 @@ def drive_mission(
     rules: FailureRules = FailureRules(),
     observation: ObservationConfig = ObservationConfig(),
     spawn_roll_rad: float = 0.0,
+    settings: TrialSettings | None = None,
 ) -> TrialRecord:
     """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy, through
     :class:`TrialLoop`.
+
+    ``settings`` (offroadbench.sim.trial.pipeline.TrialSettings, as :func:`drive_terrain` passes
+    them whole) gives the planner, controller, rules, observation and the missions' border in place
+    of those keyword arguments (the world already holds its vehicle and physics).
 
     ``classes`` is the closed roughness-class map the planner sees (the study's; needed by a driver
     whose registry entry declares it, see offroadbench.navigation.drivers.NEEDS), ``border_m`` the
@@ -308,6 +317,9 @@ def drive_mission(
     ``spawn_roll_rad`` tilts the vehicle about its long axis at spawn (a test hook: 90 deg puts it
     on its side).
     """
+    if settings is not None:
+        planner, controller, rules = settings.planner, settings.controller, settings.rules
+        observation, border_m = settings.observation, settings.missions.border_m
     sim = world.sim
     if sim.physics_rate_hz % controller.control_rate_hz:
         raise InputError(
