@@ -13,6 +13,7 @@ from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
 from offroadbench.sim.engine import ENGINES, TYRE_MODELS, engine_capabilities
+from offroadbench.sim.engines.mujoco.settings import MuJoCoConfig
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
@@ -72,6 +73,8 @@ class SimConfig:
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
     default) or ``mujoco`` (offroadbench.sim.engines.mujoco.world; ``pip install 'offroadbench[mujoco]'``).
     Both run the same trial, tyre model, telemetry and failure rules."""
+    mujoco: MuJoCoConfig = MuJoCoConfig()
+    """The MuJoCo engine's own settings (the ``[sim.mujoco]`` table; the other engines ignore it)."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)

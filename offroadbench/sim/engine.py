@@ -161,6 +161,9 @@ class EngineCapabilities:
     soil_rig_module: str | None = None
     """Module whose ``run_rig`` drives the single-wheel soil rig (offroadbench.sim.rigs.soil_check)
     on this engine; None: no rig."""
+    settings: tuple[str, ...] = ()
+    """The SimConfig keys that this engine alone reads (its own table, e.g. ``mujoco`` for
+    ``[sim.mujoco]``, or keys of ``[sim]``); the other engines ignore them."""
 
     def soil_rig(self) -> Callable[..., tuple[float, float, float]]:
         """The engine's ``run_rig`` (imports the engine); an InputError where it has none."""

@@ -3,6 +3,7 @@ engine-neutral code (offroadbench.sim.tyre_laws.soil_wheels), and each engine on
 wheel's state and applies the force. The single-wheel rigs of the two engines must agree, and a
 vehicle on MuJoCo must sink and pull as the Wong-Reece integrals say."""
 
+import dataclasses
 import importlib.util
 import math
 
@@ -76,3 +77,26 @@ def test_engines_declare_their_tyre_models_and_the_config_checks_the_declaration
             rig_curve(load_soil("lunar-regolith"), R, B, 60.0, slips=(0.0,), engine="toy-engine")
     finally:
         ENGINES._entries.pop("toy-engine", None)
+
+
+def test_each_engines_own_settings_are_simconfig_keys_and_mujocos_table_is_validated():
+    from offroadbench.sim.trial.pipeline import TrialSettings
+
+    keys = {f.name for f in dataclasses.fields(SimConfig)}
+    for name in ("pybullet", "mujoco"):
+        assert set(engine_capabilities(name).settings) <= keys, name
+    sim = TrialSettings.from_tables({"sim": {"engine": "mujoco", "mujoco": {"min_rate_hz": 240,
+                                                                            "wheel_solref": [0.03, 1]}}}).sim
+    assert sim.mujoco.min_rate_hz == 240 and sim.mujoco.wheel_solref == (0.03, 1.0)
+    assert sim.mujoco.ccd_iterations == SimConfig().mujoco.ccd_iterations  # the others keep their defaults
+    with pytest.raises(InputError, match="mujoco.cone"):
+        TrialSettings.from_tables({"sim": {"mujoco": {"cone": "round"}}})
+    with pytest.raises(InputError, match="unknown key"):
+        TrialSettings.from_tables({"sim": {"mujoco": {"min_rate": 240}}})
+
+
+@needs_mujoco
+def test_the_mujoco_world_steps_at_its_tables_rate():
+    sim = SimConfig(engine="mujoco", mujoco=dataclasses.replace(SimConfig().mujoco, min_rate_hz=240))
+    with open_world(Heightmap.flat(41, 41, 0.05), "husky", sim) as world:
+        assert world.substeps == 4 and world.contact.min_rate_hz == 240

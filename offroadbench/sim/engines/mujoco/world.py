@@ -38,7 +38,6 @@ import logging
 import math
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -51,57 +50,13 @@ from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
 from offroadbench.sim.tyre_laws.soil_wheels import soil_setup
 from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import UrdfLink, max_height_near, read_urdf
+from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
-__all__ = ["MuJoCoWorld", "MUJOCO_CONTACT"]
+__all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 
 log = logging.getLogger(__name__)
 
-
-@dataclass(frozen=True)
-class ContactTuning:
-    """MuJoCo contact settings that are not in the vehicle's spec (tuned to PyBullet's ride)."""
-
-    wheel_solref: tuple[float, float] | None = None
-    """solref of the wheel-terrain contact, (time constant s, damping ratio); None: from the
-    spec's tyre stiffness and damping (see the module docstring)."""
-    wheel_margin_m: float = 0.0
-    """Geom margin of the wheels: contacts are found within this distance, m."""
-    wheel_gap_m: float = 0.0
-    """Geom gap of the wheels: a found contact acts once closer than ``margin - gap``, m."""
-    refsafe: bool = True
-    """MuJoCo's ``refsafe``: time constants below two steps are raised to two steps."""
-    chassis_solref: tuple[float, float] = (0.02, 1.0)
-    """The chassis-terrain contact's solref (time constant s, damping ratio): MuJoCo's default."""
-    solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
-    """solimp of the wheels' contacts (MuJoCo's default)."""
-    chassis_solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
-    """solimp of the chassis' contacts (MuJoCo's default)."""
-    chassis_condim: int = 3
-    """Contact dimensionality of the chassis: 3 sliding friction (as Bullet), 4 adds torsional, 6 rolling."""
-    cone: str = "pyramidal"
-    """MuJoCo's friction cone for the contacts it owns (the chassis'): ``pyramidal`` or ``elliptic``."""
-    min_rate_hz: int = 120
-    """MuJoCo steps at least this often: a trial's step (``SimConfig.physics_rate_hz``) is split into
-    ``ceil(min_rate_hz / physics_rate_hz)`` MuJoCo steps, the tyre forces applied at each. Below
-    120 Hz the ride is bumpier than PyBullet's at 60 Hz (benchmarks/RESULTS.md, 'MuJoCo')."""
-    ccd_iterations: int = 10
-    """MuJoCo's convex-collision iterations (its default 35): 10 gave the same trials to the last
-    printed digit and 1.2x the speed on paper terrain (the chassis box against the hfield's prisms)."""
-    tyres_each_substep: bool = True
-    """True: the tyre forces are computed (and the contacts read) at every MuJoCo step. False:
-    once per trial step, from the contacts of its last MuJoCo step, and held over its MuJoCo
-    steps (as PyBullet applies them once per 60 Hz step): on the paper missions 1.2x the speed
-    with a ride as close to PyBullet's (RMS vertical acceleration -2.1 % against -4.6 %), but the
-    Jackal then fails 4 rows of ``vehicle check`` (a 2 rad/s turn at 1 m/s overshoots by 13 %,
-    it climbs a 0.118 m step against its 0.098 m bound), so it is not the default."""
-    servo_gain: float = 4.0
-    """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
-    1 / (1 + gain) per step before the torque limit."""
-
-
-#: the contact settings the MuJoCo world uses
-MUJOCO_CONTACT = ContactTuning()
 
 
 def _fmt(values) -> str:
@@ -114,12 +69,12 @@ class MuJoCoWorld:
     context manager."""
 
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig(),
-                 contact: ContactTuning = MUJOCO_CONTACT) -> None:
+                 contact: ContactTuning | None = None) -> None:
         self.hm = hm
         self.sim = sim = sim.for_terrain()  # Earth's gravity where nothing names one
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
-        self.contact = contact
+        self.contact = contact = sim.mujoco if contact is None else contact  # [sim.mujoco], unless given
         self.substeps = max(1, math.ceil(contact.min_rate_hz / sim.physics_rate_hz))
         self._dt_mj = self.dt_s / self.substeps
         t0 = time.perf_counter()

@@ -7,4 +7,5 @@ from offroadbench.sim.engine import EngineCapabilities
 
 #: what the PyBullet engine implements (offroadbench.sim.engine.engine_capabilities)
 CAPABILITIES = EngineCapabilities(tyre_models=("bullet", "coulomb", "terramechanics"),
+                                  settings=("heightfield_tile_cells", "cone_friction"),
                                   soil_rig_module="offroadbench.sim.engines.pybullet.soil_rig")
