@@ -17,7 +17,7 @@ from offroadbench.errors import InputError
 if TYPE_CHECKING:
     from offroadbench.heightmap import Heightmap
 
-__all__ = ["UrdfJoint", "UrdfLink", "max_height_near", "read_urdf", "urdf_mass_kg"]
+__all__ = ["UrdfJoint", "UrdfLink", "max_height_near", "read_urdf", "settle", "spawn_height_m", "urdf_mass_kg"]
 
 
 def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> float:
@@ -30,6 +30,23 @@ def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> f
     if c0 > c1 or r0 > r1:
         return hm.z_max_m
     return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
+
+
+def spawn_height_m(hm: Heightmap, x_m: float, y_m: float, chassis_reach_m: float, wheel_radius_m: float,
+                   bottom_m: float, clearance_m: float) -> float:
+    """Height of the vehicle's base at spawn, m: its lowest point ``bottom_m`` below the base and
+    ``clearance_m`` above the highest terrain sample within the chassis' reach (half its diagonal)
+    plus a wheel radius of (x, y)."""
+    ground = max_height_near(hm, x_m, y_m, chassis_reach_m + wheel_radius_m)
+    return ground + bottom_m + clearance_m
+
+
+def settle(world) -> None:
+    """The end of every engine's spawn: the wheels braked (commanded to 0 rad/s) while the vehicle
+    settles for ``sim.settle_time_s`` (the clock starts after it)."""
+    world.command_wheels(0.0, 0.0)
+    for _ in range(int(round(world.sim.settle_time_s * world.sim.physics_rate_hz))):
+        world.step()
 
 
 @dataclass(frozen=True)

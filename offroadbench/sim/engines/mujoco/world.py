@@ -46,10 +46,10 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.config import SimConfig
-from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
+from offroadbench.sim.tyre_laws.coulomb import CoulombBristles, bristle_constants
 from offroadbench.sim.tyre_laws.soil_wheels import soil_setup
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import UrdfLink, max_height_near, read_urdf
+from offroadbench.sim.engines.base import UrdfLink, max_height_near, read_urdf, settle, spawn_height_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
@@ -87,21 +87,21 @@ class MuJoCoWorld:
         self.data = mujoco.MjData(self.model)
         self._index()
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
+        self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         if sim.tyre_model == "coulomb":
-            share = self.geometry_mass() / len(self._wheel_bodies)
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
             # tyre is the same whatever the engine's step), integrated at MuJoCo's step
-            dt = self.dt_s
+            k, c = bristle_constants(self._mass_kg / len(self._wheel_bodies), self.dt_s)
             self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
                                           self._dt_mj if contact.tyres_each_substep else self.dt_s,
-                                          stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+                                          stiffness_n_m=k, damping_n_s_m=c)
         self._soil = None
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
             # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
             n = len(self._wheel_bodies)
-            setup = soil_setup(self.spec, sim.soil, self.geometry_mass(), n, sim.gravity_m_s2, self.dt_s)
+            setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
         self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
@@ -279,7 +279,7 @@ class MuJoCoWorld:
             own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist()))
             spins.append(own + float(m.dof_armature[j]))
         return VehicleGeometry(
-            mass_kg=self.geometry_mass(),
+            mass_kg=self._mass_kg,
             wheel_spin_inertia_kg_m2=tuple(spins),
             wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
             length_m=hi[0] - lo[0],
@@ -324,8 +324,8 @@ class MuJoCoWorld:
                 if m.geom_bodyid[g] == self._chassis:
                     reach = max(reach, 0.5 * math.hypot(ghi[0] - glo[0], ghi[1] - glo[1]))
         bottom = base[2] - min(lows)
-        ground = self.max_height_near(x_m, y_m, reach + self.spec.wheel_radius_m)
-        d.qpos[2] = ground + bottom + self.sim.spawn_clearance_m
+        d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
+                                   self.sim.spawn_clearance_m)
         mujoco.mj_forward(m, d)
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0
@@ -334,9 +334,7 @@ class MuJoCoWorld:
             self._tyres.clear()
         if self._soil is not None:
             self._soil.reset()
-        self.command_wheels(0.0, 0.0)
-        for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
-            self.step()
+        settle(self)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres

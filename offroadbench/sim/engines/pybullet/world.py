@@ -82,8 +82,9 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
+from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["World"]
@@ -235,11 +236,10 @@ class World:
             self._tyres = make_soil_tyres(self, body, self._mass_kg)
         elif coulomb:
             share = self._mass_kg / len(self.wheel_joints)  # kg carried by one wheel on flat ground
-            dt = self.dt_s
-            # bristle well inside the explicit step's stability bound (k dt^2/m < 1, c dt/m < 2)
+            k, c = bristle_constants(share, self.dt_s)
             self._tyres = CoulombTyres(cid, body, self._terrain_set, self.wheel_joints,
-                                       spec.wheel_friction * self.sim.terrain_friction, dt,
-                                       stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+                                       spec.wheel_friction * self.sim.terrain_friction, self.dt_s,
+                                       stiffness_n_m=k, damping_n_s_m=c)
         return body
 
     def _measure_geometry(self) -> VehicleGeometry:
@@ -292,15 +292,13 @@ class World:
         for j in self.wheel_joints:
             pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
         aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
-        reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1]) + self.spec.wheel_radius_m
-        ground = self.max_height_near(x_m, y_m, reach)
-        z = ground + self._bottom_offset() + self.sim.spawn_clearance_m
+        reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1])
+        z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, self._bottom_offset(),
+                           self.sim.spawn_clearance_m)
         pb.resetBasePositionAndOrientation(body, [x_m, y_m, z], orn, physicsClientId=cid)
-        self.command_wheels(0.0, 0.0)
         if self._tyres is not None:
             self._tyres.reset()
-        for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
-            self.step()
+        settle(self)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres
