@@ -1,5 +1,8 @@
 """The trial runner: drive one mission in a World, apply the failure rules, compute the metrics.
 
+The per-tick code is :class:`TrialLoop`; :func:`drive_mission` drives it with a planner's path or a
+policy, the Gymnasium env (offroadbench.sim.gym_env) with an agent's actions, so both are one trial.
+
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
 at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
@@ -19,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -36,9 +39,6 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.controller import make_tracker
 from offroadbench.sim.trial.skid_steer import wheel_speeds
 from offroadbench.sim.engine import TrialWorld
-
-if TYPE_CHECKING:
-    from offroadbench.sim.trial.pipeline import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
            "run_mission", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
@@ -301,7 +301,7 @@ def drive_mission(
     rules: FailureRules = FailureRules(),
     observation: ObservationConfig = ObservationConfig(),
     spawn_roll_rad: float = 0.0,
-    settings: TrialSettings | None = None,
+    settings: Any = None,
 ) -> TrialRecord:
     """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy, through
     :class:`TrialLoop`.
