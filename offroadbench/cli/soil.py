@@ -19,7 +19,7 @@ from offroadbench.cli._common import (
 )
 
 
-def format_soil_check(rig, model, gravity_m_s2: float, engine: str = "pybullet") -> str:
+def format_soil_check(rig, model, gravity_m_s2: float) -> str:
     """The per-slip table: engine rig beside the integrals."""
     df = pd.DataFrame({
         "slip": rig.slip,
@@ -31,7 +31,7 @@ def format_soil_check(rig, model, gravity_m_s2: float, engine: str = "pybullet")
                 float(abs(rig.torque_nm - model.torque_nm).max()) / (rig.load_n * rig.radius_m))
     return "\n".join([
         (f"soil check: {rig.soil}, wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {rig.load_n:.2f} N "
-         f"(gravity {gravity_m_s2:g} m/s^2; Bekker parameters are from 1 g tests), engine {engine}"),
+        f"(gravity {gravity_m_s2:g} m/s^2; Bekker parameters are from 1 g tests)"),
         format_table(df, "{:.3f}"),
         "",
         f"largest difference engine - integrals: {100 * worst:.2f} % of the load (pull) or load x radius (torque)",
@@ -63,7 +63,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity,
                         engine=args.engine, progress=progress)
     model = model_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load)
-    print(format_soil_check(rig, model, args.gravity, args.engine))
+    print(format_soil_check(rig, model, args.gravity))
     if args.plot:
         from offroadbench.plots.soil import plot_soil_check
 

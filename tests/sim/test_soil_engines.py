@@ -100,3 +100,14 @@ def test_the_mujoco_world_steps_at_its_tables_rate():
     sim = SimConfig(engine="mujoco", mujoco=dataclasses.replace(SimConfig().mujoco, min_rate_hz=240))
     with open_world(Heightmap.flat(41, 41, 0.05), "husky", sim) as world:
         assert world.substeps == 4 and world.contact.min_rate_hz == 240
+
+
+@needs_mujoco
+def test_soil_check_runs_on_mujoco_and_refuses_an_unknown_engine(capsys):
+    from offroadbench.cli import main
+
+    assert main(["soil", "check", "lunar-regolith", "--gravity", "1.62", "--engine", "mujoco"]) == 0
+    out = capsys.readouterr().out
+    assert "soil check: lunar-regolith" in out and "0.900" in out
+    assert main(["soil", "check", "lunar-regolith", "--engine", "bulet"]) == 2
+    assert "bulet" in capsys.readouterr().err
