@@ -102,3 +102,27 @@ def test_drive_out_keeps_its_settings_platform_and_code_version(tmp_path):
     assert s["vehicle"]["name"] == "husky" and s["planner"]["name"] == "straight"
     assert rec["mission_seeds"] == list(pd.read_csv(out / "trials.csv")["mission_seed"])
     assert rec["platform"]["arch"] and rec["code_version"].startswith("0.")
+
+
+def test_the_footprint_is_measured_by_the_trials_engine(monkeypatch):
+    """Issue 35: drive --animate and study replay measure the footprint with the trials' engine;
+    under MuJoCo no PyBullet world is built."""
+    import importlib.util
+
+    import pytest
+
+    from offroadbench.cli.drive import vehicle_footprint
+    from offroadbench.sim import SimConfig, load_vehicle
+    from offroadbench.sim.engines.pybullet import world as pybullet_world
+
+    if importlib.util.find_spec("mujoco") is None:
+        pytest.skip("mujoco not installed")
+    spec = load_vehicle("husky")
+    expected = vehicle_footprint(spec, SimConfig())
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a PyBullet world was built under MuJoCo")
+
+    monkeypatch.setattr(pybullet_world.World, "__init__", refuse)
+    # the engines measure the same shapes (PyBullet's bounding boxes carry a small margin)
+    assert vehicle_footprint(spec, SimConfig(engine="mujoco")) == pytest.approx(expected, abs=3e-3)
