@@ -348,6 +348,7 @@ def study_sections() -> list[SectionDoc]:
             skip = ("count",) if name == "missions" else ()
             notes = ("`count` is not a study key: `[study] missions_per_terrain` sets it.",) if skip else ()
             out.append(SectionDoc(name, _qualname(cls), _first_line(cls), field_docs(cls, skip=skip), notes))
+            out += _nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
     return out
 
 
@@ -552,7 +553,7 @@ def render_reference() -> str:
     ]
     for s in study_sections():
         top, _, entry = s.name.partition(".")
-        title = f'`[{top}]` with `name = "{entry}"`' if entry else f"`[{top}]`"
+        title = f'`[{top}]` with `name = "{entry}"`' if entry and s.generator != "table" else f"`[{s.name}]`"
         summary = s.summary if s.summary.endswith(".") else s.summary + "."
         lines += [f"### {title}", "", f"{_md_cell(summary)} Source: `{s.source}`.", ""]
         if s.fields:
@@ -618,6 +619,8 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
     keys without a default) are commented out."""
     lines = []
     for i, f in enumerate(s.fields):
+        if dataclasses.is_dataclass(f.default):
+            continue  # a nested table, printed as its own [table.key] (render_section_toml)
         info = "; ".join(t for t in (f.unit, f.allowed) if t)
         lines.append(f"# {_first_sentence(f.doc)}" + (f" ({info})" if info else ""))
         pre = "# " if commented_from is not None and i >= commented_from else ""
@@ -679,6 +682,9 @@ def render_section_toml(section: str | None = None) -> str:
     for s in sections:
         top = s.name.split(".", 1)[0]
         if section is not None and top != section:
+            continue
+        if s.generator == "table":  # a nested table of the one above, e.g. [sim.mujoco]
+            lines += [f"[{s.name}]", f"# {s.summary} ({s.source})"] + _toml_block(s) + [""]
             continue
         if "." in s.name:
             if s.fields:

@@ -94,9 +94,48 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
     return list(paths.values())
 
 
-def write_drive_run(run, out: Path) -> list[str]:
-    """trials.csv and telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
-    older runs still load with offroadbench.io.telemetry.load_telemetry); returns what was written."""
+def drive_record(run, label: str = "", options: dict | None = None) -> dict:
+    """What ``drive --out`` keeps beside trials.csv (``settings.json``): the command's options, the terrain
+    and seeds, every setting the missions were driven with (the TrialSettings, the terrain's gravity
+    and soil filled in), the platform (offroadbench.study.fingerprint) and the code version."""
+    import dataclasses
+
+    from offroadbench.study.fingerprint import platform_fingerprint
+    from offroadbench.study.runner import code_version
+
+    settings = {f.name: _plain(getattr(run.settings, f.name)) for f in dataclasses.fields(run.settings)}
+    return {
+        "options": _plain(options or {}),
+        "terrain": label,
+        "terrain_seed": run.terrain_seed,
+        "mission_seeds": list(run.mission_seeds),
+        "settings": settings,
+        "platform": platform_fingerprint(),
+        "code_version": code_version(),
+    }
+
+
+def _plain(value):
+    """A config as JSON data (nested dataclasses as tables, tuples as lists, paths as strings)."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def write_drive_run(run, out: Path, label: str = "", options: dict | None = None) -> list[str]:
+    """trials.csv, telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
+    older runs still load with offroadbench.io.telemetry.load_telemetry) and settings.json (what
+    drove them: :func:`drive_record`); returns what was written."""
+    import json
+
     from offroadbench.io.atomic import atomic_path
     from offroadbench.io.telemetry import save_telemetry
 
@@ -106,7 +145,9 @@ def write_drive_run(run, out: Path) -> list[str]:
             pd.DataFrame(run.rows()).to_csv(tmp, index=False)
         for index, tel in run.telemetry.items():
             save_telemetry(tel, tel_dir / f"mission_{index:03d}.parquet")
-    return ["trials.csv", "telemetry/mission_*.parquet"]
+        with atomic_path(out / "settings.json") as tmp:
+            Path(tmp).write_text(json.dumps(drive_record(run, label, options), indent=1, allow_nan=True) + "\n")
+    return ["trials.csv", "telemetry/mission_*.parquet", "settings.json"]
 
 
 def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
@@ -138,15 +179,14 @@ def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
 
 
 def vehicle_footprint(spec, sim) -> tuple[float, float]:
-    """(length, width) of the vehicle's footprint in metres, from its links' bounding boxes at rest
-    (offroadbench.sim.trial.runner.vehicle_envelope, on a small flat world)."""
+    """(length, width) of the vehicle's footprint in metres, as the trials' engine (``sim.engine``)
+    measures it (offroadbench.sim.engine.VehicleGeometry, on a small flat world)."""
     from offroadbench.heightmap import Heightmap
-    from offroadbench.sim import World
-    from offroadbench.sim.trial.runner import vehicle_envelope
+    from offroadbench.sim import open_world
 
-    with World(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
-        env = vehicle_envelope(world)
-    return env.length_m, env.width_m
+    with open_world(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
+        geo = world.geometry
+    return geo.length_m, geo.width_m
 
 
 def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason: str, footprint_m, title: str,
@@ -168,14 +208,25 @@ def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason:
                               fps=fps, progress=progress)
 
 
-def cmd_drive(args: argparse.Namespace) -> int:
+def drive_settings(args: argparse.Namespace, tables: dict):
+    """The TrialSettings of a ``drive`` command, built from its tables as a study builds a cell's
+    (offroadbench.sim.trial.pipeline.TrialSettings.from_tables)."""
     from offroadbench.analysis.roughness import RoughnessConfig
-    from offroadbench.config import from_dict
-    from offroadbench.navigation.planners import planner_from_table
-    from offroadbench.navigation.rules import FailureRules
+    from offroadbench.sim.trial.pipeline import TrialSettings
+
+    border = tables["roughness"].get("border_m", RoughnessConfig().border_m)
+    return TrialSettings.from_tables({
+        **{k: v for k, v in tables.items() if k not in ("vehicle", "planner")},
+        "vehicle": {"name": args.vehicle, **tables["vehicle"]},
+        "planner": {"name": args.planner, **tables["planner"]},
+        "missions": {"count": args.missions, "length_m": args.length_m, "border_m": border},
+    }, where="drive (--vehicle, --planner, --border-m, --set)")
+
+
+def cmd_drive(args: argparse.Namespace) -> int:
     from offroadbench.seeding import terrain_seed
-    from offroadbench.sim import ControllerConfig, SimConfig, drive_missions
-    from offroadbench.sim.trial.vehicle import vehicle_from_table
+    from offroadbench.sim import drive_missions
+    from offroadbench.sim.trial.pipeline import terrain_body
 
     if args.plot is True and args.out is None:
         raise InputError("--plot needs --out DIR to write the figures into (or give --plot PATH.png)")
@@ -189,33 +240,24 @@ def cmd_drive(args: argparse.Namespace) -> int:
         check_animation_path(args.animate)
         check_output_file(args.animate, "--animate")
     tables, recipe_sets = _drive_settings(args)
-    vehicle = vehicle_from_table({"name": args.vehicle, **tables["vehicle"]}, where="--vehicle/--set vehicle.*")
-    sim = from_dict(SimConfig, tables["sim"], where="--set sim.*")
-    controller = from_dict(ControllerConfig, tables["controller"], where="--set controller.*")
-    rules = from_dict(FailureRules, tables["rules"], where="--set rules.*")
-    roughness = from_dict(RoughnessConfig, tables["roughness"], where="--border-m/--set roughness.*")
-    planner = planner_from_table({"name": args.planner, **tables["planner"]}, where="--planner/--set planner.*")
+    settings = drive_settings(args, tables)
 
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
-    if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
+    if recipe is not None:
         from offroadbench.cli.terrain import CLIP_ELSEWHERE, warn_relief_tails
 
         warn_relief_tails(hm, label, CLIP_ELSEWHERE)
-        sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
-    else:  # a PNG: those of the recipe in its sidecar, if any
-        from offroadbench.bodies import terrain_gravity_and_soil
-        from offroadbench.io.png16 import read_png16_metadata
-
-        sim = sim.for_terrain(*terrain_gravity_and_soil(read_png16_metadata(args.terrain).get("recipe")))
+    gravity, soil = terrain_body(args.terrain, recipe)  # where --gravity / --set sim.* leave them open
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
-                             length_m=args.length_m, vehicle=vehicle, sim=sim, controller=controller, rules=rules,
-                             roughness=roughness, planner=planner, progress=progress)
+                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress)
     print(format_drive_run(run, label))
     written = []
     if out is not None:
-        written += [f"{out}/{w}" for w in write_drive_run(run, out)]
+        written += [f"{out}/{w}" for w in write_drive_run(run, out, label=label,
+                                                                   options={k: v for k, v in vars(args).items()
+                                                                            if k != "func"})]
     if plots:
         written += [str(p) for p in write_drive_figures(run, label, plots)]
     if written:
@@ -227,7 +269,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
         title = f"{label}: mission {k}, {run.planner}, {run_caption(run.sim)}, {shown.failure_reason or 'success'}"
         path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
-                                     shown.failure_reason, vehicle_footprint(vehicle, sim), title)
+                                     shown.failure_reason, vehicle_footprint(run.settings.vehicle, run.sim), title)
         print(f"wrote {path} (mission {k})")
     return 0
 
@@ -243,7 +285,8 @@ def register(sub) -> None:
                    "mission k has seed mission_seed(seed, 0, k) (offroadbench.seeding)")
     p.add_argument("--missions", type=positive_int, default=20, help="number of missions (default 20)")
     p.add_argument("--length-m", type=positive_float, default=35.0, help="start-goal distance, m (default 35, paper)")
-    p.add_argument("--out", help="directory for trials.csv and telemetry/ (Parquet) (created if missing)")
+    p.add_argument("--out", help="directory for trials.csv, telemetry/ (Parquet) and settings.json (every setting, the "
+                   "platform and code version) (created if missing)")
     p.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
                    help="write the figures: --plot PATH.png writes the trajectories at PATH and PATH_missions.png, "
                    "PATH_timeseries.png beside it; a bare --plot writes missions.png, trajectories.png and "

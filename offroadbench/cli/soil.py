@@ -63,7 +63,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         raise InputError(f"--wheel {args.wheel}: the vehicle has no wheel_width_m")
     load = args.load_n if args.load_n is not None else wheel_load_n(spec, args.gravity)
     with bar("slips", unit="slip") as progress:
-        rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity, progress=progress)
+        rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity,
+                        engine=args.engine, progress=progress)
     model = model_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load)
     print(format_soil_check(rig, model, args.gravity))
     if plot is not None:
@@ -90,5 +91,8 @@ def register(sub) -> None:
     c.add_argument("--load-n", type=positive_float, default=None,
                    help="wheel load, N (default: a quarter of the vehicle's weight at --gravity)")
     c.add_argument("--gravity", type=positive_float, default=9.81, help="gravity, m/s^2 (default 9.81)")
+    c.add_argument("--engine", default="pybullet",
+                   help="physics engine of the rig (pybullet, the default, or mujoco; the soil's force law is "
+                   "the same code on both)")
     add_plot_option(c, "the figure (rig and Wong-Reece curves against slip)", "soil_check_SOIL_WHEEL.png")
     c.set_defaults(func=cmd_check)

@@ -12,12 +12,11 @@ from dataclasses import dataclass
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
-from offroadbench.sim.engine import ENGINE_TYRE_MODELS, ENGINES
+from offroadbench.sim.engine import ENGINES, TYRE_MODELS, engine_capabilities
+from offroadbench.sim.engines.mujoco.settings import MuJoCoConfig
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
-#: values of SimConfig.tyre_model
-TYRE_MODELS = ("bullet", "coulomb", "terramechanics")
 #: gravity of a trial whose study and terrain name none, m/s^2
 EARTH_GRAVITY_M_S2 = 9.81
 #: smallest tiled heightfield side, cells (smaller tiles only add bodies and seams)
@@ -74,6 +73,8 @@ class SimConfig:
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
     default) or ``mujoco`` (offroadbench.sim.engines.mujoco.world; ``pip install 'offroadbench[mujoco]'``).
     Both run the same trial, tyre model, telemetry and failure rules."""
+    mujoco: MuJoCoConfig = MuJoCoConfig()
+    """The MuJoCo engine's own settings (the ``[sim.mujoco]`` table; the other engines ignore it)."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -99,7 +100,7 @@ class SimConfig:
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
         check_choice(self, "engine", self.engine, ENGINES.names())
-        models = ENGINE_TYRE_MODELS.get(self.engine, TYRE_MODELS)
+        models = engine_capabilities(self.engine).tyre_models  # the engine's own declaration
         if self.tyre_model not in models:
             raise InputError(f"SimConfig.tyre_model = {self.tyre_model!r} is not implemented on engine "
                              f"{self.engine!r}; allowed there: {', '.join(models)}")
