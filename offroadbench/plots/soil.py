@@ -1,4 +1,5 @@
-"""The single-wheel soil check figure: sinkage, drawbar pull and torque against slip."""
+"""The single-wheel soil check figure: sinkage, drawbar pull / load and torque / (load x radius)
+against slip, the engine rig beside the Wong-Reece integrals and the published slip-sinkage bands."""
 
 from __future__ import annotations
 
@@ -7,19 +8,33 @@ from offroadbench.plots.style import new_figure
 __all__ = ["plot_soil_check"]
 
 
-def plot_soil_check(rig, model, title: str = ""):
+def plot_soil_check(rig, model, title: str = "", bands=(), gravity_m_s2: float | None = None):
     """Three panels against slip: the engine rig (markers) beside the Wong-Reece integrals (line);
-    ``rig`` and ``model`` are offroadbench.sim.soil_check.SoilCheck."""
-    fig, axes = new_figure(1, 3, figsize=(11.0, 3.4))
-    panels = (("sinkage_m", 1000.0, "sinkage, mm"), ("drawbar_pull_n", 1.0, "drawbar pull, N"),
-              ("torque_nm", 1.0, "driving torque, N m"))
-    for ax, (field, scale, label) in zip(axes, panels):
-        ax.plot(model.slip, scale * getattr(model, field), "-", color="#1f5fbf", label="Wong-Reece integrals")
-        ax.plot(rig.slip, scale * getattr(rig, field), "o", color="#f08c1a", mfc="none", label="engine rig")
+    ``rig`` and ``model`` are offroadbench.sim.soil_check.SoilCheck. ``bands`` (published
+    sinkage(slip) / sinkage(0) ranges, offroadbench.sim.terramechanics.SlipSinkageBand) are drawn on
+    the sinkage panel scaled by the model's own static sinkage."""
+    fig, axes = new_figure(1, 3, figsize=(11.5, 3.6))
+    load, arm = rig.load_n, rig.load_n * rig.radius_m
+    panels = (
+        (axes[0], lambda c: 1000.0 * c.sinkage_m, "sinkage, mm"),
+        (axes[1], lambda c: c.drawbar_pull_n / load, "drawbar pull / load"),
+        (axes[2], lambda c: c.torque_nm / arm, "torque / (load x radius)"),
+    )
+    for ax, value, label in panels:
+        ax.plot(model.slip, value(model), "-", color="#1f5fbf", label="Wong-Reece integrals")
+        ax.plot(rig.slip, value(rig), "o", color="#f08c1a", mfc="none", label="engine rig")
         ax.set_xlabel("slip")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    fig.suptitle(title or f"{rig.soil}: wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {rig.load_n:.1f} N",
+    h0 = 1000.0 * float(model.sinkage_m[0])
+    for k, band in enumerate(bands):
+        lo, hi = band.ratio_low * h0, band.ratio_high * h0
+        axes[0].errorbar([band.slip], [0.5 * (lo + hi)], yerr=[[0.5 * (hi - lo)]], fmt="none", ecolor="#2a9d3a",
+                         elinewidth=2.5, capsize=4,
+                         label=f"{band.source.split(' (')[0]}: {band.ratio_low:g}-{band.ratio_high:g}x static, "
+                               f"{band.wheel}" if k == 0 else None)
+    axes[0].legend(fontsize=7, loc="upper left")
+    g = f", gravity {gravity_m_s2:g} m/s^2" if gravity_m_s2 is not None else ""
+    fig.suptitle(title or f"{rig.soil}: wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {load:.1f} N{g}",
                  fontsize=10)
     return fig

@@ -10,6 +10,15 @@ of travel, with the entry angle ``theta_1 = acos(1 - h / r)`` and the exit angle
   ``sigma(theta) = (k_c / b + k_phi) r^n (cos(theta) - cos(theta_1))^n``; behind it the same law at
   the equivalent front angle ``theta_1 - theta / theta_m (theta_1 - theta_m)``.
 * **Maximum-stress angle** from the slip (Wong & Reece 1967): ``theta_m = (a_0 + a_1 |s|) theta_1``.
+* **Slip-sinkage** (Ding et al. 2011, J. Terramechanics 48, the slip-dependent sinkage exponent
+  ``N = n0 + n1 s``): the exponent of the normal stress is ``n(s) = n + n1 |s|``, so at the same
+  load a slipping wheel sinks deeper (with ``z < 1 m``, a larger exponent means a softer soil) and
+  a spinning wheel digs itself in. Wong & Reece's model alone barely changes the sinkage with slip
+  (9.2 -> 10.0 mm from slip 0 to 0.9 for the Husky on lunar regolith in lunar gravity), against
+  single-wheel tests where it grows severalfold (Ding et al. 2010: 3-7x at slip 0.6 with lugged
+  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``, with its source);
+  ``n1 = 0`` is the model without slip-sinkage. The moduli keep their values as ``n`` varies (as
+  Ding et al. do), so their units follow ``n(s)``.
 * **Shear stress** (Janosi & Hanamoto 1961): ``tau = (c + sigma tan(phi)) (1 - exp(-|j| / K))``, signed as
   ``j`` (the soil resists the displacement either way), with the
   shear displacement of a driven wheel (Wong & Reece 1967, Eq. 7)
@@ -60,6 +69,7 @@ from offroadbench.registry import unknown_name
 __all__ = [
     "DEFAULT_SOIL",
     "SoilParams",
+    "SlipSinkageBand",
     "SoilTables",
     "build_tables",
     "entry_angle",
@@ -68,6 +78,7 @@ __all__ = [
     "load_soil",
     "max_stress_angle",
     "normal_stress",
+    "published_slip_sinkage",
     "shear_displacement",
     "soil_files",
     "static_sinkage",
@@ -163,6 +174,37 @@ def load_soil(name_or_path: str | Path) -> SoilParams:
     table = dict(data["soil"])
     table.setdefault("name", path.stem)
     return from_dict(SoilParams, table, where=f"{path} [soil]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SlipSinkageBand:
+    """A published band of sinkage at a slip relative to the static sinkage (``soils/data/*.csv``)."""
+
+    slip: float
+    ratio_low: float
+    """Lowest published sinkage(slip) / sinkage(0)."""
+    ratio_high: float
+    """Highest published sinkage(slip) / sinkage(0)."""
+    wheel: str
+    soil: str
+    source: str
+    figure: str
+
+
+def published_slip_sinkage() -> list[SlipSinkageBand]:
+    """The published single-wheel slip-sinkage bands shipped in ``soils/data/slip-sinkage-*.csv``
+    (each file's header names its source, figure and tolerance)."""
+    import csv
+
+    out = []
+    folder = resources.shipped("soils") / "data"
+    for path in sorted(folder.glob("slip-sinkage-*.csv")) if folder.is_dir() else []:
+        lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+        for row in csv.DictReader(lines):
+            out.append(SlipSinkageBand(slip=float(row["slip"]), ratio_low=float(row["ratio_low"]),
+                                       ratio_high=float(row["ratio_high"]), wheel=row["wheel"], soil=row["soil"],
+                                       source=row["source"], figure=row["figure"]))
+    return out
 
 
 # ---------------------------------------------------------------------------- the model

@@ -182,6 +182,21 @@ def test_soil_check_command_prints_and_plots(tmp_path, capsys):
     assert main(["soil", "check", "sno"]) == 2
 
 
+def test_soil_check_json_compares_with_the_published_band(capsys):
+    import json
+
+    from offroadbench.cli import main
+
+    assert main(["soil", "check", "lunar-regolith", "--gravity", "1.62", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["soil"] == "lunar-regolith" and doc["gravity_m_s2"] == 1.62 and len(doc["rows"]) == 10
+    sink = [r["sinkage_m"] for r in doc["rows"]]
+    assert all(b > a for a, b in itertools.pairwise(sink))  # sinkage rises with slip
+    (band,) = doc["published"]
+    assert band["slip"] == 0.6 and (band["ratio_low"], band["ratio_high"]) == (3.0, 7.0)
+    assert band["model_is"] == "below" and 2.0 < band["model_ratio"] < 3.0
+
+
 def test_slip_is_higher_on_a_slope(flat):
     """Lunar regolith, lunar gravity: climbing a 8 deg grade at 0.3 m/s takes more slip than the flat."""
     from offroadbench.sim import SimConfig, World
