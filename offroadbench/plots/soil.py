@@ -1,11 +1,44 @@
-"""The single-wheel soil check figure: sinkage, drawbar pull / load and torque / (load x radius)
-against slip, the engine rig beside the Wong-Reece integrals and the published slip-sinkage bands."""
+"""Soil figures: the single-wheel soil check (sinkage, drawbar pull / load and torque / (load x
+radius) against slip, the engine rig beside the Wong-Reece integrals and the published slip-sinkage
+bands), and a study's soft-soil box plots with the soil and gravity of each group."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
 from offroadbench.plots.style import new_figure
 
-__all__ = ["plot_soil_check"]
+__all__ = ["plot_soil_check", "fig_soil", "conditions_text"]
+
+
+def conditions_text(c: Mapping[str, Any]) -> str:
+    """``soil lunar-regolith (study), gravity 1.62 m/s^2 (terrain)`` from
+    offroadbench.study.header.soil_conditions."""
+    g = c.get("gravity_m_s2")
+    g_text = f"{g:g} m/s^2" if isinstance(g, (int, float)) else "?"
+    return f"soil {c.get('soil')} ({c.get('soil_source')}), gravity {g_text} ({c.get('gravity_source')})"
+
+
+def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]],
+             conditions: Mapping[str, Mapping[str, Any]] | None = None):
+    """Soft soil: box plots of each :data:`offroadbench.study.stats.SOIL_METRICS` over every trial per
+    group driven on soil (offroadbench.study.stats.soil_boxes); ``conditions`` (group label ->
+    offroadbench.study.header.soil_conditions) are written under the plots, one line per group."""
+    from offroadbench.plots.study import _bxp
+
+    many = max((len(b) for b in boxes.values()), default=0) > 4
+    lines = [f"{g}: {conditions_text(c)}" for g, c in (conditions or {}).items()]
+    height = (6.0 if many else 3.6) + 0.16 * len(lines)
+    fig, axes = new_figure(1, len(metrics), figsize=(5.0 * len(metrics), height))
+    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items()):
+        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
+    fig.suptitle("Soft soil: every trial (successful or not); slip and sinkage over the moving samples", fontsize=10)
+    if lines:
+        fig.supxlabel("\n".join(lines), fontsize=7, x=0.01, ha="left", family="monospace")
+    return fig
 
 
 def plot_soil_check(rig, model, title: str = "", bands=(), gravity_m_s2: float | None = None):

@@ -76,7 +76,8 @@ class TrialResult:
     rms_roll_rate_deg_s: float
     """RMS roll rate from the unwrapped roll angle, deg/s (Majhor & Bos 2023, Sec. 2.4)."""
     max_penetration_m: float
-    """Deepest wheel-terrain penetration seen at the telemetry ticks."""
+    """Deepest wheel-terrain penetration seen at the telemetry ticks (a transient maximum: on soil
+    use ``sinkage_median_m`` and ``sinkage_p95_m``)."""
     sim_time_s: float
     """Simulated time at the end of the trial (success, failure or timeout)."""
     final_distance_to_goal_m: float
@@ -92,9 +93,14 @@ class TrialResult:
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
     mean_slip: float = float("nan")
-    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
-    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
-    deepest soil sinkage."""
+    """Mean longitudinal wheel slip over the moving telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models; moving: offroadbench.navigation.metrics)."""
+    sinkage_median_m: float = float("nan")
+    """Median of the deepest wheel's soil sinkage over the moving telemetry ticks, m (the
+    ``terramechanics`` tyre model; NaN with the other models)."""
+    sinkage_p95_m: float = float("nan")
+    """95th percentile of the deepest wheel's soil sinkage over the moving telemetry ticks, m (as
+    ``sinkage_median_m``)."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -254,8 +260,7 @@ def drive_mission(
                  cmd_v, cmd_w, progress, world.wheel_penetration_m())
             )
             slip = world.wheel_slip()
-            if slip is not None:
-                slips.append(slip)
+            slips.append(math.nan if slip is None else slip)
             done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
             if done is not None:
                 reason = done
@@ -268,8 +273,12 @@ def drive_mission(
 
     tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
     result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    if slips:
-        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
+    if any(map(math.isfinite, slips)):  # on soil: slip and sinkage over the moving samples
+        moving = metrics.moving_samples(tel["cmd_v_m_s"], tel["vx_m_s"], tel["vy_m_s"])
+        on_soil = moving & np.isfinite(np.asarray(slips))
+        median, p95 = metrics.sinkage_summary(tel["penetration_m"], on_soil)
+        result = dataclasses.replace(result, mean_slip=metrics.mean_where(slips, on_soil), sinkage_median_m=median,
+                                     sinkage_p95_m=p95)
     path = replanner.trace if replanner is not None else waypoints
     return TrialRecord(result, tel, np.asarray(path, dtype=float))
 
