@@ -31,11 +31,11 @@ rule a configuration makes impossible to fire, and :class:`RuleChecker` logs it 
 Entrapment thresholds, from single-wheel tests and the soil model (offroadbench.sim.terramechanics):
 
 * ``entrap_slip = 0.6``: by slip 0.6 a wheel has most of its drawbar pull (the Wong-Reece pull of
-  the Husky's wheel on lunar regolith is within 10 % of its peak there; ``offroadbench soil
-  check``), so more slip buys no more traction, and single-wheel tests find the sinkage several
+  the Husky's wheel on lunar regolith is 89 % of its peak there in lunar gravity, 98 % in Earth
+  gravity; ``offroadbench soil check``), so more slip buys little more traction, and single-wheel tests find the sinkage several
   times the static one there (Ding et al. 2010: 3-7x at slip 0.6 for lugged wheels on a lunar
   simulant).
-* ``entrap_sinkage_ratio = 1.5``: the soil model with slip-sinkage gives 2.0-2.5x the static
+* ``entrap_sinkage_ratio = 1.5``: the soil model with slip-sinkage gives 1.8-2.2x the static
   sinkage at slip 0.6 (lunar and Earth gravity, ``soils/lunar-regolith.toml``'s ``n1``), so 1.5x
   is crossed by any wheel held at slip 0.6 or more, and not by load transfer alone on flat ground.
   In this model the sinkage follows the slip quasi-statically (no excavation that accumulates over

