@@ -28,7 +28,7 @@ with a 3x timeout: the timeout comes first. The window used is therefore
 keep the paper's 30 s and a 6 m mission (18 s timeout) gets 9 s. :func:`unreachable` names any
 rule a configuration makes impossible to fire, and :class:`RuleChecker` logs it as a warning.
 
-Entrapment thresholds, from single-wheel tests and the soil model (offroadbench.sim.terramechanics):
+Entrapment thresholds, from single-wheel tests and the soil model (offroadbench.sim.tyre_laws.terramechanics):
 
 * ``entrap_slip = 0.6``: by slip 0.6 a wheel has most of its drawbar pull (the Wong-Reece pull of
   the Husky's wheel on lunar regolith is 89 % of its peak there in lunar gravity, 98 % in Earth

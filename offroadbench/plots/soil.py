@@ -43,8 +43,8 @@ def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapp
 
 def plot_soil_check(rig, model, title: str = "", bands=(), gravity_m_s2: float | None = None):
     """Three panels against slip: the engine rig (markers) beside the Wong-Reece integrals (line);
-    ``rig`` and ``model`` are offroadbench.sim.soil_check.SoilCheck. ``bands`` (published
-    sinkage(slip) / sinkage(0) ranges, offroadbench.sim.terramechanics.SlipSinkageBand) are drawn on
+    ``rig`` and ``model`` are offroadbench.sim.rigs.soil_check.SoilCheck. ``bands`` (published
+    sinkage(slip) / sinkage(0) ranges, offroadbench.sim.tyre_laws.terramechanics.SlipSinkageBand) are drawn on
     the sinkage panel scaled by the model's own static sinkage."""
     fig, axes = new_figure(1, 3, figsize=(11.5, 3.6))
     load, arm = rig.load_n, rig.load_n * rig.radius_m

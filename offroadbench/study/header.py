@@ -58,7 +58,7 @@ def _on_terrain(sim: Any, recipe: Any) -> Any:
 def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
     """The soil and gravity a cell's trials ran with, and where each came from: ``study`` (the
     study's ``[sim]`` or grid sets it), ``terrain`` (the recipe's ``[soil]`` / ``[body]``) or
-    ``default`` (offroadbench.sim.terramechanics.DEFAULT_SOIL, Earth's gravity)."""
+    ``default`` (offroadbench.sim.tyre_laws.terramechanics.DEFAULT_SOIL, Earth's gravity)."""
     from offroadbench.bodies import terrain_gravity_and_soil
 
     info = meta["cells"][cell]

@@ -37,7 +37,7 @@ def _sim(engine: str, tyre_model: str, gravity: float):
 
 def _trial(hm, sim):
     from offroadbench.sim import open_world
-    from offroadbench.sim.runner import drive_mission
+    from offroadbench.sim.trial.runner import drive_mission
 
     with open_world(hm, "husky", sim) as world:
         result = drive_mission(world, Mission.between(0, (2.5, 4.0), (17.5, 4.0))).result
@@ -68,8 +68,8 @@ def test_rigid_ground_holds_the_commanded_speed_and_stops_at_the_goal(flat, engi
     samples are not bounded: the Jackal bounces on PyBullet's contacts (2 % standard deviation of
     the speed with the old loop as with this one)."""
     from offroadbench.sim import ControllerConfig, open_world
-    from offroadbench.sim.controller import LineTracker
-    from offroadbench.sim.skid_steer import wheel_speeds
+    from offroadbench.sim.trial.controller import LineTracker
+    from offroadbench.sim.trial.skid_steer import wheel_speeds
 
     sim = _sim(engine, "coulomb", 9.81)
     start, goal = np.array([2.5, 4.0]), np.array([17.5, 4.0])
