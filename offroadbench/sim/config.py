@@ -119,7 +119,7 @@ class SimConfig:
 @dataclass(frozen=True, kw_only=True)
 class ControllerConfig:
     """Pure pursuit on the planned path (the study's ``[planner]``; default the start-goal line), with
-    a jerk-limited (ruckig) speed profile."""
+    a speed loop following a jerk-limited (ruckig) reference (offroadbench.sim.trial.controller)."""
 
     lookahead_m: float = 1.5
     """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
