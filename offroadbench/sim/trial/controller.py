@@ -11,19 +11,19 @@ Speed: a two-degree-of-freedom loop, a feedforward reference plus feedback on it
 Systems, Sec. 8.5 "A general controller structure"; anti-windup by conditional integration,
 Astrom & Hagglund 2006, Advanced PID Control, ch. 3 "Integrator windup")::
 
-                 +------------------+ p_ref, v_ref
-     goal L ---->| ruckig reference |--------------+------------------------+
-                 | (own state p,v,a)|              | v_ref (feedforward)    |
-                 +------------------+              v                        |
-                        ^  re-plan only if      +-----+    +-------+  u     |    +---------+
-                        |  |p_ref - p| > bound  |  +  |--->|  sat  |------------>| wheels, |-- p, v
-                        +-----------------------|     |    |[0,u_max]|  wheel     | soil    |   |
-                                                +-----+    +-------+  speed     +---------+   |
-                                                   ^  k_p e + I                                 |
-                          e = p_ref - p            |   I += k_i e dt unless u is held            |
-                     p ---------------------------(-)  at a limit in e's direction               |
-                     ^                                                                            |
-                     +---------------------------- measured progress p along the path -----------+
+                  +-------------------+  v_ref (feedforward)
+      goal L ---->| ruckig reference  |-------------------------+
+                  | own state p, v, a |                         |
+                  +-------------------+                         v
+                     |  p_ref     ^                       +-----------+      +-----------+
+                     |            | re-plan only when     |    sum    |  u   |  wheels,  |
+                     v            | |p_ref - p| > bound   | v_ref +   |----->|  vehicle, |---+
+                  +------+        |                       | k_p e + I |      |  soil     |   |
+                  |  -   |--------+---------------------->| sat [0,   |      +-----------+   |
+                  +------+     e = p_ref - p              |   u_max]  |                      |
+                     ^                                    +-----------+                      |
+                     |          I += k_i e dt, unless u is held at a limit in e's direction   |
+                     +-------------------- measured progress p along the path ----------------+
 
 * The reference (progress ``p_ref``, speed ``v_ref``, acceleration ``a_ref``) is a 1-D ruckig
   trajectory to the goal at rest, within the cruise speed, the vehicle's acceleration and jerk. It
