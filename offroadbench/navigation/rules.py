@@ -95,15 +95,18 @@ class FailureRules:
     fall_depth_m: float = 1.0
     """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
     entrap_slip: float = 0.6
-    """A trial fails as ``entrapped`` while the mean wheel slip stays above this (the wheels turn:
-    module docstring, "Entrapment thresholds") ..."""
+    """A trial fails as ``entrapped`` while the mean wheel slip stays above this: the wheels turn,
+    and by slip 0.6 a wheel has 89-98 % of its peak pull on lunar regolith while single-wheel tests
+    find its sinkage severalfold the static one (Ding et al. 2010: 3-7x; offroadbench.navigation.rules,
+    "Entrapment thresholds") ..."""
     entrap_progress_radii: float = 1.0
-    """... and the base comes less than this many wheel radii closer to the goal ..."""
+    """... and the base comes less than this many wheel radii closer to the goal (one radius in 5 s
+    at 1 m/s of wheel rim: a slip above 0.96) ..."""
     entrap_sinkage_ratio: float = 1.5
     """... with the window's median deepest-wheel sinkage at least this many times the settled
-    sinkage (at the trial's first sample) ..."""
+    sinkage (at the trial's first sample; the soil model gives 1.8-2.2x at slip 0.6) ..."""
     entrap_window_s: float = 5.0
-    """... over this long, seconds."""
+    """... over this long, seconds (several wheel revolutions at 1 m/s)."""
 
     def __post_init__(self) -> None:
         check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
