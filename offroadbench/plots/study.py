@@ -102,17 +102,6 @@ def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: M
     return fig
 
 
-def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
-    """Soft soil: box plots of the mean wheel slip and the deepest wheel sinkage of every trial per
-    group driven on soil (offroadbench.study.stats.soil_boxes)."""
-    many = max((len(b) for b in boxes.values()), default=0) > 4
-    fig, axes = new_figure(1, len(metrics), figsize=(5.5 * len(metrics), 6.0 if many else 3.6))
-    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items()):
-        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
-    fig.suptitle("Soft soil: every trial (successful or not)", fontsize=10)
-    return fig
-
-
 def fig_missions(hm, classes: np.ndarray, closed: np.ndarray, border_m: float, trials: pd.DataFrame, *, title: str = ""):
     """Fig. 4 (Majhor & Bos 2023): class map, closed class map with the border, and the terrain's
     missions (start green, goal red; line white = success, black = failure).

@@ -120,7 +120,7 @@ class SimConfig:
 @dataclass(frozen=True, kw_only=True)
 class ControllerConfig:
     """Pure pursuit on the planned path (the study's ``[planner]``; default the start-goal line), with
-    a jerk-limited (ruckig) speed profile."""
+    a speed loop following a jerk-limited (ruckig) reference (offroadbench.sim.trial.controller)."""
 
     lookahead_m: float = 1.5
     """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
@@ -128,11 +128,28 @@ class ControllerConfig:
     """Controller updates per second; must divide SimConfig.physics_rate_hz."""
     cruise_speed_m_s: float = 1.0
     """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
+    speed_gain_1_s: float = 1.0
+    """Proportional gain of the wheel-speed command on the progress error (reference minus measured
+    progress), 1/s (offroadbench.sim.trial.controller)."""
+    speed_integral_gain_1_s2: float = 0.25
+    """Integral gain on the progress error, 1/s^2; with ``speed_gain_1_s`` = 1 the error's poles are
+    both at -0.5/s (critically damped)."""
+    speed_lag_bound_m: float = 0.5
+    """The speed reference is re-planned when the measured progress is more than this behind (or
+    ahead of) it, m: it is moved to this distance from the vehicle, keeping its speed."""
+    traction_slip_limit: float = 0.0
+    """Traction control: hold the wheel-speed command to ``max(v, 0.1 v_cruise) / (1 - limit)`` of
+    the measured speed ``v`` along the path, so the wheels slip at most about this much; 0: off
+    (the default)."""
 
     def __post_init__(self) -> None:
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
         check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
+        check_range(self, "speed_gain_1_s", self.speed_gain_1_s, lo=0)
+        check_range(self, "speed_integral_gain_1_s2", self.speed_integral_gain_1_s2, lo=0)
+        check_range(self, "speed_lag_bound_m", self.speed_lag_bound_m, lo=0, lo_open=True)
+        check_range(self, "traction_slip_limit", self.traction_slip_limit, lo=0, hi=1, hi_open=True)
 
 
 def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:

@@ -15,7 +15,7 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["held_fixed", "report_title", "settings_columns", "driver_files"]
+__all__ = ["held_fixed", "report_title", "settings_columns", "driver_files", "soil_conditions"]
 
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
@@ -53,6 +53,24 @@ def _on_terrain(sim: Any, recipe: Any) -> Any:
     from offroadbench.bodies import terrain_gravity_and_soil
 
     return sim.for_terrain(*terrain_gravity_and_soil(recipe))
+
+
+def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
+    """The soil and gravity a cell's trials ran with, and where each came from: ``study`` (the
+    study's ``[sim]`` or grid sets it), ``terrain`` (the recipe's ``[soil]`` / ``[body]``) or
+    ``default`` (offroadbench.sim.tyre_laws.terramechanics.DEFAULT_SOIL, Earth's gravity)."""
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    info = meta["cells"][cell]
+    raw = info["settings"].get("sim", {})
+    sim = _sections(meta, cell)["sim"]
+    gravity, soil = terrain_gravity_and_soil(info.get("recipe"))
+
+    def source(key: str, terrain_value: Any) -> str:
+        return "study" if raw.get(key) is not None else "terrain" if terrain_value is not None else "default"
+
+    return {"soil": getattr(sim, "soil", None), "soil_source": source("soil", soil),
+            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity)}
 
 
 def _default(name: str) -> Any:

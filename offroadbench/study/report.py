@@ -43,7 +43,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_soil, fig_success, short_label
+from offroadbench.plots.soil import conditions_text, fig_soil
+from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
 from offroadbench.study import stats
 from offroadbench.study.results import load, load_meta, load_terrains
 
@@ -495,14 +496,21 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     soil = stats.soil_boxes(trials, labels)
     if soil:
-        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS)
+        from offroadbench.study.header import soil_conditions
+
+        cond = {labels[c]: soil_conditions(meta, c) for c in sorted(labels) if labels[c] in next(iter(soil.values()))}
+        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS, cond)
         rows = [{"metric": f"{title} ({unit})", "group": g, "n": b["n"], "median": b["median"], "Q1": b["q1"],
                  "Q3": b["q3"], "max": float(np.nanmax(b["values"])) if b["n"] else math.nan}
                 for m, (title, unit) in stats.SOIL_METRICS.items() for g, b in soil[m].items()]
         lines += ["## Soft soil: slip and sinkage (every trial)", "", "![Soft soil](fig8_soil.png)", "",
-                  "Mean longitudinal slip of the wheels over the trial and the deepest wheel sinkage "
-                  "(Wong-Reece terramechanics tyre model), over every trial of the groups driven on soil, "
-                  "failed ones included.", "", markdown_table(pd.DataFrame(rows)), ""]
+                  "Per trial: the mean longitudinal slip of the wheels and the median and 95th percentile of "
+                  "the deepest wheel's sinkage, over the samples where the vehicle is driven (Wong-Reece "
+                  "terramechanics tyre model; offroadbench.navigation.metrics); the boxes are over every trial "
+                  "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
+                  "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
+                  "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
+                  markdown_table(pd.DataFrame(rows)), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",

@@ -55,8 +55,9 @@ CLASSES = CLASS_NAMES
 
 #: soft-soil metrics (every trial of a cell driven on soil, ``terramechanics`` tyre model): column -> (title, unit)
 SOIL_METRICS: dict[str, tuple[str, str]] = {
-    "mean_slip": ("Mean wheel slip", "-"),
-    "max_penetration_m": ("Deepest wheel sinkage", "m"),
+    "mean_slip": ("Mean wheel slip (moving)", "-"),
+    "sinkage_median_m": ("Median wheel sinkage (moving)", "m"),
+    "sinkage_p95_m": ("95th percentile wheel sinkage (moving)", "m"),
 }
 
 
@@ -117,7 +118,8 @@ def soil_boxes(trials: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict[s
     if "mean_slip" not in trials:
         return {}
     soil = sorted(c for c in labels if np.isfinite(trials.loc[trials["cell"] == c, "mean_slip"].astype(float)).any())
-    return {m: {labels[c]: box_stats(trials.loc[trials["cell"] == c, m]) for c in soil} for m in SOIL_METRICS} if soil else {}
+    return {m: {labels[c]: box_stats(trials.loc[trials["cell"] == c, m] if m in trials else ()) for c in soil}
+            for m in SOIL_METRICS} if soil else {}
 
 
 def group_summary(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:

@@ -80,7 +80,8 @@ class TrialResult:
     rms_roll_rate_deg_s: float
     """RMS roll rate from the unwrapped roll angle, deg/s (Majhor & Bos 2023, Sec. 2.4)."""
     max_penetration_m: float
-    """Deepest wheel-terrain penetration seen at the telemetry ticks."""
+    """Deepest wheel-terrain penetration seen at the telemetry ticks (a transient maximum: on soil
+    use ``sinkage_median_m`` and ``sinkage_p95_m``)."""
     sim_time_s: float
     """Simulated time at the end of the trial (success, failure or timeout)."""
     final_distance_to_goal_m: float
@@ -96,9 +97,14 @@ class TrialResult:
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
     mean_slip: float = float("nan")
-    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
-    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
-    deepest soil sinkage."""
+    """Mean longitudinal wheel slip over the moving telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models; moving: offroadbench.navigation.metrics)."""
+    sinkage_median_m: float = float("nan")
+    """Median of the deepest wheel's soil sinkage over the moving telemetry ticks, m (the
+    ``terramechanics`` tyre model; NaN with the other models)."""
+    sinkage_p95_m: float = float("nan")
+    """95th percentile of the deepest wheel's soil sinkage over the moving telemetry ticks, m (as
+    ``sinkage_median_m``)."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -246,8 +252,7 @@ class TrialLoop:
                               self.cmd_v, self.cmd_w, progress_m(pos), world.wheel_penetration_m()))
             self._row_k = k
             slip = world.wheel_slip()
-            if slip is not None:
-                self.slips.append(slip)
+            self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
             done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
             if done is not None:
                 self.reason = done
@@ -281,8 +286,12 @@ class TrialLoop:
         reason = "timeout" if self.reason is None else self.reason
         result = _result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
                          1.0 / self.world.sim.telemetry_rate_hz, self.goal)
-        if self.slips:
-            result = dataclasses.replace(result, mean_slip=math.fsum(self.slips) / len(self.slips))
+        if any(map(math.isfinite, self.slips)):  # on soil: slip and sinkage over the moving samples
+            moving = metrics.moving_samples(tel["cmd_v_m_s"], tel["vx_m_s"], tel["vy_m_s"])
+            on_soil = moving & np.isfinite(np.asarray(self.slips))
+            median, p95 = metrics.sinkage_summary(tel["penetration_m"], on_soil)
+            result = dataclasses.replace(result, mean_slip=metrics.mean_where(self.slips, on_soil),
+                                         sinkage_median_m=median, sinkage_p95_m=p95)
         return result
 
     def telemetry(self) -> dict[str, np.ndarray]:
