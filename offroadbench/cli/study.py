@@ -40,8 +40,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
-                          "(default: generous against the trials' nominal time)")
+                     help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
+                          "replaced) and the study goes on (default: generous against the trials' nominal time; "
+                          "at most 30 days)")
+    run.add_argument("--retry-faults", action="store_true",
+                     help="run the trials stored as faults (past their limit, thrown while settling) again; "
+                          "a resume skips them otherwise")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory and study-size estimate checks (memory also "
                           "OFFROADBENCH_NO_MEMORY_CHECK=1)")
@@ -117,6 +121,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
+    from offroadbench.study.executors import check_trial_timeout
+
+    try:
+        check_trial_timeout(args.trial_timeout_s)
+    except InputError as exc:
+        raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(load_toml(path), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     try:
@@ -144,15 +154,18 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         with bar(study.name, unit="trial", postfix=success) as progress:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
+                                retry_faults=args.retry_faults)
     except Terminated:
         sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
-    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
+    faults = (f"; {summary.faults} fault(s), excluded from the statistics (see the report; --retry-faults runs "
+              "them again)") if summary.faults else ""
+    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
-    if summary.done == summary.total and not args.no_report:
+    if summary.complete and not args.no_report:
         path = write_report(out, out / "report")
         print(f"report: {path}")
     return 0

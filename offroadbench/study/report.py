@@ -270,6 +270,25 @@ def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return {"success": succ, "areas": areas, "metrics": pd.DataFrame(metrics)}
 
 
+# ---------------------------------------------------------------------------- faults (issue 30)
+def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """The report's list of faulted trials (``faults`` table of the store: no outcome, so no
+    statistic counts them); adds ``faults.csv`` to ``tables``. Nothing when there are none."""
+    from offroadbench.study.store import Store
+
+    with Store(run_dir) as store:
+        rows = store.fault_rows()
+    if not rows:
+        return []
+    df = pd.DataFrame(rows, columns=["cell", "terrain", "mission", "terrain_seed", "mission_seed", "reason", "session"])
+    tables["faults.csv"] = df
+    return ["## Faults", "",
+            f"{len(df)} trial(s) gave no outcome (past the per-trial limit, or the vehicle thrown while settling). "
+            "They are not trials of the study: every statistic above and below leaves them out. "
+            "`study run --retry-faults` runs them again.", "",
+            markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
+
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -338,6 +357,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "",
         markdown_table(sessions),
         "",
+        *_faults_section(run_dir, tables),
         *_platforms_section(run_dir, meta)[0],
         "## Roughness classes (Fig. 5)",
         "",
