@@ -1,0 +1,273 @@
+"""Reliability, round three (issue 30): a resume never mixes two configurations, a trial with no
+outcome is a fault and the study goes on, a full store is one line, killed sessions say so.
+
+A cheap stand-in replaces the physics (tests.study.test_run.fake_trials).
+"""
+
+from __future__ import annotations
+
+import copy
+import errno
+import os
+import shutil
+import sqlite3
+import time
+from pathlib import Path
+
+import pytest
+
+from offroadbench import resources
+from offroadbench.errors import InputError, TrialFault
+from offroadbench.study import load, load_meta, run_study, study_from_dict
+from offroadbench.study.executors import MAX_TRIAL_TIMEOUT_S, check_trial_timeout
+from offroadbench.study.spec import plan_cells
+from offroadbench.study.store import LOCK_NAME, Store
+from tests.study.test_run import STUDY, fake_trials
+
+
+def cells_of(data: dict):
+    study = study_from_dict(copy.deepcopy(data))
+    return study, plan_cells(study)
+
+
+def small(**settings) -> dict:
+    data = copy.deepcopy(STUDY)
+    data["study"].update(terrains_per_cell=1, missions_per_terrain=3)
+    data.update(copy.deepcopy(settings))
+    return data
+
+
+# ---------------------------------------------------------------------------- Deliver 1: inputs
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """An OFFROADBENCH_PATH folder with a copy of the lunar regolith and of the Husky."""
+    root = tmp_path / "user"
+    (root / "soils").mkdir(parents=True)
+    text = resources.soil_files()["lunar-regolith"].read_text().replace('name = "lunar-regolith"', 'name = "my-soil"')
+    (root / "soils" / "my-soil.toml").write_text(text)
+    husky = resources.vehicle_files()["husky"].parent
+    shutil.copytree(husky, root / "vehicles" / "my-husky")
+    toml = root / "vehicles" / "my-husky" / "vehicle.toml"
+    toml.write_text(toml.read_text().replace('name = "husky"', 'name = "my-husky"'))
+    monkeypatch.setenv(resources.ENV_VAR, str(root))
+    return root
+
+
+def _edit(path: Path, old: str, new: str) -> None:
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+
+
+def test_a_resume_refuses_an_edited_soil_naming_the_parameter(tmp_path, user_dir):
+    data = small(sim={"tyre_model": "terramechanics", "soil": "my-soil"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    _edit(user_dir / "soils" / "my-soil.toml", "k_phi = 820000.0", "k_phi = 1000000.0")
+    with pytest.raises(InputError, match=r"soil parameters: .*k_phi 820000.0 -> 1000000.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    assert len(load(tmp_path / "run")) == 6  # nothing of the new soil was added
+
+
+def test_a_resume_refuses_an_edited_vehicle_or_urdf(tmp_path, user_dir):
+    data = small(vehicle={"name": "my-husky"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    toml = user_dir / "vehicles" / "my-husky" / "vehicle.toml"
+    _edit(toml, "wheel_torque_limit_nm = 28.0", "wheel_torque_limit_nm = 12.0")
+    with pytest.raises(InputError, match=r"another study .*vehicle .*wheel_torque_limit_nm 28.0 -> 12.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    _edit(toml, "wheel_torque_limit_nm = 12.0", "wheel_torque_limit_nm = 28.0")
+    urdf = user_dir / "vehicles" / "my-husky" / "husky.urdf"
+    urdf.write_bytes(urdf.read_bytes() + b"\n<!-- edited -->\n")
+    with pytest.raises(InputError, match=r"vehicle .*urdf_sha256"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_changed_engine_or_planner_version_is_named(tmp_path, monkeypatch):
+    from offroadbench.study import inputs
+
+    data = small()
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    monkeypatch.setattr(inputs, "_engine", lambda name: {"name": name, "package": f"{name} 99.0"})
+    with pytest.raises(InputError, match=r"physics engine or its version: \[0\].package pybullet .* -> pybullet 99.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_cosmetic_change_is_accepted_and_recorded(tmp_path):
+    data = small()
+    first = run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:  # an unfinished study: drop one trial so the resume has work
+        store.drop_trials([(0, 0, 2, 1)])
+    cosmetic = copy.deepcopy(data)
+    cosmetic["study"]["description"] = "now with words"
+    cosmetic["reference"] = {"source": "a paper"}
+    cosmetic["sim"] = {"physics_rate_hz": 60}  # the default, written out
+    summary = run_study(*cells_of(cosmetic), tmp_path, executor="inline", trial_fn=fake_trials)
+    assert summary.ran == 1 and summary.done == first.done
+    meta = load_meta(tmp_path)
+    (amend,) = meta["amendments"]
+    assert {"description", "reference.source", "settings.sim.physics_rate_hz"} <= set(amend["changed"])
+    assert meta["study"]["description"] == "now with words"
+    # the study's real settings still refuse, naming the key
+    real = copy.deepcopy(cosmetic)
+    real["sim"] = {"physics_rate_hz": 120}
+    with pytest.raises(InputError, match=r"trial settings: .*sim.physics_rate_hz 60 -> 120"):
+        run_study(*cells_of(real), tmp_path, executor="inline", trial_fn=fake_trials)
+
+
+def test_a_store_without_recorded_inputs_names_the_study_key_that_differs(tmp_path):
+    data = small()
+    run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    con.execute("DELETE FROM meta WHERE key='trial_inputs'")  # as an older offroadbench left it
+    con.commit()
+    con.close()
+    other = copy.deepcopy(data)
+    other["study"]["missions_per_terrain"] = 4
+    with pytest.raises(InputError, match=r"holds another study .*changed: missions_per_terrain"):
+        run_study(*cells_of(other), tmp_path, executor="inline", trial_fn=fake_trials)
+    described = copy.deepcopy(data)
+    described["study"]["description"] = "only words"
+    assert run_study(*cells_of(described), tmp_path, executor="inline", trial_fn=fake_trials).ran == 0
+    assert "trial_inputs" in load_meta(tmp_path)  # recorded from now on
+
+
+# ---------------------------------------------------------------------------- Deliver 2: faults
+def thrown_on(mission: int):
+    """fake_trials whose trial ``mission`` throws the vehicle while it settles (a TrialFault)."""
+
+    def trials(prepared, settings):
+        for row in fake_trials(prepared, settings):
+            if row["mission_index"] == mission:
+                raise TrialFault("the vehicle was thrown 26 m while it settled")
+            yield row
+
+    return trials
+
+
+def test_a_thrown_vehicle_is_a_fault_not_an_outcome_and_the_terrain_goes_on(tmp_path):
+    study, cells = cells_of(small())
+    summary = run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
+    assert (summary.done, summary.faults) == (4, 2) and summary.complete
+    stored = load(tmp_path)
+    assert sorted(stored["mission"].unique()) == [0, 2]  # mission 2 ran after the fault, in a new world
+    with Store(tmp_path) as store:
+        faults = store.fault_rows()
+    assert [(c, t, m) for c, t, m, *_ in faults] == [(0, 0, 1), (1, 0, 1)]
+    assert all("thrown 26 m" in f[5] for f in faults)
+
+
+def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
+    from offroadbench.study.report import build_report
+
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
+    rep = build_report(tmp_path)
+    assert "## Faults" in rep.markdown and "thrown 26 m" in rep.markdown
+    assert len(rep.tables["faults.csv"]) == 2
+    assert rep.tables["summary.csv"]["trials"].sum() == 4
+
+
+def test_a_limit_shorter_than_the_poll_is_enforced(tmp_path, monkeypatch):
+    from offroadbench.study.executors import LocalExecutor
+
+    monkeypatch.setattr(LocalExecutor, "poll_s", 60.0)  # the deadline, not the poll, sets the wait
+    def slow_mission_1(prepared, settings):
+        for row in fake_trials(prepared, settings):
+            if row["mission_index"] == 1:
+                time.sleep(30)
+            yield row
+
+    study, cells = cells_of(small())
+    t0 = time.monotonic()
+    summary = run_study(study, cells, tmp_path, executor="local", workers=1, trial_fn=slow_mission_1,
+                        executor_options={"trial_timeout_s": 2.0})
+    assert time.monotonic() - t0 < 25
+    assert (summary.done, summary.faults) == (4, 2)
+
+
+@pytest.mark.parametrize("value", [0, -1, float("nan"), float("inf"), 1e10, MAX_TRIAL_TIMEOUT_S * 1.01, True, "5"])
+def test_a_limit_beyond_the_sane_range_is_refused(value):
+    with pytest.raises(InputError, match="trial_timeout_s"):
+        check_trial_timeout(value)
+
+
+def test_the_largest_limit_works_on_a_dask_style_wait():
+    """The Dask task slices its wait: a limit at the maximum must not overflow a lock's timeout."""
+    import threading
+
+    assert check_trial_timeout(MAX_TRIAL_TIMEOUT_S) <= threading.TIMEOUT_MAX
+
+
+# ---------------------------------------------------------------------------- Deliver 3: a full store
+class _FullAt:
+    """A connection whose INSERT INTO trials fails with SQLITE_FULL from the ``n``-th trial on,
+    after SQLite has rolled the transaction back itself (as it does on a full disk): the ROLLBACK
+    that followed used to raise "cannot rollback - no transaction is active" over it."""
+
+    def __init__(self, con, n: int) -> None:
+        self._con, self._n, self._seen = con, n, 0
+
+    def __getattr__(self, name):
+        return getattr(self._con, name)
+
+    def execute(self, sql, *args):
+        if sql.startswith("INSERT OR IGNORE INTO trials"):
+            self._seen += 1
+            if self._seen >= self._n:
+                self._con.execute("ROLLBACK")
+                raise sqlite3.OperationalError("database or disk is full")
+        return self._con.execute(sql, *args)
+
+
+def test_a_full_disk_in_a_trial_commit_is_one_oserror_naming_the_store(tmp_path, monkeypatch):
+    study, cells = cells_of(small())
+    real_init = Store.__init__
+
+    def init(self, *a, **k):
+        real_init(self, *a, **k)
+        if k.get("create"):
+            self.con = _FullAt(self.con, 3)
+
+    monkeypatch.setattr(Store, "__init__", init)
+    with pytest.raises(OSError) as info:
+        run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "study.sqlite")
+    monkeypatch.undo()
+    assert not (tmp_path / LOCK_NAME).exists()
+    assert len(load(tmp_path)) == 2  # what was committed stays
+    assert run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials).done == study.n_trials
+
+
+def test_a_full_disk_while_locking_leaves_no_lock_file(tmp_path, monkeypatch):
+    from offroadbench.study.store import RunLock
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "pwrite", full)
+    with pytest.raises(InputError, match=r"study.lock: cannot write the run directory's lock file \(no space left"):
+        RunLock(tmp_path / "run").acquire()
+    assert not (tmp_path / "run" / LOCK_NAME).exists()
+
+
+# ---------------------------------------------------------------------------- Deliver 7: sessions
+def test_a_killed_session_is_shown_as_killed_and_recorded_so_by_the_next_run(tmp_path):
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    con.execute("UPDATE runs SET status='running', finished=NULL")  # as a SIGKILLed run leaves it
+    con.commit()
+    con.close()
+    dead = os.fork()
+    if dead == 0:
+        os._exit(0)
+    os.waitpid(dead, 0)
+    (tmp_path / LOCK_NAME).write_text(f"{dead}\n")  # its lock file, naming its dead pid
+    assert load_meta(tmp_path)["runs"][0]["status"] == "killed"
+    (tmp_path / LOCK_NAME).write_text(f"{os.getpid()}\n")  # a live holder: still running
+    assert load_meta(tmp_path)["runs"][0]["status"] == "running"
+    (tmp_path / LOCK_NAME).unlink()
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:
+        stored = [r for r in store.con.execute("SELECT status FROM runs ORDER BY id")]
+    assert stored == [("killed",), ("finished",)]
