@@ -34,7 +34,8 @@ from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChe
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.controller import make_tracker
 from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.engine import TrialWorld
+from offroadbench.sim.engine import TrialWorld, max_height_near
+from offroadbench.bounds import check_settled
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
            "vehicle_envelope", "body_velocity", "body_frame"]
@@ -221,6 +222,9 @@ def drive_mission(
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
+    _settled = world.base_state()  # a vehicle thrown while settling is a fault, not a trial (offroadbench.bounds)
+    check_settled(_settled[0], _settled[2], max_height_near(hm, *mission.start_xy_m, spec.wheel_radius_m + spec.track_m),
+                  size_m=spec.track_m + 2 * spec.wheel_radius_m, where=f"mission {mission.index}")
 
     rows: list[tuple] = []
     slips: list[float] = []

@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from offroadbench import resources
+from offroadbench.bounds import check_bounds
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
 from offroadbench.registry import unknown_name
@@ -122,6 +123,7 @@ class SoilParams:
         check_range(self, "a1", self.a1, lo=0, hi=1)
         if self.a0 + self.a1 >= 1.0:
             raise InputError(f"soil {self.name!r}: a0 + a1 = {self.a0 + self.a1:g} must be below 1 (theta_m < theta_1)")
+        check_bounds(self, f"soil {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
     def modulus(self, width_m: float) -> float:
         """Bekker's ``k_c / b + k_phi`` for a wheel of width ``b``, N/m^(n+2); must be positive."""
