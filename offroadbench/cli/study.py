@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
-from offroadbench.io.atomic import atomic_path
+from offroadbench.io.atomic import atomic_path, atomic_paths
 
 EXPORT_FORMATS = ("parquet", "csv")
 #: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
@@ -184,15 +184,17 @@ def cmd_export(args: argparse.Namespace) -> int:
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))
-    with created_dirs(out):
-        for name, df in tables:
-            path = out / f"{name}.{args.format}"
-            with atomic_path(path) as tmp:
-                if args.format == "csv":
-                    df.to_csv(tmp, index=False)
-                else:
-                    df.to_parquet(tmp, index=False)
-            print(f"{path} ({len(df)} rows)")
+    paths = [out / f"{name}.{args.format}" for name, _ in tables]
+    # all or nothing: both tables replace the old ones together (io.atomic.atomic_paths), so a
+    # killed export never leaves a new trials table beside an old terrains table
+    with created_dirs(out), atomic_paths(paths) as temps:
+        for (_, df), tmp in zip(tables, temps):
+            if args.format == "csv":
+                df.to_csv(tmp, index=False)
+            else:
+                df.to_parquet(tmp, index=False)
+    for path, (_, df) in zip(paths, tables):
+        print(f"{path} ({len(df)} rows)")
     return 0
 
 

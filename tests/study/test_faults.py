@@ -271,3 +271,63 @@ def test_a_killed_session_is_shown_as_killed_and_recorded_so_by_the_next_run(tmp
     with Store(tmp_path) as store:
         stored = [r for r in store.con.execute("SELECT status FROM runs ORDER BY id")]
     assert stored == [("killed",), ("finished",)]
+
+
+# ---------------------------------------------------------------------------- Deliver 5: export
+def _export_rows(out: Path) -> tuple[int, int]:
+    import pandas as pd
+
+    return len(pd.read_csv(out / "trials.csv")), int(pd.read_csv(out / "terrains.csv")["trials"].sum())
+
+
+@pytest.mark.parametrize("cut", ["after_first_rename", "disk_full_on_second_table"])
+def test_study_export_is_all_or_nothing(tmp_path, cut):
+    from offroadbench.cli import main
+    from offroadbench.io import atomic
+
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:
+        store.drop_trials([(0, 0, 2, 1)])
+    assert main(["study", "export", str(tmp_path), "--format", "csv"]) == 0
+    assert _export_rows(tmp_path) == (5, 5)  # the old pair
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)  # now 6 trials
+    pid = os.fork()
+    if pid == 0:  # the export, cut at one point
+        try:
+            if cut == "after_first_rename":
+                real, n = os.replace, [0]
+
+                def replace(a, b):
+                    real(a, b)
+                    if str(b).endswith(".csv"):
+                        n[0] += 1
+                        if n[0] == 1:
+                            os._exit(9)  # killed between the two tables
+
+                atomic.os.replace = replace
+            else:
+                import pandas as pd
+
+                real_csv, n = pd.DataFrame.to_csv, [0]
+
+                def to_csv(self, *a, **k):
+                    n[0] += 1
+                    if n[0] == 2:
+                        raise OSError(errno.ENOSPC, "No space left on device")
+                    return real_csv(self, *a, **k)
+
+                pd.DataFrame.to_csv = to_csv
+            code = main(["study", "export", str(tmp_path), "--format", "csv"])
+        finally:
+            os._exit(code if "code" in locals() else 3)
+    _, status = os.waitpid(pid, 0)
+    if cut == "after_first_rename":
+        assert os.WEXITSTATUS(status) == 9
+        atomic.finish_commits(tmp_path)  # what the next export (or reader) does first
+        assert _export_rows(tmp_path) == (6, 6)  # the new pair, completed
+    else:
+        assert os.WEXITSTATUS(status) == 1  # the CLI's one line for a full disk
+        assert _export_rows(tmp_path) == (5, 5)  # the old pair, untouched
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".") and ("commit" in p.name or
+                                                                                  p.name.endswith(".tmp"))]
