@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -87,10 +88,17 @@ DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
 
 def os_error(exc: OSError, path: str | Path) -> OSError:
     """A full disk (or quota) as an OSError whose ``filename`` is the output ``path`` (not a
-    temporary name), so the message names what could not be written; other OSErrors unchanged."""
+    temporary name), so the message names what could not be written; other OSErrors unchanged.
+    numpy's short write (``ndarray.tofile``: "N requested and M written", no errno) is a full disk
+    too: the kernel writes less than asked only when the device or a file-size limit is reached."""
     if exc.errno in DISK_FULL:
         return OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(path))
+    if exc.errno is None and _SHORT_WRITE.fullmatch(str(exc).strip()):
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
     return exc
+
+
+_SHORT_WRITE = re.compile(r"\d+ requested and \d+ written")
 
 
 @contextlib.contextmanager

@@ -34,6 +34,7 @@ does it again.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import logging
@@ -131,6 +132,14 @@ class Store:
                 self._migrate()
             self.columns = {t: {r[1] for r in self.con.execute(f"PRAGMA table_info({t})")} for t in ("trials", "runs")}
         except sqlite3.DatabaseError as exc:
+            if self.created:  # ours and empty: a failure here is the device's (a full disk), not the file's
+                con = getattr(self, "con", None)
+                if con is not None:
+                    with contextlib.suppress(sqlite3.Error):
+                        con.close()
+                remove_store(self.run_dir)
+                why = "no space left on the device" if _nearly_full(self.run_dir) else str(exc)
+                raise InputError(f"{path}: cannot create the study store ({why})") from None
             raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
 
     def _migrate(self) -> None:
@@ -342,7 +351,7 @@ class Store:
             else:
                 self._write("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
         except (OSError, sqlite3.DatabaseError) as exc:
-            log.warning("%s: could not record the end of session %d (%s)", self.path, run_id, exc)
+            log.info("%s: could not record the end of session %d (%s)", self.path, run_id, exc)
 
     def mark_killed_sessions(self) -> int:
         """Mark every session still ``running`` as ``killed``: call only while holding the run
@@ -401,6 +410,15 @@ class Store:
         if not self.has_faults_table():
             return 0
         return self._write("DELETE FROM faults").rowcount
+
+
+def _nearly_full(directory: Path, margin: int = 1 << 20) -> bool:
+    """Whether the device of ``directory`` has less than ``margin`` bytes free (1 MiB)."""
+    try:
+        st = os.statvfs(directory)
+    except OSError:
+        return False
+    return st.f_bavail * st.f_frsize < margin
 
 
 def _lock_holder_alive(run_dir: Path) -> bool:
