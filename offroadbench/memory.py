@@ -22,7 +22,8 @@ from offroadbench.errors import InputError
 
 __all__ = [
     "GRID_BYTES_PER_CELL", "WORKER_BYTES_PER_CELL", "TILE_BUILD_BYTES_PER_CELL", "WORKER_BASE_BYTES",
-    "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "available_memory_bytes", "check_memory",
+    "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
+    "check_memory",
     "check_recipe_memory", "workers_that_fit", "format_bytes",
 ]
 
@@ -40,8 +41,32 @@ def grid_bytes(rows: int, cols: int) -> int:
     return int(rows) * int(cols) * GRID_BYTES_PER_CELL
 
 
+def address_space_room_bytes() -> int | None:
+    """Address space this process may still map under its ``RLIMIT_AS`` (``ulimit -v``): the soft
+    limit less the current virtual size (``VmSize`` of /proc/self/status); None when unlimited or
+    unknown. Every process (each study worker too) has its own."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError, ValueError):
+        return None
+    if soft == resource.RLIM_INFINITY or soft < 0:
+        return None
+    used = 0
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmSize:"):
+                used = int(line.split()[1]) * 1024
+                break
+    except (OSError, ValueError):
+        pass
+    return max(0, soft - used)
+
+
 def available_memory_bytes() -> int | None:
-    """Memory this process may still use: MemAvailable, capped by a cgroup limit; None if unknown."""
+    """Memory this process may still use: MemAvailable, capped by a cgroup limit and by the room
+    left under ``RLIMIT_AS`` (:func:`address_space_room_bytes`); None if unknown."""
     avail = None
     try:
         for line in Path("/proc/meminfo").read_text().splitlines():
@@ -61,6 +86,9 @@ def available_memory_bytes() -> int | None:
             avail = room if avail is None else min(avail, room)
         except (OSError, ValueError):
             continue
+    room = address_space_room_bytes()
+    if room is not None:
+        avail = room if avail is None else min(avail, room)
     return avail
 
 
@@ -76,8 +104,10 @@ def check_memory(estimate_bytes: int, what: str, force: bool = False) -> None:
         return
     avail = available_memory_bytes()
     if avail is not None and estimate_bytes > avail:
+        limited = address_space_room_bytes() == avail
         raise InputError(
-            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available; "
+            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available"
+            f"{' under this process address-space limit (ulimit -v)' if limited else ''}; "
             f"make it smaller, or pass --force (or set {NO_MEMORY_CHECK_ENV}=1) to try anyway"
         )
 

@@ -72,6 +72,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")
         return 130
+    except MemoryError as exc:  # past the up-front estimate (--force, or an estimate too low)
+        sys.stderr.write(f"offroadbench: error: out of memory ({_one_line(exc) or 'MemoryError'}); make the work "
+                         "smaller or give it more memory\n")
+        return EXIT_FAILED
     except BrokenPipeError:
         # the reader (e.g. `| head`) went away: stop quietly, as command-line tools do
         devnull = os.open(os.devnull, os.O_WRONLY)

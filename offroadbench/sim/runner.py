@@ -199,10 +199,10 @@ def drive_mission(
                               vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
     if planner.kind == "policy":
         waypoints = problem.endpoints()
-        policy = make_policy(planner.name, planner.config, PolicyContext(
+        policy = _policy_call(planner.name, "could not be built", make_policy, planner.name, planner.config, PolicyContext(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
-        policy.reset(problem)
+        _policy_call(planner.name, "failed in reset()", policy.reset, problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
         replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
         waypoints = replanner.waypoints
@@ -245,7 +245,8 @@ def drive_mission(
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
-                a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
+                a = _checked_action(planner.name, _policy_call(planner.name, f"failed in act() at t = {k * world.dt_s:.2f} s",
+                                                               policy.act, obs), k * world.dt_s)
                 cmd_v = min(max(a[0], -v_lim), v_lim)
                 cmd_w = min(max(a[1], -w_lim), w_lim)
             world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
@@ -276,6 +277,20 @@ def drive_mission(
         result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     path = replanner.trace if replanner is not None else waypoints
     return TrialRecord(result, tel, np.asarray(path, dtype=float))
+
+
+def _policy_call(name: str, what: str, fn, *args):
+    """A policy's own code (built, reset, act): its exception is a one-line PluginError naming the
+    policy (the traceback goes to the log), as a planner's is (:func:`plan_within_limits`)."""
+    try:
+        return fn(*args)
+    except (PluginError, InputError):
+        raise
+    except Exception as exc:
+        import logging
+
+        logging.getLogger(__name__).info("policy %r %s", name, what, exc_info=True)
+        raise PluginError(f"policy {name!r} {what}: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}") from exc
 
 
 def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:
