@@ -24,7 +24,7 @@ from typing import Any, Mapping
 
 from offroadbench.errors import InputError, TrialFault
 
-__all__ = ["BOUNDS", "Bound", "SETTLE_MAX_RISE_M", "SETTLE_MAX_SPEED_M_S", "check_bounds", "check_settled",
+__all__ = ["BOUNDS", "CELL_SIZE", "HEIGHT_M", "Bound", "check_heights", "SETTLE_MAX_RISE_M", "SETTLE_MAX_SPEED_M_S", "check_bounds", "check_settled",
            "reference_lines"]
 
 _WONG = "Wong 2001, Theory of Ground Vehicles, 3rd ed., Table 2.3"
@@ -47,8 +47,29 @@ class Bound:
         return above and value <= self.hi
 
 
+#: the grid spacing of any terrain map, metres: from lab-scale scans to coarse planetary DEMs
+CELL_SIZE = Bound(1e-5, 1e5, "lab terrain scans (tens of micrometres) to global planetary DEMs (MOLA MEGDR: "
+                             "463 m)")
+
+#: the height of any terrain sample, metres (the Solar System's largest relief is about 22 km above
+#: its datum: Olympus Mons on Mars, MOLA; a Heightmap of 1e12 m spikes is a unit or file error)
+HEIGHT_M = Bound(-1e5, 1e5, "the largest relief in the Solar System, Olympus Mons, is about 22 km above the Mars "
+                            "datum (MOLA); Earth's Mariana Trench is 11 km deep")
+
+
+def check_heights(z_min_m: float, z_max_m: float, where: str = "heightmap") -> None:
+    """Refuse (one line) heights outside :data:`HEIGHT_M`: no terrain has them, and no engine can
+    represent them (PyBullet's float32 heightfield loses the map's range)."""
+    for name, value in (("lowest height", z_min_m), ("highest height", z_max_m)):
+        if not HEIGHT_M.holds(float(value)):
+            raise InputError(f"{where}: {name} {value:g} m is outside the physical range {HEIGHT_M.text()} m "
+                             f"({HEIGHT_M.source}); check the heights and their unit")
+
+
 #: config class name -> field -> physical range and its source
 BOUNDS: Mapping[str, Mapping[str, Bound]] = {
+    "GridConfig": {"cell_size_m": CELL_SIZE},
+    "Heightmap": {"cell_size_m": CELL_SIZE},
     "SoilParams": {
         "n": Bound(0.05, 2.0, f"{_WONG}: n from 0.13 (heavy clay) to 1.6 (snow)"),
         "k_c": Bound(-1e6, 1e6, f"{_WONG}: 0.99 (dry sand) to 102 kN/m^(n+1) (LETE sand); ten times that either way "
@@ -142,4 +163,5 @@ def reference_lines() -> list[str]:
         lines += [f"### `{cls}`", "", "| key | physical range | source |", "|---|---|---|"]
         lines += [f"| `{name}` | {b.text()} | {b.source} |" for name, b in table.items()]
         lines.append("")
+    lines += [f"Terrain heights (`Heightmap.z`, every map read or generated): {HEIGHT_M.text()} m ({HEIGHT_M.source}).", ""]
     return lines
