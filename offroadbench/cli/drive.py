@@ -193,6 +193,10 @@ def cmd_drive(args: argparse.Namespace) -> int:
     roughness = from_dict(RoughnessConfig, tables["roughness"], where="--border-m/--set roughness.*")
     planner = planner_from_table({"name": args.planner, **tables["planner"]}, where="--planner/--set planner.*")
 
+    from offroadbench.study.runner import check_drive_size
+
+    # the same size limit as a study's (1e7 m missions would run for days): --force to run anyway
+    check_drive_size(args.missions, args.length_m, min(controller.cruise_speed_m_s, vehicle.max_speed_m_s), args.force)
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
     if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
@@ -264,5 +268,5 @@ def register(sub) -> None:
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",
-                   help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
+                   help="skip the up-front memory and work estimate checks (memory also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_drive)

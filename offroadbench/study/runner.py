@@ -30,7 +30,7 @@ from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, Trial
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "StudyEstimate", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
            "save_trial_telemetry", "worker_memory_bytes"]
 
 
@@ -206,6 +206,19 @@ def check_study_size(study: StudyConfig, force: bool = False) -> StudyEstimate:
         raise InputError(f"study {study.name!r}: {est.describe()}; more than the {MAX_CELLS} cells or "
                          f"{MAX_CPU_S / 86400:g} CPU-days run without --force: check the grid and the mission "
                          "length, or give --force to run it anyway")
+    return est
+
+
+def check_drive_size(missions: int, length_m: float, speed_m_s: float, force: bool = False) -> StudyEstimate:
+    """``drive``'s work estimated as a study's (one terrain of ``missions`` trials of ``length_m``
+    at ``speed_m_s``); refused (InputError with the estimate) past MAX_CPU_S unless ``force``."""
+    sim_s = length_m / speed_m_s if speed_m_s > 0 else float("inf")
+    est = StudyEstimate(cells=1, trials=int(missions), cpu_s=missions * sim_s / ESTIMATE_RTF + ESTIMATE_TERRAIN_S)
+    if not force and not est.cpu_s <= MAX_CPU_S:
+        raise InputError(f"drive: {missions} mission(s) of {length_m:g} m at {speed_m_s:g} m/s, about "
+                         f"{est.cpu_s / 3600:.3g} CPU-hours (at a real-time factor of {ESTIMATE_RTF:g}); "
+                         f"more than the {MAX_CPU_S / 86400:g} CPU-days run without --force: "
+                         "check --missions and --length-m, or give --force to run it anyway")
     return est
 
 
