@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     level = logging.INFO if args.verbose else logging.WARNING
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     # Dask reads its log level when distributed is imported (here and in the workers it starts)
-    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "info" if args.verbose else "warning")
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "info" if args.verbose else "critical")  # a worker's ERRORs: the study says it in one line
     logging.getLogger("distributed").setLevel(level)
     try:
         return int(args.func(args) or 0)
