@@ -8,7 +8,8 @@ every input of a trial into plain JSON data, by component:
 
 * ``design``: root seed, terrains and missions per cell, pairing, telemetry kept, and each cell's
   grid values and seed key (which trials exist and their seeds);
-* ``recipes``: each cell's resolved recipe (the terrain);
+* ``recipes``: each cell's resolved recipe (the terrain), and ``recipe_files`` the SHA-256 of the
+  files its layers read (a ``crater_file``, a DEM ``path``);
 * ``settings``: each cell's settings after defaults are filled in (``[sim]``, ``[controller]``,
   ``[rules]``, ``[missions]``, ``[roughness]``, the observation): a default written out changes
   nothing here;
@@ -110,6 +111,24 @@ def _soil(sim: Any, recipe_soil: str | None) -> dict[str, Any] | None:
     return to_dict(load_soil(name))
 
 
+#: keys of a recipe layer that name a file the layer reads (offroadbench.terrain.recipe)
+_FILE_KEYS = ("crater_file", "path")
+
+
+def _recipe_files(recipe: Mapping[str, Any]) -> dict[str, str]:
+    """{layer.key = path: SHA-256} of the files a recipe's layers read (relative paths from the
+    working directory, as the recipe reads them)."""
+    out = {}
+    for lname, layer in (recipe.get("layers") or {}).items():
+        if not isinstance(layer, dict):
+            continue
+        for key in _FILE_KEYS:
+            value = layer.get(key)
+            if isinstance(value, str):
+                out[f"{lname}.{key} = {value}"] = _sha256(value)
+    return out
+
+
 def _distinct(values: Sequence[Any]) -> list[Any]:
     """The distinct values in first-seen order (a grid repeats most components in every cell)."""
     seen, out = set(), []
@@ -144,8 +163,11 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
                            if isinstance(p.recipe_data.get("soil"), dict) else None))
         planners.append(_planner(ts.planner))
         engines.append(_engine(ts.sim.engine))
-    return {"design": design, "recipes": recipes, "settings": settings, "vehicle": _distinct(vehicles),
-            "soil": _distinct(soils), "planner": _distinct(planners), "engine": _distinct(engines)}
+    files = _distinct([_recipe_files(r) for r in recipes])
+    out = {"design": design, "recipes": recipes, "recipe_files": files, "settings": settings,
+           "vehicle": _distinct(vehicles), "soil": _distinct(soils), "planner": _distinct(planners),
+           "engine": _distinct(engines)}
+    return json.loads(json.dumps(out, default=repr))  # as the store will hold it (tuples as lists, ...)
 
 
 def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
@@ -176,7 +198,7 @@ def _first_differences(old: Any, new: Any, limit: int = 3) -> list[str]:
     return out
 
 
-_WHAT = {"design": "the study design", "recipes": "the terrain recipe", "settings": "the trial settings",
+_WHAT = {"design": "the study design", "recipes": "the terrain recipe", "recipe_files": "a file the recipe reads", "settings": "the trial settings",
          "vehicle": "the vehicle (its table or model file)", "soil": "the soil parameters",
          "planner": "the planner or policy (or its package version)", "engine": "the physics engine or its version"}
 
