@@ -332,6 +332,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     fixed = held_fixed(meta)
     tables["held_fixed.csv"] = fixed
+    faults = _faults_section(run_dir, tables)
+    n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
     lines = [
         f"# {report_title(meta)}",
         "",
@@ -342,7 +344,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(fixed),
         "",
         f"- trials: **{len(trials)} of {n_total}** stored"
-        + ("" if len(trials) == n_total else " (**incomplete**: the study has not finished)"),
+        + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
+        + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
         f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
@@ -357,7 +360,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "",
         markdown_table(sessions),
         "",
-        *_faults_section(run_dir, tables),
+        *faults,
         *_platforms_section(run_dir, meta)[0],
         "## Roughness classes (Fig. 5)",
         "",

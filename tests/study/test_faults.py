@@ -162,7 +162,8 @@ def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
     study, cells = cells_of(small())
     run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
     rep = build_report(tmp_path)
-    assert "## Faults" in rep.markdown and "thrown 26 m" in rep.markdown
+    assert "## Faults" in rep.markdown and "thrown 26 m" in rep.markdown and "incomplete" not in rep.markdown
+    assert "**4 of 6** stored, 2 fault(s)" in rep.markdown
     assert len(rep.tables["faults.csv"]) == 2
     assert rep.tables["summary.csv"]["trials"].sum() == 4
 
