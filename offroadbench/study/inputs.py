@@ -105,7 +105,7 @@ def _engine(name: str) -> dict[str, Any]:
 def _soil(sim: Any, recipe_soil: str | None) -> dict[str, Any] | None:
     if sim.tyre_model != "terramechanics":
         return None  # no soil enters such a trial
-    from offroadbench.sim.terramechanics import DEFAULT_SOIL, load_soil
+    from offroadbench.sim.tyre_laws.terramechanics import DEFAULT_SOIL, load_soil
 
     name = sim.soil or recipe_soil or DEFAULT_SOIL
     return to_dict(load_soil(name))
