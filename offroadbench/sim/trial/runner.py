@@ -35,6 +35,7 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.controller import make_tracker
 from offroadbench.sim.trial.skid_steer import wheel_speeds
 from offroadbench.sim.engine import TrialWorld
+from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
@@ -223,7 +224,7 @@ def drive_mission(
 
     world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
     _settled = world.base_state()  # a vehicle thrown while settling is a fault, not a trial (offroadbench.bounds)
-    check_settled(_settled[0], _settled[2], world.max_height_near(*mission.start_xy_m, spec.wheel_radius_m + spec.track_m),
+    check_settled(_settled[0], _settled[2], max_height_near(hm, *mission.start_xy_m, spec.wheel_radius_m + spec.track_m),
                   size_m=spec.track_m + 2 * spec.wheel_radius_m, where=f"mission {mission.index}")
 
     rows: list[tuple] = []
