@@ -192,11 +192,30 @@ def test_a_limit_beyond_the_sane_range_is_refused(value):
         check_trial_timeout(value)
 
 
-def test_the_largest_limit_works_on_a_dask_style_wait():
-    """The Dask task slices its wait: a limit at the maximum must not overflow a lock's timeout."""
-    import threading
+@pytest.mark.parametrize("limit", [MAX_TRIAL_TIMEOUT_S, 1e10])
+def test_a_dask_task_waits_in_slices_so_no_limit_overflows(limit):
+    """A limit past ``threading.TIMEOUT_MAX`` made every Dask task fail with OverflowError; the task
+    now waits in short slices (1e10 s is refused by the CLI, but the task would cope)."""
+    from offroadbench.study.executors import _dask_task
+    from offroadbench.study.runner import plan_tasks
+    from offroadbench.study.tasks import TerrainBuilt, TrialDone
 
-    assert check_trial_timeout(MAX_TRIAL_TIMEOUT_S) <= threading.TIMEOUT_MAX
+    study, cells = cells_of(small())
+    task = plan_tasks(study, cells, set())[0]
+    msgs = _dask_task(task, fake_trials, limit)
+    assert isinstance(msgs[0], TerrainBuilt) and [type(m) for m in msgs[1:]] == [TrialDone] * 3
+
+
+def test_a_thrown_vehicle_is_told_from_one_at_rest():
+    from offroadbench.bounds import check_settled
+
+    check_settled((1.0, 2.0, 0.25), (0.01, 0.0, -0.02), ground_z_m=0.1, size_m=0.9)  # at rest on its wheels
+    with pytest.raises(TrialFault, match=r"thrown while it settled \(base 26 m above"):
+        check_settled((1.0, 2.0, 26.1), (0.0, 0.0, 0.5), ground_z_m=0.1, size_m=0.9)
+    with pytest.raises(TrialFault, match="moving at 12 m/s"):
+        check_settled((1.0, 2.0, 0.3), (12.0, 0.0, 0.0), ground_z_m=0.1, size_m=0.9)
+    with pytest.raises(TrialFault):
+        check_settled((1.0, 2.0, float("nan")), (0.0, 0.0, 0.0), ground_z_m=0.1)
 
 
 # ---------------------------------------------------------------------------- Deliver 3: a full store
