@@ -27,6 +27,7 @@ a change of the study TOML that leaves every component equal (a description, a c
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from pathlib import Path
@@ -51,6 +52,7 @@ def _sha256(path: str | Path) -> str:
     return h.hexdigest()
 
 
+@functools.lru_cache(maxsize=None)
 def _distribution(module: str | None) -> str:
     """``package version`` of the installed distribution holding ``module``; built-in entries
     (offroadbench's own) say ``offroadbench (built in)``: their code is the package's, whose
@@ -149,6 +151,8 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
               "missions_per_terrain": study.missions_per_terrain, "paired_terrains": study.paired_terrains,
               "telemetry": study.telemetry, "cells": [[dict(p.values), p.key] for p in plans]}
     recipes, settings, vehicles, soils, planners, engines = [], [], [], [], [], []
+    sha = functools.lru_cache(maxsize=None)(_sha256)  # a grid of 10,000 cells reads each file once
+    engine = functools.lru_cache(maxsize=None)(_engine)
     for p in plans:
         ts = p.trial_settings
         recipes.append(dict(p.recipe_data))
@@ -157,12 +161,12 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
         plain.pop("planner")
         settings.append(plain)
         vehicle["urdf"] = Path(ts.vehicle.urdf).name
-        vehicle["urdf_sha256"] = _sha256(ts.vehicle.urdf)
+        vehicle["urdf_sha256"] = sha(ts.vehicle.urdf)
         vehicles.append(vehicle)
         soils.append(_soil(ts.sim, (p.recipe_data.get("soil") or {}).get("name")
                            if isinstance(p.recipe_data.get("soil"), dict) else None))
         planners.append(_planner(ts.planner))
-        engines.append(_engine(ts.sim.engine))
+        engines.append(engine(ts.sim.engine))
     files = _distinct([_recipe_files(r) for r in recipes])
     out = {"design": design, "recipes": recipes, "recipe_files": files, "settings": settings,
            "vehicle": _distinct(vehicles), "soil": _distinct(soils), "planner": _distinct(planners),
