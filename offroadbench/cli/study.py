@@ -165,7 +165,7 @@ def cmd_run(args: argparse.Namespace) -> int:
               "them again)") if summary.faults else ""
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
-    if summary.complete and not args.no_report:
+    if summary.complete and summary.done and not args.no_report:  # (a study of faults only has no statistics)
         path = write_report(out, out / "report")
         print(f"report: {path}")
     return 0
