@@ -351,3 +351,77 @@ def test_study_export_is_all_or_nothing(tmp_path, cut):
         assert _export_rows(tmp_path) == (5, 5)  # the old pair, untouched
     assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".") and ("commit" in p.name or
                                                                                   p.name.endswith(".tmp"))]
+
+
+# ---------------------------------------------------------------------------- as a user: the CLI
+HUNG_STUDY = """
+[study]
+name = "hung"
+recipe = "paper-d2.45"
+root_seed = 3
+terrains_per_cell = 1
+missions_per_terrain = 3
+
+[recipe_overrides]
+"grid.rows" = 161
+"grid.cols" = 161
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 3.0
+border_m = 1.0
+
+[planner]
+name = "hangs-once-test"
+"""
+
+
+def test_a_study_with_a_hanging_trial_finishes_the_rest_and_reports_the_fault(tmp_path, monkeypatch, capsys):
+    """Done-when of issue 30: a study with one hanging trial finishes every other trial, reports the
+    hung one as a fault, and its statistics exclude it; a resume skips it, --retry-faults runs it."""
+    import math
+
+    from offroadbench.cli import main
+    from offroadbench.navigation.drivers import POLICIES, PolicySpec
+
+    marker = tmp_path / "hung.marker"
+
+    class HangsOnce:
+        """Drives at the goal; the first act() of the second episode anywhere hangs (once)."""
+
+        episodes = 0
+
+        def __init__(self, cfg, context) -> None:
+            pass
+
+        def reset(self, problem) -> None:
+            HangsOnce.episodes += 1
+            self.episode = HangsOnce.episodes
+
+        def act(self, obs):
+            if self.episode == 2 and not marker.exists():
+                marker.write_text("hung")
+                time.sleep(600)
+            gx, gy = obs["state"][:2]
+            return (0.8, max(-1.5, min(1.5, 2.0 * math.atan2(gy, gx))))
+
+    POLICIES.add("hangs-once-test", PolicySpec(HangsOnce, summary="test policy"))
+    try:
+        (tmp_path / "study.toml").write_text(HUNG_STUDY)
+        out = tmp_path / "run"
+        args = ["study", "run", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "1",
+                "--trial-timeout-s", "4"]
+        assert main(args) == 0
+        text = capsys.readouterr().out
+        assert "2 / 3 trials" in text and "1 fault(s)" in text
+        report = (out / "report" / "report.md").read_text()
+        assert "## Faults" in report and "ran longer than 4 s" in report and "**2 of 3** stored, 1 fault(s)" in report
+        assert len(load(out)) == 2
+        assert main([*args, "--no-report"]) == 0 and "this run: 0 trials" in capsys.readouterr().out
+        assert main([*args, "--retry-faults"]) == 0  # the marker is there: it runs now
+        assert "3 / 3 trials" in capsys.readouterr().out
+        assert "## Faults" not in (out / "report" / "report.md").read_text()
+    finally:
+        POLICIES._entries.pop("hangs-once-test", None)
