@@ -94,15 +94,15 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
 def write_drive_run(run, out: Path) -> list[str]:
     """trials.csv and telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
     older runs still load with offroadbench.io.telemetry.load_telemetry); returns what was written."""
-    from offroadbench.io.atomic import atomic_path
+    from offroadbench.io.export import staged_dir
     from offroadbench.io.telemetry import save_telemetry
 
-    tel_dir = out / "telemetry"
-    with created_dirs(out, tel_dir):
-        with atomic_path(out / "trials.csv") as tmp:
-            pd.DataFrame(run.rows()).to_csv(tmp, index=False)
+    # all or nothing (the export transaction): a full disk leaves no trials.csv without its telemetry
+    with staged_dir(out) as stage:
+        (stage / "telemetry").mkdir()
+        pd.DataFrame(run.rows()).to_csv(stage / "trials.csv", index=False)
         for index, tel in run.telemetry.items():
-            save_telemetry(tel, tel_dir / f"mission_{index:03d}.parquet")
+            save_telemetry(tel, stage / "telemetry" / f"mission_{index:03d}.parquet", sweep=False)
     return ["trials.csv", "telemetry/mission_*.parquet"]
 
 
