@@ -104,7 +104,8 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
     workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
-    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
+    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force,
+                 per_process_bytes=per_worker)
     return workers
 
 

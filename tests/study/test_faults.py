@@ -425,3 +425,19 @@ def test_a_study_with_a_hanging_trial_finishes_the_rest_and_reports_the_fault(tm
         assert "## Faults" not in (out / "report" / "report.md").read_text()
     finally:
         POLICIES._entries.pop("hangs-once-test", None)
+
+
+def test_memory_check_reads_the_address_space_limit_per_process(monkeypatch):
+    from offroadbench import memory
+
+    monkeypatch.setattr(memory, "address_space_room_bytes", lambda: 2 * 2**30)
+    monkeypatch.delenv(memory.NO_MEMORY_CHECK_ENV, raising=False)
+    with pytest.raises(InputError, match="address-space limit"):
+        memory.check_memory(3 * 2**30, "a 6000x6000 heightmap")
+    # a study's workers: each has its own limit, so four of 1 GB fit under a 2 GB limit each ...
+    monkeypatch.setattr(memory, "available_memory_bytes", lambda per_process=True: 2 * 2**30 if per_process
+                        else 64 * 2**30)
+    memory.check_memory(4 * 2**30, "4 workers", per_process_bytes=2**30)
+    # ... but not one of 3 GB
+    with pytest.raises(InputError, match="each process needs about 3.0 GB"):
+        memory.check_memory(3 * 2**30, "1 worker", per_process_bytes=3 * 2**30)
