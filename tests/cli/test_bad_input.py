@@ -382,3 +382,28 @@ def test_soil_list_names_an_invalid_user_soil_and_lists_the_others(base, tmp_pat
     assert res.returncode == 0, res.stderr
     assert "lunar-regolith" in res.stdout and "absurd" not in res.stdout
     assert res.stderr.count("\n") == 1 and "invalid soil absurd" in res.stderr and "k_phi = 1e+300" in res.stderr
+
+
+def test_drive_out_on_a_full_disk_leaves_nothing(tmp_path, monkeypatch):
+    import errno
+    from types import SimpleNamespace
+
+    from offroadbench.cli.drive import write_drive_run
+    from offroadbench.io import telemetry
+
+    calls = {"n": 0}
+    real = telemetry.save_telemetry
+
+    def fills_up(columns, path, **kw):
+        calls["n"] += 1
+        if calls["n"] == 2:  # the second mission's telemetry
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(columns, path, **kw)
+
+    monkeypatch.setattr(telemetry, "save_telemetry", fills_up)
+    run = SimpleNamespace(rows=lambda: [{"mission": 0}, {"mission": 1}],
+                          telemetry={k: {"t_s": np.arange(3.0), "x_m": np.zeros(3)} for k in (0, 1)})
+    with pytest.raises(OSError) as info:
+        write_drive_run(run, tmp_path / "out")
+    assert info.value.errno == errno.ENOSPC and str(tmp_path / "out") in str(info.value.filename)
+    assert list(tmp_path.iterdir()) == []  # no trials.csv without its telemetry, no staging folder
