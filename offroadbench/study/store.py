@@ -190,6 +190,10 @@ class Store:
         if not old:
             self._write_meta(values)
             return []
+        from offroadbench.study.plan import check_unchanged
+
+        # the [analysis] plan (issue 29) is fixed once a trial is stored; before, it may change
+        check_unchanged(old, values, self.counts()[0], str(self.run_dir))
         keys = changed_study_keys(old.get("study") or {}, values.get("study") or {})
         if "trial_inputs" in old and "trial_inputs" in values:
             diffs = changed_inputs(old["trial_inputs"], values["trial_inputs"])
@@ -198,7 +202,7 @@ class Store:
                                  f"changed: {'; '.join(diffs)}); undo the change to resume, or use another --out "
                                  "directory")
         elif old.get("study_id") != values["study_id"]:
-            real = [k for k in keys if k.split(".")[0] not in COSMETIC_STUDY_KEYS]
+            real = [k for k in keys if k.split(".")[0] not in (*COSMETIC_STUDY_KEYS, "analysis")]
             old_recipes = [c.get("recipe") for c in old.get("cells", [])]
             new_recipes = [c.get("recipe") for c in values.get("cells", [])]
             if real or old_recipes != new_recipes:
