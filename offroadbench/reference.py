@@ -223,8 +223,12 @@ def _type_text(annotation: Any) -> str:
 def field_docs(cls: type, *, skip: tuple[str, ...] = (), defaults: Any = None) -> tuple[FieldDoc, ...]:
     """The keys of config class ``cls``, in declaration order. ``defaults``: an instance whose values
     stand as the defaults (a vehicle's own values)."""
+    from offroadbench.bounds import BOUNDS
+
     docs = _attribute_docs(cls)
     ranges = _allowed_ranges(cls)
+    for name, bound in BOUNDS.get(cls.__name__, {}).items():  # physical bounds (sources: "Physical bounds")
+        ranges[name] = f"{ranges[name]}; physically {bound.text()}" if ranges.get(name) else f"physically {bound.text()}"
     hints = typing.get_type_hints(cls)
     out = []
     for f in dataclasses.fields(cls):
@@ -561,6 +565,9 @@ def render_reference() -> str:
         for note in s.notes:
             lines += [note, ""]
     lines += _analysis_lines()
+    from offroadbench.bounds import reference_lines
+
+    lines += reference_lines()
     lines += [
         "## Terrain recipes",
         "",

@@ -178,7 +178,13 @@ def save_figure(fig, path: str | Path, dpi: int = 150) -> Path:
     """Save a matplotlib Figure atomically (format from the suffix, default PNG)."""
     from offroadbench.io.atomic import atomic_path
 
+    from matplotlib.text import Text
+
     p = Path(path)
+    for t in fig.findobj(Text):  # a file name that is not UTF-8 (surrogate escapes) cannot be drawn
+        text = t.get_text()
+        if isinstance(text, str) and printable(text) != text:
+            t.set_text(printable(text))
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=dpi, format=p.suffix.lstrip(".") or "png")
     return p
@@ -202,6 +208,11 @@ def medians_text(summary: dict) -> str:
 def run_caption(sim) -> str:
     """``pybullet, g = 9.81 m/s^2``: the engine and gravity a figure of driven trials was made with."""
     return f"{sim.engine}, g = {sim.gravity_m_s2:g} m/s^2"
+
+
+def printable(text: str) -> str:
+    """``text`` with the surrogate escapes of a non-UTF-8 file name (os.fsdecode) shown as U+FFFD."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
 
 
 def format_table(df: pd.DataFrame, floatfmt: str = "{:.2f}") -> str:

@@ -133,20 +133,19 @@ def _plain(value):
 def write_drive_run(run, out: Path, label: str = "", options: dict | None = None) -> list[str]:
     """trials.csv, telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
     older runs still load with offroadbench.io.telemetry.load_telemetry) and settings.json (what
-    drove them: :func:`drive_record`); returns what was written."""
+    drove them: :func:`drive_record`), all or nothing; returns what was written."""
     import json
 
-    from offroadbench.io.atomic import atomic_path
+    from offroadbench.io.export import staged_dir
     from offroadbench.io.telemetry import save_telemetry
 
-    tel_dir = out / "telemetry"
-    with created_dirs(out, tel_dir):
-        with atomic_path(out / "trials.csv") as tmp:
-            pd.DataFrame(run.rows()).to_csv(tmp, index=False)
+    # all or nothing (the export transaction): a full disk leaves no trials.csv without its telemetry
+    with staged_dir(out) as stage:
+        (stage / "telemetry").mkdir()
+        pd.DataFrame(run.rows()).to_csv(stage / "trials.csv", index=False)
         for index, tel in run.telemetry.items():
-            save_telemetry(tel, tel_dir / f"mission_{index:03d}.parquet")
-        with atomic_path(out / "settings.json") as tmp:
-            Path(tmp).write_text(json.dumps(drive_record(run, label, options), indent=1, allow_nan=True) + "\n")
+            save_telemetry(tel, stage / "telemetry" / f"mission_{index:03d}.parquet", sweep=False)
+        (stage / "settings.json").write_text(json.dumps(drive_record(run, label, options), indent=1, allow_nan=True) + "\n")
     return ["trials.csv", "telemetry/mission_*.parquet", "settings.json"]
 
 
@@ -242,6 +241,11 @@ def cmd_drive(args: argparse.Namespace) -> int:
     tables, recipe_sets = _drive_settings(args)
     settings = drive_settings(args, tables)
 
+    from offroadbench.study.runner import check_drive_size
+
+    # the same size limit as a study's (1e7 m missions would run for days): --force to run anyway
+    check_drive_size(args.missions, args.length_m,
+                     min(settings.controller.cruise_speed_m_s, settings.vehicle.max_speed_m_s), args.force)
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
     if recipe is not None:
@@ -312,5 +316,5 @@ def register(sub) -> None:
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",
-                   help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
+                   help="skip the up-front memory and work estimate checks (memory also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_drive)

@@ -78,8 +78,20 @@ def soil_check_json(rig, model, gravity_m_s2: float, published=()) -> str:
 def cmd_list(args: argparse.Namespace) -> int:
     from offroadbench.sim.tyre_laws.terramechanics import load_soil, soil_files
 
-    for name in soil_files():
-        print(f"{name:30s} {load_soil(name).description}")
+    import sys
+
+    from offroadbench.errors import InputError
+
+    bad = []
+    for name, path in soil_files().items():
+        try:
+            soil = load_soil(path)
+        except InputError as exc:  # one invalid user soil does not hide the others
+            bad.append(f"offroadbench: invalid soil {name} ({path}): {' '.join(str(exc).split())}")
+            continue
+        print(f"{name:30s} {soil.description}")
+    for line in bad:
+        sys.stderr.write(line + "\n")
     return 0
 
 

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
-from offroadbench.io.atomic import atomic_path
+from offroadbench.io.atomic import atomic_path, atomic_paths
 
 EXPORT_FORMATS = ("parquet", "csv")
 #: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
@@ -40,8 +40,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
-                          "(default: generous against the trials' nominal time)")
+                     help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
+                          "replaced) and the study goes on (default: generous against the trials' nominal time; "
+                          "at most 30 days)")
+    run.add_argument("--retry-faults", action="store_true",
+                     help="run the trials stored as faults (past their limit, thrown while settling) again; "
+                          "a resume skips them otherwise")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
                           "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
@@ -108,7 +112,8 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
     workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
-    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
+    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force,
+                 per_process_bytes=per_worker)
     return workers
 
 
@@ -156,6 +161,12 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
+    from offroadbench.study.executors import check_trial_timeout
+
+    try:
+        check_trial_timeout(args.trial_timeout_s)
+    except InputError as exc:
+        raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     try:
@@ -183,7 +194,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         with bar(study.name, unit="trial", postfix=success) as progress:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
+                                retry_faults=args.retry_faults)
     except Terminated:
         from offroadbench.study.store import Store
 
@@ -195,9 +207,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
-    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
+    faults = (f"; {summary.faults} fault(s), excluded from the statistics (see the report; --retry-faults runs "
+              "them again)") if summary.faults else ""
+    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
-    if summary.done == summary.total and not args.no_report:
+    if summary.complete and summary.done and not args.no_report:  # (a study of faults only has no statistics)
         path = write_report(out, out / "report")
         print(f"report: {path}")
     return 0
@@ -223,15 +237,17 @@ def cmd_export(args: argparse.Namespace) -> int:
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))
-    with created_dirs(out):
-        for name, df in tables:
-            path = out / f"{name}.{args.format}"
-            with atomic_path(path) as tmp:
-                if args.format == "csv":
-                    df.to_csv(tmp, index=False)
-                else:
-                    df.to_parquet(tmp, index=False)
-            print(f"{path} ({len(df)} rows)")
+    paths = [out / f"{name}.{args.format}" for name, _ in tables]
+    # all or nothing: both tables replace the old ones together (io.atomic.atomic_paths), so a
+    # killed export never leaves a new trials table beside an old terrains table
+    with created_dirs(out), atomic_paths(paths) as temps:
+        for (_, df), tmp in zip(tables, temps):
+            if args.format == "csv":
+                df.to_csv(tmp, index=False)
+            else:
+                df.to_parquet(tmp, index=False)
+    for path, (_, df) in zip(paths, tables):
+        print(f"{path} ({len(df)} rows)")
     return 0
 
 

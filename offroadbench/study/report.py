@@ -366,6 +366,25 @@ def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return {"success": succ, "areas": areas, "metrics": pd.DataFrame(metrics)}
 
 
+# ---------------------------------------------------------------------------- faults (issue 30)
+def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """The report's list of faulted trials (``faults`` table of the store: no outcome, so no
+    statistic counts them); adds ``faults.csv`` to ``tables``. Nothing when there are none."""
+    from offroadbench.study.store import Store
+
+    with Store(run_dir) as store:
+        rows = store.fault_rows()
+    if not rows:
+        return []
+    df = pd.DataFrame(rows, columns=["cell", "terrain", "mission", "terrain_seed", "mission_seed", "reason", "session"])
+    tables["faults.csv"] = df
+    return ["## Faults", "",
+            f"{len(df)} trial(s) gave no outcome (past the per-trial limit, or the vehicle thrown while settling). "
+            "They are not trials of the study: every statistic above and below leaves them out. "
+            "`study run --retry-faults` runs them again.", "",
+            markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
+
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -409,6 +428,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     fixed = held_fixed(meta)
     tables["held_fixed.csv"] = fixed
+    faults = _faults_section(run_dir, tables)
+    n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
     confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
@@ -422,7 +443,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(fixed),
         "",
         f"- trials: **{len(trials)} of {n_total}** stored"
-        + ("" if len(trials) == n_total else " (**incomplete**: the study has not finished)"),
+        + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
+        + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
         f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
@@ -439,6 +461,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "",
         markdown_table(sessions),
         "",
+        *faults,
         *_platforms_section(run_dir, meta)[0],
         "## Roughness classes (Fig. 5)",
         "",

@@ -8,7 +8,10 @@ machine) runs it without reading the study file. :func:`run_terrain` yields mess
   area fractions of Sec. 2.4, inside the border, before the closing);
 * :class:`TrialDone` after each trial (its ``kept`` is None, or ``{"telemetry": columns,
   "path_xy": waypoints}`` when the task's ``telemetry`` setting keeps this trial's telemetry:
-  ``failed``, failed trials only; ``all``).
+  ``failed``, failed trials only; ``all``);
+* :class:`TrialFaulted` for a trial that gave no outcome (:class:`offroadbench.errors.TrialFault`:
+  the vehicle was thrown while settling; executors send it too for a trial past its limit): the
+  task goes on with its next mission in a new world.
 
 The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
 ``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
@@ -37,14 +40,17 @@ layers) it is the same measure taken on the finished surface.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
 
+from offroadbench.errors import TrialFault
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
+__all__ = ["prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
+           "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
@@ -100,6 +106,31 @@ class TrialDone:
         return (self.cell, self.terrain)
 
 
+@dataclass(frozen=True)
+class TrialFaulted:
+    """Message: one trial of a terrain task gave no outcome (a fault, stored apart from the trials)."""
+
+    cell: int
+    terrain: int
+    mission: int
+    terrain_seed: int
+    mission_seed: int
+    reason: str
+    """One line: why (e.g. "ran longer than 60 s, the per-trial limit")."""
+
+    @property
+    def key(self) -> tuple[int, int]:
+        """(cell, terrain): the task this message belongs to."""
+        return (self.cell, self.terrain)
+
+
+def remaining_task(task: TerrainTask, after: int | None) -> TerrainTask | None:
+    """``task`` with only the missions after mission ``after`` (None: all of them); None if none is left."""
+    order = [k for k, _ in task.missions]
+    rest = task.missions if after is None else task.missions[order.index(after) + 1:]
+    return dataclasses.replace(task, missions=tuple(rest)) if rest else None
+
+
 def unexplained_variance(z, twin) -> float:
     """1 - r^2 of two surfaces of the same shape (r: Pearson correlation of their heights)."""
     import numpy as np
@@ -142,18 +173,30 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
     stats["build_s"] = time.perf_counter() - t0
     yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
-    for mission, item in zip(prepared.missions, trial_fn(prepared, settings)):
-        k = mission.index
-        kept = None
-        if hasattr(item, "result"):  # a TrialRecord
-            row = item.result.as_row()
-            if keeps_telemetry(task.telemetry, bool(row["success"])):
-                kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
-        else:
-            row = dict(item)
-        if int(row.get("mission_index", k)) != k:
-            raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
-        yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+    pending = list(prepared.missions)
+    while pending:
+        # a faulted trial ends its world (the engine's state is not to be trusted): the missions
+        # after it are driven in a new one
+        part = dataclasses.replace(prepared, missions=tuple(pending),
+                                   mission_seeds=tuple(seeds[m.index] for m in pending))
+        try:
+            for mission, item in zip(part.missions, trial_fn(part, settings)):
+                k = mission.index
+                kept = None
+                if hasattr(item, "result"):  # a TrialRecord
+                    row = item.result.as_row()
+                    if keeps_telemetry(task.telemetry, bool(row["success"])):
+                        kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
+                else:
+                    row = dict(item)
+                if int(row.get("mission_index", k)) != k:
+                    raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
+                pending.pop(0)
+                yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+            return
+        except TrialFault as exc:
+            k = pending.pop(0).index
+            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seeds[k], " ".join(str(exc).split()))
 
 
 def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[TerrainBuilt | TrialDone]:

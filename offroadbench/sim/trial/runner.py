@@ -39,6 +39,8 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.controller import make_tracker
 from offroadbench.sim.trial.skid_steer import wheel_speeds
 from offroadbench.sim.engine import TrialWorld
+from offroadbench.sim.engines.base import max_height_near
+from offroadbench.bounds import check_settled
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
            "run_mission", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
@@ -214,6 +216,10 @@ class TrialLoop:
         self.k = 0
         world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
         self._read()
+        # a vehicle thrown while settling is a fault, not a trial (offroadbench.bounds)
+        check_settled(self.state[0], self.state[2],
+                      max_height_near(hm, *mission.start_xy_m, spec.wheel_radius_m + spec.track_m),
+                      size_m=spec.track_m + 2 * spec.wheel_radius_m, where=f"mission {mission.index}")
 
     def _read(self) -> None:
         pos, quat, lin, ang = self.world.base_state()
@@ -348,10 +354,10 @@ def drive_mission(
                               vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
     if planner.kind == "policy":
         waypoints = problem.endpoints()
-        policy = make_policy(planner.name, planner.config, PolicyContext(
+        policy = _policy_call(planner.name, "could not be built", make_policy, planner.name, planner.config, PolicyContext(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
-        policy.reset(problem)
+        _policy_call(planner.name, "failed in reset()", policy.reset, problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
         replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
         waypoints = replanner.waypoints
@@ -379,7 +385,8 @@ def drive_mission(
             v, w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
         else:
             obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
-            v, w = clamp_action(_checked_action(planner.name, policy.act(obs), loop.t_s), spec)
+            act = _policy_call(planner.name, f"failed in act() at t = {loop.t_s:.2f} s", policy.act, obs)
+            v, w = clamp_action(_checked_action(planner.name, act, loop.t_s), spec)
         loop.command(v, w)
         if loop.record(progress_m) or loop.step_to_next_control(progress_m):
             break
@@ -391,6 +398,20 @@ def clamp_action(action: tuple[float, float], spec) -> tuple[float, float]:
     """A (v, omega) command within the vehicle's top speed (either direction) and yaw-rate limit."""
     v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
     return min(max(action[0], -v_lim), v_lim), min(max(action[1], -w_lim), w_lim)
+
+
+def _policy_call(name: str, what: str, fn, *args):
+    """A policy's own code (built, reset, act): its exception is a one-line PluginError naming the
+    policy (the traceback goes to the log), as a planner's is (:func:`plan_within_limits`)."""
+    try:
+        return fn(*args)
+    except (PluginError, InputError):
+        raise
+    except Exception as exc:
+        import logging
+
+        logging.getLogger(__name__).info("policy %r %s", name, what, exc_info=True)
+        raise PluginError(f"policy {name!r} {what}: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}") from exc
 
 
 def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:

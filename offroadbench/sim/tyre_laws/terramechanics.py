@@ -62,6 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from offroadbench import resources
+from offroadbench.bounds import check_bounds
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
 from offroadbench.registry import unknown_name
@@ -138,6 +139,7 @@ class SoilParams:
         check_range(self, "n1", self.n1, lo=0, hi=2)
         if self.a0 + self.a1 >= 1.0:
             raise InputError(f"soil {self.name!r}: a0 + a1 = {self.a0 + self.a1:g} must be below 1 (theta_m < theta_1)")
+        check_bounds(self, f"soil {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
     def exponent(self, slip):
         """The sinkage exponent at slip ``s``: ``n + n1 |s|`` (Ding et al. 2011), dimensionless."""
