@@ -29,6 +29,7 @@ from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
 from offroadbench.navigation.perception import Replanner
+from offroadbench.navigation.sensor import Belief, make_sensing, sheet_envelope
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
@@ -153,6 +154,8 @@ class TrialRecord:
     """TELEMETRY_COLUMNS, each a 1-D array."""
     path_xy: np.ndarray
     """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
+    belief: Belief | None = None
+    """Under the ``mast`` sensor: the believed path and the map it built (None for the oracle)."""
 
 
 def drive_mission(
@@ -193,9 +196,13 @@ def drive_mission(
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
+    perception = planner.perception
+    envelope = vehicle_envelope(world) if "vehicle" in needs else None
+    if envelope is not None and perception is not None and perception.limits == "sheet":
+        envelope = sheet_envelope(envelope, spec)
     problem = PlanningProblem(hm=hm, classes=classes if "classes" in needs else None, start_xy=mission.start_xy_m,
-                              goal_xy=mission.goal_xy_m, border_m=border_m,
-                              vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
+                              goal_xy=mission.goal_xy_m, border_m=border_m, vehicle=envelope)
+    sensing = make_sensing(hm, perception, mission)  # what the driver knows: the truth, or the mast sensor's
     if planner.kind == "policy":
         waypoints = problem.endpoints()
         policy = make_policy(planner.name, planner.config, PolicyContext(
@@ -203,7 +210,7 @@ def drive_mission(
             control_rate_hz=controller.control_rate_hz))
         policy.reset(problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
-        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
+        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, perception, sensing)
         waypoints = replanner.waypoints
     else:
         waypoints = plan_within_limits(planner, problem)
@@ -235,12 +242,16 @@ def drive_mission(
             pos, quat, lin, ang = world.base_state()
             roll, pitch, yaw, *rates = body_frame(world, quat, ang)
         if ctrl_tick:
+            bx, by, byaw = sensing.update(pos, yaw)  # the believed pose (the true one for the oracle)
             if policy is None:
-                if replanner is not None and replanner.update(pos[:2]) is not None:
+                if replanner is not None and replanner.update((bx, by)) is not None:
                     tracker = make_tracker(replanner.waypoints, spec, controller)
-                cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
+                cmd_v, cmd_w, _ = tracker.command(np.array((bx, by)), byaw, np.array(lin[:2]))
             else:
-                obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
+                obs = observe(hm, observation, goal, (bx, by, pos[2]), roll, pitch, byaw, rates,
+                              body_velocity(world, quat, lin), fill_m, None if sensing.name == "oracle" else sensing.z)
+                if "map" in needs:
+                    obs["pose"], obs["elevation_m"] = np.array((bx, by, byaw)), sensing.z
                 a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
                 cmd_v = min(max(a[0], -v_lim), v_lim)
                 cmd_w = min(max(a[1], -w_lim), w_lim)
@@ -271,7 +282,8 @@ def drive_mission(
     if slips:
         result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     path = replanner.trace if replanner is not None else waypoints
-    return TrialRecord(result, tel, np.asarray(path, dtype=float))
+    belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.z)
+    return TrialRecord(result, tel, np.asarray(path, dtype=float), belief)
 
 
 def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:
