@@ -48,6 +48,8 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
 __all__ = [
+    "LIMITS",
+    "SENSORS",
     "PERCEPTION_STREAM",
     "PerceptionConfig",
     "Replanner",
@@ -56,6 +58,11 @@ __all__ = [
     "seen_map",
     "split_perception",
 ]
+
+#: the arms of ``sensor`` (offroadbench.navigation.sensor)
+SENSORS = ("oracle", "mast")
+#: where the planners' vehicle limits come from (``limits``)
+LIMITS = ("measured", "sheet")
 
 #: first spawn-key entry of the perception stream (terrains use 0, missions 1; offroadbench.seeding)
 PERCEPTION_STREAM = 2
@@ -86,11 +93,11 @@ class PerceptionConfig:
     """``mast``: range of the sensor, m."""
     mast_height_m: float = 0.75
     """``mast``: height of the sensor above the ground under the vehicle, m."""
-    sensor_noise_m_per_m: float = 0.005
-    """``mast``: standard deviation of a seen height per metre of range, m/m."""
+    sensor_noise_per_range: float = 0.005
+    """``mast``: standard deviation of a seen height per metre of range (m per m)."""
     scan_every_m: float = 0.25
     """``mast``: the sensor scans each time the vehicle has moved this far, m."""
-    drift_per_m: float = 0.02
+    odometry_drift: float = 0.01
     """``mast``: odometry drift: the standard deviation of the per-trial distance scale error and of
     the heading error's random walk per square-root metre travelled (rad)."""
     limits: str = "measured"
@@ -99,10 +106,8 @@ class PerceptionConfig:
     them, offroadbench.navigation.sensor.sheet_envelope)."""
 
     def __post_init__(self) -> None:
-        from offroadbench.navigation.sensor import LIMITS, SENSORS
-
         for name in ("map_noise_m", "map_noise_corr_m", "map_cell_m", "sensing_radius_m",
-                     "sensor_noise_m_per_m", "drift_per_m"):
+                     "sensor_noise_per_range", "odometry_drift"):
             check_range(self, name, getattr(self, name), lo=0.0)
         for name in ("replan_every_m", "sensor_range_m", "mast_height_m", "scan_every_m"):
             check_range(self, name, getattr(self, name), lo=0.0, lo_open=True)

@@ -15,7 +15,7 @@ from offroadbench.navigation.planners import planner_from_table
 from offroadbench.navigation.sensor import MastSensor, Oracle, make_sensing, sheet_envelope, viewshed
 
 CELL = 0.05
-CLEAN = PerceptionConfig(sensor="mast", sensor_range_m=12.0, sensor_noise_m_per_m=0.0, drift_per_m=0.0)
+CLEAN = PerceptionConfig(sensor="mast", sensor_range_m=12.0, sensor_noise_per_range=0.0, odometry_drift=0.0)
 
 
 def _crater() -> Heightmap:
@@ -61,7 +61,7 @@ def test_the_viewshed_of_a_flat_plain_is_everything_in_range_and_a_wall_hides_wh
 
 def test_height_noise_grows_with_range():
     hm = Heightmap(np.zeros((401, 401)), CELL)
-    cfg = PerceptionConfig(sensor="mast", sensor_range_m=9.0, sensor_noise_m_per_m=0.01, drift_per_m=0.0)
+    cfg = PerceptionConfig(sensor="mast", sensor_range_m=9.0, sensor_noise_per_range=0.01, odometry_drift=0.0)
     z = MastSensor(hm, cfg, np.random.default_rng(1), (10.0, 10.0), 0.0).z
     yy, xx = np.mgrid[0:401, 0:401] * CELL
     r = np.hypot(xx - 10.0, yy - 10.0)
@@ -77,7 +77,7 @@ def test_odometry_drift_moves_the_believed_pose_and_the_map_together():
     z = np.zeros((401, 401))
     z[200, 300] = 1.0  # a post at (15, 10) m
     hm = Heightmap(z, CELL)
-    cfg = PerceptionConfig(sensor="mast", sensor_range_m=9.0, sensor_noise_m_per_m=0.0, drift_per_m=0.05)
+    cfg = PerceptionConfig(sensor="mast", sensor_range_m=9.0, sensor_noise_per_range=0.0, odometry_drift=0.05)
     sensor = MastSensor(hm, cfg, np.random.default_rng(3), (2.0, 10.0), 0.0)
     for x in np.arange(2.0, 12.01, 0.05):
         pose = sensor.update((x, 10.0, 0.0), 0.0)
