@@ -116,7 +116,7 @@ def test_perception_keys_are_validated_and_the_sheet_gives_published_limits():
     with pytest.raises(InputError, match="map_noise_m"):
         PerceptionConfig(sensor="mast", map_noise_m=0.05)
     from offroadbench.navigation.problem import VehicleEnvelope
-    from offroadbench.sim.vehicle import load_vehicle
+    from offroadbench.sim.trial.vehicle import load_vehicle
 
     husky = load_vehicle("husky")
     env = sheet_envelope(VehicleEnvelope(), husky)
