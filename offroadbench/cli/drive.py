@@ -83,7 +83,8 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
         save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
                     paths["missions"])
         save_figure(plot_trajectories(hm, closed, run.missions, run.telemetry, run.results, border_m=border,
-                                      paths=run.paths, title=f"{label}: trajectories ({run.planner})"),
+                                      paths=run.paths, beliefs=run.beliefs,
+                                      title=f"{label}: trajectories ({run.planner})"),
                     paths["trajectories"])
         save_figure(plot_timeseries(run.telemetry[shown.mission_index], title=f"{label}: mission "
                                     f"{shown.mission_index} ({shown.failure_reason or 'success'})"),

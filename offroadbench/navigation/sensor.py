@@ -190,9 +190,9 @@ def sheet_envelope(envelope: Any, spec: Any) -> Any:
 
 @dataclass(frozen=True, eq=False)
 class Belief:
-    """What the sensor left at the end of a trial (for plots): the believed path and the map."""
+    """What the sensor left at the end of a trial (for plots): the believed path and what was seen."""
 
     trail_xy: np.ndarray
     """Believed positions at the control ticks, (N, 2) map metres."""
-    z_m: np.ndarray
-    """The map built (NaN: never seen)."""
+    seen: np.ndarray
+    """Which map cells the sensor's map holds at the end (bool, the map's shape; in the believed frame)."""

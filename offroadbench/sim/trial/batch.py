@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -64,6 +64,8 @@ class DriveRun:
     planner: str = "straight"
     """Name of the planner or policy that drove."""
     paths: Mapping[int, np.ndarray] = field(default_factory=dict)
+    beliefs: Mapping[int, Any] = field(default_factory=dict)
+    """Mission index -> what the ``mast`` sensor left (offroadbench.navigation.sensor.Belief); empty for the oracle."""
     """Mission index -> planned waypoints (N, 2), map metres (a policy's: start and goal)."""
 
     @property
@@ -133,4 +135,5 @@ def drive_missions(
         missions=prepared.missions, mission_seeds=mseeds, terrain_seed=terrain_seed,
         results=tuple(r.result for r in records), telemetry={r.result.mission_index: r.telemetry for r in records},
         planner=choice.name, paths={r.result.mission_index: r.path_xy for r in records},
+        beliefs={r.result.mission_index: r.belief for r in records if r.belief is not None},
     )

@@ -282,7 +282,7 @@ def drive_mission(
     if slips:
         result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
     path = replanner.trace if replanner is not None else waypoints
-    belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.z)
+    belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.seen)
     return TrialRecord(result, tel, np.asarray(path, dtype=float), belief)
 
 
