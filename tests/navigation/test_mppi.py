@@ -107,3 +107,20 @@ def test_config_is_validated_and_selectable_from_a_planner_table():
         MppiConfig(samples=1)
     with pytest.raises(InputError, match="yaw_slip"):
         MppiConfig(yaw_slip=1.0)
+
+
+def test_a_trial_with_mppi_and_the_mast_sensor_succeeds_and_replays_bit_for_bit():
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim import World
+    from offroadbench.sim.trial.runner import drive_mission
+
+    hm = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square
+    mission = Mission.between(0, (2.0, 2.0), (6.0, 5.0))
+    choice = planner_from_table({"name": "mppi", "samples": 256, "sensor": "mast"})
+    with World(hm) as world:
+        a = drive_mission(world, mission, planner=choice, border_m=1.0)
+        b = drive_mission(world, mission, planner=choice, border_m=1.0)
+    assert a.result.success and a.result == b.result
+    assert all(np.array_equal(a.telemetry[k], b.telemetry[k]) for k in a.telemetry)
+    assert a.belief is not None and np.array_equal(a.belief.trail_xy, b.belief.trail_xy)
+    assert a.belief.seen[40, 40] and not a.belief.seen.all()  # the start's ground seen, not the whole map

@@ -122,3 +122,20 @@ def test_perception_keys_are_validated_and_the_sheet_gives_published_limits():
     env = sheet_envelope(VehicleEnvelope(), husky)
     assert env.max_slope == pytest.approx(math.tan(math.radians(30.0)))  # the sheet's side slope
     assert env.max_step_m == VehicleEnvelope().max_step_m  # the sheet gives no step: as measured
+
+
+def test_a_study_can_put_mppi_and_the_sensor_arms_on_its_grid():
+    from offroadbench.study.spec import plan_cells, study_from_dict
+
+    study = study_from_dict({
+        "study": {"name": "arms", "recipe": "paper-d2.45", "root_seed": 0},
+        "grid": {"planner.name": ["astar", "mppi"], "planner.sensor": ["oracle", "mast"]},
+        "planner": {"sensor_range_m": 6.0, "limits": "sheet"},
+    })
+    plans = plan_cells(study)
+    arms = {(p.section("planner").name, p.section("planner").perception.sensor) for p in plans}
+    assert arms == {("astar", "oracle"), ("astar", "mast"), ("mppi", "oracle"), ("mppi", "mast")}
+    assert all(p.section("planner").perception.limits == "sheet" for p in plans)
+    with pytest.raises(InputError, match="sensor"):
+        plan_cells(study_from_dict({"study": {"name": "bad", "recipe": "paper-d2.45", "root_seed": 0},
+                                    "planner": {"name": "mppi", "sensor": "radar"}}))
