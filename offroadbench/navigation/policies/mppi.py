@@ -44,8 +44,18 @@ belly, |g_along| / max_slope, |g_cross| / max_slope)`` with the slope resolved a
 a cell within a footprint of an unknown cell has ``H = unknown_hazard`` (unknown is neither flat nor
 forbidden). A rollout pays, per second, ``hazard_weight H^2 + roughness_weight r + lethal_cost [H >= 1]``
 (``lethal_cost`` also off the map), plus ``goal_weight`` times its time-averaged and its final
-distance to the goal (metres); steps after a rollout first comes within ``goal_tolerance_m`` of the
-goal cost nothing (the trial has ended there).
+progress term; steps after a rollout first comes within ``goal_tolerance_m`` of the goal cost
+nothing (the trial has ended there).
+
+**Progress** (``cost_to_go``, the default): the cost-to-go to the goal, a Dijkstra search from the
+goal over the footprint-hazard cost grid that ``astar`` plans on (offroadbench.navigation.costmap;
+8-connected, each move its length times the mean cost per metre of its two cells; the relaxed grid
+when the strict one has no path), read bilinearly every 0.25 s along each rollout and at its end;
+cells the strict grid forbids are lethal too. It is the terminal cost that lets a short horizon go
+round an obstacle wider than it can see (the global-guidance of MPPI navigation stacks, e.g.
+Nav2's path-following critics), computed once per mission on the true map, and on a sensor's map
+(unseen ground continued smoothly, as the planners see it) each time the map has changed and the
+vehicle has moved ``cost_to_go_every_m``. Without it: the straight-line distance to the goal.
 
 What it needs: ``observation["pose"]`` (believed x, y, yaw) and ``observation["elevation_m"]`` (the
 map it plans on, on the terrain's grid; NaN unknown), which the runner adds for entries that declare
@@ -70,7 +80,7 @@ from offroadbench.config import check_int, check_range
 from offroadbench.navigation.drivers import PolicyContext, register_policy
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 
-__all__ = ["MppiConfig", "MppiPolicy", "MPPI_STREAM", "CostWindow", "cost_window", "rollout"]
+__all__ = ["MppiConfig", "MppiPolicy", "MPPI_STREAM", "CostWindow", "CostToGo", "cost_window", "cost_to_go", "rollout"]
 
 #: first spawn-key entry of MPPI's stream (terrains 0, missions 1, perception 2; offroadbench.seeding)
 MPPI_STREAM = 3
@@ -114,6 +124,14 @@ class MppiConfig:
     """Extra slip per unit of uphill grade (rise/run)."""
     yaw_slip: float = 0.1
     """Fraction of the commanded yaw rate lost in a skid-steer turn."""
+    cost_to_go: bool = True
+    """Score progress by the cost-to-go to the goal over the planners' cost grid (Dijkstra on the
+    perceived map, module docstring) instead of the straight-line distance (which traps a 2.5 s
+    horizon behind any obstacle wider than it can see round)."""
+    cost_to_go_grid_m: float = 0.25
+    """Cell of the cost-to-go grid, m."""
+    cost_to_go_every_m: float = 1.0
+    """Re-compute the cost-to-go after the vehicle has moved this far and the map has changed, m."""
     recost_every_m: float = 0.25
     """Re-compute the cost window after the vehicle has moved this far (or when the map changes), m."""
     seed: int = 0
@@ -123,7 +141,7 @@ class MppiConfig:
         check_int(self, "samples", self.samples, lo=2, hi=1_000_000)
         check_int(self, "seed", self.seed, lo=0)
         for name in ("horizon_s", "temperature", "noise_corr_s", "cruise_speed_m_s", "recost_every_m",
-                     "goal_tolerance_m"):
+                     "goal_tolerance_m", "cost_to_go_grid_m", "cost_to_go_every_m"):
             check_range(self, name, getattr(self, name), lo=0, lo_open=True)
         for name in ("noise_v_m_s", "noise_omega_rad_s", "goal_weight", "hazard_weight", "roughness_weight",
                      "lethal_cost", "unknown_hazard", "slip_per_grade"):
@@ -262,7 +280,7 @@ def rollout(pose, u: np.ndarray, dt: float, win: CostWindow, cfg: MppiConfig) ->
 
 
 def _costs(pose, x: np.ndarray, y: np.ndarray, th: np.ndarray, goal: np.ndarray, dt: float, win: CostWindow,
-           veh: VehicleEnvelope, cfg: MppiConfig) -> np.ndarray:
+           veh: VehicleEnvelope, cfg: MppiConfig, ctg: "CostToGo | None" = None) -> np.ndarray:
     """The cost S_k of each rollout (see the module docstring); ``x, y`` relative to ``pose``."""
     ox, oy = float(pose[0]), float(pose[1])
     idx, _ = win.index(x, y, ox, oy)
@@ -277,6 +295,8 @@ def _costs(pose, x: np.ndarray, y: np.ndarray, th: np.ndarray, goal: np.ndarray,
     for side in (half, -half):
         hz = np.maximum(hz, step[win.index(x - side * s, y + side * c, ox, oy)[0]])
     lethal = hz >= 1.0
+    if ctg is not None:  # the planners' footprint hazard past a limit counts as lethal too
+        lethal |= ctg.forbidden_at(x + np.float32(ox), y + np.float32(oy)) > 0
     per_s = np.minimum(hz, 1.0)
     per_s *= per_s
     per_s *= np.float32(cfg.hazard_weight)
@@ -286,10 +306,82 @@ def _costs(pose, x: np.ndarray, y: np.ndarray, th: np.ndarray, goal: np.ndarray,
     # the trial ends at the goal: nothing counts after a rollout first comes within the tolerance
     going = np.cumsum(dist <= np.float32(cfg.goal_tolerance_m), axis=1) == 0
     per_s *= going
+    hazard = dt * per_s.sum(axis=1, dtype=np.float64)
+    if ctg is not None:  # progress by the cost-to-go, read every 0.25 s of the rollout and at its end
+        every = max(1, int(round(0.25 / dt)))
+        ts = np.arange(x.shape[1] - 1, -1, -every)[::-1]
+        togo = ctg.at(x[:, ts] + np.float32(pose[0]), y[:, ts] + np.float32(pose[1])) * going[:, ts]
+        return hazard + cfg.goal_weight * (togo.mean(axis=1) + togo[:, -1])
     dist *= going
-    horizon = x.shape[1] * dt
-    return (dt * per_s.sum(axis=1, dtype=np.float64)
-            + cfg.goal_weight * (dist.sum(axis=1, dtype=np.float64) * (dt / horizon) + dist[:, -1]))
+    return hazard + cfg.goal_weight * (dist.mean(axis=1, dtype=np.float64) + dist[:, -1])
+
+
+@dataclass(frozen=True)
+class CostToGo:
+    """Cost from each planning cell to the goal (cost-metres), on a grid of ``f x f`` map cells."""
+
+    value: np.ndarray
+    """(rows, cols) float32; cells no path reaches hold the largest finite value plus 10."""
+    forbidden: np.ndarray
+    """(rows, cols) float32: 1 where the strict cost grid forbids the cell (a hazard at or past one
+    of the vehicle's limits over its footprint, or outside the mission border), else 0."""
+    f: int
+    cell_m: float
+
+    def forbidden_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """1 where points (map metres, float32) fall in a forbidden cell (the cell each falls in)."""
+        rows, cols = self.forbidden.shape
+        inv = 1.0 / (self.f * self.cell_m)
+        c = np.clip(np.floor(x * np.float32(inv) + np.float32(0.5 / self.f)).astype(np.int32), 0, cols - 1)
+        r = np.clip(np.floor(y * np.float32(inv) + np.float32(0.5 / self.f)).astype(np.int32), 0, rows - 1)
+        return self.forbidden.ravel()[r * cols + c]
+
+    def at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Bilinear cost-to-go at points (map metres; cell (R, C)'s centre is map pixel ``C f + (f - 1) / 2``)."""
+        from scipy.ndimage import map_coordinates
+
+        half = (self.f - 1) / 2.0
+        u = (x / self.cell_m - half) / self.f
+        v = (y / self.cell_m - half) / self.f
+        return map_coordinates(self.value, [v, u], order=1, mode="nearest")
+
+
+def cost_to_go(problem: PlanningProblem, grid_m: float) -> CostToGo:
+    """Dijkstra from the goal over the footprint-hazard cost grid of ``problem`` (the one ``astar``
+    plans on, offroadbench.navigation.costmap; relaxed when the strict grid has no path from the
+    start): each 8-connected move costs its length times the mean cost per metre of its two cells."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    from offroadbench.navigation.costmap import CostConfig, cost_grid
+
+    cfg = CostConfig(grid_m=grid_m)
+    forbidden = None
+    for relaxed in (False, True):
+        grid = cost_grid(problem, cfg, relaxed=relaxed)
+        if forbidden is None:
+            forbidden = (~np.isfinite(grid.cost)).astype(np.float32)
+        c = grid.cost
+        rows, cols = c.shape
+        ids = np.arange(rows * cols).reshape(rows, cols)
+        src, dst, w = [], [], []
+        for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+            a = (slice(0, rows - dr), slice(max(-dc, 0), cols - max(dc, 0)))
+            b = (slice(dr, rows), slice(max(dc, 0), cols + min(dc, 0)))
+            ca, cb = c[a], c[b]
+            ok = np.isfinite(ca) & np.isfinite(cb)
+            src.append(ids[a][ok])
+            dst.append(ids[b][ok])
+            w.append(math.hypot(dr, dc) * grid.step_m * 0.5 * (ca[ok] + cb[ok]))
+        n = rows * cols
+        graph = coo_matrix((np.concatenate(w), (np.concatenate(src), np.concatenate(dst))), shape=(n, n)).tocsr()
+        goal = grid.cell_of(problem.goal_xy)
+        dist = dijkstra(graph, directed=False, indices=goal[0] * cols + goal[1]).reshape(rows, cols)
+        if math.isfinite(dist[grid.cell_of(problem.start_xy)]):
+            break
+    finite = np.isfinite(dist)
+    top = float(dist[finite].max()) if finite.any() else 0.0
+    return CostToGo(np.where(finite, dist, top + 10.0).astype(np.float32), forbidden, grid.f, problem.hm.cell_size_m)
 
 
 def _stream_seed(problem: PlanningProblem, seed: int) -> int:
@@ -330,6 +422,10 @@ class MppiPolicy:
         self._win: CostWindow | None = None
         self._win_at = np.zeros(2)
         self._win_map: object = None
+        self._problem: PlanningProblem | None = None
+        self._ctg: CostToGo | None = None
+        self._ctg_at = np.zeros(2)
+        self._ctg_map: object = None
 
     def reset(self, problem: PlanningProblem) -> None:
         """Start a mission: its goal, grid, stream and a mean sequence of cruising straight on."""
@@ -340,6 +436,9 @@ class MppiPolicy:
         self.U[:, 0] = self.v_max
         self._win = None
         self._win_map = None
+        self._problem = problem
+        self._ctg = None
+        self._ctg_map = None
 
     def noise(self, k: int) -> np.ndarray:
         """(k, T, 2) time-correlated noise from the policy's stream (stationary OU, module docstring), float32."""
@@ -358,17 +457,43 @@ class MppiPolicy:
             self._win_at, self._win_map = xy.copy(), z
         return self._win
 
+    def _cost_to_go(self, z: np.ndarray, xy: np.ndarray) -> "CostToGo | None":
+        """The cost-to-go on the map ``z``, re-computed when the map changed and the vehicle moved
+        ``cost_to_go_every_m`` (the true map: once per mission)."""
+        if not self.cfg.cost_to_go or self._problem is None:
+            return None
+        stale = self._ctg is None or (z is not self._ctg_map
+                                      and math.hypot(*(xy - self._ctg_at)) >= self.cfg.cost_to_go_every_m)
+        if stale:
+            import dataclasses
+
+            from offroadbench.heightmap import Heightmap
+            from offroadbench.navigation.perception import seen_map
+
+            hm = self._problem.hm
+            if z is not hm.z:  # a sensor's map: unseen ground continues the seen (as the planners see it)
+                seen = ~np.isnan(z)
+                hm = seen_map(Heightmap(np.where(seen, z, 0.0), self.cell_m), seen)
+            inside = self._problem.inside_border(xy)[0]
+            start = (float(xy[0]), float(xy[1])) if inside else self._problem.start_xy
+            problem = dataclasses.replace(self._problem, hm=hm, start_xy=start, vehicle=self.veh)
+            self._ctg = cost_to_go(problem, self.cfg.cost_to_go_grid_m)
+            self._ctg_at, self._ctg_map = xy.copy(), z
+        return self._ctg
+
     def plan(self, pose: np.ndarray, z: np.ndarray) -> np.ndarray:
         """One MPPI iteration from ``pose`` on ``z``: updates and returns the mean sequence (T, 2)."""
         cfg = self.cfg
-        win = self._window(z, np.asarray(pose[:2], dtype=float))
+        xy = np.asarray(pose[:2], dtype=float)
+        win = self._window(z, xy)
+        ctg = self._cost_to_go(z, xy)
         eps = self.noise(cfg.samples)
         eps[0] = 0.0
         lo = np.array([0.0, -self.w_max])
         hi = np.array([self.v_max, self.w_max])
         u = np.clip(self.U.astype(np.float32)[None] + eps, lo.astype(np.float32), hi.astype(np.float32))
         x, y, th = rollout(pose, u, self.dt, win, cfg)
-        cost = _costs(pose, x, y, th, self.goal, self.dt, win, self.veh, cfg)
+        cost = _costs(pose, x, y, th, self.goal, self.dt, win, self.veh, cfg, ctg)
         cost = np.where(np.isfinite(cost), cost, np.finfo(float).max / 4)
         w = np.exp(-(cost - cost.min()) / cfg.temperature)
         w /= w.sum()
