@@ -124,3 +124,23 @@ def test_a_trial_with_mppi_and_the_mast_sensor_succeeds_and_replays_bit_for_bit(
     assert all(np.array_equal(a.telemetry[k], b.telemetry[k]) for k in a.telemetry)
     assert a.belief is not None and np.array_equal(a.belief.trail_xy, b.belief.trail_xy)
     assert a.belief.seen[40, 40] and not a.belief.seen.all()  # the start's ground seen, not the whole map
+
+
+def test_cost_to_go_is_the_distance_on_open_ground_and_the_detour_behind_a_wall():
+    from offroadbench.navigation.policies.mppi import cost_to_go
+
+    flat = Heightmap.flat(201, 201, CELL)
+    problem = PlanningProblem(hm=flat, classes=None, start_xy=(2.0, 5.0), goal_xy=(8.0, 5.0), border_m=0.5)
+    ctg = cost_to_go(problem, 0.25)
+    pts = np.array([[2.0, 5.0], [5.0, 8.0], [7.0, 3.0]], dtype=np.float32)
+    d = np.hypot(pts[:, 0] - 8.0, pts[:, 1] - 5.0)
+    got = ctg.at(pts[:, 0], pts[:, 1])
+    assert np.all(got >= d - 0.26) and np.all(got <= 1.09 * d + 0.26)  # octile metric on 0.25 m cells
+    assert ctg.forbidden_at(np.float32([5.0]), np.float32([5.0]))[0] == 0
+    z = np.zeros((201, 201))
+    z[20:181, 118:122] = 0.5  # a wall at x = 5.9-6.05 m from y = 1 to 9 m
+    walled = cost_to_go(PlanningProblem(hm=Heightmap(z, CELL), classes=None, start_xy=(2.0, 5.0),
+                                        goal_xy=(8.0, 5.0), border_m=0.5), 0.25)
+    behind = walled.at(np.float32([5.0]), np.float32([5.0]))[0]
+    assert behind > 3.0 + 6.0  # round an end of the wall (about 2 x 4.1 m), not 3 m through it
+    assert walled.forbidden_at(np.float32([6.0]), np.float32([5.0]))[0] == 1
