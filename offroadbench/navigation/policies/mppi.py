@@ -94,11 +94,11 @@ class MppiConfig:
     """Control sequences sampled per tick (sample 0 is the mean itself)."""
     horizon_s: float = 2.5
     """Length of each rollout, s (in steps of the control period)."""
-    temperature: float = 1.0
+    temperature: float = 0.3
     """lambda of the weights ``exp(-(S - min S) / lambda)``, in cost units (metres of distance)."""
     noise_v_m_s: float = 0.3
     """Standard deviation of the speed noise, m/s."""
-    noise_omega_rad_s: float = 0.6
+    noise_omega_rad_s: float = 0.4
     """Standard deviation of the yaw-rate noise, rad/s."""
     noise_corr_s: float = 0.4
     """Correlation time of the noise (Ornstein-Uhlenbeck), s."""
