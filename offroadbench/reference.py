@@ -265,7 +265,7 @@ def _first_line(obj: Any) -> str:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -274,6 +274,7 @@ def _study_section() -> SectionDoc:
         "(the keys of `offroadbench generate --set`)."),
         ("`[reference]`: published numbers the report sets beside the study's (free-form; "
         "`offroadbench.study.report`)."),
+        ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
     return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
                       notes)
@@ -442,6 +443,10 @@ TERRAIN_COLUMNS = (
      "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
     ("area_semi", "", "Fraction inside the border that is semi-rough (as above)."),
     ("area_high", "", "Fraction inside the border that is highly rough (as above)."),
+    ("twin_unexplained_var", "", "Only in cells with `[study] missions_from` whose missions come from another cell's "
+     "terrain: 1 - r^2 of this terrain's heights against that terrain's (same seed); for a band-limited arm against "
+     "its aliased twin, the share of the surface's variance carried by the W-M terms above the grid's Nyquist "
+     "frequency (offroadbench.study.tasks.prepare_cell)."),
 )
 
 #: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
@@ -516,6 +521,20 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
     return lines
 
 
+def _analysis_lines() -> list[str]:
+    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.plan)."""
+    from offroadbench.study import plan
+
+    doc = inspect.getdoc(plan) or ""
+    tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
+    return ["### `[analysis]`", "", f"{_md_cell(_first_line(plan.AnalysisPlan))} Source: "
+            f"`{_qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
+            "in its Confirmatory section and marks every other number exploratory; a plan changed after "
+            "trials were stored is refused.", "", *_md_table(field_docs(plan.AnalysisPlan, skip=("comparisons",))),
+            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(_first_line(plan.Comparison))} Source: "
+            f"`{_qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
+
+
 def render_reference() -> str:
     """The whole reference as Markdown (the text of ``docs/reference.md``)."""
     from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS
@@ -544,6 +563,7 @@ def render_reference() -> str:
             lines += _md_table(s.fields) + [""]
         for note in s.notes:
             lines += [note, ""]
+    lines += _analysis_lines()
     lines += [
         "## Terrain recipes",
         "",

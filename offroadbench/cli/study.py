@@ -42,6 +42,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
                      help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
                           "(default: generous against the trials' nominal time)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
+                          "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
+                          "vehicle, planner, missions), any other key is a recipe override (as drive --set), "
+                          "e.g. --set study.terrains_per_cell=2 --set sim.engine=mujoco; repeatable")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory and study-size estimate checks (memory also "
                           "OFFROADBENCH_NO_MEMORY_CHECK=1)")
@@ -104,6 +109,37 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
     return workers
 
 
+def apply_sets(data: dict, sets: list[str] | None) -> dict:
+    """The study TOML dict with ``--set KEY=VALUE`` applied: ``study.FIELD`` into ``[study]``,
+    ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
+    that a grid axis varies is refused (it would be overwritten in every cell)."""
+    from offroadbench.cli._common import parse_sets
+    from offroadbench.study.spec import SECTIONS
+
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    grid = set(_flat_keys(out.get("grid", {})))
+    for item in sets or []:
+        key = item.partition("=")[0].strip()
+        head, dot, rest = key.partition(".")
+        if key in grid or f"recipe.{key}" in grid:
+            raise InputError(f"--set {item!r}: {key} is a grid axis of this study; change the grid in the file")
+        (value,) = parse_sets([item]).values()
+        if head == "study" or head in SECTIONS:
+            if not dot or not rest or "." in rest:
+                raise InputError(f"--set {item!r}: a study or settings key is {head}.FIELD=VALUE")
+            out.setdefault(head, {})[rest] = value
+        else:
+            out.setdefault("recipe_overrides", {})[key] = value
+    return out
+
+
+def _flat_keys(table: dict, prefix: str = "") -> list[str]:
+    keys = []
+    for k, v in table.items():
+        keys += _flat_keys(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k}"]
+    return keys
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.io.inputs import check_input_file
@@ -117,7 +153,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    study = study_from_dict(load_toml(path), where=str(path))
+    study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     try:
         plans = plan_cells(study, base_dir=path.parent)
@@ -128,7 +164,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
-    text = path.read_text()
+    text = path.read_text() + "".join(f"\n# run with: study run --set {item}" for item in args.set or [])
     counts = {"new": 0, "ok": 0}
 
     def success() -> dict:

@@ -250,6 +250,7 @@ def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "",
                 "seed_key": p.key,
                 "recipe": dict(p.recipe_data),
                 "settings": {k: dict(v) for k, v in p.settings.items()},
+                **({"missions_recipe": dict(p.missions_recipe_data)} if p.missions_recipe_data is not None else {}),
             }
             for p in plans
         ],
