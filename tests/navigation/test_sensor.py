@@ -139,3 +139,23 @@ def test_a_study_can_put_mppi_and_the_sensor_arms_on_its_grid():
     with pytest.raises(InputError, match="sensor"):
         plan_cells(study_from_dict({"study": {"name": "bad", "recipe": "paper-d2.45", "root_seed": 0},
                                     "planner": {"name": "mppi", "sensor": "radar"}}))
+
+
+def test_a_planner_under_the_mast_sensor_replans_from_its_believed_position_and_replays():
+    from offroadbench.sim import World
+    from offroadbench.sim.trial.runner import drive_mission
+
+    hm = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square
+    mission = Mission.between(0, (2.0, 2.0), (6.0, 5.0))
+    choice = planner_from_table({"name": "astar", "sensor": "mast", "odometry_drift": 0.05})
+    classes = np.zeros(hm.shape, dtype=np.uint8)
+    with World(hm) as world:
+        a = drive_mission(world, mission, planner=choice, classes=classes, border_m=1.0)
+        b = drive_mission(world, mission, planner=choice, classes=classes, border_m=1.0)
+    assert a.result == b.result and np.array_equal(a.path_xy, b.path_xy)
+    assert len(a.path_xy) > 2  # the start, re-planning positions and the last plan
+    tel = a.telemetry
+    true_xy = np.column_stack([tel["x_m"], tel["y_m"]])
+    # the believed path drifts from the true one (the tracker followed the believed pose)
+    gap = np.hypot(*(a.belief.trail_xy[-1] - true_xy[-1]))
+    assert 0.0 < gap < 1.0
