@@ -8,7 +8,7 @@
   the vehicle scans all round (a spinning lidar) every ``scan_every_m`` the vehicle moves. A cell is
   seen when the straight line from the sensor to it clears the terrain: the classic radial-sweep
   viewshed (Franklin & Ray 1994, "Higher isn't necessarily better: visibility algorithms and
-  experiments", Sec. 3): along each of ``ceil(2 pi R / cell)`` azimuths, samples every cell out to
+  experiments", Advances in GIS Research): along each of ``ceil(2 pi R / cell)`` azimuths, samples every cell out to
   the range ``R = sensor_range_m`` are visible when the tangent of their elevation angle from the
   sensor is at least the largest of the samples before them. Crater floors behind a rim, the far
   sides of ridges and ground beyond the range stay **unknown** (NaN), never guessed flat. A seen

@@ -4,7 +4,7 @@ Each control tick the policy samples ``samples`` control sequences ``u_k(t) = U(
 (speed and yaw rate) around its mean sequence ``U`` over ``horizon_s``, rolls each out through the
 vehicle model below, scores it on the planner's elevation map, and moves ``U`` to the
 temperature-weighted mean of the samples (Williams et al. 2017, "Information theoretic MPC for
-model-based reinforcement learning", ICRA, Algorithm 2 and Eq. 29 without the control-cost term):
+model-based reinforcement learning", ICRA; the update without its control-cost term):
 
     w_k = exp(-(S_k - min_j S_j) / lambda) / sum_j exp(-(S_j - min_i S_i) / lambda)
     U(t) <- U(t) + sum_k w_k eps_k(t)
@@ -19,7 +19,7 @@ drive can follow, rather than white noise that averages to nothing over a horizo
 
 **Model** (a unicycle with a slip term, the kinematic skid-steer model of Kozlowski & Pazderski 2004,
 "Modeling and control of a 4-wheel skid-steering mobile robot", Int. J. Appl. Math. Comput. Sci. 14,
-Eq. 13-16, with its slip made a function of the grade): state ``(x, y, theta)`` in map metres and
+reduced to a unicycle, with a slip that grows with the grade): state ``(x, y, theta)`` in map metres and
 radians, controls ``(v, omega)``, step ``dt`` = the control period,
 
     theta(t + 1) = theta(t) + (1 - s_yaw) omega(t) dt
