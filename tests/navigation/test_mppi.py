@@ -144,3 +144,16 @@ def test_cost_to_go_is_the_distance_on_open_ground_and_the_detour_behind_a_wall(
     behind = walled.at(np.float32([5.0]), np.float32([5.0]))[0]
     assert behind > 3.0 + 6.0  # round an end of the wall (about 2 x 4.1 m), not 3 m through it
     assert walled.forbidden_at(np.float32([6.0]), np.float32([5.0]))[0] == 1
+
+
+def test_a_stalled_vehicle_backs_up_then_drives_on():
+    policy, hm = _policy()
+    pose = np.array([2.0, 5.0, 0.0])
+    state = np.zeros(10, dtype=np.float32)  # measured forward speed 0: held by something the map hides
+    vs = [policy.act({"pose": pose, "elevation_m": hm.z, "state": state})[0] for _ in range(80)]
+    stall = int(MppiConfig().stall_s * 20)
+    assert min(vs[:stall - 1]) > 0.3  # driving on while the stall is timed
+    assert max(vs[stall + 1 : stall + 25]) <= 0.0 and min(vs[stall + 1 : stall + 25]) < -0.1  # backing up
+    assert vs[stall + 32] > 0.3  # forward again
+    blind, _ = _policy(MppiConfig(stall_s=0.0))
+    assert min(blind.act({"pose": pose, "elevation_m": hm.z, "state": state})[0] for _ in range(60)) > 0.3

@@ -57,6 +57,11 @@ Nav2's path-following critics), computed once per mission on the true map, and o
 (unseen ground continued smoothly, as the planners see it) each time the map has changed and the
 vehicle has moved ``cost_to_go_every_m``. Without it: the straight-line distance to the goal.
 
+**Recovery.** The kinematic model cannot know that a wheel is held by a step: when the measured
+forward speed (``observation["state"]``, ``v_forward_m_s``) stays below 0.05 m/s for ``stall_s``
+while the policy commands at least 0.3 m/s, it backs up for ``backup_s`` (speeds sampled in
+``[-0.5 v_top, 0]``, the same costs), then drives on (a back-up recovery, as Nav2's BackUp behaviour).
+
 What it needs: ``observation["pose"]`` (believed x, y, yaw) and ``observation["elevation_m"]`` (the
 map it plans on, on the terrain's grid; NaN unknown), which the runner adds for entries that declare
 ``map`` (offroadbench.navigation.drivers.NEEDS): the true map and pose for the ``oracle`` arm, the
@@ -134,6 +139,12 @@ class MppiConfig:
     """Re-compute the cost-to-go after the vehicle has moved this far and the map has changed, m."""
     recost_every_m: float = 0.25
     """Re-compute the cost window after the vehicle has moved this far (or when the map changes), m."""
+    stall_s: float = 1.5
+    """Recovery: when the measured forward speed has stayed below 0.05 m/s for this long while the
+    policy commanded at least 0.3 m/s, the model is wrong (a wheel against a step it cannot climb):
+    the policy backs up (s); 0 disables it."""
+    backup_s: float = 1.5
+    """Recovery: how long it backs up, sampling only speeds in [-0.5 top speed, 0], s."""
     seed: int = 0
     """Root of the policy's random stream (with the mission's start and goal)."""
 
@@ -143,7 +154,7 @@ class MppiConfig:
         for name in ("horizon_s", "temperature", "noise_corr_s", "cruise_speed_m_s", "recost_every_m",
                      "goal_tolerance_m", "cost_to_go_grid_m", "cost_to_go_every_m"):
             check_range(self, name, getattr(self, name), lo=0, lo_open=True)
-        for name in ("noise_v_m_s", "noise_omega_rad_s", "goal_weight", "hazard_weight", "roughness_weight",
+        for name in ("stall_s", "backup_s", "noise_v_m_s", "noise_omega_rad_s", "goal_weight", "hazard_weight", "roughness_weight",
                      "lethal_cost", "unknown_hazard", "slip_per_grade"):
             check_range(self, name, getattr(self, name), lo=0)
         for name in ("slip_base", "yaw_slip"):
@@ -426,6 +437,8 @@ class MppiPolicy:
         self._ctg: CostToGo | None = None
         self._ctg_at = np.zeros(2)
         self._ctg_map: object = None
+        self._stalled_s = 0.0
+        self._backup_left_s = 0.0
 
     def reset(self, problem: PlanningProblem) -> None:
         """Start a mission: its goal, grid, stream and a mean sequence of cruising straight on."""
@@ -439,6 +452,8 @@ class MppiPolicy:
         self._problem = problem
         self._ctg = None
         self._ctg_map = None
+        self._stalled_s = 0.0
+        self._backup_left_s = 0.0
 
     def noise(self, k: int) -> np.ndarray:
         """(k, T, 2) time-correlated noise from the policy's stream (stationary OU, module docstring), float32."""
@@ -489,8 +504,9 @@ class MppiPolicy:
         ctg = self._cost_to_go(z, xy)
         eps = self.noise(cfg.samples)
         eps[0] = 0.0
-        lo = np.array([0.0, -self.w_max])
-        hi = np.array([self.v_max, self.w_max])
+        backing = self._backup_left_s > 0.0
+        lo = np.array([-0.5 * self.v_max if backing else 0.0, -self.w_max])
+        hi = np.array([0.0 if backing else self.v_max, self.w_max])
         u = np.clip(self.U.astype(np.float32)[None] + eps, lo.astype(np.float32), hi.astype(np.float32))
         x, y, th = rollout(pose, u, self.dt, win, cfg)
         cost = _costs(pose, x, y, th, self.goal, self.dt, win, self.veh, cfg, ctg)
@@ -501,8 +517,28 @@ class MppiPolicy:
         self.last_cost = cost
         return self.U
 
+    def _recovery(self, observation: Mapping[str, np.ndarray]) -> None:
+        """Count the time stalled (commanded >= 0.3 m/s, measured < 0.05 m/s forward) and start or
+        run down a back-up (``stall_s``, ``backup_s``)."""
+        cfg = self.cfg
+        if self._backup_left_s > 0.0:
+            self._backup_left_s -= self.dt
+            if self._backup_left_s <= 0.0:  # forward again, from a fresh mean
+                self.U[:, 0] = self.v_max
+            return
+        state = observation.get("state")
+        if cfg.stall_s <= 0.0 or state is None:
+            return
+        stalled = self.U[0, 0] >= 0.3 and abs(float(state[7])) < 0.05
+        self._stalled_s = self._stalled_s + self.dt if stalled else 0.0
+        if self._stalled_s >= cfg.stall_s:
+            self._stalled_s = 0.0
+            self._backup_left_s = cfg.backup_s
+            self.U[:, 0] = -0.3 * self.v_max
+
     def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
         pose = np.asarray(observation["pose"], dtype=float)
+        self._recovery(observation)
         U = self.plan(pose, observation["elevation_m"])
         v, w = float(U[0, 0]), float(U[0, 1])
         self.U = np.vstack([U[1:], U[-1:]])  # warm start of the next tick
