@@ -313,6 +313,7 @@ def _driver_entries() -> list[tuple[str, str, Any]]:
 
 
 def _planner_sections() -> list[SectionDoc]:
+    from offroadbench.navigation.perception import PerceptionConfig
     from offroadbench.navigation.planners import NoConfig, PlannerChoice
 
     entries = _driver_entries()
@@ -321,7 +322,12 @@ def _planner_sections() -> list[SectionDoc]:
         "planner", _qualname(PlannerChoice), _first_line(PlannerChoice),
         (FieldDoc("name", "str", "straight", "", f"one of {names} (and installed plug-ins)",
                   "The planner (pure pursuit follows its path) or closed-loop policy that drives every trial; "
-                  "the table's other keys are that entry's settings, below."),),
+                  "the table's other keys are what it perceives (the keys after `name`, "
+                  "offroadbench.navigation.perception.PerceptionConfig) and that entry's settings, below."),
+         *field_docs(PerceptionConfig)),
+        ("The keys after `name` apply to every planner and policy: the map-error keys, or `sensor = \"mast\"` "
+         "(offroadbench.navigation.sensor); `sensor = \"oracle\"` with the map-error keys at 0 is the true "
+         "map and pose.",),
     )
     out = [head]
     for kind, name, spec in entries:

@@ -66,6 +66,8 @@ class DriveRun:
     """Name of the planner or policy that drove."""
     paths: Mapping[int, np.ndarray] = field(default_factory=dict)
     """Mission index -> planned waypoints (N, 2), map metres (a policy's: start and goal)."""
+    beliefs: Mapping[int, Any] = field(default_factory=dict)
+    """Mission index -> what the ``mast`` sensor left (offroadbench.navigation.sensor.Belief); empty for the oracle."""
     settings: Any = None
     """The TrialSettings the missions were driven with (offroadbench.sim.trial.pipeline), the
     terrain's gravity and soil filled in."""
@@ -152,4 +154,5 @@ def drive_missions(
         terrain_seed=terrain_seed, results=tuple(r.result for r in records),
         telemetry={r.result.mission_index: r.telemetry for r in records}, planner=settings.planner.name,
         paths={r.result.mission_index: r.path_xy for r in records}, settings=settings.replace(sim=sim),
+        beliefs={r.result.mission_index: r.belief for r in records if r.belief is not None},
     )

@@ -33,6 +33,7 @@ from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
 from offroadbench.navigation.perception import Replanner
+from offroadbench.navigation.sensor import Belief, make_sensing, sheet_envelope
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
@@ -165,6 +166,8 @@ class TrialRecord:
     """TELEMETRY_COLUMNS, each a 1-D array."""
     path_xy: np.ndarray
     """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
+    belief: Belief | None = None
+    """Under the ``mast`` sensor: the believed path and the map it built (None for the oracle)."""
 
 
 class TrialLoop:
@@ -349,9 +352,13 @@ def drive_mission(
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
+    perception = planner.perception
+    envelope = vehicle_envelope(world) if "vehicle" in needs else None
+    if envelope is not None and perception is not None and perception.limits == "sheet":
+        envelope = sheet_envelope(envelope, spec)
     problem = PlanningProblem(hm=hm, classes=classes if "classes" in needs else None, start_xy=mission.start_xy_m,
-                              goal_xy=mission.goal_xy_m, border_m=border_m,
-                              vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
+                              goal_xy=mission.goal_xy_m, border_m=border_m, vehicle=envelope)
+    sensing = make_sensing(hm, perception, mission)  # what the driver knows: the truth, or the mast sensor's
     if planner.kind == "policy":
         waypoints = problem.endpoints()
         policy = _policy_call(planner.name, "could not be built", make_policy, planner.name, planner.config, PolicyContext(
@@ -359,7 +366,7 @@ def drive_mission(
             control_rate_hz=controller.control_rate_hz))
         _policy_call(planner.name, "failed in reset()", policy.reset, problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
-        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
+        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, perception, sensing)
         waypoints = replanner.waypoints
     else:
         waypoints = plan_within_limits(planner, problem)
@@ -379,19 +386,24 @@ def drive_mission(
                      spawn_roll_rad=spawn_roll_rad)
     while True:
         pos, quat, lin, ang, roll, pitch, yaw, rates = loop.state
+        bx, by, byaw = sensing.update(pos, yaw)  # the believed pose (the true one for the oracle)
         if policy is None:
-            if replanner is not None and replanner.update(pos[:2]) is not None:
+            if replanner is not None and replanner.update((bx, by)) is not None:
                 tracker = make_tracker(replanner.waypoints, spec, controller)
-            v, w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
+            v, w, _ = tracker.command(np.array((bx, by)), byaw, np.array(lin[:2]))
         else:
-            obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
+            obs = observe(hm, observation, goal, (bx, by, pos[2]), roll, pitch, byaw, rates,
+                          body_velocity(world, quat, lin), fill_m, None if sensing.name == "oracle" else sensing.z)
+            if "map" in needs:
+                obs["pose"], obs["elevation_m"] = np.array((bx, by, byaw)), sensing.z
             act = _policy_call(planner.name, f"failed in act() at t = {loop.t_s:.2f} s", policy.act, obs)
             v, w = clamp_action(_checked_action(planner.name, act, loop.t_s), spec)
         loop.command(v, w)
         if loop.record(progress_m) or loop.step_to_next_control(progress_m):
             break
     path = replanner.trace if replanner is not None else waypoints
-    return TrialRecord(loop.result(), loop.telemetry(), np.asarray(path, dtype=float))
+    belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.seen)
+    return TrialRecord(loop.result(), loop.telemetry(), np.asarray(path, dtype=float), belief)
 
 
 def clamp_action(action: tuple[float, float], spec) -> tuple[float, float]:
