@@ -61,7 +61,10 @@ def main() -> None:
     ap.add_argument("--ticks", type=int, default=100)
     ap.add_argument("--samples", type=int, default=1024)
     ap.add_argument("--horizon", type=float, default=2.5)
+    ap.add_argument("--smoke", action="store_true", help="5 ticks of each case (CI: the script cannot rot)")
     args = ap.parse_args()
+    if args.smoke:
+        args.ticks = 5
     hm = terrain()
     cfg = MppiConfig(samples=args.samples, horizon_s=args.horizon)
     policy = MppiPolicy(cfg, PolicyContext())
