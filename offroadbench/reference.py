@@ -538,6 +538,11 @@ def render_reference() -> str:
             lines += _md_table(s.fields) + [""]
         for note in s.notes:
             lines += [note, ""]
+    from offroadbench.search.space import reference_sections  # the failure search's tables
+
+    for title, s in reference_sections():
+        lines += [f"### {title}", "", f"{_md_cell(s.summary)}. Source: `{s.source}`.", "", *_md_table(s.fields), ""]
+        lines += [line for note in s.notes for line in (note, "")]
     lines += [
         "## Terrain recipes",
         "",
