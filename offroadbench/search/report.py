@@ -22,7 +22,7 @@ from offroadbench.errors import InputError
 from offroadbench.search.estimators import Estimate, distinct_failures, is_estimate, mc_estimate, trials_for_rel_error
 from offroadbench.search.plan import SearchPlan
 from offroadbench.search.runner import margin_of
-from offroadbench.search.space import SearchConfig, search_from_dict
+from offroadbench.search.space import METHODS, SearchConfig, search_from_dict
 from offroadbench.study.spec import CellPlan, study_from_dict
 
 __all__ = ["search_table", "stream_summary", "estimates", "first_failures", "build_search_report"]
@@ -93,7 +93,10 @@ def first_failures(cfg: SearchConfig, stream: pd.DataFrame, k: int = FIRST_K) ->
 def stream_summary(df: pd.DataFrame, cfg: SearchConfig) -> pd.DataFrame:
     """Per (group, method): trials, failures, distinct failures, trials to the first FIRST_K distinct failures, best margin."""
     rows = []
-    for (grp, method), s in df.groupby(["group", "method"], sort=True):
+    order = {m: i for i, m in enumerate(METHODS)}
+    keys = sorted(df.groupby(["group", "method"]).groups, key=lambda k: (k[0], order.get(k[1], len(order))))
+    for grp, method in keys:
+        s = df[(df["group"] == grp) & (df["method"] == method)]
         s = s[s["done"]]
         counts = distinct_failures(_unit(cfg, s), s["failed"].to_numpy(), cfg.distinct_distance)
         rows.append({"group": grp, "method": method, "trials": len(s), "failures": int(s["failed"].sum()),

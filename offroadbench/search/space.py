@@ -281,21 +281,3 @@ def search_from_dict(table: Mapping[str, Any], where: str = "[search]") -> Searc
 def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))
 
-
-def reference_sections() -> list:
-    """The ``[search]`` and ``[[search.params]]`` tables for the settings reference
-    (offroadbench.reference: ``(title, SectionDoc)`` pairs)."""
-    from offroadbench.reference import SectionDoc, field_docs
-
-    notes = ("A search file is a study file plus these tables (`offroadbench search run SEARCH.toml`); "
-             "`[study]` takes no `terrains_per_cell` or `missions_per_terrain` (one terrain and mission per "
-             "trial), and a `[grid]`, if any, lists the cells searched one after another. "
-             "Source of the estimators: `offroadbench.search.estimators`.",)
-    return [
-        ("`[search]`", SectionDoc("search", f"{SearchConfig.__module__}.SearchConfig",
-                                  "What a failure search runs and on which budget",
-                                  field_docs(SearchConfig, skip=("params",)), notes)),
-        ("`[[search.params]]`", SectionDoc("search.params", f"{SearchParam.__module__}.SearchParam",
-                                           "One searched key, with its range and nominal distribution "
-                                           "(one table per key)", field_docs(SearchParam))),
-    ]
