@@ -9,7 +9,7 @@ import pytest
 
 from offroadbench.cli import main
 from offroadbench.search import load_search, run_search
-from offroadbench.sim.pipeline import drive_terrain
+from offroadbench.sim import drive_terrain
 
 SMALL = Path(__file__).with_name("small-search.toml")
 
