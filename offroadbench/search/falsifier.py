@@ -88,8 +88,15 @@ def plan_batch(method: str, cfg: SearchConfig, history: list[Batch], budget: int
     return "ce-final", min(cfg.batch_size, left)
 
 
+def _ranked_last(margin: np.ndarray) -> np.ndarray:
+    """Margins with the NaN of no-mission draws replaced by more than the largest finite one (ranked last)."""
+    m = np.asarray(margin, dtype=float)
+    finite = m[np.isfinite(m)]
+    return np.where(np.isfinite(m), m, (finite.max() if finite.size else 0.0) + 1.0)
+
+
 def _ce_state(cfg: SearchConfig, history: list[Batch]) -> tuple[GaussianProposal, bool]:
-    stages = [(b.z, b.margin) for b in history if b.stage == "ce-stage"]
+    stages = [(b.z, _ranked_last(b.margin)) for b in history if b.stage == "ce-stage"]
     return ce_adapt(stages, cfg.dim, quantile=cfg.ce_quantile, min_sd=cfg.ce_min_sd, max_stages=cfg.ce_max_stages)
 
 
@@ -136,7 +143,7 @@ def _tpe_ask(cfg: SearchConfig, seed: int, batch: int, history: list[Batch], n: 
                                              constant_liar=True)
         study = optuna.create_study(direction="minimize", sampler=sampler)
         done = [optuna.trial.create_trial(params=cfg.values(xi), distributions=dists, value=float(mi))
-                for b in history for xi, mi in zip(b.x, b.margin)]
+                for b in history for xi, mi in zip(b.x, b.margin) if np.isfinite(mi)]  # no-mission draws: not told
         if done:
             study.add_trials(done)
         out = []
@@ -157,7 +164,8 @@ def _cma(cfg: SearchConfig, seed: int, history: list[Batch], n: int) -> np.ndarr
         for _ in range(len(b.margin)):
             opt.ask()
         if len(b.margin) == opt.population_size:
-            opt.tell([(u[i], float(b.margin[i])) for i in range(len(u))])
+            m = _ranked_last(b.margin)
+            opt.tell([(u[i], float(m[i])) for i in range(len(u))])
     u = np.array([opt.ask() for _ in range(n)])
     lo = np.array([p.low for p in cfg.params])
     hi = np.array([p.high for p in cfg.params])

@@ -21,7 +21,7 @@ import pandas as pd
 from offroadbench.errors import InputError
 from offroadbench.search.estimators import Estimate, distinct_failures, is_estimate, mc_estimate, trials_for_rel_error
 from offroadbench.search.plan import SearchPlan
-from offroadbench.search.runner import margin_of
+from offroadbench.search.runner import NO_MISSION, margin_of
 from offroadbench.search.space import METHODS, SearchConfig, search_from_dict
 from offroadbench.study.spec import CellPlan, study_from_dict
 
@@ -69,7 +69,8 @@ def search_table(run_dir: str | Path) -> tuple[pd.DataFrame, SearchPlan]:
                                "terrain_seed": tseed, "mission_seed": mseed}
         if row is not None:
             r = json.loads(row)
-            rec.update(done=True, failed=not r["success"], failure_reason=r["failure_reason"],
+            rec.update(done=True, failed=not r["success"] and r["failure_reason"] != NO_MISSION,
+                       failure_reason=r["failure_reason"],
                        margin=margin_of(plan, plan.groups[grp], values, r),
                        final_distance_to_goal_m=r["final_distance_to_goal_m"])
         else:
@@ -100,6 +101,7 @@ def stream_summary(df: pd.DataFrame, cfg: SearchConfig) -> pd.DataFrame:
         s = s[s["done"]]
         counts = distinct_failures(_unit(cfg, s), s["failed"].to_numpy(), cfg.distinct_distance)
         rows.append({"group": grp, "method": method, "trials": len(s), "failures": int(s["failed"].sum()),
+                     "no mission": int((s["failure_reason"] == NO_MISSION).sum()),
                      "distinct failures": int(counts[-1]) if len(counts) else 0,
                      f"trials to {FIRST_K} distinct failures": first_failures(cfg, s),
                      "lowest margin": float(s["margin"].min()) if len(s) else np.nan})

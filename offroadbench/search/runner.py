@@ -11,6 +11,12 @@ which says which stream (grid cell ``grp``, ``method``) and batch each cell belo
 lies in the parameter space (``x`` and the standard-normal ``z``, JSON lists) and its log
 likelihood ratio for the estimators (NULL for the falsifier).
 
+A proposal whose terrain holds no mission (no low-roughness start cell, no goal: the mission rules
+of Majhor & Bos 2023, Sec. 2.3, cannot be met) is stored with ``failure_reason = "no_mission"``:
+it is outside what a mission is, not a failure of the vehicle, so the falsifier is not told it,
+the cross-entropy levels rank it last, and the estimators count it as no failure (the report
+counts these trials apart).
+
 Crash safety and resumption. A batch's proposals and cells are committed in one transaction
 before any of its trials runs; each trial is committed the moment it ends (the study store's
 guarantees). On a restart, every stream is rebuilt from what is stored: finished batches are its
@@ -26,6 +32,7 @@ import dataclasses
 import json
 import logging
 import math
+import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +53,8 @@ from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, Trial
 
 log = logging.getLogger(__name__)
 
-__all__ = ["SearchSummary", "SEARCH_TABLE", "run_search", "stream_trials", "margin_of"]
+__all__ = ["NO_MISSION", "SearchSummary", "SEARCH_TABLE", "infeasible_cell", "margin_of", "no_mission_row", "run_search",
+           "stream_trials"]
 
 SEARCH_TABLE = """
 CREATE TABLE IF NOT EXISTS search_trials (
@@ -100,9 +108,37 @@ def search_meta(plan: SearchPlan, budget: int, source_text: str, version: str) -
     }
 
 
+#: failure_reason of a proposal whose terrain holds no mission (no start or goal cell of the
+#: mission rules): not a vehicle failure, so the search leaves it out (margin NaN, not counted as failed)
+NO_MISSION = "no_mission"
+_MISSION_ERRORS = re.compile(r"^(cell (\d+), terrain 0: )?(no start cell|could not place mission|map [^:]* leaves)")
+
+
+def infeasible_cell(exc: InputError, cells: list[int]) -> int | None:
+    """The cell of a study error saying that its terrain holds no mission (the mission sampler's
+    InputError as the process executors report it, ``cell C, terrain 0: no start cell ...``, or
+    bare from the inline executor, which runs ``cells`` in order: then the first of them), if it
+    is one of ``cells``."""
+    m = _MISSION_ERRORS.match(str(exc))
+    if m is None or not cells:
+        return None
+    cell = int(m.group(2)) if m.group(2) else cells[0]
+    return cell if cell in cells else None
+
+
+def no_mission_row(message: str) -> dict[str, Any]:
+    """The stored row of a proposal whose terrain holds no mission."""
+    nan = float("nan")
+    return {"mission_index": 0, "success": False, "failure_reason": NO_MISSION, "error": " ".join(message.split()),
+            "start_x_m": nan, "start_y_m": nan, "goal_x_m": nan, "goal_y_m": nan, "final_distance_to_goal_m": nan}
+
+
 def margin_of(plan: SearchPlan, group: CellPlan, values: Mapping[str, Any], row: Mapping[str, Any]) -> float:
     """The failure margin (offroadbench.search.objective) of a stored row, with the trial's own
-    rules, controller and vehicle (searched settings keys applied)."""
+    rules, controller and vehicle (searched settings keys applied); NaN for a proposal whose
+    terrain holds no mission."""
+    if row.get("failure_reason") == NO_MISSION:
+        return float("nan")
     ts = group.trial_settings
     parts = {"rules": ts.rules, "controller": ts.controller, "vehicle": ts.vehicle}
     for k, v in values.items():
@@ -271,8 +307,21 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
                 ran += 1
                 tick()
 
-        ex.run(tasks, trial_fn, handle)
-        log.info("group %d %s batch %d (%s, %d trials) done", gi, method, b, stage, len(tasks))
+        while tasks:
+            try:
+                ex.run(tasks, trial_fn, handle)
+                break
+            except InputError as exc:  # a proposal whose terrain holds no mission: record it, run the rest
+                tasks = [t for t in tasks if not store.has_trial(t.cell.index, 0, 0)]
+                cell = infeasible_cell(exc, [t.cell.index for t in tasks])
+                if cell is None:
+                    raise
+                task = next(t for t in tasks if t.cell.index == cell)
+                log.info("cell %d: no mission can be drawn on its terrain (%s); stored as %s", cell, exc, NO_MISSION)
+                store.add_trial(cell, 0, 0, task.terrain_seed, task.missions[0][1], no_mission_row(str(exc)),
+                                run_id=run_id)
+                tasks = [t for t in tasks if not store.has_trial(t.cell.index, 0, 0)]
+        log.info("group %d %s batch %d (%s) done", gi, method, b, stage)
 
 
 def _store_batch(store: Store, gi: int, method: str, b: int, prop, cells: list[CellPlan]) -> None:

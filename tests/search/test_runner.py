@@ -158,3 +158,22 @@ def test_a_study_directory_is_refused(tmp_path, write_tiny_study):
     run_study(study, cells, tmp_path / "run", executor="inline", trial_fn=fake_trials)
     with pytest.raises(InputError, match="holds a study, not a search"):
         run_search(search_from_data(SEARCH), tmp_path / "run", executor="inline", trial_fn=stand_in_trials)
+
+
+@pytest.mark.parametrize("executor", ["inline", "local"])
+def test_proposals_whose_terrain_holds_no_mission_are_stored_apart_and_the_search_goes_on(tmp_path, executor):
+    from offroadbench.search.report import search_table
+    from offroadbench.search.runner import NO_MISSION
+
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["random", "falsify"], budget=12)
+    # a 6 m map with a 0.5 m border has a 7.07 m diagonal: longer missions cannot be placed
+    data["search"]["params"][1] = {"key": "missions.length_m", "low": 3.0, "high": 12.0}
+    plan = search_from_data(data)
+    summary = run_search(plan, tmp_path, executor=executor, workers=2, trial_fn=stand_in_trials)
+    assert summary.done == 24
+    df, _ = search_table(tmp_path)
+    none = df["failure_reason"] == NO_MISSION
+    assert none.any() and (df.loc[none, "missions.length_m"] > 6.0).all()  # near the diagonal: no goal found
+    assert not df.loc[none, "failed"].any() and df.loc[none, "margin"].isna().all()
+    assert (df.loc[~none, "missions.length_m"] <= 7.1).all()
