@@ -3,7 +3,7 @@
 A falsifier needs a gradient to follow before it has seen its first failure, and the
 cross-entropy method needs levels between "easy" and "failed" (Rubinstein & Kroese 2004,
 Sec. 3.4), so a pass/fail bit is not enough. The margin of one trial's row
-(offroadbench.sim.runner.TrialResult) is
+(offroadbench.sim.TrialResult) is
 
 * on failure: ``-max(d / L, 1e-3)``, with d the distance left to the goal when the trial ended and
   L the mission's straight length (a trial that failed far from its goal is "more failed");
