@@ -128,8 +128,7 @@ def test_a_search_gives_the_same_trials_on_every_executor(reference, tmp_path, n
         pytest.importorskip("distributed")
     plan, d, _ = reference
     data = copy.deepcopy(SEARCH)
-    data["search"]["methods"] = ["falsify"]
-    data["search"]["budget"] = 8
+    data["search"].update(methods=["falsify"], budget=8, batch_size=8)  # one batch: one Dask cluster start
     small = search_from_data(data)
     inline = tmp_path / "inline"
     run_search(small, inline, executor="inline", trial_fn=stand_in_trials)
