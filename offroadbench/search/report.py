@@ -37,9 +37,8 @@ def _plan_from_meta(meta: dict[str, Any]) -> SearchPlan:
     search_data = dict(meta["search"])
     search_data["params"] = [dict(p) for p in search_data["params"]]
     search = search_from_dict(search_data, where="stored [search]")
-    study = study_from_dict({"study": {k: v for k, v in meta["study"].items()
-                                       if k not in ("grid", "recipe_overrides", "settings", "reference")},
-                             **{"grid": {}}})
+    head = ("name", "recipe", "root_seed", "description", "paired_terrains", "telemetry")
+    study = study_from_dict({"study": {k: v for k, v in meta["study"].items() if k in head}})
     groups = tuple(CellPlan(index=g["index"], values=g["values"], key=g["seed_key"], recipe_data=g["recipe"],
                             settings=g["settings"]) for g in meta["groups"])
     return SearchPlan(search=search, study=study, groups=groups)
