@@ -265,7 +265,7 @@ def _first_line(obj: Any) -> str:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -274,6 +274,7 @@ def _study_section() -> SectionDoc:
         "(the keys of `offroadbench generate --set`)."),
         ("`[reference]`: published numbers the report sets beside the study's (free-form; "
         "`offroadbench.study.report`)."),
+        ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
     return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
                       notes)
@@ -392,8 +393,10 @@ FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
                  "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
                  "population (read when the recipe is loaded)."),)),
     "dem": ("dem", (
-        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
-                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy, a geographic .npz "
+                 "with non-square cells, or GeoTIFF), read when the recipe is loaded; `matplotlib:NAME`: a sample "
+                 "file shipped with matplotlib (`matplotlib:jacksboro_fault_dem.npz`, a real DEM); none: the "
+                 "shipped sample DEM."),
         FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
         FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
         FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
@@ -451,6 +454,10 @@ TERRAIN_COLUMNS = (
      "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
     ("area_semi", "", "Fraction inside the border that is semi-rough (as above)."),
     ("area_high", "", "Fraction inside the border that is highly rough (as above)."),
+    ("twin_unexplained_var", "", "Only in cells with `[study] missions_from` whose missions come from another cell's "
+     "terrain: 1 - r^2 of this terrain's heights against that terrain's (same seed); for a band-limited arm against "
+     "its aliased twin, the share of the surface's variance carried by the W-M terms above the grid's Nyquist "
+     "frequency (offroadbench.study.tasks.prepare_cell)."),
 )
 
 #: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
@@ -525,6 +532,20 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
     return lines
 
 
+def _analysis_lines() -> list[str]:
+    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.plan)."""
+    from offroadbench.study import plan
+
+    doc = inspect.getdoc(plan) or ""
+    tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
+    return ["### `[analysis]`", "", f"{_md_cell(_first_line(plan.AnalysisPlan))} Source: "
+            f"`{_qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
+            "in its Confirmatory section and marks every other number exploratory; a plan changed after "
+            "trials were stored is refused.", "", *_md_table(field_docs(plan.AnalysisPlan, skip=("comparisons",))),
+            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(_first_line(plan.Comparison))} Source: "
+            f"`{_qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
+
+
 def render_reference() -> str:
     """The whole reference as Markdown (the text of ``docs/reference.md``)."""
     from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS
@@ -553,6 +574,7 @@ def render_reference() -> str:
             lines += _md_table(s.fields) + [""]
         for note in s.notes:
             lines += [note, ""]
+    lines += _analysis_lines()
     for title, s in search_sections():
         lines += [f"### {title}", "", f"{_md_cell(s.summary)}. Source: `{s.source}`.", "", *_md_table(s.fields), ""]
         lines += [line for note in s.notes for line in (note, "")]
@@ -575,10 +597,12 @@ def render_reference() -> str:
     lines += [
         "## Tables a study writes",
         "",
-        "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
+        "### Trials (`offroadbench.study.load(DIR)`, `study export`'s `trials.parquet` or `trials.csv`)",
         "",
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
-        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`."),
+        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`. `study export` adds, after these, the "
+        "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
+        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",
@@ -628,16 +652,47 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
 _STUDY_EXAMPLE = {"name": "my-study", "recipe": "paper-d2.45", "root_seed": 0}
 
 
+#: the study's free-form tables, printed after ``[study]``: (name, comment lines, example lines)
+_FREE_TABLES = (
+    ("grid", (
+        "Axes of the parameter grid: \"dotted.key\" = [values], one cell per combination (first axis slowest).",
+        "Keys: recipe (preset names or paths), recipe.<key of the recipe TOML>, <table>.<key> of a table below.",
+        "No axis: one cell. Uncomment or write your own:",
+    ), (
+        '# "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]',
+        '# "planner.name" = ["straight", "astar"]',
+    )),
+    ("recipe_overrides", (
+        "Fixed \"dotted.key\" = value changes of the recipe, for every cell (the keys of generate --set;",
+        "the recipe's own [grid] and [layers.*] tables: docs/reference.md, Terrain recipes).",
+    ), (
+        '# "grid.rows" = 257',
+        '# "grid.cols" = 257',
+    )),
+)
+
+
+def _free_table(name: str) -> list[str]:
+    for table, comments, examples in _FREE_TABLES:
+        if table == name:
+            return [f"[{table}]", *(f"# {c}" for c in comments), *examples, ""]
+    raise KeyError(name)
+
+
 def render_section_toml(section: str | None = None) -> str:
     """A study table (or, with ``section=None``, every table) with its defaults, as TOML with a
     comment per key. The output loads as it is; keys without a default are commented out (in
-    ``[study]`` the required keys get example values)."""
+    ``[study]`` the required keys get example values; ``[grid]`` and ``[recipe_overrides]`` are
+    printed empty, with commented examples)."""
     sections = study_sections()
     names = [s.name for s in sections if "." not in s.name]
+    free = [t for t, _, _ in _FREE_TABLES]
+    if section in free:
+        return "\n".join(_free_table(section)).rstrip() + "\n"
     if section is not None and section not in names:
         from offroadbench.registry import unknown_name
 
-        raise unknown_name("study table", section, names)
+        raise unknown_name("study table", section, names[:1] + free + names[1:])
     lines: list[str] = []
     for s in sections:
         top = s.name.split(".", 1)[0]
@@ -655,4 +710,7 @@ def render_section_toml(section: str | None = None) -> str:
                 for f in s.fields))
         # a vehicle's figures stay commented: set here, they would override another vehicle's own
         lines += _toml_block(s, commented_from=1 if s.name == "vehicle" else None) + [""]
+        if s.name == "study" and section is None:
+            for table in free:
+                lines += _free_table(table)
     return "\n".join(lines).rstrip() + "\n"

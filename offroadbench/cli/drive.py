@@ -47,19 +47,19 @@ SET_SECTIONS = ("sim", "controller", "rules", "roughness", "vehicle", "planner")
 
 def format_drive_run(run, label: str) -> str:
     """The per-mission table and the summary of a DriveRun."""
+    from offroadbench.cli._common import count_text, medians_text
+
     df = pd.DataFrame(run.rows())
     df["outcome"] = df["failure_reason"].replace("", "success")
     df["max_penetration_mm"] = 1000 * df["max_penetration_m"]
     s = run.summary
-    medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
-        f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
+        f"{label}: {count_text(len(run.missions), 'mission')} of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
         f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz, "
         f"gravity {run.sim.gravity_m_s2:g} m/s^2",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
-        f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
-        "  " + medians,
+        f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); " + medians_text(s),
     ])
 
 
@@ -77,8 +77,11 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
     """The missions, trajectories and time-series figures of a DriveRun."""
     from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
 
+    from offroadbench.cli._common import run_caption
+
     hm, closed, border = run.heightmap, run.closed, run.mission_config.border_m
     shown = next((r for r in run.results if r.success), run.results[0])
+    label = f"{label} ({run_caption(run.sim)})"  # every figure names the gravity and the engine
     with created_dirs(*{p.parent for p in paths.values()}):
         save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
                     paths["missions"])
@@ -160,9 +163,9 @@ def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason:
     t = np.asarray(tel["t_s"], float)
     rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 20.0
     frames = frame_indices(len(t), rate, fps=fps)
-    with created_dirs(path.parent):
+    with created_dirs(path.parent), bar(f"writing {path.name}", unit="frame") as progress:
         return save_animation(view.fig, lambda i: view.draw(tel, i, failure_reason=failure_reason), frames, path,
-                              fps=fps)
+                              fps=fps, progress=progress)
 
 
 def cmd_drive(args: argparse.Namespace) -> int:
@@ -196,9 +199,9 @@ def cmd_drive(args: argparse.Namespace) -> int:
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
     if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
-        from offroadbench.cli.terrain import warn_relief_tails
+        from offroadbench.cli.terrain import CLIP_ELSEWHERE, warn_relief_tails
 
-        warn_relief_tails(hm, label)
+        warn_relief_tails(hm, label, CLIP_ELSEWHERE)
         sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
     else:  # a PNG: those of the recipe in its sidecar, if any
         from offroadbench.bodies import terrain_gravity_and_soil
@@ -220,7 +223,9 @@ def cmd_drive(args: argparse.Namespace) -> int:
     if args.animate:
         shown = next((r for r in run.results if not r.success), run.results[0])
         k = shown.mission_index
-        title = f"{label}: mission {k}, {run.planner}, {shown.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        title = f"{label}: mission {k}, {run.planner}, {run_caption(run.sim)}, {shown.failure_reason or 'success'}"
         path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
                                      shown.failure_reason, vehicle_footprint(vehicle, sim), title)
         print(f"wrote {path} (mission {k})")

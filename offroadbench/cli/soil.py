@@ -11,9 +11,11 @@ import argparse
 import pandas as pd
 
 from offroadbench.cli._common import (
+    add_plot_option,
     bar,
-    check_output_file,
+    created_dirs,
     format_table,
+    plot_path,
     positive_float,
     save_figure,
 )
@@ -52,8 +54,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     from offroadbench.sim.tyre_laws.terramechanics import load_soil
     from offroadbench.sim.trial.vehicle import load_vehicle
 
-    if args.plot:
-        check_output_file(args.plot, "--plot", (".png", ".pdf", ".svg"))
+    from pathlib import Path
+
+    plot = plot_path(args.plot, f"soil_check_{Path(args.soil).stem}_{Path(args.wheel).stem}.png")
     soil = load_soil(args.soil)
     spec = load_vehicle(args.wheel)
     if spec.wheel_width_m is None:
@@ -63,11 +66,12 @@ def cmd_check(args: argparse.Namespace) -> int:
         rig = rig_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load, gravity_m_s2=args.gravity, progress=progress)
     model = model_curve(soil, spec.wheel_radius_m, spec.wheel_width_m, load)
     print(format_soil_check(rig, model, args.gravity))
-    if args.plot:
+    if plot is not None:
         from offroadbench.plots.soil import plot_soil_check
 
-        save_figure(plot_soil_check(rig, model), args.plot)
-        print(f"\nwrote {args.plot}")
+        with created_dirs(plot.parent):
+            save_figure(plot_soil_check(rig, model), plot)
+        print(f"\nwrote {plot}")
     return 0
 
 
@@ -86,5 +90,5 @@ def register(sub) -> None:
     c.add_argument("--load-n", type=positive_float, default=None,
                    help="wheel load, N (default: a quarter of the vehicle's weight at --gravity)")
     c.add_argument("--gravity", type=positive_float, default=9.81, help="gravity, m/s^2 (default 9.81)")
-    c.add_argument("--plot", metavar="PATH", help="write the figure (.png, .pdf or .svg)")
+    add_plot_option(c, "the figure (rig and Wong-Reece curves against slip)", "soil_check_SOIL_WHEEL.png")
     c.set_defaults(func=cmd_check)

@@ -42,6 +42,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
                      help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
                           "(default: generous against the trials' nominal time)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
+                          "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
+                          "vehicle, planner, missions), any other key is a recipe override (as drive --set), "
+                          "e.g. --set study.terrains_per_cell=2 --set sim.engine=mujoco; repeatable")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory and study-size estimate checks (memory also "
                           "OFFROADBENCH_NO_MEMORY_CHECK=1)")
@@ -56,6 +61,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep = sub.add_parser("report", help="write the Markdown report with figures of a run directory")
     rep.add_argument("run_dir", help="run directory of a study")
     rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained file (figures inline, sortable per-trial "
+                     "table, the replay animations found in RUN_DIR/replays inline and linked from their trials)")
     rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
     rep.set_defaults(func=cmd_report)
 
@@ -104,6 +112,37 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
     return workers
 
 
+def apply_sets(data: dict, sets: list[str] | None) -> dict:
+    """The study TOML dict with ``--set KEY=VALUE`` applied: ``study.FIELD`` into ``[study]``,
+    ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
+    that a grid axis varies is refused (it would be overwritten in every cell)."""
+    from offroadbench.cli._common import parse_sets
+    from offroadbench.study.spec import SECTIONS
+
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    grid = set(_flat_keys(out.get("grid", {})))
+    for item in sets or []:
+        key = item.partition("=")[0].strip()
+        head, dot, rest = key.partition(".")
+        if key in grid or f"recipe.{key}" in grid:
+            raise InputError(f"--set {item!r}: {key} is a grid axis of this study; change the grid in the file")
+        (value,) = parse_sets([item]).values()
+        if head == "study" or head in SECTIONS:
+            if not dot or not rest or "." in rest:
+                raise InputError(f"--set {item!r}: a study or settings key is {head}.FIELD=VALUE")
+            out.setdefault(head, {})[rest] = value
+        else:
+            out.setdefault("recipe_overrides", {})[key] = value
+    return out
+
+
+def _flat_keys(table: dict, prefix: str = "") -> list[str]:
+    keys = []
+    for k, v in table.items():
+        keys += _flat_keys(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k}"]
+    return keys
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.io.inputs import check_input_file
@@ -117,7 +156,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    study = study_from_dict(load_toml(path), where=str(path))
+    study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     try:
         plans = plan_cells(study, base_dir=path.parent)
@@ -128,7 +167,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
-    text = path.read_text()
+    text = path.read_text() + "".join(f"\n# run with: study run --set {item}" for item in args.set or [])
     counts = {"new": 0, "ok": 0}
 
     def success() -> dict:
@@ -146,7 +185,13 @@ def cmd_run(args: argparse.Namespace) -> int:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
                                 executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
     except Terminated:
-        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        from offroadbench.study.store import Store
+
+        with Store(out) as store:
+            stored = store.counts()[0]
+        sys.stderr.write(f"offroadbench: terminated; {counts['new']} trial(s) of this run saved, {stored} of "
+                         f"{study.n_trials} stored in {out}; "
+                         "run the same command again to resume\n")
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
@@ -168,6 +213,13 @@ def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.study.stats import terrain_success
 
     trials = load(run_dir)
+    if len(trials):  # each row says what made it: the fixed settings beside the grid axes
+        from offroadbench.study.header import settings_columns
+        from offroadbench.study.results import load_meta
+
+        fixed = settings_columns(load_meta(run_dir))
+        fixed = fixed[["cell", *(c for c in fixed.columns if c not in trials.columns)]]
+        trials = trials.merge(fixed, on="cell", how="left")
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))
@@ -193,8 +245,9 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
     return cell, terrain
 
 
-def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
-    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
+def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
+    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
+    ``html`` also the self-contained report.html) to ``out``."""
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
@@ -214,7 +267,11 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
         if toml:
             (stage / "study.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
-    return out / "report.md"
+        if html:
+            from offroadbench.study.html_report import report_html
+
+            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
+    return out / ("report.html" if html else "report.md")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -222,7 +279,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
-    path = write_report(run_dir, out, _parse_fig4(args.fig4))
+    path = write_report(run_dir, out, _parse_fig4(args.fig4), html=args.html)
     print(f"report: {path}")
     return 0
 
@@ -280,7 +337,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))  # the engine and gravity it drove
+        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
@@ -293,7 +353,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
 
-        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, {r.failure_reason or 'success'}"
         footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
         path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
                                      r.failure_reason, footprint, title)

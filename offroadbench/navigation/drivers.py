@@ -216,9 +216,11 @@ def planner_from_table(table: Mapping[str, Any], where: str = "[planner]") -> Pl
         spec, kind = PLANNERS.get(name), "planner"
     elif name in POLICIES:
         spec, kind = POLICIES.get(name), "policy"
-    else:
-        PLANNERS.get(name)  # the did-you-mean error
-        raise AssertionError  # pragma: no cover
+    else:  # the did-you-mean error over both registries: --planner and [planner] name take either
+        from offroadbench.registry import unknown_name
+
+        raise unknown_name("planner or policy", name, [*PLANNERS.names(), *POLICIES.names()],
+                           extra=f"(planners: {', '.join(PLANNERS.names())}; policies: {', '.join(POLICIES.names())})")
     try:
         cfg = from_dict(spec.config, data, where=f"{where} ({name})")
     except TypeError as exc:

@@ -11,6 +11,7 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
+from matplotlib.patheffects import Normal, Stroke
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
@@ -146,8 +147,10 @@ def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel
     grid = fig.add_gridspec(4, 2, width_ratios=(1.15, 1.0))
     ax = fig.add_subplot(grid[:, 0])
     draw_classes(ax, closed, hm.extent_m)
-    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
-    ax.plot(path_xy[:, 0], path_xy[:, 1], color="white", lw=1.5, ls="--", label="planned")
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0,
+                label=f"mission border ({border_m:g} m)")
+    ax.plot(path_xy[:, 0], path_xy[:, 1], color="white", lw=1.5, ls="--", label="planned",
+            path_effects=[Stroke(linewidth=3.0, foreground="black"), Normal()])  # seen on the white legend too
     ax.plot(tel["x_m"], tel["y_m"], color="black", lw=1.5, label="driven")
     ax.plot(tel["x_m"][-1], tel["y_m"][-1], "X", color="red", mec="black", ms=9)
     ax.plot(*path_xy[0], "o", color="limegreen", mec="black", ms=7)
@@ -159,7 +162,7 @@ def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel
     ax.set_ylim(max(ys.min() - pad, 0), min(ys.max() + pad, hm.height_m))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9, facecolor="0.8")  # the white lines show
     t = tel["t_s"]
     series = (
         (("z_m", "z (m)", 1.0),),
@@ -209,7 +212,8 @@ def fig_paths(hm, closed: np.ndarray, border_m: float, mission, drawn, *, title:
     # the figure takes the crop's shape (equal axes), with room for the title and labels
     fig, ax = new_figure(figsize=(9.5, float(np.clip(6.6 * (y1 - y0) / (x1 - x0) + 1.2, 3.2, 9.0))))
     draw_classes(ax, closed, hm.extent_m)
-    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0,
+                label=f"mission border ({border_m:g} m)")
     colours = ("white", "black", "magenta", "cyan", "lime", "red")
     for (label, planned, driven, outcome), colour in zip(drawn, colours):
         if planned is not None:

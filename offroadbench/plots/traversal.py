@@ -3,6 +3,8 @@ time series of one trial. Functions return matplotlib Figures; the CLI saves the
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from matplotlib.lines import Line2D
 
@@ -22,8 +24,13 @@ def _class_axes(hm: Heightmap, classes: np.ndarray, border_m: float | None, titl
         draw_border(ax, hm.extent_m, border_m)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(title)
+    ax.set_title(wrap_title(title))
     return fig, ax
+
+
+def wrap_title(title: str, width: int = 72) -> str:
+    """A long title (a terrain label with its overrides, engine and gravity) on several lines."""
+    return "\n".join(textwrap.wrap(title, width)) or title
 
 
 def plot_missions(hm: Heightmap, closed_classes: np.ndarray, missions, *, border_m: float | None = None,
@@ -65,6 +72,8 @@ def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telem
                     markeredgecolor="k", markersize=8)
     handles = [Line2D([], [], marker="X", linestyle="", color=c, markeredgecolor="k",
                           label=k or "success") for k, c in _OUTCOME_COLOURS.items()]
+    handles += [Line2D([], [], color="k", linewidth=0.7, linestyle=":", label="planned"),
+                Line2D([], [], color="k", linewidth=1.2, label="driven")]
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
     return fig
 
@@ -90,5 +99,5 @@ def plot_timeseries(tel: dict, *, title: str = "trial"):
     axes[3].set_ylabel("m/s, rad/s")
     axes[3].set_xlabel("time (s)")
     axes[3].legend(loc="upper right", fontsize=8)
-    fig.suptitle(title)
+    fig.suptitle(wrap_title(title, 100))
     return fig

@@ -23,7 +23,7 @@ from offroadbench.study.spec import CellPlan, StudyConfig, plan_cells, study_fro
 __all__ = ["SearchPlan", "load_search", "search_from_data", "trial_cell"]
 
 #: [study] keys a search file may not set (a search draws its own trials)
-_STUDY_ONLY = ("terrains_per_cell", "missions_per_terrain")
+_STUDY_ONLY = ("terrains_per_cell", "missions_per_terrain", "missions_from")
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,6 +48,8 @@ def search_from_data(data: Mapping[str, Any], where: str = "search", base_dir: P
     if not isinstance(data, Mapping) or "search" not in data:
         raise InputError(f"{where}: no [search] table (a search file is a study file with a [search] table)")
     data = dict(data)
+    if "analysis" in data:
+        raise InputError(f"{where}: [analysis] is a study's analysis plan; a search reports its own estimates")
     search = search_from_dict(data.pop("search"), where=f"{where}: [search]")
     head = data.get("study", {})
     if isinstance(head, Mapping):

@@ -19,6 +19,7 @@ from offroadbench import resources
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
+from offroadbench.study.header import driver_files
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
 from offroadbench.io.outputs import missing_dirs
@@ -250,6 +251,8 @@ def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "",
                 "seed_key": p.key,
                 "recipe": dict(p.recipe_data),
                 "settings": {k: dict(v) for k, v in p.settings.items()},
+                **({"missions_recipe": dict(p.missions_recipe_data)} if p.missions_recipe_data is not None else {}),
+                "files": driver_files(p.trial_settings.planner),  # e.g. a policy's model: path, size, SHA-256
             }
             for p in plans
         ],

@@ -168,6 +168,14 @@ class Store:
                 "use another --out directory"
             )
         if old:
+            from offroadbench.study.plan import check_unchanged
+
+            if check_unchanged(old, values, self.counts()[0], str(self.run_dir)):  # no trial yet: take the new plan
+                with self.con:
+                    self.con.execute("BEGIN")
+                    self.con.executemany("UPDATE meta SET value = ? WHERE key = ?",
+                                         [(json.dumps(values[k], sort_keys=True), k) for k in ("study", "study_toml")
+                                          if k in values])
             if old.get("version") != values.get("version"):
                 log.warning(
                     "%s was started with offroadbench %s, resuming with %s",

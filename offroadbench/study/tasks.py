@@ -23,7 +23,16 @@ settings and seeds) and says whether the new row equals the stored one.
 Seeds (:mod:`offroadbench.seeding`). The terrain is ``generate_terrain(recipe, terrain_seed)``;
 mission k of terrain j is drawn alone from its ``mission_seed`` on the
 closed class map (Majhor & Bos 2023, Sec. 2.3: start in low roughness, goal in low or semi, 35 m
-apart, 5 m border), so it does not depend on which other missions are drawn or pending.
+apart, 5 m border), so it does not depend on which other missions are drawn or pending. A cell whose
+missions come from another cell's terrain (``[study] missions_from``) draws them on that terrain
+(same seed) and drives them on its own (:func:`prepare_cell`), and its terrain row records
+``twin_unexplained_var``: the share of the two surfaces' height variance that one does not
+explain linearly in the other, 1 - r^2 (for a band-limited arm against its aliased twin: the
+share carried by the W-M terms above the grid's Nyquist frequency). For one W-M surface (Majhor &
+Bos 2023, Eq. 1) the terms are plane waves with the same phases in both twins, and 1 - r^2 equals
+the amplitude share sum_{n above Nyquist} gamma^(2 (D-3) n) / sum_n gamma^(2 (D-3) n) to within
+1 % (tests/study/test_run_sets.py); on the multifractal product (filtered, multiplied, rescaled
+layers) it is the same measure taken on the finished surface.
 """
 
 from __future__ import annotations
@@ -35,7 +44,7 @@ from typing import Any, Callable, Iterator, Mapping
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
+__all__ = ["prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
@@ -91,6 +100,32 @@ class TrialDone:
         return (self.cell, self.terrain)
 
 
+def unexplained_variance(z, twin) -> float:
+    """1 - r^2 of two surfaces of the same shape (r: Pearson correlation of their heights)."""
+    import numpy as np
+
+    a = np.asarray(z, float).ravel() - np.mean(z)
+    b = np.asarray(twin, float).ravel() - np.mean(twin)
+    den = float(np.sqrt(np.dot(a, a) * np.dot(b, b)))
+    return float(1.0 - (np.dot(a, b) / den) ** 2) if den > 0 else float("nan")
+
+
+def prepare_cell(cell: CellPlan, terrain_seed: int, missions) -> tuple[PreparedTerrain, dict[str, float]]:
+    """The cell's terrain with its missions ((index, seed) pairs), drawn on the cell's own terrain or,
+    with ``missions_from``, on the reference cell's terrain of the same seed; and the extra terrain
+    statistics (``twin_unexplained_var`` with a reference terrain)."""
+    settings = cell.trial_settings
+    ref = cell.missions_recipe()
+    if ref is None:
+        return prepare_terrain(cell.recipe(), terrain_seed, settings, missions), {}
+    twin = prepare_terrain(ref, terrain_seed, settings, missions)
+    own = prepare_terrain(cell.recipe(), terrain_seed, settings, twin.missions)
+    import dataclasses
+
+    own = dataclasses.replace(own, mission_seeds=twin.mission_seeds)
+    return own, {"twin_unexplained_var": unexplained_variance(own.hm.z, twin.hm.z)}
+
+
 def keeps_telemetry(setting: str, success: bool) -> bool:
     """Whether a trial's telemetry is kept under ``setting`` (none / failed / all)."""
     return setting == "all" or (setting == "failed" and not success)
@@ -102,8 +137,8 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
     cell = task.cell
     settings = cell.trial_settings
     t0 = time.perf_counter()
-    prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
-    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()}
+    prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
     stats["build_s"] = time.perf_counter() - t0
     yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
@@ -181,7 +216,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     tseed, mseed, text = hit
     plan = CellPlan.from_meta(meta, cell)
     settings = plan.trial_settings
-    prepared = prepare_terrain(plan.recipe(), tseed, settings, [(mission, mseed)])
+    prepared, _ = prepare_cell(plan, tseed, [(mission, mseed)])
     rec = next(iter(drive_terrain(prepared, settings)))
     stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too

@@ -19,7 +19,8 @@ def test_drive_writes_csv_figures_and_prints_summary(tmp_path, capsys):
 
     assert list(df["terrain_seed"]) == [terrain_seed(2, 0)] * 2
     assert list(df["mission_seed"]) == [mission_seed(2, 0, 0), mission_seed(2, 0, 1)]
-    assert f"paper-d2.3 seed {terrain_seed(2, 0)}" in text
+    # the label names the preset with its --set overrides (issue 33): a changed terrain is not the preset
+    assert f"paper-d2.3 + grid.rows=301, grid.cols=301 seed {terrain_seed(2, 0)}" in text
     assert {"success", "failure_reason", "traversal_time_s", "rms_vertical_accel_m_s2"} <= set(df.columns)
     for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.parquet"):
         assert (out / name).stat().st_size > 0
