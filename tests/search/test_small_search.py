@@ -70,3 +70,17 @@ def test_an_interrupted_real_search_resumes_identically(searched, tmp_path):
     summary = run_search(plan, tmp_path, executor="local", workers=2)
     assert summary.ran == 6
     assert _table(tmp_path) == _table(searched)
+
+
+@pytest.mark.timeout(600)
+def test_the_search_benchmark_runs_in_its_smoke_mode(tmp_path):
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, str(root / "benchmarks" / "bench_search.py"), "--smoke", "--workers", "1",
+                          "--keep", str(tmp_path)],
+                         capture_output=True, text=True, timeout=500, cwd=root)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "falsify: trials to 1 distinct failures" in out.stdout
+    assert "P(failure), nominal sampling pooled" in out.stdout
