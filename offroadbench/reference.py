@@ -362,6 +362,21 @@ def study_sections() -> list[SectionDoc]:
     return out
 
 
+def search_sections() -> list[tuple[str, SectionDoc]]:
+    """(title, table) of the failure search's ``[search]`` and ``[[search.params]]`` tables."""
+    from offroadbench.search.space import SearchConfig, SearchParam
+
+    notes = ("A search file is a study file plus these tables (`offroadbench search run SEARCH.toml`); "
+             "`[study]` takes no `terrains_per_cell` or `missions_per_terrain` (one terrain and mission per "
+             "trial), and a `[grid]`, if any, lists the cells searched one after another. "
+             "Source of the estimators: `offroadbench.search.estimators`.",)
+    return [("`[search]`", SectionDoc("search", _qualname(SearchConfig), "What a failure search runs and on which budget",
+                                      field_docs(SearchConfig, skip=("params",)), notes)),
+            ("`[[search.params]]`", SectionDoc("search.params", _qualname(SearchParam),
+                                               "One searched key, with its range and nominal distribution "
+                                               "(one table per key)", field_docs(SearchParam)))]
+
+
 def section_names() -> list[str]:
     return [s.name for s in study_sections()]
 
@@ -571,6 +586,9 @@ def render_reference() -> str:
         for note in s.notes:
             lines += [note, ""]
     lines += _analysis_lines()
+    for title, s in search_sections():
+        lines += [f"### {title}", "", f"{_md_cell(s.summary)}. Source: `{s.source}`.", "", *_md_table(s.fields), ""]
+        lines += [line for note in s.notes for line in (note, "")]
     from offroadbench.bounds import reference_lines
 
     lines += reference_lines()

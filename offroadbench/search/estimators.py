@@ -1,0 +1,245 @@
+"""Failure probabilities: plain Monte Carlo, and cross-entropy importance sampling (pure numpy/scipy).
+
+Everything works in standard-normal coordinates ``z`` (offroadbench.search.space: the nominal
+distribution is N(0, I)); a trial's *margin* m(z) is negative exactly when it fails, and
+P(failure) = P(m(Z) <= 0), Z ~ N(0, I).
+
+**Plain Monte Carlo.** n nominal draws, k failures: p = k / n, relative error
+sqrt((1 - p) / (n p)), and the exact Clopper-Pearson interval (Clopper & Pearson 1934).
+
+**Cross-entropy importance sampling** (Rubinstein & Kroese 2004, Alg. 3.4.1 with the Gaussian
+update of their Sec. 3.5; de Boer et al. 2005, Alg. 2.1). The proposal is N(mu, diag sd^2).
+Stage t draws n_s points from the current proposal q_t, sets the level
+gamma_t = max(rho-quantile of the margins, 0), and refits mu and sd to the elite points
+(m <= gamma_t) weighted by w = phi(z) / q_t(z) (the likelihood ratio: the cross-entropy-optimal
+Gaussian is the weighted moment match, de Boer et al. 2005, Eq. 37-38). Adaptation stops at the
+first stage whose level reaches 0 (at least rho n_s failures) or after ``max_stages``. The rest
+of the budget is drawn from the *defensive mixture* q = alpha phi + (1 - alpha) q_T
+(Hesterberg 1995), whose weights are bounded by 1/alpha, and
+
+    p_IS = mean(1{m_i <= 0} w_i),   se = sd(1{m <= 0} w) / sqrt(n),   RE = se / p_IS,
+
+with the normal interval p_IS +- z_{(1+level)/2} se (clipped at 0). Bounded weights keep the
+central limit theorem, and so the interval's coverage, honest at the sample sizes used
+(tests/search/test_estimators.py checks the coverage on Gaussian tails of known probability).
+
+Efficiency. Plain MC needs n_MC(r) = (1 - p) / (p r^2) draws for relative error r; IS needs
+its adaptive stages plus var(1{m <= 0} w) / (p^2 r^2) final draws (:func:`trials_for_rel_error`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+from scipy import special, stats
+
+__all__ = ["Estimate", "GaussianProposal", "ce_update", "ce_adapt", "mc_estimate", "is_estimate", "ce_is",
+           "CEResult", "trials_for_rel_error", "distinct_failures"]
+
+_LOG_2PI = math.log(2 * math.pi)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """An estimate of P(failure) with its relative error and a confidence interval."""
+
+    p: float
+    """The estimate."""
+    rel_error: float
+    """Standard error over the estimate (NaN when the estimate is 0)."""
+    low: float
+    """Lower end of the interval."""
+    high: float
+    """Upper end of the interval (NaN: unknown, e.g. importance sampling with no failure seen)."""
+    n: int
+    """Trials the estimate used (the whole budget spent for it, adaptive stages included: ``trials``)."""
+    failures: int
+    """Failures among them."""
+    trials: int
+    """Every trial spent to get the estimate (for IS: the adaptive stages too)."""
+    var_per_trial: float
+    """Variance of one term of the estimator (p (1 - p) for MC; var(1{fail} w) for IS)."""
+    method: str
+    """``mc`` or ``ce-is``."""
+    level: float = 0.95
+
+    @property
+    def se(self) -> float:
+        return math.sqrt(self.var_per_trial / self.n) if self.n else float("nan")
+
+    def covers(self, p: float) -> bool:
+        """Whether the interval holds ``p``."""
+        return self.low <= p <= self.high
+
+
+def mc_estimate(failed: Sequence[bool] | np.ndarray, level: float = 0.95) -> Estimate:
+    """Plain Monte Carlo estimate from nominal draws: p = k/n with the Clopper-Pearson interval."""
+    f = np.asarray(failed, dtype=bool).ravel()
+    n, k = int(f.size), int(f.sum())
+    if n == 0:
+        return Estimate(float("nan"), float("nan"), 0.0, 1.0, 0, 0, 0, float("nan"), "mc", level)
+    p = k / n
+    a = 1 - level
+    low = 0.0 if k == 0 else float(stats.beta.ppf(a / 2, k, n - k + 1))
+    high = 1.0 if k == n else float(stats.beta.ppf(1 - a / 2, k + 1, n - k))
+    re = math.sqrt((1 - p) / (n * p)) if k else float("nan")
+    return Estimate(p, re, low, high, n, k, n, p * (1 - p), "mc", level)
+
+
+def is_estimate(failed: np.ndarray, log_w: np.ndarray, trials: int | None = None, level: float = 0.95) -> Estimate:
+    """Importance-sampling estimate mean(1{fail} w) with the normal interval (clipped at 0).
+
+    ``log_w`` are the log likelihood ratios log(phi(z) / q(z)) of the draws; ``trials`` is the
+    whole budget spent (adaptive stages included; default the number of draws)."""
+    f = np.asarray(failed, dtype=bool).ravel()
+    lw = np.asarray(log_w, dtype=float).ravel()
+    n = int(f.size)
+    if n == 0:
+        return Estimate(float("nan"), float("nan"), 0.0, float("nan"), 0, 0, trials or 0, float("nan"), "ce-is", level)
+    y = np.where(f, np.exp(lw), 0.0)
+    p = float(y.mean())
+    var = float(y.var(ddof=1)) if n > 1 else float("nan")
+    se = math.sqrt(var / n) if n > 1 else float("nan")
+    zq = float(special.ndtri(0.5 + level / 2))
+    if f.sum() == 0:
+        return Estimate(0.0, float("nan"), 0.0, float("nan"), n, 0, trials or n, var, "ce-is", level)
+    return Estimate(p, se / p, max(p - zq * se, 0.0), p + zq * se, n, int(f.sum()), trials or n, var, "ce-is", level)
+
+
+def trials_for_rel_error(est: Estimate, rel_error: float) -> float:
+    """Trials an estimator like ``est`` needs for relative error ``rel_error`` at its estimated p:
+    (1 - p) / (p r^2) for MC; the adaptive stages plus var / (p^2 r^2) final draws for IS."""
+    if not est.p > 0:
+        return float("inf")
+    if est.method == "mc":
+        return (1 - est.p) / (est.p * rel_error ** 2)
+    return (est.trials - est.n) + est.var_per_trial / (est.p ** 2 * rel_error ** 2)
+
+
+# ---------------------------------------------------------------------------- proposals
+@dataclass(frozen=True)
+class GaussianProposal:
+    """q(z) = alpha phi(z) + (1 - alpha) N(z; mean, diag sd^2), phi the standard normal density of dimension d."""
+
+    mean: tuple[float, ...]
+    sd: tuple[float, ...]
+    defensive: float = 0.0
+    """alpha, the weight of the nominal density in the mixture (0: a plain Gaussian)."""
+
+    @classmethod
+    def nominal(cls, d: int) -> "GaussianProposal":
+        return cls((0.0,) * d, (1.0,) * d, 0.0)
+
+    @property
+    def dim(self) -> int:
+        return len(self.mean)
+
+    def with_defensive(self, alpha: float) -> "GaussianProposal":
+        return GaussianProposal(self.mean, self.sd, float(alpha))
+
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """n draws (n, d): from the nominal with probability alpha, else from the Gaussian."""
+        d = self.dim
+        base = rng.standard_normal((n, d))
+        if self.defensive > 0:
+            pick = rng.random(n) < self.defensive
+        else:
+            pick = np.zeros(n, dtype=bool)
+        z = np.asarray(self.mean) + np.asarray(self.sd) * base
+        return np.where(pick[:, None], base, z)
+
+    def log_weight(self, z: np.ndarray) -> np.ndarray:
+        """log(phi(z) / q(z)) of each row of ``z``."""
+        z = np.atleast_2d(np.asarray(z, dtype=float))
+        d = self.dim
+        log_phi = -0.5 * (z ** 2).sum(axis=1) - 0.5 * d * _LOG_2PI
+        mu, sd = np.asarray(self.mean), np.asarray(self.sd)
+        log_g = (-0.5 * (((z - mu) / sd) ** 2).sum(axis=1) - np.log(sd).sum() - 0.5 * d * _LOG_2PI)
+        if self.defensive > 0:
+            log_q = np.logaddexp(math.log(self.defensive) + log_phi, math.log1p(-self.defensive) + log_g)
+        else:
+            log_q = log_g
+        return log_phi - log_q
+
+
+def ce_update(z: np.ndarray, margin: np.ndarray, proposal: GaussianProposal, quantile: float,
+              min_sd: float) -> tuple[GaussianProposal, float]:
+    """One cross-entropy step: the level gamma = max(rho-quantile of ``margin``, 0) and the Gaussian
+    fitted to the elite points (margin <= gamma) weighted by their likelihood ratios (de Boer et al.
+    2005, Eq. 37-38); the new sd is at least ``min_sd``. Returns (new proposal, gamma)."""
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    m = np.asarray(margin, dtype=float)
+    gamma = max(float(np.quantile(m, quantile, method="inverted_cdf")), 0.0)
+    elite = m <= gamma
+    w = np.exp(proposal.log_weight(z[elite]))
+    w = w / w.sum()
+    mean = (w[:, None] * z[elite]).sum(axis=0)
+    var = (w[:, None] * (z[elite] - mean) ** 2).sum(axis=0)
+    sd = np.maximum(np.sqrt(var), min_sd)
+    return GaussianProposal(tuple(float(v) for v in mean), tuple(float(v) for v in sd), 0.0), gamma
+
+
+def ce_adapt(stages: Sequence[tuple[np.ndarray, np.ndarray]], d: int, *, quantile: float, min_sd: float,
+             max_stages: int) -> tuple[GaussianProposal, bool]:
+    """The proposal after the adaptive stages ``stages`` ((z, margin) of each, in order, stage t
+    drawn from the proposal this function gives for stages[:t]). Returns (proposal, adapted):
+    ``adapted`` once a stage's level reached 0 or ``max_stages`` stages ran; the proposal is then
+    the final one (without the defensive mixture, which the caller adds)."""
+    prop = GaussianProposal.nominal(d)
+    for t, (z, m) in enumerate(stages):
+        prop, gamma = ce_update(z, m, prop, quantile, min_sd)
+        if gamma <= 0 or t + 1 >= max_stages:
+            return prop, True
+    return prop, False
+
+
+@dataclass(frozen=True)
+class CEResult:
+    """What :func:`ce_is` did: the estimate and the proposals of its stages."""
+
+    estimate: Estimate
+    proposals: tuple[GaussianProposal, ...]
+    """The proposal of every adaptive stage, then the final (defensive) one."""
+
+
+def ce_is(margin_fn: Callable[[np.ndarray], np.ndarray], d: int, budget: int, rng: np.random.Generator, *,
+          stage_size: int = 100, quantile: float = 0.1, max_stages: int = 6, defensive: float = 0.1,
+          min_sd: float = 1.0, level: float = 0.95) -> CEResult:
+    """Cross-entropy importance sampling of P(margin_fn(Z) <= 0), Z ~ N(0, I_d), on ``budget``
+    evaluations of ``margin_fn`` (vectorised: (n, d) -> (n,)). The in-memory twin of what
+    ``search run`` does with method ``ce-is`` (same :func:`ce_adapt`, same estimator)."""
+    stages: list[tuple[np.ndarray, np.ndarray]] = []
+    props = []
+    used = 0
+    prop, adapted = GaussianProposal.nominal(d), False
+    while not adapted and used + stage_size < budget:
+        props.append(prop)
+        z = prop.sample(stage_size, rng)
+        stages.append((z, margin_fn(z)))
+        used += stage_size
+        prop, adapted = ce_adapt(stages, d, quantile=quantile, min_sd=min_sd, max_stages=max_stages)
+    final = prop.with_defensive(defensive)
+    props.append(final)
+    z = final.sample(budget - used, rng)
+    failed = margin_fn(z) <= 0
+    est = is_estimate(failed, final.log_weight(z), trials=budget, level=level)
+    return CEResult(est, tuple(props))
+
+
+# ---------------------------------------------------------------------------- falsification counts
+def distinct_failures(unit_x: np.ndarray, failed: np.ndarray, min_distance: float) -> np.ndarray:
+    """Cumulative count of distinct failures after each trial (in the given order): a failure is
+    distinct when its parameters (scaled to [0, 1]) differ from every earlier distinct failure by
+    at least ``min_distance`` in some coordinate (Chebyshev distance)."""
+    x = np.atleast_2d(np.asarray(unit_x, dtype=float))
+    f = np.asarray(failed, dtype=bool).ravel()
+    seen: list[np.ndarray] = []
+    out = np.zeros(len(f), dtype=int)
+    for i in range(len(f)):
+        if f[i] and all(np.max(np.abs(x[i] - s)) >= min_distance for s in seen):
+            seen.append(x[i])
+        out[i] = len(seen)
+    return out

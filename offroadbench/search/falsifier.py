@@ -1,0 +1,172 @@
+"""Proposals of a failure search, batch by batch (ask/tell), rebuilt from the stored trials.
+
+A search runs *streams*: one per (grid cell, method). Batch b of a stream is a pure function of
+the search config, the stream's seed, b and the results of batches 0..b-1 (:class:`Batch`), so the
+optimiser's state never has to be saved: after a kill, :func:`propose` rebuilds it from the stored
+trials and gives the same proposals again (tests/search/test_runner.py kills and resumes a search).
+
+* ``falsify`` with ``sampler = "tpe"``: optuna's TPE sampler (Bergstra et al. 2011; multivariate,
+  Falkner et al. 2018) seeded per batch, told every earlier trial (``create_trial``) and asked
+  ``n`` times with the constant liar (Ginsbourger et al. 2010), so one batch spreads out. It
+  minimises the margin (offroadbench.search.objective) over the parameters' ranges.
+* ``falsify`` with ``sampler = "cmaes"``: CMA-ES (Hansen 2016) of the ``cmaes`` package on the
+  ranges scaled to [0, 1], its population one batch; the state is rebuilt by replaying every
+  earlier generation's ask and tell (the package's generator is seeded, so the replay is exact).
+* ``random``: nominal draws (plain Monte Carlo).
+* ``ce-is``: cross-entropy stages, then importance sampling from the defensive mixture
+  (offroadbench.search.estimators).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench import seeding
+from offroadbench.search.estimators import GaussianProposal, ce_adapt
+from offroadbench.search.space import METHODS, SearchConfig
+
+__all__ = ["Batch", "Proposal", "SEARCH_STREAM", "stream_seed", "plan_batch", "propose"]
+
+#: first spawn-key entry of a search's own seeds (the study's streams are 0 and 1)
+SEARCH_STREAM = 7
+
+
+@dataclass(frozen=True, eq=False)
+class Batch:
+    """A finished batch of a stream: what was proposed and how each trial ended."""
+
+    stage: str
+    """``falsify``, ``random``, ``ce-stage`` (an adaptive cross-entropy stage) or ``ce-final``."""
+    x: np.ndarray
+    """Parameter values (n, d)."""
+    z: np.ndarray
+    """Their standard-normal coordinates (n, d)."""
+    margin: np.ndarray
+    """The failure margin of each trial (n,); negative = failed."""
+
+
+@dataclass(frozen=True, eq=False)
+class Proposal:
+    """The next batch of a stream, before it runs."""
+
+    stage: str
+    x: np.ndarray
+    """Parameter values (n, d), inside every range."""
+    z: np.ndarray
+    """Standard-normal coordinates (n, d)."""
+    log_w: np.ndarray
+    """log(nominal density / proposal density) of each point, in z (n,): 0 for nominal draws, NaN
+    for the falsifier (its points come from no stated density)."""
+
+
+def stream_seed(root_seed: int, group: int, method: str) -> int:
+    """The integer seed of one stream (grid cell ``group``, ``method``)."""
+    return seeding.derive_seed(root_seed, SEARCH_STREAM, group, METHODS.index(method))
+
+
+def _batch_rng(seed: int, batch: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(batch,)))
+
+
+def plan_batch(method: str, cfg: SearchConfig, history: list[Batch], budget: int) -> tuple[str, int]:
+    """(stage, size) of the next batch of a stream that has run ``history``; size 0 when the
+    stream has spent ``budget``."""
+    used = sum(len(b.margin) for b in history)
+    left = budget - used
+    if left <= 0:
+        return method, 0
+    if method != "ce-is":
+        return method, min(cfg.batch_size, left)
+    if any(b.stage == "ce-final" for b in history):
+        return "ce-final", min(cfg.batch_size, left)
+    _, adapted = _ce_state(cfg, history)
+    if not adapted and cfg.ce_stage_size < left:
+        return "ce-stage", cfg.ce_stage_size
+    return "ce-final", min(cfg.batch_size, left)
+
+
+def _ranked_last(margin: np.ndarray) -> np.ndarray:
+    """Margins with the NaN of no-mission draws replaced by more than the largest finite one (ranked last)."""
+    m = np.asarray(margin, dtype=float)
+    finite = m[np.isfinite(m)]
+    return np.where(np.isfinite(m), m, (finite.max() if finite.size else 0.0) + 1.0)
+
+
+def _ce_state(cfg: SearchConfig, history: list[Batch]) -> tuple[GaussianProposal, bool]:
+    stages = [(b.z, _ranked_last(b.margin)) for b in history if b.stage == "ce-stage"]
+    return ce_adapt(stages, cfg.dim, quantile=cfg.ce_quantile, min_sd=cfg.ce_min_sd, max_stages=cfg.ce_max_stages)
+
+
+def propose(method: str, stage: str, n: int, cfg: SearchConfig, seed: int, batch: int, history: list[Batch]) -> Proposal:
+    """Batch ``batch`` (``n`` points, ``stage`` from :func:`plan_batch`) of a stream with seed ``seed``
+    whose earlier batches are ``history``."""
+    rng = _batch_rng(seed, batch)
+    d = cfg.dim
+    if stage == "random":
+        z = rng.standard_normal((n, d))
+        return Proposal(stage, cfg.from_z(z), z, np.zeros(n))
+    if stage in ("ce-stage", "ce-final"):
+        prop, _ = _ce_state(cfg, history)
+        if stage == "ce-final":
+            prop = prop.with_defensive(cfg.ce_defensive)
+        z = prop.sample(n, rng)
+        return Proposal(stage, cfg.from_z(z), z, prop.log_weight(z))
+    if stage != "falsify":
+        raise ValueError(f"unknown stage {stage!r}")
+    x = _tpe(cfg, seed, batch, history, n) if cfg.sampler == "tpe" else _cma(cfg, seed, history, n)
+    return Proposal(stage, x, cfg.to_z(x), np.full(n, np.nan))
+
+
+def _tpe(cfg: SearchConfig, seed: int, batch: int, history: list[Batch], n: int) -> np.ndarray:
+    import optuna
+    from optuna.distributions import FloatDistribution
+
+    dists = {p.key: FloatDistribution(p.low, p.high) for p in cfg.params}
+    verbosity = optuna.logging.get_verbosity()
+    optuna.logging.set_verbosity(optuna.logging.WARNING)  # one in-memory optuna study per batch: not news
+    try:
+        return _tpe_ask(cfg, seed, batch, history, n, dists)
+    finally:
+        optuna.logging.set_verbosity(verbosity)
+
+
+def _tpe_ask(cfg: SearchConfig, seed: int, batch: int, history: list[Batch], n: int, dists) -> np.ndarray:
+    import optuna
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # optuna's ExperimentalWarning for multivariate and constant_liar
+        sampler = optuna.samplers.TPESampler(seed=int(seeding.derive_seed(seed, batch) % 2**32),
+                                             n_startup_trials=cfg.startup_trials, multivariate=True,
+                                             constant_liar=True)
+        study = optuna.create_study(direction="minimize", sampler=sampler)
+        done = [optuna.trial.create_trial(params=cfg.values(xi), distributions=dists, value=float(mi))
+                for b in history for xi, mi in zip(b.x, b.margin) if np.isfinite(mi)]  # no-mission draws: not told
+        if done:
+            study.add_trials(done)
+        out = []
+        for _ in range(n):
+            trial = study.ask(dists)
+            out.append([trial.params[k] for k in cfg.keys])
+    return np.clip(np.asarray(out, dtype=float), [p.low for p in cfg.params], [p.high for p in cfg.params])
+
+
+def _cma(cfg: SearchConfig, seed: int, history: list[Batch], n: int) -> np.ndarray:
+    from cmaes import CMA
+
+    d = cfg.dim
+    opt = CMA(mean=np.full(d, 0.5), sigma=0.25, bounds=np.tile([0.0, 1.0], (d, 1)), seed=int(seed % 2**31),
+              population_size=cfg.batch_size)
+    for b in history:  # replay every earlier generation: same asks, same tells
+        u = cfg.unit(b.x)
+        for _ in range(len(b.margin)):
+            opt.ask()
+        if len(b.margin) == opt.population_size:
+            m = _ranked_last(b.margin)
+            opt.tell([(u[i], float(m[i])) for i in range(len(u))])
+    u = np.array([opt.ask() for _ in range(n)])
+    lo = np.array([p.low for p in cfg.params])
+    hi = np.array([p.high for p in cfg.params])
+    return np.clip(lo + u * (hi - lo), lo, hi)

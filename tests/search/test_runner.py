@@ -1,0 +1,178 @@
+"""A search drives study trials into a study store, resumes after a kill with the same proposals,
+and runs on every executor (a stand-in trial function: no physics, see stand_in.py)."""
+
+import copy
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from offroadbench.errors import InputError
+from offroadbench.search import run_search, search_from_data
+from tests.search.stand_in import SEARCH, stand_in_trials
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _table(run_dir):
+    con = sqlite3.connect(f"file:{run_dir / 'study.sqlite'}?mode=ro", uri=True)
+    try:
+        proposals = con.execute("SELECT cell, grp, method, batch, slot, stage, x, z, log_w FROM search_trials "
+                                "ORDER BY cell").fetchall()
+        rows = con.execute("SELECT cell, terrain, mission, terrain_seed, mission_seed, row FROM trials ORDER BY cell").fetchall()
+    finally:
+        con.close()
+    return proposals, rows
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    d = tmp_path_factory.mktemp("search-ref")
+    plan = search_from_data(SEARCH)
+    summary = run_search(plan, d, executor="inline", trial_fn=stand_in_trials)
+    return plan, d, summary
+
+
+def test_a_search_stores_every_trial_of_every_stream_and_finds_failures(reference):
+    plan, d, summary = reference
+    assert summary.total == summary.done == 3 * 24
+    proposals, rows = _table(d)
+    assert [p[0] for p in proposals] == [r[0] for r in rows] == list(range(72))
+    by_method = {}
+    for (_, _, method, *_), (*_, row) in zip(proposals, rows):
+        by_method.setdefault(method, []).append('"success": false' in row)
+    # the falsifier concentrates on the failure region: more failures than nominal sampling
+    assert sum(by_method["falsify"]) > 2 * max(sum(by_method["random"]), 1)
+    # every proposal lies inside the search ranges
+    for p in proposals:
+        x = np.array(eval(p[6]))
+        assert 0.5 <= x[0] <= 2.0 and 2.3 <= x[1] <= 2.6
+
+
+def test_the_same_seed_gives_the_same_search(reference, tmp_path):
+    plan, d, _ = reference
+    run_search(plan, tmp_path, executor="inline", trial_fn=stand_in_trials)
+    assert _table(tmp_path) == _table(d)
+
+
+def interrupting(after):
+    count = {"n": 0}
+
+    def trials(prepared, settings):
+        for row in stand_in_trials(prepared, settings):
+            count["n"] += 1
+            if count["n"] > after:
+                raise KeyboardInterrupt
+            yield row
+
+    return trials
+
+
+@pytest.mark.parametrize("after", [6, 31, 55])  # inside a falsifier batch, a CE stage, a CE final batch
+def test_an_interrupted_search_resumes_with_identical_proposals(reference, tmp_path, after):
+    plan, d, _ = reference
+    with pytest.raises(KeyboardInterrupt):
+        run_search(plan, tmp_path, executor="inline", trial_fn=interrupting(after))
+    assert len(_table(tmp_path)[1]) == after
+    summary = run_search(plan, tmp_path, executor="inline", trial_fn=stand_in_trials)
+    assert summary.ran == 72 - after
+    assert _table(tmp_path) == _table(d)
+
+
+KILLED = textwrap.dedent("""
+    import sys, time
+    sys.path.insert(0, {root!r})
+    from offroadbench.search import run_search, search_from_data
+    from tests.search.stand_in import SEARCH, stand_in_trials
+
+    def slow(prepared, settings):
+        for row in stand_in_trials(prepared, settings):
+            time.sleep(0.05)
+            yield row
+
+    run_search(search_from_data(SEARCH), {out!r}, executor="local", workers=2, trial_fn=slow)
+""")
+
+
+@pytest.mark.timeout(300)
+def test_a_killed_search_resumes_with_identical_proposals(reference, tmp_path, stored_trials):
+    plan, d, _ = reference
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-c", KILLED.format(root=str(ROOT), out=str(out))], cwd=ROOT,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 200
+        while stored_trials(out) < 20 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert proc.poll() is None, "the search ended before it could be killed"
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the coordinator and its workers
+        proc.wait()
+    assert 20 <= stored_trials(out) < 72
+    summary = run_search(plan, out, executor="inline", trial_fn=stand_in_trials)
+    assert summary.done == 72
+    assert _table(out) == _table(d)
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("name", ["local", "dask"])
+def test_a_search_gives_the_same_trials_on_every_executor(reference, tmp_path, name):
+    if name == "dask":
+        pytest.importorskip("distributed")
+    plan, d, _ = reference
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["falsify"], budget=8, batch_size=8)  # one batch: one Dask cluster start
+    small = search_from_data(data)
+    inline = tmp_path / "inline"
+    run_search(small, inline, executor="inline", trial_fn=stand_in_trials)
+    run_search(small, tmp_path / name, executor=name, workers=2, trial_fn=stand_in_trials)
+    assert _table(tmp_path / name) == _table(inline)
+
+
+def test_a_larger_budget_goes_on_where_the_search_stopped(reference, tmp_path):
+    plan, d, _ = reference
+    run_search(plan, tmp_path, budget=12, executor="inline", trial_fn=stand_in_trials)
+    summary = run_search(plan, tmp_path, budget=24, executor="inline", trial_fn=stand_in_trials)
+    assert summary.ran == 36
+    proposals, _ = _table(tmp_path)
+    ref = {(p[1], p[2], p[3], p[4]): p[5:] for p in _table(d)[0]}
+    # the falsifier and nominal streams are the same as a run with the larger budget from the start
+    for p in proposals:
+        if p[2] != "ce-is":
+            assert ref[(p[1], p[2], p[3], p[4])] == p[5:]
+
+
+def test_a_study_directory_is_refused(tmp_path, write_tiny_study):
+    from offroadbench.study import load_study, run_study
+    from tests.study.test_run import fake_trials
+
+    study, cells = load_study(write_tiny_study(tmp_path, name="s", root_seed=1, terrains=1, missions=1))
+    run_study(study, cells, tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    with pytest.raises(InputError, match="holds a study, not a search"):
+        run_search(search_from_data(SEARCH), tmp_path / "run", executor="inline", trial_fn=stand_in_trials)
+
+
+@pytest.mark.parametrize("executor", ["inline", "local"])
+def test_proposals_whose_terrain_holds_no_mission_are_stored_apart_and_the_search_goes_on(tmp_path, executor):
+    from offroadbench.search.report import search_table
+    from offroadbench.search.runner import NO_MISSION
+
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["random", "falsify"], budget=12)
+    # a 6 m map with a 0.5 m border has a 7.07 m diagonal: longer missions cannot be placed
+    data["search"]["params"][1] = {"key": "missions.length_m", "low": 3.0, "high": 12.0}
+    plan = search_from_data(data)
+    summary = run_search(plan, tmp_path, executor=executor, workers=2, trial_fn=stand_in_trials)
+    assert summary.done == 24
+    df, _ = search_table(tmp_path)
+    none = df["failure_reason"] == NO_MISSION
+    assert none.any() and (df.loc[none, "missions.length_m"] > 6.0).all()  # near the diagonal: no goal found
+    assert not df.loc[none, "failed"].any() and df.loc[none, "margin"].isna().all()
+    assert (df.loc[~none, "missions.length_m"] <= 7.1).all()
