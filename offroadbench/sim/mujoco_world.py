@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from offroadbench.config import check_choice
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export.mujoco import mujoco_hfield_size
@@ -96,6 +97,31 @@ class ContactTuning:
     servo_gain: float = 4.0
     """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
     1 / (1 + gain) per step before the torque limit."""
+    tyre_loop: str = "auto"
+    """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.tyres_compiled,
+    the same forces to the last bit at about a tenth of the cost), ``python`` (the interpreted loop
+    over CoulombBristles) or ``auto`` (compiled when numba is installed, else python)."""
+
+    def __post_init__(self) -> None:
+        check_choice(self, "tyre_loop", self.tyre_loop, TYRE_LOOPS)
+
+
+#: values of ContactTuning.tyre_loop
+TYRE_LOOPS = ("auto", "compiled", "python")
+
+
+def _compiled_loop(choice: str):
+    """offroadbench.sim.tyres_compiled for ContactTuning.tyre_loop = ``choice``, or None for the
+    Python loop (``auto`` without numba)."""
+    if choice == "python":
+        return None
+    try:
+        from offroadbench.sim import tyres_compiled
+    except ImportError:
+        if choice == "compiled":
+            raise InputError("ContactTuning.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
+        return None
+    return tyres_compiled
 
 
 #: the contact settings the MuJoCo world uses
@@ -215,6 +241,14 @@ class MuJoCoWorld:
             self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
                                           self._dt_mj if contact.tyres_each_substep else self.dt_s,
                                           stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+        self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        tc = _compiled_loop(contact.tyre_loop) if self._tyres is not None else None
+        if tc is not None:
+            core, m = self._tyres, self.model
+            slot = [self._wheel_geom.get(g, -1) for g in range(m.ngeom)]
+            f, ist = tc.new_state(core.n, core._mu, core._dt, core._k, core._c, self._wheel_bodies, self._wheel_qvel,
+                                  self._wheel_axis, self._terrain_geom, self._chassis, slot)
+            self._fast = (tc, f, ist)
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
         self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
@@ -439,6 +473,8 @@ class MuJoCoWorld:
         if self._tyres is not None:
             self._tyres.reset()
             self._tyres.clear()
+        if self._fast is not None:
+            self._fast[0].reset_state(self._fast[1], self._fast[2], len(self._loads))
         self.command_wheels(0.0, 0.0)
         for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
             self.step()
@@ -458,6 +494,9 @@ class MuJoCoWorld:
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
         ``xfrc_applied``, ``mj_step2``, then the contacts."""
+        if self._fast is not None:
+            self._step_compiled()
+            return
         m, d = self.model, self.data
         each = self.contact.tyres_each_substep
         last = self.substeps - 1
@@ -478,6 +517,34 @@ class MuJoCoWorld:
             self._base_force = None
             if self._tyres is None:
                 d.xfrc_applied[self._chassis] = 0.0
+
+    def _step_compiled(self) -> None:
+        """:meth:`step` with the compiled tyre loop (offroadbench.sim.tyres_compiled): the same
+        sequence, the contacts read and the forces applied outside the interpreter."""
+        m, d = self.model, self.data
+        tc, f, ist = self._fast
+        each = self.contact.tyres_each_substep
+        last = self.substeps - 1
+        pushed = self._base_force
+        push = 14 * len(self._loads) + tc.F_PUSH_X
+        if pushed is not None:
+            f[push:push + 3] = pushed
+            f[push + 3] = 1.0
+        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.apply_tyres, tc.read_contacts
+        for k in range(self.substeps):
+            if each or k == 0:
+                step1(m, d)
+                apply(qvel, xmat, xipos, xfrc, f, ist)
+                step2(m, d)
+            else:
+                mujoco.mj_step(m, d)  # the tyre forces of this trial step held in xfrc_applied
+            if each or k == last:
+                con = d.contact
+                read(con.geom, con.dist, con.pos, con.frame, con.efc_address, d.efc_force, f, ist)
+        if pushed is not None:
+            self._base_force = None
+            f[push + 3] = 0.0
 
     def _apply_tyres(self) -> None:
         """The tyre forces of the wheels touched in the last step, as forces and torques about each
@@ -606,6 +673,8 @@ class MuJoCoWorld:
 
     def wheel_penetration_m(self) -> float:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), m."""
+        if self._fast is not None:
+            return self._fast[0].penetration(self._fast[1], len(self._loads))
         return self._penetration
 
     def wheel_slip(self) -> float | None:
@@ -614,6 +683,8 @@ class MuJoCoWorld:
 
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal force from the terrain in the last step, N (left, then right)."""
+        if self._fast is not None:
+            return self._fast[0].loads(self._fast[1], len(self._loads))
         return tuple(self._loads)
 
     def centre_of_mass_m(self) -> tuple[float, float, float]:
