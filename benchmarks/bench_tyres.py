@@ -7,7 +7,8 @@ MuJoCo states, sampled along a paper mission (terrain 0 of D = 2.45, root seed 2
 touching the ground in some of them), alternating python and compiled in rounds (best of
 ``--repeats`` rounds per state, so load hits both alike); the compiled loop is timed with the
 attribute look-ups its call needs (``d.contact`` and its fields), as the world makes them.
-It also times the whole trial step (``world.step``) both ways.
+It also times the whole trial step (``world.step``) both ways, over the mission's first
+``calls / 10`` steps.
 
     .venv/bin/python benchmarks/bench_tyres.py [--states 12] [--repeats 7] [--smoke]
 
@@ -31,7 +32,7 @@ from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld
 
 def _states(world: MuJoCoWorld, start, goal, count: int) -> list[tuple[np.ndarray, np.ndarray]]:
     """(qpos, qvel) of ``count`` moments of a straight drive from ``start`` towards ``goal``, 20 trial steps apart."""
-    world.spawn(*start, np.arctan2(goal[1] - start[1], goal[0] - start[0]))
+    world.spawn(*start, float(np.arctan2(goal[1] - start[1], goal[0] - start[0])))
     out = []
     for k in range(20 * count):
         world.command_wheels(7.0 + 3.0 * np.sin(0.05 * k), 7.0 - 3.0 * np.sin(0.05 * k))
@@ -52,7 +53,7 @@ def _python_loop(world: MuJoCoWorld):
 def _compiled_loop(world: MuJoCoWorld):
     tc, f, ist = world._fast
     d = world.data
-    apply, read = tc.apply_tyres, tc.read_contacts
+    apply, read = tc.APPLY, tc.READ
     qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
 
     def run(n: int) -> None:
@@ -91,7 +92,7 @@ def main() -> None:
         from offroadbench.navigation.missions import MissionConfig
 
         hm, missions = _paper_terrain(2.45, RoughnessConfig(border_m=5.0), MissionConfig(count=1, length_m=35.0, border_m=5.0), 1)
-        start, goal = missions[0].start, missions[0].goal
+        start, goal = missions[0].start_xy_m, missions[0].goal_xy_m
     worlds = {loop: MuJoCoWorld(hm, "husky", SimConfig(engine="mujoco"), ContactTuning(tyre_loop=loop))
               for loop in ("python", "compiled")}
     runners = {"python": _python_loop(worlds["python"]), "compiled": _compiled_loop(worlds["compiled"])}
@@ -115,13 +116,13 @@ def main() -> None:
             per[loop].append(best[loop])
     # whole trial steps, the two worlds alternating
     step_best = dict.fromkeys(worlds, float("inf"))
-    for w in worlds.values():
-        w.spawn(*start, 0.0)
+    heading = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
     for _ in range(args.repeats):
         for loop, w in worlds.items():
+            w.spawn(*start, heading)  # each timing from the same state: the first steps of the mission
             t0 = time.perf_counter()
             for k in range(args.calls // 10):
-                w.command_wheels(6.0, 5.0)
+                w.command_wheels(6.0, 5.5)
                 w.step()
             step_best[loop] = min(step_best[loop], (time.perf_counter() - t0) / (args.calls // 10))
     for w in worlds.values():

@@ -248,6 +248,8 @@ class MuJoCoWorld:
             slot = [self._wheel_geom.get(g, -1) for g in range(m.ngeom)]
             f, ist = tc.new_state(core.n, core._mu, core._dt, core._k, core._c, self._wheel_bodies, self._wheel_qvel,
                                   self._wheel_axis, self._terrain_geom, self._chassis, slot)
+            d = self.data
+            tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
@@ -531,7 +533,7 @@ class MuJoCoWorld:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
         qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
-        step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.apply_tyres, tc.read_contacts
+        step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.APPLY, tc.READ
         for k in range(self.substeps):
             if each or k == 0:
                 step1(m, d)

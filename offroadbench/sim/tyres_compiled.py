@@ -38,7 +38,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["new_state", "reset_state", "read_contacts", "apply_tyres", "wheel_force", "loads", "penetration"]
+__all__ = ["APPLY", "READ", "apply_tyres", "check_types", "loads", "new_state", "penetration", "read_contacts", "reset_state",
+           "wheel_force"]
 
 # offsets past 14 n in the float state
 F_MU, F_DT, F_K, F_C, F_PEN, F_PUSH_X, F_PUSH_Y, F_PUSH_Z, F_PUSHED = range(9)
@@ -85,11 +86,17 @@ def penetration(f: np.ndarray, n: int) -> float:
     return float(f[14 * n + F_PEN])
 
 
-@njit(cache=True)
+#: the kernels' signatures, compiled at import (or loaded from numba's cache): MuJoCo's arrays as
+#: any-layout views (``d.contact``'s fields are strided), the state arrays contiguous
+_READ_SIG = "void(int32[:, :], float64[:], float64[:, :], float64[:, :], int32[:], float64[:], float64[::1], int64[::1])"
+_APPLY_SIG = "void(float64[:], float64[:, :], float64[:, :], float64[:, :], float64[::1], int64[::1])"
+
+
+@njit(_READ_SIG, cache=True)
 def read_contacts(geom, dist, pos, frame, efc_address, efc_force, f, st):  # pragma: no cover - compiled
     """Sum the wheels' terrain contacts of the step just taken (``d.contact`` fields of its
     ``ncon`` contacts and ``d.efc_force``) into the state: the Python loop's ``_read_contacts``."""
-    n = _n_wheels(f)
+    n = (f.shape[0] - N_F) // 14
     base_i = 4 * n
     terrain = st[base_i + I_TERRAIN]
     for j in range(11 * n):
@@ -209,7 +216,7 @@ def wheel_force(f, st, i, cx, cy, cz, vx, vy, vz, wx, wy, wz):  # pragma: no cov
     return fx, fy, fz, px, py, pz
 
 
-@njit(cache=True)
+@njit(_APPLY_SIG, cache=True)
 def apply_tyres(qvel, xmat, xipos, xfrc, f, st):  # pragma: no cover - compiled
     """Write the touched wheels' tyre forces, and moments about their centres of mass, into
     ``xfrc`` (``d.xfrc_applied``; every other row zero, the chassis row the pushed force if any),
@@ -269,3 +276,32 @@ def apply_tyres(qvel, xmat, xipos, xfrc, f, st):  # pragma: no cover - compiled
         xfrc[body, 3] = oy * fz - oz * fy
         xfrc[body, 4] = oz * fx - ox * fz
         xfrc[body, 5] = ox * fy - oy * fx
+
+
+def _entry(kernel):
+    """``kernel``'s compiled entry point for its one signature: the call skips numba's type dispatch
+    (about 0.5 us of 1 per call; the arguments are unboxed as the signature says, so the caller
+    passes exactly those types: :func:`check_types` once per world). Falls back to the dispatcher
+    where numba keeps its compiled overloads elsewhere."""
+    try:
+        (result,) = kernel.overloads.values()
+        return result.entry_point
+    except (AttributeError, ValueError):
+        return kernel
+
+
+#: :func:`read_contacts` and :func:`apply_tyres` without numba's per-call type dispatch
+READ = _entry(read_contacts)
+APPLY = _entry(apply_tyres)
+
+
+def check_types(qvel, xmat, xipos, xfrc, contact, efc_force) -> None:
+    """Call both kernels once through numba's dispatcher with a world's arrays (``d.qvel``,
+    ``d.xmat``, ``d.xipos``, ``d.xfrc_applied``, ``d.contact``, ``d.efc_force``) on a throw-away state,
+    which raises TypeError if their types are not the compiled signatures' (another MuJoCo version),
+    before :data:`READ` and :data:`APPLY` are used without that check."""
+    f, st = new_state(0, 0.0, 0.0, 0.0, 0.0, [], [], np.zeros((0, 3)), -1, 0, [-1] * xfrc.shape[0])
+    scratch = np.zeros_like(xfrc)
+    apply_tyres(qvel, xmat, xipos, scratch, f, st)
+    c = contact
+    read_contacts(c.geom, c.dist, c.pos, c.frame, c.efc_address, efc_force, f, st)
