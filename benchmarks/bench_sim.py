@@ -8,7 +8,7 @@ tests/test_sim_physics.py (15 deg ramp, wall, off the edge) at each rate.
 
     .venv/bin/python benchmarks/bench_sim.py [--preset paper-d2.45] [--seed 1] [--missions 5]
 
-``--contact`` instead compares the tyre-terrain contact models (offroadbench.sim.contact) in one
+``--contact`` instead compares the tyre-terrain contact models (offroadbench.sim.engines.pybullet.tyres) in one
 run, at the default 60 Hz with sphere wheels: the old default (Bullet's friction, the URDF's
 light wheels, 50 solver iterations), ``bullet`` (Bullet's friction with the drive train's spin inertia) and ``coulomb``
 (the new default). Per model it prints the RTF on the same missions (run in rounds: each
@@ -118,7 +118,7 @@ def contact_variant(name: str):
 
 def yaw_tracking(vehicle, sim) -> tuple[float, float]:
     """(min, max) of achieved / commanded yaw rate on flat ground over the vehicle check's cases."""
-    from offroadbench.sim.check import _yaw_tracking
+    from offroadbench.sim.rigs.vehicle_check import _yaw_tracking
 
     with World(Heightmap.flat(161, 161, 0.1), vehicle, sim) as w:
         ratios = [r.measured / r.expected for r in _yaw_tracking(w, (0.0, 22.5, 45.0), (0.25, 0.5, 1.0, 2.0))]
@@ -127,7 +127,7 @@ def yaw_tracking(vehicle, sim) -> tuple[float, float]:
 
 def rough_turn_rate(vehicle, sim) -> float:
     """Median |yaw rate| of a 1 rad/s turn in place at 27 poses on a small rough D = 2.6 terrain, rad/s."""
-    from offroadbench.sim.check import _mean_yaw_rate
+    from offroadbench.sim.rigs.vehicle_check import _mean_yaw_rate
     from offroadbench.terrain.recipe import apply_overrides
 
     recipe = apply_overrides(load_recipe("paper-d2.6"), {"grid.rows": 241, "grid.cols": 241, "layers.base.relief_m": 1.5})
@@ -208,7 +208,7 @@ def compare_soil(args) -> None:
 
 
 def compare_iterations(args) -> None:
-    from offroadbench.sim.check import check_vehicle
+    from offroadbench.sim.rigs.vehicle_check import check_vehicle
 
     counts = [int(s) for s in args.iterations.split(",")]
     husky = load_vehicle("husky")
@@ -245,13 +245,17 @@ def compare_iterations(args) -> None:
 
 
 def _old_tyres(rev: str):
-    """CoulombTyres as ``sim/contact.py`` of git revision ``rev`` defines it (loaded from ``git show``)."""
+    """CoulombTyres as ``sim/contact.py`` (later ``sim/engines/pybullet/tyres.py``) of git revision ``rev`` defines it (loaded from ``git show``)."""
     import subprocess
     import types
 
     root = Path(__file__).resolve().parents[1]
-    src = subprocess.run(["git", "show", f"{rev}:offroadbench/sim/contact.py"], cwd=root, check=True,
-                         capture_output=True, text=True).stdout
+    for path in ("offroadbench/sim/contact.py", "offroadbench/sim/engines/pybullet/tyres.py"):  # before / after the move
+        got = subprocess.run(["git", "show", f"{rev}:{path}"], cwd=root, capture_output=True, text=True)
+        if got.returncode == 0:
+            break
+    got.check_returncode()
+    src = got.stdout
     mod = types.ModuleType(f"contact_{rev}")
     exec(compile(src, f"{rev}:contact.py", "exec"), mod.__dict__)
     return mod.CoulombTyres
@@ -268,9 +272,9 @@ PAIRED = {  # variant -> (SimConfig changes, old tyre loop?)
 
 def _paper_terrain(d_high: float, rc, mcfg, n: int):
     """Terrain 0 of root seed 2023 at ``d_high`` and its first ``n`` missions, as the paper study has them
-    (through offroadbench.sim.pipeline.prepare_terrain)."""
+    (through offroadbench.sim.trial.pipeline.prepare_terrain)."""
     from offroadbench.seeding import mission_seed, terrain_seed
-    from offroadbench.sim.pipeline import TrialSettings, prepare_terrain
+    from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain
     from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
     recipe = apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d_high})
@@ -297,7 +301,7 @@ def _drive_rotated(worlds: dict, missions, wall: dict, simt: dict, res: dict) ->
             w.close()
 
 def paired(args) -> None:
-    import offroadbench.sim.world as world_mod
+    import offroadbench.sim.engines.pybullet.world as world_mod
 
     old, lean = _old_tyres(args.old_rev), world_mod.CoulombTyres
     husky = load_vehicle("husky")
@@ -361,8 +365,8 @@ def engines(args) -> None:
             t0 = time.perf_counter()
             tuning = {k.split(".", 1)[1]: v for k, v in changes.items() if k.startswith("contact.")}
             sim = dataclasses.replace(SimConfig(), **{k: v for k, v in changes.items() if not k.startswith("contact.")})
-            if tuning:  # MuJoCo contact settings (offroadbench.sim.mujoco_world.ContactTuning)
-                from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld
+            if tuning:  # MuJoCo contact settings (offroadbench.sim.engines.mujoco.world.ContactTuning)
+                from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld
 
                 worlds[n] = MuJoCoWorld(hm, "husky", sim, ContactTuning(**tuning))
             else:

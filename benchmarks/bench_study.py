@@ -169,7 +169,7 @@ def plans(missions: int, planners: list[str]) -> None:
     from offroadbench.navigation.costmap import _HAZARD_CACHE
     from offroadbench.navigation.planners import PlanningProblem, plan
     from offroadbench.sim import World
-    from offroadbench.sim.runner import vehicle_envelope
+    from offroadbench.sim.trial.runner import vehicle_envelope
     from offroadbench.study import load_study
     from offroadbench.study.runner import plan_tasks
     from offroadbench.study.spec import plan_cells

@@ -6,7 +6,7 @@ A recipe names its body (``[body] name = "moon"``) or gives the gravity itself
 sheets (nssdc.gsfc.nasa.gov/planetary/factsheet): Moon 1.62, Mars 3.71 m/s^2; Earth 9.81, the
 value the project has always used (standard gravity is 9.80665).
 
-Soil parameters measured in 1 g are not validated in reduced gravity (offroadbench.sim.terramechanics).
+Soil parameters measured in 1 g are not validated in reduced gravity (offroadbench.sim.tyre_laws.terramechanics).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ Everything here is read from the code, so the reference cannot drift from it:
 * a key's meaning (with its unit and the paper or source behind it) is the field's docstring,
   read from the source with :mod:`ast`; its allowed range is read from the ``check_range`` /
   ``check_int`` / ``check_choice`` calls of the config's ``__post_init__``;
-* the trial columns are the fields of :class:`offroadbench.sim.runner.TrialResult` with their
+* the trial columns are the fields of :class:`offroadbench.sim.trial.runner.TrialResult` with their
   docstrings, after the key columns of :func:`offroadbench.study.results.load`.
 
 ``offroadbench config --write-reference docs/reference.md`` rewrites the committed reference
@@ -280,7 +280,7 @@ def _study_section() -> SectionDoc:
 
 
 def _vehicle_section() -> SectionDoc:
-    from offroadbench.sim.vehicle import VehicleSpec, list_vehicles, load_vehicle
+    from offroadbench.sim.trial.vehicle import VehicleSpec, list_vehicles, load_vehicle
 
     husky = load_vehicle("husky")
     name = FieldDoc("name", "str", "husky", "", f"a vehicle name ({', '.join(list_vehicles())}) or a vehicle.toml path",
@@ -438,7 +438,7 @@ TERRAIN_COLUMNS = (
     ("area_high", "", "Fraction inside the border that is highly rough (as above)."),
 )
 
-#: meaning of each telemetry column (offroadbench.sim.runner.TELEMETRY_COLUMNS)
+#: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
 TELEMETRY_DOCS = {
     "t_s": "Time since the clock started (after settling).",
     "x_m": "Base position x on the map.", "y_m": "Base position y on the map.", "z_m": "Base height.",
@@ -457,7 +457,7 @@ TELEMETRY_DOCS = {
 def trial_columns() -> list[FieldDoc]:
     """The columns of a study's trial table (``offroadbench.study.load``): keys, then every
     TrialResult field (``mission_index`` is the ``mission`` key)."""
-    from offroadbench.sim.runner import TrialResult
+    from offroadbench.sim.trial.runner import TrialResult
 
     keys = [FieldDoc(n, "", None, u, "", d) for n, u, d in KEY_COLUMNS]
     return keys + [f for f in field_docs(TrialResult) if f.name != "mission_index"]
@@ -512,7 +512,7 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
 
 def render_reference() -> str:
     """The whole reference as Markdown (the text of ``docs/reference.md``)."""
-    from offroadbench.sim.runner import TELEMETRY_COLUMNS
+    from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS
 
     lines = [
         "# offroadbench settings reference",
@@ -560,7 +560,7 @@ def render_reference() -> str:
         "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
         "",
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
-        "trials only. Source: `offroadbench.sim.runner.TrialResult`."),
+        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",
@@ -573,7 +573,7 @@ def render_reference() -> str:
         "### Telemetry (`telemetry/` of a run directory or of `drive --out`)",
         "",
         ("One row per telemetry sample (`[sim] telemetry_rate_hz`, 20 Hz by default). "
-        "Source: `offroadbench.sim.runner.TELEMETRY_COLUMNS`."),
+        "Source: `offroadbench.sim.trial.runner.TELEMETRY_COLUMNS`."),
         "",
         *_md_table([FieldDoc(c, "", None, unit_of(c), "", TELEMETRY_DOCS.get(c, "")) for c in TELEMETRY_COLUMNS],
                    columns=True),

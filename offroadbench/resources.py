@@ -6,7 +6,7 @@ installed wheel works from any directory:
 * ``offroadbench.data.terrains``: terrain presets (``<name>.toml``) and ``data/sample-dem.npy``;
 * ``offroadbench.data.vehicles``: one folder per vehicle, holding ``vehicle.toml`` and its URDF;
 * ``offroadbench.data.experiments``: study TOMLs (``smoke.toml``, ``majhor2023.toml``, ...);
-* ``offroadbench.data.soils``: soil parameter sets (``<name>.toml``, offroadbench.sim.terramechanics).
+* ``offroadbench.data.soils``: soil parameter sets (``<name>.toml``, offroadbench.sim.tyre_laws.terramechanics).
 
 In the repository these are the top-level folders ``terrains/``, ``vehicles/``,
 ``experiments/`` and ``soils/``; ``setup.py`` maps them into the package at build time (editable installs too).

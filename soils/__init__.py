@@ -1,1 +1,1 @@
-"""Soil parameter sets (``*.toml``, offroadbench.sim.terramechanics), shipped as ``offroadbench.data.soils``."""
+"""Soil parameter sets (``*.toml``, offroadbench.sim.tyre_laws.terramechanics), shipped as ``offroadbench.data.soils``."""

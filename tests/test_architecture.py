@@ -107,20 +107,18 @@ def test_importing_leaves_pybullet_and_matplotlib_backend_alone(module):
     assert r.returncode == 0, r.stderr
 
 
-#: the only modules that may talk to a physics engine (offroadbench.sim.engine, the engine boundary)
-ENGINE_MODULES = {"offroadbench.sim.world", "offroadbench.sim.contact", "offroadbench.sim._banner",
-                  "offroadbench.sim.mujoco_world",
-                  # the terramechanics tyre model's PyBullet adapter (contact.py's sibling) and its
-                  # PyBullet single-wheel rig (issue 21): engine code, not callers of the boundary
-                  "offroadbench.sim.soil_contact", "offroadbench.sim.soil_check"}
-#: top-level packages of physics engines
-ENGINE_PACKAGES = {"pybullet", "pybullet_data", "pybullet_envs", "mujoco"}
+#: top-level packages of physics engines -> the engine they belong to
+ENGINE_PACKAGES = {"pybullet": "pybullet", "pybullet_data": "pybullet", "pybullet_envs": "pybullet", "mujoco": "mujoco"}
+#: modules outside the engine packages that may import an engine: the banner guard (it imports
+#: pybullet quietly for the CLI and the study workers)
+ENGINE_EXCEPTIONS = {"offroadbench.sim._banner": {"pybullet"}}
 
 
-def _engine_uses(tree: ast.AST) -> list[str]:
+def _engine_uses(tree: ast.AST) -> list[tuple[str, str]]:
     """Every place in ``tree`` that talks to a physics engine directly, at any level (inside
-    functions too): an import of an engine package (statement, ``importlib.import_module`` or
-    ``__import__`` of a literal name), a physics client id (``.client_id``, ``physicsClientId=``)."""
+    functions too), as (engine, where and what): an import of an engine package (statement,
+    ``importlib.import_module`` or ``__import__`` of a literal name), a PyBullet client id
+    (``.client_id``, ``physicsClientId=``)."""
     found = []
     for node in ast.walk(tree):
         names: list[str] = []
@@ -133,11 +131,21 @@ def _engine_uses(tree: ast.AST) -> list[str]:
             fname = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
             if fname in ("import_module", "__import__") and node.args and isinstance(node.args[0], ast.Constant):
                 names = [str(node.args[0].value)]
-            found += [f"line {node.lineno}: physicsClientId=" for k in node.keywords if k.arg == "physicsClientId"]
+            found += [("pybullet", f"line {node.lineno}: physicsClientId=") for k in node.keywords
+                      if k.arg == "physicsClientId"]
         elif isinstance(node, ast.Attribute) and node.attr == "client_id":
-            found.append(f"line {node.lineno}: .client_id")
-        found += [f"line {node.lineno}: imports {n}" for n in names if n.split(".")[0] in ENGINE_PACKAGES]
+            found.append(("pybullet", f"line {node.lineno}: .client_id"))
+        found += [(ENGINE_PACKAGES[n.split(".")[0]], f"line {node.lineno}: imports {n}") for n in names
+                  if n.split(".")[0] in ENGINE_PACKAGES]
     return found
+
+
+def _allowed_engines(module: str) -> set[str]:
+    """The engines ``module`` may talk to: its own, inside ``offroadbench.sim.engines.<engine>``."""
+    parts = module.split(".")
+    if parts[:3] == ["offroadbench", "sim", "engines"] and len(parts) > 3 and parts[3] in ENGINE_PACKAGES.values():
+        return {parts[3]}
+    return ENGINE_EXCEPTIONS.get(module, set())
 
 
 def test_the_engine_detector_sees_function_level_imports_and_client_ids():
@@ -150,19 +158,31 @@ def test_the_engine_detector_sees_function_level_imports_and_client_ids():
         "    return pb.getAABB(world.vehicle_id, physicsClientId=world.client_id)\n"
     )
     found = _engine_uses(ast.parse(code))
-    assert {f.split(": ", 1)[1] for f in found} == {
-        "imports pybullet", "imports mujoco", "imports pybullet_data", "physicsClientId=", ".client_id"}
+    assert {(e, f.split(": ", 1)[1]) for e, f in found} == {
+        ("pybullet", "imports pybullet"), ("mujoco", "imports mujoco"), ("pybullet", "imports pybullet_data"),
+        ("pybullet", "physicsClientId="), ("pybullet", ".client_id")}
     assert _engine_uses(ast.parse("import numpy\nfrom offroadbench.sim import engine\n")) == []
+    assert _allowed_engines("offroadbench.sim.engines.mujoco.world") == {"mujoco"}
+    assert _allowed_engines("offroadbench.sim.engines.base") == set()
+    assert _allowed_engines("offroadbench.sim.rigs.soil_check") == set()
 
 
-def test_only_the_engine_modules_talk_to_an_engine():
-    """The engine boundary (issue 19): no module but sim/world.py, sim/contact.py, the banner guard
-    and the MuJoCo world imports pybullet or mujoco or uses a physics client id, at any level."""
+def test_only_each_engine_package_talks_to_its_engine():
+    """The engine boundary (issues 19, 35): only modules under ``sim/engines/pybullet/`` import
+    pybullet or use a physics client id, only modules under ``sim/engines/mujoco/`` import mujoco
+    (the banner guard aside), at any level; and each engine package does talk to its engine (the
+    rule is not vacuous)."""
     offenders = []
+    used: dict[str, set[str]] = {}
     for m, path in _modules().items():
-        if m not in ENGINE_MODULES:
-            offenders += [f"{m}: {f}" for f in _engine_uses(ast.parse(path.read_text()))]
+        uses = _engine_uses(ast.parse(path.read_text()))
+        allowed = _allowed_engines(m)
+        offenders += [f"{m}: {what}" for engine, what in uses if engine not in allowed]
+        for engine, _ in uses:
+            used.setdefault(engine, set()).add(m)
     assert offenders == []
+    assert {m.split(".")[3] for e in used for m in used[e] if m.startswith("offroadbench.sim.engines.")} == {
+        "pybullet", "mujoco"}
 
 
 def test_print_only_in_cli():

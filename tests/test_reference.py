@@ -13,7 +13,7 @@ from offroadbench import reference
 from offroadbench.cli import main
 from offroadbench.errors import InputError
 from offroadbench.navigation.planners import planner_from_table
-from offroadbench.sim.runner import TELEMETRY_COLUMNS, TrialResult
+from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS, TrialResult
 from offroadbench.study.spec import _STUDY_KEYS, SECTIONS, plan_cells, study_from_dict
 
 REPO = Path(__file__).resolve().parents[1]

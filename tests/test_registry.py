@@ -106,7 +106,7 @@ def test_terrain_plugins_from_both_groups_are_renamed_to_their_entry_point(monke
 
 def test_vehicle_plugin_is_loaded_by_name(monkeypatch, tmp_path):
     from offroadbench import resources
-    from offroadbench.sim import vehicle
+    from offroadbench.sim.trial import vehicle
 
     husky = resources.vehicle_files()["husky"].parent
     rover = tmp_path / "rover"

@@ -7,7 +7,7 @@ import pytest
 from offroadbench import resources
 from offroadbench.cli import main
 from offroadbench.errors import InputError
-from offroadbench.sim.vehicle import list_vehicles, load_vehicle
+from offroadbench.sim.trial.vehicle import list_vehicles, load_vehicle
 from offroadbench.terrain.recipe import list_presets, load_recipe
 
 USER_PRESET = """

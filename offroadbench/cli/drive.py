@@ -1,7 +1,7 @@
 """``offroadbench drive TERRAIN.png|PRESET``: run random missions on one terrain with a planner or policy.
 
-The work is :func:`offroadbench.sim.batch.drive_missions`; this module parses, checks the
-output directory, formats the :class:`~offroadbench.sim.batch.DriveRun` and writes its files.
+The work is :func:`offroadbench.sim.trial.batch.drive_missions`; this module parses, checks the
+output directory, formats the :class:`~offroadbench.sim.trial.batch.DriveRun` and writes its files.
 """
 
 from __future__ import annotations
@@ -136,10 +136,10 @@ def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
 
 def vehicle_footprint(spec, sim) -> tuple[float, float]:
     """(length, width) of the vehicle's footprint in metres, from its links' bounding boxes at rest
-    (offroadbench.sim.runner.vehicle_envelope, on a small flat world)."""
+    (offroadbench.sim.trial.runner.vehicle_envelope, on a small flat world)."""
     from offroadbench.heightmap import Heightmap
     from offroadbench.sim import World
-    from offroadbench.sim.runner import vehicle_envelope
+    from offroadbench.sim.trial.runner import vehicle_envelope
 
     with World(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
         env = vehicle_envelope(world)
@@ -172,7 +172,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
     from offroadbench.navigation.rules import FailureRules
     from offroadbench.seeding import terrain_seed
     from offroadbench.sim import ControllerConfig, SimConfig, drive_missions
-    from offroadbench.sim.vehicle import vehicle_from_table
+    from offroadbench.sim.trial.vehicle import vehicle_from_table
 
     if args.plot is True and args.out is None:
         raise InputError("--plot needs --out DIR to write the figures into (or give --plot PATH.png)")

@@ -1,7 +1,7 @@
 """``offroadbench soil list`` and ``offroadbench soil check SOIL``: the soils of the terramechanics
 tyre model, and one wheel on a soil at controlled slip in the engine beside the Wong-Reece integrals.
 
-The work is :mod:`offroadbench.sim.soil_check`; this module parses, prints and writes the figure.
+The work is :mod:`offroadbench.sim.rigs.soil_check`; this module parses, prints and writes the figure.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def format_soil_check(rig, model, gravity_m_s2: float) -> str:
 
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from offroadbench.sim.terramechanics import load_soil, soil_files
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil, soil_files
 
     for name in soil_files():
         print(f"{name:30s} {load_soil(name).description}")
@@ -48,9 +48,9 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from offroadbench.errors import InputError
-    from offroadbench.sim.soil_check import model_curve, rig_curve, wheel_load_n
-    from offroadbench.sim.terramechanics import load_soil
-    from offroadbench.sim.vehicle import load_vehicle
+    from offroadbench.sim.rigs.soil_check import model_curve, rig_curve, wheel_load_n
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil
+    from offroadbench.sim.trial.vehicle import load_vehicle
 
     if args.plot:
         check_output_file(args.plot, "--plot", (".png", ".pdf", ".svg"))

@@ -1,6 +1,6 @@
 """``offroadbench vehicle check NAME [--json]``: judge a vehicle model against its own physics.
 
-The work is :func:`offroadbench.sim.check.check_vehicle`; this module prints its rows as a table
+The work is :func:`offroadbench.sim.rigs.vehicle_check.check_vehicle`; this module prints its rows as a table
 (or a JSON list) and exits 1 if any figure is outside its tolerance of what the model's grip,
 geometry and motor torque predict. Spec-sheet figures are printed beside, as information.
 """
@@ -35,7 +35,7 @@ def format_checks(name: str, rows) -> str:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from offroadbench.sim import SimConfig, load_vehicle
-    from offroadbench.sim.check import check_vehicle
+    from offroadbench.sim.rigs.vehicle_check import check_vehicle
 
     spec = load_vehicle(args.name)
     changes = {k: v for k, v in (("tyre_model", args.tyre_model), ("engine", args.engine),

@@ -3,7 +3,7 @@
 Two registries share the ``[planner] name`` namespace (a planner of the same name wins):
 
 * :data:`PLANNERS`: :class:`PlannerSpec` entries, ``plan(problem, cfg) -> (N, 2) waypoints`` that
-  pure pursuit follows (offroadbench.sim.controller); built in: offroadbench.navigation.planners;
+  pure pursuit follows (offroadbench.sim.trial.controller); built in: offroadbench.navigation.planners;
 * :data:`POLICIES`: :class:`PolicySpec` entries, ``make(cfg, context) -> Policy``, a closed loop
   ``act(observation) -> (v, omega)``; built in: offroadbench.navigation.policies.
 

@@ -3,7 +3,7 @@
 :class:`PlanningProblem` is one query (terrain, closed class map, start, goal, mission border,
 vehicle); :class:`VehicleEnvelope` is what a planner knows of the vehicle: its footprint and limits.
 Both are plain frozen data with no registry and no search, so every planner, policy and the trial
-runner (offroadbench.sim.runner) can import them without importing each other.
+runner (offroadbench.sim.trial.runner) can import them without importing each other.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ class VehicleEnvelope:
     """Steepest climbable slope, rise/run (about the tyre friction coefficient on a slope)."""
     max_step_m: float = 0.13
     """Highest step the vehicle climbs, m (Husky: 0.13 m, the geometric bound of
-    offroadbench.sim.check.step_bound_m: the chassis nose strikes a step higher than the belly)."""
+    offroadbench.sim.rigs.vehicle_check.step_bound_m: the chassis nose strikes a step higher than the belly)."""
     ground_clearance_m: float = 0.13
     """Height of the belly above flat ground, m (Husky: 0.13 m, the spec sheet's and the URDF's)."""
     wheel_radius_m: float = 0.1651

@@ -9,7 +9,7 @@ __all__ = ["plot_soil_check"]
 
 def plot_soil_check(rig, model, title: str = ""):
     """Three panels against slip: the engine rig (markers) beside the Wong-Reece integrals (line);
-    ``rig`` and ``model`` are offroadbench.sim.soil_check.SoilCheck."""
+    ``rig`` and ``model`` are offroadbench.sim.rigs.soil_check.SoilCheck."""
     fig, axes = new_figure(1, 3, figsize=(11.0, 3.4))
     panels = (("sinkage_m", 1000.0, "sinkage, mm"), ("drawbar_pull_n", 1.0, "drawbar pull, N"),
               ("torque_nm", 1.0, "driving torque, N m"))

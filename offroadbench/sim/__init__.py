@@ -1,6 +1,12 @@
 """Traversal trials: the only package that talks to a physics engine (PyBullet by default; the
 engine boundary is offroadbench.sim.engine).
 
+Layout: ``engine.py`` (the TrialWorld protocol and the engine registry), ``engines/`` (one package
+per engine, ``base.py`` what they share), ``tyre_laws/`` (engine-neutral force laws), ``trial/``
+(settings, terrain preparation, the tick loop, the controller, the vehicle), ``rigs/`` (``vehicle
+check``, ``soil check``), ``gym_env.py`` (the Gymnasium env) and ``config.py`` (SimConfig,
+ControllerConfig).
+
 Public API: SimConfig, ControllerConfig, FailureRules (frozen configs), VehicleSpec /
 load_vehicle, World (PyBullet), open_world / TrialWorld / VehicleGeometry / ENGINES (the engine
 boundary, offroadbench.sim.engine), TrialResult, run_mission, run_missions, drive_missions / DriveRun,
@@ -20,26 +26,26 @@ _EXPORTS = {
     "SimConfig": "config",
     "ControllerConfig": "config",
     "FailureRules": "config",
-    "VehicleSpec": "vehicle",
-    "load_vehicle": "vehicle",
-    "list_vehicles": "vehicle",
-    "vehicle_from_table": "vehicle",
-    "World": "world",
+    "VehicleSpec": "trial.vehicle",
+    "load_vehicle": "trial.vehicle",
+    "list_vehicles": "trial.vehicle",
+    "vehicle_from_table": "trial.vehicle",
+    "World": "engines.pybullet.world",
     "TrialWorld": "engine",
     "VehicleGeometry": "engine",
     "ENGINES": "engine",
     "open_world": "engine",
-    "TrialResult": "runner",
-    "FAILURE_REASONS": "runner",
-    "TELEMETRY_COLUMNS": "runner",
-    "run_mission": "runner",
-    "run_missions": "pipeline",
-    "TrialSettings": "pipeline",
-    "PreparedTerrain": "pipeline",
-    "prepare_terrain": "pipeline",
-    "drive_terrain": "pipeline",
-    "DriveRun": "batch",
-    "drive_missions": "batch",
+    "TrialResult": "trial.runner",
+    "FAILURE_REASONS": "trial.runner",
+    "TELEMETRY_COLUMNS": "trial.runner",
+    "run_mission": "trial.runner",
+    "run_missions": "trial.pipeline",
+    "TrialSettings": "trial.pipeline",
+    "PreparedTerrain": "trial.pipeline",
+    "prepare_terrain": "trial.pipeline",
+    "drive_terrain": "trial.pipeline",
+    "DriveRun": "trial.batch",
+    "drive_missions": "trial.batch",
     "import_pybullet_quietly": "_banner",
 }
 

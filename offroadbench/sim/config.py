@@ -52,18 +52,18 @@ class SimConfig:
     of at most this many cells, each its own Bullet heightfield; neighbouring tiles share their edge
     samples, so the surface is the same, but a wheel on a seam touches two shapes. Bullet's build
     of a heightfield holds a temporary render mesh of all its triangles (~0.7 GB for one 1009^2
-    map); tiles cap that at one tile's share (offroadbench.sim.world). ``0`` builds one heightfield
+    map); tiles cap that at one tile's share (offroadbench.sim.engines.pybullet.world). ``0`` builds one heightfield
     for the whole map (the build before 2026-11-23; results differ from tiled ones only through
     the seams' contacts)."""
     tyre_model: str = "coulomb"
-    """Tyre-terrain friction (offroadbench.sim.contact): ``bullet`` (Bullet's contact friction on
+    """Tyre-terrain friction (offroadbench.sim.engines.pybullet.tyres): ``bullet`` (Bullet's contact friction on
     the wheels, with the vehicle's wheel spin inertia) or ``coulomb`` (Bullet's wheel friction
     off; Coulomb forces against each contact's slip velocity, applied every step) or
     ``terramechanics`` (Bullet's wheel-terrain contact off; Wong-Reece soft-soil forces on each wheel
-    every step, offroadbench.sim.soil_contact, on the soil ``soil``)."""
+    every step, offroadbench.sim.engines.pybullet.soil, on the soil ``soil``)."""
     soil: str | None = None
     """Soil of the ``terramechanics`` tyre model: a soil name (``soils/*.toml``) or TOML path. None:
-    the terrain's (its recipe's ``[soil] name``), else offroadbench.sim.terramechanics.DEFAULT_SOIL."""
+    the terrain's (its recipe's ``[soil] name``), else offroadbench.sim.tyre_laws.terramechanics.DEFAULT_SOIL."""
     cone_friction: bool | None = None
     """PyBullet's friction cone (``enableConeFriction``) for the contacts Bullet's solver owns:
     ``None`` (default) switches it off under the ``coulomb`` tyre model, where the wheels' Bullet
@@ -72,7 +72,7 @@ class SimConfig:
     under the other tyre models. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
     engine: str = "pybullet"
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
-    default) or ``mujoco`` (offroadbench.sim.mujoco_world; ``pip install 'offroadbench[mujoco]'``).
+    default) or ``mujoco`` (offroadbench.sim.engines.mujoco.world; ``pip install 'offroadbench[mujoco]'``).
     Both run the same trial, tyre model, telemetry and failure rules."""
 
     def __post_init__(self) -> None:
@@ -109,7 +109,7 @@ class SimConfig:
     def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> SimConfig:
         """This config with the terrain's gravity and soil where it leaves them open (None), and
         Earth's gravity and the default soil where the terrain names none either."""
-        from offroadbench.sim.terramechanics import DEFAULT_SOIL
+        from offroadbench.sim.tyre_laws.terramechanics import DEFAULT_SOIL
 
         g = self.gravity_m_s2 if self.gravity_m_s2 is not None else gravity_m_s2
         return dataclasses.replace(self, gravity_m_s2=EARTH_GRAVITY_M_S2 if g is None else float(g),

@@ -16,7 +16,7 @@ loop that owns the contact and the motors to apply once per step:
   it). Applied at each wheel-terrain contact along the wheel's rolling direction (the wheel's
   forward axis projected on the contact plane), with the contact's normal force ``N``.
 
-offroadbench.sim.contact.CoulombTyres already has, per contact and per step, the normal force and
+offroadbench.sim.engines.pybullet.tyres.CoulombTyres already has, per contact and per step, the normal force and
 the slip velocity: the place to add the rolling-resistance force. world.command_wheels is the
 place to pass :func:`power_limited_torque` of the current wheel speeds as the motors' forces.
 """

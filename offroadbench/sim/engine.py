@@ -1,11 +1,11 @@
 """The engine boundary: what a traversal trial needs from a physics engine.
 
-A trial (offroadbench.sim.runner), the vehicle check (offroadbench.sim.check) and the Gymnasium
-env talk to a physics engine only through a :class:`TrialWorld`: one terrain and one vehicle,
+A trial (offroadbench.sim.trial.runner), the vehicle check (offroadbench.sim.rigs.vehicle_check) and
+the Gymnasium env talk to a physics engine only through a :class:`TrialWorld`: one terrain and one vehicle,
 built when the world is opened. Its parts:
 
 - **build terrain** (heightfield tiles or the engine's own height field) from a Heightmap, and
-  **load a vehicle** from its :class:`~offroadbench.sim.vehicle.VehicleSpec` (URDF + limits);
+  **load a vehicle** from its :class:`~offroadbench.sim.trial.vehicle.VehicleSpec` (URDF + limits);
   the vehicle's measured geometry comes back once, as :class:`VehicleGeometry`
   (``world.geometry``), which the planners' envelope, the step rule and ``vehicle check`` read;
 - **reset and spawn** the vehicle at rest above a point, settled;
@@ -16,9 +16,10 @@ built when the world is opened. Its parts:
 - **cast a vertical ray** at the terrain.
 
 Engines are looked up by name in :data:`ENGINES` (``SimConfig.engine``); :func:`open_world` opens
-the configured one. Only the engine modules (``offroadbench.sim.world`` for PyBullet, with
-``contact.py``; ``offroadbench.sim.mujoco_world`` for MuJoCo) import an engine
-(``tests/test_architecture.py``). Importing this module imports no engine.
+the configured one. Each engine is a package, ``offroadbench.sim.engines.<name>`` (its world, tyre
+and soil contact), and only its own package imports the engine (``tests/test_architecture.py``);
+what the engines share sits above them in ``offroadbench.sim.engines.base`` and the engine-neutral
+force laws in ``offroadbench.sim.tyre_laws``. Importing this module imports no engine.
 """
 
 from __future__ import annotations
@@ -34,9 +35,9 @@ from offroadbench.registry import Registry
 if TYPE_CHECKING:
     from offroadbench.heightmap import Heightmap
     from offroadbench.sim.config import SimConfig
-    from offroadbench.sim.vehicle import VehicleSpec
+    from offroadbench.sim.trial.vehicle import VehicleSpec
 
-__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world", "max_height_near"]
+__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -167,26 +168,12 @@ def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., Tri
 #: physics engines by name (``SimConfig.engine``): each a callable ``(hm, vehicle, sim) -> TrialWorld``;
 #: installed packages add theirs through the entry-point group ``offroadbench.engines``
 ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine", entry_point_group="offroadbench.engines")
-ENGINES.add("pybullet", _lazy("offroadbench.sim.world", "World", "pybullet", "pybullet"))
-ENGINES.add("mujoco", _lazy("offroadbench.sim.mujoco_world", "MuJoCoWorld", "mujoco", "mujoco"))
+ENGINES.add("pybullet", _lazy("offroadbench.sim.engines.pybullet.world", "World", "pybullet", "pybullet"))
+ENGINES.add("mujoco", _lazy("offroadbench.sim.engines.mujoco.world", "MuJoCoWorld", "mujoco", "mujoco"))
 
 
 #: tyre models (SimConfig.tyre_model) each engine implements
 ENGINE_TYRE_MODELS = {"pybullet": ("bullet", "coulomb", "terramechanics"), "mujoco": ("bullet", "coulomb")}
-
-
-def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> float:
-    """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), clipped to the
-    map, metres (where every engine spawns a vehicle clear of the ground); ``z_max`` off the map."""
-    import math
-
-    c0 = max(0, int(math.floor((x_m - radius_m) / hm.cell_size_m)))
-    c1 = min(hm.cols - 1, int(math.ceil((x_m + radius_m) / hm.cell_size_m)))
-    r0 = max(0, int(math.floor((y_m - radius_m) / hm.cell_size_m)))
-    r1 = min(hm.rows - 1, int(math.ceil((y_m + radius_m) / hm.cell_size_m)))
-    if c0 > c1 or r0 > r1:
-        return hm.z_max_m
-    return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
 
 
 def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:

@@ -8,7 +8,7 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
 
 - **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
   the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to wheel
-  speeds by the skid-steer drive (:func:`offroadbench.sim.skid_steer.wheel_speeds`) and held for one
+  speeds by the skid-steer drive (:func:`offroadbench.sim.trial.skid_steer.wheel_speeds`) and held for one
   control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 Bullet steps).
   Actions outside the Box are clipped. There is no speed profile: the agent commands the wheels.
   A non-finite action (NaN or infinite in either component) or one that is not two numbers is
@@ -76,9 +76,9 @@ from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig,
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, plan
 from offroadbench.navigation.rules import FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig, SimConfig
-from offroadbench.sim.skid_steer import wheel_speeds
-from offroadbench.sim.runner import body_frame, body_velocity, vehicle_envelope
-from offroadbench.sim.vehicle import VehicleSpec
+from offroadbench.sim.trial.skid_steer import wheel_speeds
+from offroadbench.sim.trial.runner import body_frame, body_velocity, vehicle_envelope
+from offroadbench.sim.trial.vehicle import VehicleSpec
 from offroadbench.sim.engine import TrialWorld, open_world
 
 __all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",

@@ -77,7 +77,7 @@ def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
 def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
     from offroadbench.seeding import terrain_seed
-    from offroadbench.sim.pipeline import prepare_terrain
+    from offroadbench.sim.trial.pipeline import prepare_terrain
     from offroadbench.study.spec import CellPlan
 
     plan = CellPlan.from_meta(meta, cell)
@@ -450,7 +450,7 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     between planners, at the middle level), over the closed class map."""
     from offroadbench.io.telemetry import load_telemetry
     from offroadbench.plots.study import fig_paths
-    from offroadbench.sim.pipeline import prepare_terrain
+    from offroadbench.sim.trial.pipeline import prepare_terrain
     from offroadbench.study.runner import telemetry_paths
     from offroadbench.study.spec import CellPlan
 

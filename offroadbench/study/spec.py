@@ -47,7 +47,7 @@ from typing import Any, Callable, Mapping
 
 from offroadbench.config import check_int, config_id, load_toml, to_dict
 from offroadbench.errors import InputError
-from offroadbench.sim.pipeline import SETTINGS_TABLES, TrialSettings
+from offroadbench.sim.trial.pipeline import SETTINGS_TABLES, TrialSettings
 from offroadbench import seeding
 
 __all__ = [
@@ -62,7 +62,7 @@ __all__ = [
 
 
 #: settings tables of a study -> fn(table, where) that builds and validates their config (the
-#: parts of :class:`offroadbench.sim.pipeline.TrialSettings`)
+#: parts of :class:`offroadbench.sim.trial.pipeline.TrialSettings`)
 SECTIONS: Mapping[str, Callable[[dict, str], Any]] = SETTINGS_TABLES
 
 #: what ``[study] telemetry`` may keep
@@ -224,7 +224,7 @@ class CellPlan:
 
     @functools.cached_property
     def trial_settings(self) -> TrialSettings:
-        """The cell's :class:`~offroadbench.sim.pipeline.TrialSettings`, built once (``vehicle.toml``
+        """The cell's :class:`~offroadbench.sim.trial.pipeline.TrialSettings`, built once (``vehicle.toml``
         read once) and kept with the plan."""
         return TrialSettings.from_tables(self.settings, where=f"cell {self.index}")
 

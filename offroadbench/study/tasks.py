@@ -12,10 +12,10 @@ machine) runs it without reading the study file. :func:`run_terrain` yields mess
 
 The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
 ``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
-can swap the physics for a cheap stand-in; :func:`~offroadbench.sim.pipeline.drive_terrain` is the
+can swap the physics for a cheap stand-in; :func:`~offroadbench.sim.trial.pipeline.drive_terrain` is the
 real one (PyBullet). The terrain, its class maps and its missions come from
-:func:`~offroadbench.sim.pipeline.prepare_terrain` with the cell's
-:class:`~offroadbench.sim.pipeline.TrialSettings`, built once per cell.
+:func:`~offroadbench.sim.trial.pipeline.prepare_terrain` with the cell's
+:class:`~offroadbench.sim.trial.pipeline.TrialSettings`, built once per cell.
 
 Replays. :func:`replay_trial` re-runs one stored trial from the run directory alone (its recipe,
 settings and seeds) and says whether the new row equals the stored one.
@@ -32,14 +32,14 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
 
-from offroadbench.sim.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
+from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
 __all__ = ["TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
-#: prepared mission, in order`` (see :func:`offroadbench.sim.pipeline.drive_terrain`)
+#: prepared mission, in order`` (see :func:`offroadbench.sim.trial.pipeline.drive_terrain`)
 TrialFn = Callable[[PreparedTerrain, TrialSettings], Iterator[Any]]
 
 
@@ -81,7 +81,7 @@ class TrialDone:
     terrain_seed: int
     mission_seed: int
     row: Mapping[str, Any]
-    """The trial's row (offroadbench.sim.runner.TrialResult.as_row)."""
+    """The trial's row (offroadbench.sim.trial.runner.TrialResult.as_row)."""
     kept: Mapping[str, Any] | None = None
     """None, or ``{"telemetry": columns, "path_xy": waypoints}`` to store beside the row."""
 
@@ -132,7 +132,7 @@ class Replay:
     """One stored trial driven again: the new record, the stored row and what it was driven on."""
 
     record: Any
-    """The new offroadbench.sim.runner.TrialRecord."""
+    """The new offroadbench.sim.trial.runner.TrialRecord."""
     stored: Mapping[str, Any]
     """The stored row of the trial."""
     identical: bool

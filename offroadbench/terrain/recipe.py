@@ -106,7 +106,7 @@ class Recipe:
     data: Mapping[str, Any]
     source: str = ""
     soil: str | None = None
-    """``[soil] name``: the soil of the terramechanics tyre model (offroadbench.sim.terramechanics)."""
+    """``[soil] name``: the soil of the terramechanics tyre model (offroadbench.sim.tyre_laws.terramechanics)."""
     body: str = "earth"
     """``[body]``: the body the terrain lies on (offroadbench.bodies)."""
     gravity_m_s2: float | None = None

@@ -99,7 +99,7 @@ def main() -> None:
     build_parser()  # imports every command module
     for name in ("pandas", "scipy.ndimage", "PIL.Image", "matplotlib.figure", "offroadbench.study",
                  "offroadbench.study.runner", "offroadbench.terrain.recipe", "offroadbench.analysis.describe",
-                 "offroadbench.io.png16", "offroadbench.io.export", "offroadbench.sim.batch", "offroadbench.sim.vehicle"):
+                 "offroadbench.io.png16", "offroadbench.io.export", "offroadbench.sim.trial.batch", "offroadbench.sim.trial.vehicle"):
         importlib.import_module(name)
     results = []
     for case in cases:

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from offroadbench.cli import main
-from offroadbench.sim.check import CheckResult
+from offroadbench.sim.rigs.vehicle_check import CheckResult
 
 ROWS = [CheckResult("yaw rate in place, heading 0 deg, command 1 rad/s", 0.98, 1.0, "rad/s", True, "0.85-1.1 x expected"),
         CheckResult("static tip angle (tilt table)", 56.0, 56.7, "deg", True, "within 2 deg", "geometric"),
@@ -23,7 +23,7 @@ def fake_check(monkeypatch):
         calls.append((spec.name, sim.tyre_model))
         return list(ROWS)
 
-    monkeypatch.setattr("offroadbench.sim.check.check_vehicle", check)
+    monkeypatch.setattr("offroadbench.sim.rigs.vehicle_check.check_vehicle", check)
     return calls
 
 

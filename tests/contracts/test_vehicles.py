@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from offroadbench.sim.vehicle import VehicleSpec, list_vehicles, load_vehicle
+from offroadbench.sim.trial.vehicle import VehicleSpec, list_vehicles, load_vehicle
 
 
 @pytest.mark.parametrize("name", list_vehicles())

@@ -130,7 +130,7 @@ def test_the_planner_table_takes_the_map_keys():
 
 def test_a_trial_drives_the_true_terrain_while_the_planner_replans():
     from offroadbench.sim import World
-    from offroadbench.sim.runner import drive_mission
+    from offroadbench.sim.trial.runner import drive_mission
 
     hm = _ridge_map(gap=True)
     m = _mission(start=(2.0, 2.0), goal=(5.0, 2.0))

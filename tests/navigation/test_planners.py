@@ -28,7 +28,7 @@ from offroadbench.navigation.planners import (
 )
 from offroadbench.navigation.planners.astar import _astar
 from offroadbench.sim import ControllerConfig, FailureRules, World, load_vehicle, run_mission
-from offroadbench.sim.controller import LineTracker, PathTracker, make_tracker
+from offroadbench.sim.trial.controller import LineTracker, PathTracker, make_tracker
 
 CELL = 0.05
 FLAT = Heightmap.flat(161, 241, CELL)  # 12 x 8 m

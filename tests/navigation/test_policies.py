@@ -12,7 +12,7 @@ from offroadbench.navigation.planners import PlannerChoice, planner_from_table
 from offroadbench.navigation.policies import POLICIES, PolicyContext, ReactiveConfig, make_policy
 from offroadbench.sim import World
 from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
-from offroadbench.sim.runner import drive_mission
+from offroadbench.sim.trial.runner import drive_mission
 
 CELL = 0.05
 FLAT = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square

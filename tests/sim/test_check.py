@@ -1,4 +1,4 @@
-"""The vehicle check (offroadbench.sim.check): both shipped vehicles pass against their own physics,
+"""The vehicle check (offroadbench.sim.rigs.vehicle_check): both shipped vehicles pass against their own physics,
 spec-sheet figures stand beside as information, and broken vehicles fail the row that shows it."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from offroadbench.sim.check import check_vehicle, climb_limit_deg
+from offroadbench.sim.rigs.vehicle_check import check_vehicle, climb_limit_deg
 
 
 @pytest.fixture(scope="module", params=["husky", "jackal"])
@@ -94,7 +94,7 @@ def test_slippery_tyres_fail_the_turning_rows_not_the_grip_limited_ones(tmp_path
     """Wheel friction 0.1: the climb and the parked side slope are judged against atan(0.1) and
     pass; the vehicle can no longer turn as it is commanded (the kinematic yaw rate at 1 m/s needs
     only 0.4 m/s^2 of the 1 m/s^2 its grip gives), so the turning row fails."""
-    from offroadbench.sim.vehicle import load_vehicle
+    from offroadbench.sim.trial.vehicle import load_vehicle
 
     rows = _quick_check(_broken(load_vehicle("husky"), tmp_path, friction=0.1))
     grip = math.degrees(math.atan(0.1))
@@ -109,7 +109,7 @@ def test_raised_centre_of_mass_fails_the_stability_row(tmp_path):
     """The Husky's chassis centre of mass 0.5 m higher: it would roll over at about 26 deg, before its
     tyres slide at 38.7 deg. The stability row fails; the tilt table still finds the tip angle the
     geometry gives for the raised centre of mass."""
-    from offroadbench.sim.vehicle import load_vehicle
+    from offroadbench.sim.trial.vehicle import load_vehicle
 
     rows = _quick_check(_broken(load_vehicle("husky"), tmp_path, com_raise_m=0.5))
     stability = rows["static stability: tip angle over slide angle"]
@@ -152,7 +152,7 @@ def test_climb_limit_formula():
 
 
 def test_step_bound_geometry():
-    from offroadbench.sim.check import step_bound_m
+    from offroadbench.sim.rigs.vehicle_check import step_bound_m
 
     assert step_bound_m(0.165, 0.13, 0.512, overhang=True) == 0.13  # the nose strikes first
     assert step_bound_m(0.1, 0.3, 0.5, overhang=False) == pytest.approx(0.1, abs=1e-3)  # high belly: the radius

@@ -1,4 +1,4 @@
-"""Tyre-terrain contact models (offroadbench.sim.contact): turning follows the command at any
+"""Tyre-terrain contact models (offroadbench.sim.engines.pybullet.tyres): turning follows the command at any
 heading, and a parked vehicle holds on a slope."""
 
 import math
@@ -7,8 +7,8 @@ import pytest
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim import SimConfig, World
-from offroadbench.sim.check import _mean_yaw_rate, _set_gravity
-from offroadbench.sim.skid_steer import achievable_twist
+from offroadbench.sim.rigs.vehicle_check import _mean_yaw_rate, _set_gravity
+from offroadbench.sim.trial.skid_steer import achievable_twist
 
 
 @pytest.mark.parametrize("model", ["coulomb", "bullet"])

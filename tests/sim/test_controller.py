@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from offroadbench.sim import ControllerConfig, load_vehicle
-from offroadbench.sim.controller import LineTracker, PathTracker, SpeedProfile, pure_pursuit_omega
-from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.trial.controller import LineTracker, PathTracker, SpeedProfile, pure_pursuit_omega
+from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
 
 
 def test_pure_pursuit_curvature():

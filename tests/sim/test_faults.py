@@ -17,7 +17,7 @@ from offroadbench.navigation.planners import PlannerChoice
 from offroadbench.navigation.policies import POLICIES, PolicySpec
 from offroadbench.sim import World
 from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
-from offroadbench.sim.runner import drive_mission
+from offroadbench.sim.trial.runner import drive_mission
 
 #: what the test policy does: return NaN at its ``at``-th action of episode number ``episode``
 POISON = {"armed": True, "episode": 1, "at": 10}
@@ -212,7 +212,7 @@ def cleanup_planners():
 def test_a_planner_beyond_its_limits_is_a_plugin_error(terrain, cleanup_planners, monkeypatch):
     import time
 
-    from offroadbench.sim import runner
+    from offroadbench.sim.trial import runner
 
     hm, classes = terrain
     a, _ = missions(hm)

@@ -1,4 +1,4 @@
-"""The MuJoCo world (offroadbench.sim.mujoco_world): the same terrain, vehicle and checks as the
+"""The MuJoCo world (offroadbench.sim.engines.mujoco.world): the same terrain, vehicle and checks as the
 PyBullet world, behind the same engine boundary (offroadbench.sim.engine)."""
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ def test_settled_vehicle_carries_its_weight_and_tilted_gravity_shifts_it():
 def test_vehicle_check_passes_on_mujoco(vehicle):
     """Every physical figure of ``vehicle check`` within its tolerance on MuJoCo as on PyBullet
     (the Husky's spec-sheet climb of 45 deg needs mu >= 1 on both: grip-limited at mu = 0.8)."""
-    from offroadbench.sim.check import check_vehicle
+    from offroadbench.sim.rigs.vehicle_check import check_vehicle
 
     rows = check_vehicle(vehicle, MUJOCO, headings_deg=(0.0, 22.5, 45.0), yaw_commands_rad_s=(0.5, 2.0))
     failed = [r for r in rows if not r.ok and r.name != "steepest grade climbed vs spec sheet"]
@@ -84,7 +84,7 @@ def test_vehicle_check_passes_on_mujoco(vehicle):
 
 def test_a_missing_mujoco_is_an_input_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco now raises ModuleNotFoundError
-    monkeypatch.delitem(sys.modules, "offroadbench.sim.mujoco_world", raising=False)
+    monkeypatch.delitem(sys.modules, "offroadbench.sim.engines.mujoco.world", raising=False)
     with pytest.raises(InputError, match=r"engine 'mujoco' needs the mujoco package: pip install 'offroadbench\[mujoco\]'"):
         open_world(Heightmap.flat(41, 41, CELL), "husky", MUJOCO)
 

@@ -13,7 +13,7 @@ from offroadbench.io.telemetry import load_telemetry
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
 from offroadbench.sim import (FAILURE_REASONS, TELEMETRY_COLUMNS, ControllerConfig, FailureRules, SimConfig, World,
                               open_world, run_mission, run_missions)
-from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
 
 CELL = 0.05
 

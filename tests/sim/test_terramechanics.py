@@ -9,7 +9,7 @@ import pytest
 from scipy import integrate, optimize
 
 from offroadbench.errors import InputError
-from offroadbench.sim.terramechanics import (
+from offroadbench.sim.tyre_laws.terramechanics import (
     build_tables,
     list_soils,
     load_soil,
@@ -110,7 +110,7 @@ def flat():
 @pytest.mark.parametrize("gravity", [9.81, 1.625])
 def test_vehicle_settles_at_the_static_sinkage_and_drives(flat, gravity):
     from offroadbench.sim import SimConfig, World
-    from offroadbench.sim.skid_steer import wheel_speeds
+    from offroadbench.sim.trial.skid_steer import wheel_speeds
 
     sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=gravity)
     with World(flat, "husky", sim) as world:
@@ -138,7 +138,7 @@ RIG_TOL = 0.01
 def test_single_wheel_rig_in_the_engine_matches_independent_quadrature(name, load_n, gravity):
     """Done-when of issue 21: the engine rig agrees with the integrals, computed here by scipy
     quadrature with the sinkage solved by brentq, over slip 0-0.9."""
-    from offroadbench.sim.soil_check import SLIPS, rig_curve
+    from offroadbench.sim.rigs.soil_check import SLIPS, rig_curve
 
     soil = load_soil(name)
     rig = rig_curve(soil, R, B, load_n, gravity_m_s2=gravity)
@@ -164,8 +164,8 @@ def test_soil_check_command_prints_and_plots(tmp_path, capsys):
 def test_slip_is_higher_on_a_slope(flat):
     """Lunar regolith, lunar gravity: climbing a 8 deg grade at 0.3 m/s takes more slip than the flat."""
     from offroadbench.sim import SimConfig, World
-    from offroadbench.sim.check import _set_gravity
-    from offroadbench.sim.skid_steer import wheel_speeds
+    from offroadbench.sim.rigs.vehicle_check import _set_gravity
+    from offroadbench.sim.trial.skid_steer import wheel_speeds
 
     sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
     slips = []
@@ -190,7 +190,7 @@ def test_deep_snow_ramp_entraps_where_rigid_ground_climbs():
     from offroadbench.heightmap import Heightmap
     from offroadbench.navigation.missions import Mission
     from offroadbench.sim import SimConfig, World
-    from offroadbench.sim.runner import drive_mission
+    from offroadbench.sim.trial.runner import drive_mission
 
     x = np.arange(241) * 0.1
     hm = Heightmap(np.tile(math.tan(math.radians(20.0)) * np.maximum(0.0, x - 6.0), (81, 1)), 0.1)

@@ -170,7 +170,7 @@ from pathlib import Path
 
 def hang_once(prepared, settings):
     \"\"\"Real trials, except that the first call on the cluster hangs (a stuck simulation).\"\"\"
-    from offroadbench.sim.pipeline import drive_terrain
+    from offroadbench.sim.trial.pipeline import drive_terrain
 
     marker = Path(os.environ["OFFROADBENCH_TEST_HANG_MARKER"])
     if not marker.exists():

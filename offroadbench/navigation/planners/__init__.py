@@ -4,7 +4,7 @@ A planner receives a :class:`~offroadbench.navigation.problem.PlanningProblem` (
 study's closed roughness-class map, start, goal, the mission border and the vehicle's envelope)
 and its own frozen config, and returns waypoints in map metres (x, y), the first exactly the start
 and the last exactly the goal. The trial runner follows them with pure pursuit
-(offroadbench.sim.controller: ``PathTracker``).
+(offroadbench.sim.trial.controller: ``PathTracker``).
 
 Registering a planner:
 

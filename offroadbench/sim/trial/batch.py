@@ -3,7 +3,7 @@
 :func:`drive_missions` is the whole ``drive`` command as a library call: it classifies the
 terrain and closes its rough areas (Majhor & Bos 2023, Sec. 2.3-2.4), samples ``n`` straight
 missions on the closed map, drives them in one PyBullet World and returns a :class:`DriveRun`
-with the missions, one :class:`~offroadbench.sim.runner.TrialResult` per mission, each trial's
+with the missions, one :class:`~offroadbench.sim.trial.runner.TrialResult` per mission, each trial's
 20 Hz telemetry (in memory) and the summary of Eq. 5. It writes no file and prints nothing.
 
 Importing this module does not import pybullet; calling :func:`drive_missions` does.
@@ -60,7 +60,7 @@ class DriveRun:
     results: tuple = ()
     """One TrialResult per mission, same order."""
     telemetry: Mapping[int, Mapping[str, np.ndarray]] = field(default_factory=dict)
-    """Mission index -> telemetry columns (offroadbench.sim.runner.TELEMETRY_COLUMNS)."""
+    """Mission index -> telemetry columns (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)."""
     planner: str = "straight"
     """Name of the planner or policy that drove."""
     paths: Mapping[int, np.ndarray] = field(default_factory=dict)
@@ -117,8 +117,8 @@ def drive_missions(
     raised before any physics runs.
     """
     from offroadbench.navigation.planners import PlannerChoice, planner_from_table
-    from offroadbench.sim.pipeline import TrialSettings, drive_terrain, prepare_terrain
-    from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+    from offroadbench.sim.trial.pipeline import TrialSettings, drive_terrain, prepare_terrain
+    from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
     choice = planner if isinstance(planner, PlannerChoice) else planner_from_table({"name": planner}, where="planner")
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)

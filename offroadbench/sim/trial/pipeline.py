@@ -10,9 +10,9 @@ the same three steps:
 2. :func:`prepare_terrain`: the terrain (a Heightmap, or a recipe and a seed), its roughness class
    maps (Majhor & Bos 2023, Eq. 3-4 and the closing, computed once and shared by the mission
    sampler and the planners), and its missions, each drawn alone from its seed (Sec. 2.3).
-3. :func:`drive_terrain`: one World for the terrain, one :class:`~offroadbench.sim.runner.TrialRecord`
+3. :func:`drive_terrain`: one World for the terrain, one :class:`~offroadbench.sim.trial.runner.TrialRecord`
    per mission, in the prepared order. Each mission gets a freshly loaded vehicle
-   (:meth:`~offroadbench.sim.world.World.spawn`), so a record does not depend on the order.
+   (:meth:`~offroadbench.sim.engines.pybullet.world.World.spawn`), so a record does not depend on the order.
 
 Importing this module does not import pybullet; :func:`drive_terrain` does.
 """
@@ -35,10 +35,10 @@ from offroadbench.navigation.missions import Mission, MissionConfig, sample_miss
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
-from offroadbench.sim.vehicle import VehicleSpec, load_vehicle, vehicle_from_table
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle, vehicle_from_table
 
 if TYPE_CHECKING:
-    from offroadbench.sim.runner import TrialResult
+    from offroadbench.sim.trial.runner import TrialResult
 
 __all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions"]
 
@@ -105,7 +105,7 @@ class TrialSettings:
         return dataclasses.replace(self, **changes)
 
     def drive_kwargs(self, maps: ClassMaps | None) -> dict[str, Any]:
-        """Keyword arguments of :func:`offroadbench.sim.runner.drive_mission` for these settings."""
+        """Keyword arguments of :func:`offroadbench.sim.trial.runner.drive_mission` for these settings."""
         return {"planner": self.planner, "classes": None if maps is None else maps.closed,
                 "border_m": self.missions.border_m, "controller": self.controller, "rules": self.rules,
                 "observation": self.observation}
@@ -169,7 +169,7 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
 def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
                   progress: ProgressFn | None = None) -> Iterator[Any]:
     """Drive every prepared mission in one world of ``sim.engine`` (offroadbench.sim.engine.open_world); yield one TrialRecord per mission as it finishes."""
-    from offroadbench.sim.runner import drive_mission
+    from offroadbench.sim.trial.runner import drive_mission
     from offroadbench.sim.engine import open_world
 
     needs = settings.planner.needs
@@ -200,7 +200,7 @@ def run_missions(
     """Run every mission on one terrain (built once) and return one TrialResult per mission.
 
     ``planner``, ``classes`` (a closed class map, used as it is) and ``border_m`` as in
-    :func:`offroadbench.sim.runner.drive_mission`; the missions are driven through
+    :func:`offroadbench.sim.trial.runner.drive_mission`; the missions are driven through
     :func:`drive_terrain`, in the order given. With ``telemetry_dir``
     the telemetry of each trial is saved there as ``mission_<index>.npz`` (see
     offroadbench.io.telemetry) and its planned path as ``mission_<index>_path.npz``.

@@ -3,7 +3,7 @@
 Bullet's wheel-terrain contact is switched off (a collision filter per wheel and terrain tile);
 the chassis keeps its contact, so belly strikes stay real. Each step, before ``stepSimulation``,
 :class:`SoilTyres` does for every wheel, with the states of the last step (explicit, like
-:class:`offroadbench.sim.contact.CoulombTyres`):
+:class:`offroadbench.sim.engines.pybullet.tyres.CoulombTyres`):
 
 1. **Ground under the wheel.** The terrain surface is the heightmap's bilinear patch (heights and
    slopes from the four samples around a point; Bullet's two triangles per cell differ from it by
@@ -12,7 +12,7 @@ the chassis keeps its contact, so belly strikes stay real. Each step, before ``s
    rolled wheel touches with the rim's lowest point, not the centre's foot), and the plane is taken
    again under that point.
 2. **Penetration** ``delta`` of the rim into that plane (along its normal): the soil sinkage plus
-   the series spring (offroadbench.sim.terramechanics, "Tables").
+   the series spring (offroadbench.sim.tyre_laws.terramechanics, "Tables").
 3. **Slip.** In the plane, with ``e_f = axle x n`` the rolling direction: the wheel centre's speed
    ``V`` along it, ``U = r omega`` of the wheel's spin about its axle, and the lateral speed
    ``V_y``. The longitudinal and lateral slips are the states of a first-order relaxation (the
@@ -40,7 +40,7 @@ import pybullet as pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.terramechanics import SoilTables, build_tables, load_soil
+from offroadbench.sim.tyre_laws.terramechanics import SoilTables, build_tables, load_soil
 
 __all__ = ["SoilTyres", "make_soil_tyres"]
 

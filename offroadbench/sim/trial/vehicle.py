@@ -64,10 +64,10 @@ class VehicleSpec:
     wheel_spin_inertia_kg_m2: float | None = None
     """Moment of inertia of each wheel about its axle as the motor sees it, kg m^2: the tyre's own
     plus the gearbox's reflected motor inertia (rotor inertia x gear ratio^2). Set on the wheel links
-    after loading (None: the URDF's value). See offroadbench.sim.contact for why it matters."""
+    after loading (None: the URDF's value). See offroadbench.sim.engines.pybullet.tyres for why it matters."""
     rated_climb_grade_deg: float | None = None
     """Steepest grade the maker says the vehicle climbs, degrees (spec sheet; shown beside the
-    measured figure by offroadbench.sim.check, never used in the simulation)."""
+    measured figure by offroadbench.sim.rigs.vehicle_check, never used in the simulation)."""
     rated_side_slope_deg: float | None = None
     """Steepest side slope the maker says the vehicle traverses, degrees (spec sheet; as above)."""
     rated_step_m: float | None = None

@@ -23,7 +23,7 @@ from ruckig import InputParameter, OutputParameter, Result, Ruckig
 
 from offroadbench.errors import InputError
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.vehicle import VehicleSpec
+from offroadbench.sim.trial.vehicle import VehicleSpec
 
 __all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker", "PathTracker", "make_tracker"]
 

@@ -81,9 +81,10 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
-from offroadbench.sim.contact import CoulombTyres
-from offroadbench.sim.engine import VehicleGeometry, max_height_near
-from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
+from offroadbench.sim.engine import VehicleGeometry
+from offroadbench.sim.engines.base import max_height_near
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["World"]
 
@@ -225,7 +226,7 @@ class World:
                                   physicsClientId=cid)
         self._tyres = None
         if self.sim.tyre_model == "terramechanics":
-            from offroadbench.sim.soil_contact import make_soil_tyres
+            from offroadbench.sim.engines.pybullet.soil import make_soil_tyres
 
             self._tyres = make_soil_tyres(self, body)
         elif coulomb:
@@ -301,7 +302,7 @@ class World:
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres
-        (offroadbench.sim.engine.max_height_near)."""
+        (offroadbench.sim.engines.base.max_height_near)."""
         return max_height_near(self.hm, x_m, y_m, radius_m)
 
     def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:

@@ -1,6 +1,6 @@
 """A MuJoCo world holding one terrain and one vehicle: the engine ``mujoco`` (SimConfig.engine).
 
-It implements offroadbench.sim.engine.TrialWorld as offroadbench.sim.world.World does for
+It implements offroadbench.sim.engine.TrialWorld as offroadbench.sim.engines.pybullet.world.World does for
 PyBullet, from the same inputs, so a trial, its telemetry and its failure rules are the same code:
 
 - **Terrain**: one ``hfield`` from the Heightmap, placed as offroadbench.io.export.mujoco places
@@ -14,7 +14,7 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
 - **Motors**: velocity actuators (``kv`` a stiff servo, the implicit-fast integrator keeps it
   stable) limited to the spec's wheel torque: PyBullet's VELOCITY_CONTROL motors.
 - **Tyres**: under ``tyre_model = "coulomb"`` the wheels' contacts are frictionless (``condim``
-  1) and the project's tyre model (offroadbench.sim.contact.CoulombBristles, the very code the
+  1) and the project's tyre model (offroadbench.sim.tyre_laws.coulomb.CoulombBristles, the very code the
   PyBullet world uses) applies the friction as forces: each trial step starts with ``mj_step1``
   (kinematics, collisions), the tyre forces from the last step's contacts and the current
   velocities into ``xfrc_applied``, then ``mj_step2``, at each of the trial step's MuJoCo steps
@@ -29,7 +29,7 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
 - **Reset**: ``mj_resetData`` before every spawn clears every piece of state, so results do not
   depend on the missions run before (bit-identical in any mission order).
 
-Only this module (and offroadbench.sim.world / contact for PyBullet) imports a physics engine.
+Only this module (and offroadbench.sim.engines.pybullet.world / contact for PyBullet) imports a physics engine.
 """
 
 from __future__ import annotations
@@ -48,9 +48,10 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.config import SimConfig
-from offroadbench.sim.contact import CoulombBristles
-from offroadbench.sim.engine import VehicleGeometry, max_height_near
-from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
+from offroadbench.sim.engine import VehicleGeometry
+from offroadbench.sim.engines.base import max_height_near
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["MuJoCoWorld", "MUJOCO_CONTACT"]
 
@@ -483,7 +484,7 @@ class MuJoCoWorld:
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres
-        (offroadbench.sim.engine.max_height_near)."""
+        (offroadbench.sim.engines.base.max_height_near)."""
         return max_height_near(self.hm, x_m, y_m, radius_m)
 
     def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:

@@ -14,7 +14,7 @@ and is therefore driven at 1.87 rad/s.
 
 from __future__ import annotations
 
-from offroadbench.sim.vehicle import VehicleSpec
+from offroadbench.sim.trial.vehicle import VehicleSpec
 
 __all__ = ["wheel_speeds", "achievable_twist"]
 

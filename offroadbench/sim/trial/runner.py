@@ -32,8 +32,8 @@ from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.controller import make_tracker
-from offroadbench.sim.skid_steer import wheel_speeds
+from offroadbench.sim.trial.controller import make_tracker
+from offroadbench.sim.trial.skid_steer import wheel_speeds
 from offroadbench.sim.engine import TrialWorld
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
@@ -130,9 +130,9 @@ def vehicle_envelope(world: TrialWorld) -> VehicleEnvelope:
     """The footprint and limits of ``world``'s vehicle, for planners, from its measured geometry
     (``world.geometry``, offroadbench.sim.engine.VehicleGeometry): overall length and width, the
     belly's height above the wheels' bottoms, and the step limit (the spec's ``rated_step_m``, else
-    offroadbench.sim.check.step_bound_m of that geometry, the bound ``offroadbench vehicle check``
+    offroadbench.sim.rigs.vehicle_check.step_bound_m of that geometry, the bound ``offroadbench vehicle check``
     tests)."""
-    from offroadbench.sim.check import step_bound_m
+    from offroadbench.sim.rigs.vehicle_check import step_bound_m
 
     spec, geo = world.spec, world.geometry
     step = spec.rated_step_m

@@ -13,8 +13,8 @@ contact model and skid-steer drive the trials use:
 - **yaw-rate tracking**, in place and at cruise speed, at headings 0, 22.5 and 45 deg (Bullet's
   friction directions sit on the world axes, so a heading-dependent contact shows here) for
   commands 0.25-2 rad/s (capped at the vehicle's yaw-rate limit). The expected value is the
-  command after the wheel-speed saturation of :func:`offroadbench.sim.skid_steer.wheel_speeds`
-  (:func:`~offroadbench.sim.skid_steer.achievable_twist`); pass: 0.85-1.1x.
+  command after the wheel-speed saturation of :func:`offroadbench.sim.trial.skid_steer.wheel_speeds`
+  (:func:`~offroadbench.sim.trial.skid_steer.achievable_twist`); pass: 0.85-1.1x.
 - **straight-line drift**: lateral offset after 10 m driven open loop at cruise speed on flat
   ground (expected 0; pass: under 1 % of the distance).
 - **stopping distance** from top speed when the wheels are commanded to stop, against
@@ -41,7 +41,7 @@ contact model and skid-steer drive the trials use:
   across a 2 cm grid). Expected: the geometric bound of :func:`step_bound_m` (wheel radius, chassis nose, belly clearing the edge); pass: 0.6-1.05x.
 
 **Soft soil** (:func:`soft_soil_checks`, the ``terramechanics`` tyre model on lunar regolith in
-lunar gravity, offroadbench.sim.terramechanics):
+lunar gravity, offroadbench.sim.tyre_laws.terramechanics):
 
 - **sinkage at rest** against the Wong-Reece sinkage that carries a quarter of the weight; pass:
   within 15 %.
@@ -69,8 +69,8 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import ENGINE_TYRE_MODELS, TrialWorld, open_world
-from offroadbench.sim.skid_steer import achievable_twist, wheel_speeds
-from offroadbench.sim.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
            "soft_soil_checks", "soil_climb_limit_deg", "SOFT_SOIL", "SOFT_SOIL_GRAVITY_M_S2"]
@@ -480,7 +480,7 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
                          n_wheels: int = 4) -> float:
     """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
     weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
-    from offroadbench.sim.terramechanics import static_sinkage, wheel_forces
+    from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
 
     def margin(theta: float) -> float:
         load = mass_kg * g * math.cos(theta) / n_wheels
@@ -518,7 +518,7 @@ def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
 
 def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
     """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
-    from offroadbench.sim.terramechanics import load_soil, static_sinkage, wheel_forces
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil, static_sinkage, wheel_forces
 
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     if spec.wheel_width_m is None:

@@ -1,0 +1,82 @@
+"""Single-wheel test rig: one wheel on a soil, driven at controlled slip and load in the physics engine.
+
+The rig is the soil-bin test of terramechanics laboratories (Wong & Reece 1967; Ishigami et al. 2007,
+Sec. 4): a carriage moves along x at a set speed, a free vertical slide carries the load, and the
+wheel below it spins at a set angular velocity, so the slip is ``s = 1 - v / (r omega)``. Here the
+carriage and slide are prismatic joints and the wheel a revolute joint of one PyBullet multibody;
+the soil acts on the wheel through the ``terramechanics`` tyre model
+(:class:`offroadbench.sim.engines.pybullet.soil.SoilTyres`) on a flat heightmap. Once steady, the rig reads:
+
+* sinkage: the soil sinkage the tyre model reports (the series spring's part excluded);
+* drawbar pull: the force the carriage's motor holds back (the soil's forward push on the wheel);
+* driving torque: the torque the wheel's motor applies (the soil's resistance torque).
+
+:func:`model_curve` gives the same quantities from the Wong-Reece integrals directly (the sinkage at
+which ``F_z`` carries the load, then ``F_x`` and ``T`` there), without the engine, the tables or
+the relaxation, so the rig tests the whole per-step path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from offroadbench.progress import ProgressFn
+from offroadbench.sim.tyre_laws.terramechanics import SoilParams, static_sinkage, wheel_forces
+
+__all__ = ["SLIPS", "SoilCheck", "model_curve", "rig_curve", "wheel_load_n"]
+
+#: slips of the check
+SLIPS = tuple(round(0.1 * i, 1) for i in range(10))
+
+
+@dataclass(frozen=True)
+class SoilCheck:
+    """Sinkage, drawbar pull and torque against slip for one wheel, load and soil."""
+
+    soil: str
+    radius_m: float
+    width_m: float
+    load_n: float
+    slip: np.ndarray
+    sinkage_m: np.ndarray
+    drawbar_pull_n: np.ndarray
+    torque_nm: np.ndarray
+
+
+def model_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float,
+                slips: Sequence[float] = SLIPS) -> SoilCheck:
+    """The Wong-Reece integrals at the sinkage that carries ``load_n`` at each slip."""
+    out = []
+    for s in slips:
+        h = static_sinkage(soil, radius_m, width_m, load_n, s)
+        _, fx, t = wheel_forces(soil, radius_m, width_m, h, s)
+        out.append((h, float(fx), float(t)))
+    h, fx, t = (np.array(c) for c in zip(*out))
+    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
+
+
+def wheel_load_n(spec, gravity_m_s2: float) -> float:
+    """One wheel's share of the vehicle's weight, N (the URDF's masses, equal shares)."""
+    from offroadbench.sim.engines.pybullet.soil_rig import urdf_mass_kg
+
+    return urdf_mass_kg(spec.urdf) * gravity_m_s2 / len(spec.wheel_joints)
+
+
+def rig_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float, *, gravity_m_s2: float = 9.81,
+              slips: Sequence[float] = SLIPS, wheel_speed_m_s: float = 0.6, physics_rate_hz: int = 60,
+              seconds: float = 4.0, progress: ProgressFn | None = None) -> SoilCheck:
+    """Drive the rig at each slip for ``seconds`` and average the last quarter (module docstring).
+
+    ``wheel_speed_m_s`` is ``r omega``; the carriage moves at ``(1 - s)`` of it, which must stay above
+    the tyre model's resistance fade speed (0.05 m/s) for the steady-state Wong-Reece forces to apply.
+    """
+    from offroadbench.sim.engines.pybullet.soil_rig import rig_rows
+
+    rows = rig_rows(soil, radius_m, width_m, load_n, gravity_m_s2=gravity_m_s2, slips=slips,
+                    wheel_speed_m_s=wheel_speed_m_s, physics_rate_hz=physics_rate_hz, seconds=seconds,
+                    progress=progress)
+    h, fx, t = (np.array(c) for c in zip(*rows))
+    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
