@@ -27,7 +27,7 @@ import numpy as np
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim import SimConfig
-from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld
+from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld
 
 
 def _states(world: MuJoCoWorld, start, goal, count: int) -> list[tuple[np.ndarray, np.ndarray]]:

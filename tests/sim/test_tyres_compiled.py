@@ -1,5 +1,5 @@
-"""The compiled coulomb tyre loop of the MuJoCo world (offroadbench.sim.tyres_compiled) against the
-Python loop (offroadbench.sim.contact.CoulombBristles and MuJoCoWorld's contact reading)."""
+"""The compiled coulomb tyre loop of the MuJoCo world (offroadbench.sim.engines.mujoco._tyres_c) against the
+Python loop (offroadbench.sim.tyre_laws.coulomb.CoulombBristles and MuJoCoWorld's contact reading)."""
 
 from __future__ import annotations
 
@@ -13,13 +13,13 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
 from offroadbench.sim import SimConfig, run_mission
-from offroadbench.sim.contact import CoulombBristles
+from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
 
 pytest.importorskip("mujoco")
 pytest.importorskip("numba")
 
-from offroadbench.sim import tyres_compiled as tc  # noqa: E402
-from offroadbench.sim.mujoco_world import ContactTuning, MuJoCoWorld  # noqa: E402
+from offroadbench.sim.engines.mujoco import _tyres_c as tc  # noqa: E402
+from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld  # noqa: E402
 
 MUJOCO = SimConfig(engine="mujoco")
 REL = 1e-9
@@ -143,8 +143,8 @@ def test_the_loop_is_selectable_and_auto_falls_back_to_python_without_numba(monk
     with pytest.raises(InputError, match=r"ContactTuning.tyre_loop = 'numba' is not known; allowed: auto, compiled, python"):
         ContactTuning(tyre_loop="numba")
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba now raises ImportError
-    monkeypatch.delitem(sys.modules, "offroadbench.sim.tyres_compiled", raising=False)
-    monkeypatch.delattr("offroadbench.sim.tyres_compiled", raising=False)
+    monkeypatch.delitem(sys.modules, "offroadbench.sim.engines.mujoco._tyres_c", raising=False)
+    monkeypatch.delattr("offroadbench.sim.engines.mujoco._tyres_c", raising=False)
     with MuJoCoWorld(hm, "husky", MUJOCO) as w:
         assert w._fast is None
     with pytest.raises(InputError, match=r"tyre_loop = 'compiled' needs numba: pip install 'offroadbench\[fast\]'"):

@@ -99,7 +99,7 @@ class ContactTuning:
     """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
     1 / (1 + gain) per step before the torque limit."""
     tyre_loop: str = "auto"
-    """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.tyres_compiled,
+    """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.engines.mujoco._tyres_c,
     the same forces to the last bit at about a tenth of the cost), ``python`` (the interpreted loop
     over CoulombBristles) or ``auto`` (compiled when numba is installed, else python)."""
 
@@ -112,17 +112,17 @@ TYRE_LOOPS = ("auto", "compiled", "python")
 
 
 def _compiled_loop(choice: str):
-    """offroadbench.sim.tyres_compiled for ContactTuning.tyre_loop = ``choice``, or None for the
+    """offroadbench.sim.engines.mujoco._tyres_c for ContactTuning.tyre_loop = ``choice``, or None for the
     Python loop (``auto`` without numba)."""
     if choice == "python":
         return None
     try:
-        from offroadbench.sim import tyres_compiled
+        from offroadbench.sim.engines.mujoco import _tyres_c
     except ImportError:
         if choice == "compiled":
             raise InputError("ContactTuning.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
         return None
-    return tyres_compiled
+    return _tyres_c
 
 
 #: the contact settings the MuJoCo world uses
@@ -522,7 +522,7 @@ class MuJoCoWorld:
                 d.xfrc_applied[self._chassis] = 0.0
 
     def _step_compiled(self) -> None:
-        """:meth:`step` with the compiled tyre loop (offroadbench.sim.tyres_compiled): the same
+        """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
         sequence, the contacts read and the forces applied outside the interpreter."""
         m, d = self.model, self.data
         tc, f, ist = self._fast

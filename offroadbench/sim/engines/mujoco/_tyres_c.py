@@ -3,7 +3,7 @@ loop, outside the interpreter.
 
 What it computes
 ----------------
-Exactly what offroadbench.sim.mujoco_world does in Python with offroadbench.sim.contact.
+Exactly what offroadbench.sim.engines.mujoco.world does in Python with offroadbench.sim.tyre_laws.coulomb.
 CoulombBristles at each MuJoCo step:
 
 - :func:`read_contacts` (after ``mj_step2``): each wheel's terrain contacts of the step just taken,
