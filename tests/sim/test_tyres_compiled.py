@@ -149,3 +149,31 @@ def test_the_loop_is_selectable_and_auto_falls_back_to_python_without_numba(monk
         assert w._fast is None
     with pytest.raises(InputError, match=r"tyre_loop = 'compiled' needs numba: pip install 'offroadbench\[fast\]'"):
         MuJoCoWorld(hm, "husky", MUJOCO, ContactTuning(tyre_loop="compiled"))
+
+
+def test_the_compiled_loop_gives_the_python_rows_when_compiled_for_the_x86_64_baseline(tmp_path):
+    """numba compiles for the host CPU (AVX-512 here, AVX2 on the project's other machines); compiled
+    for the x86-64 baseline instead (no AVX, no FMA: ``NUMBA_CPU_NAME=x86-64``, a fresh cache) the
+    loop gives the Python loop's row to the last bit: the result does not depend on the CPU's SIMD."""
+    import os
+    import subprocess
+
+    code = (
+        "import numpy as np\n"
+        "from offroadbench.heightmap import Heightmap\n"
+        "from offroadbench.navigation.missions import Mission\n"
+        "from offroadbench.sim import SimConfig, run_mission\n"
+        "from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld\n"
+        "y, x = np.mgrid[0:81, 0:201] * 0.05\n"
+        "hm = Heightmap(0.3 + 0.08 * np.sin(2.1 * x) * np.cos(1.7 * y) + 0.03 * np.sin(5.3 * y + 0.7 * x), 0.05)\n"
+        "with MuJoCoWorld(hm, 'husky', SimConfig(engine='mujoco'), ContactTuning(tyre_loop=LOOP)) as w:\n"
+        "    assert (w._fast is not None) == (LOOP == 'compiled')\n"
+        "    r, _ = run_mission(w, Mission.between(0, (2, 2), (8, 3)))\n"
+        "print(repr(r))\n"
+    )
+    env = dict(os.environ, NUMBA_CPU_NAME="x86-64", NUMBA_CPU_FEATURES="", NUMBA_CACHE_DIR=str(tmp_path))
+    baseline = subprocess.run([sys.executable, "-c", code.replace("LOOP", "'compiled'")], capture_output=True,
+                              text=True, check=True, env=env).stdout
+    ns = {}
+    exec(code.replace("LOOP", "'python'").replace("print(repr(r))\n", ""), ns)
+    assert baseline == repr(ns["r"]) + "\n" and "success=True" in baseline
