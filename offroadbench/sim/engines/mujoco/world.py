@@ -18,7 +18,10 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   PyBullet world uses) applies the friction as forces: each trial step starts with ``mj_step1``
   (kinematics, collisions), the tyre forces from the last step's contacts and the current
   velocities into ``xfrc_applied``, then ``mj_step2``, at each of the trial step's MuJoCo steps
-  (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction.
+  (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction. The
+  contact reading and the forces run compiled (offroadbench.sim.engines.mujoco._tyres_c, numba:
+  the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
+  installed, else in Python (``ContactTuning.tyre_loop``).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
@@ -234,21 +237,21 @@ class MuJoCoWorld:
         self._index()
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._tyres = None
+        self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        tc = None
         if sim.tyre_model == "coulomb":
             share = self.geometry_mass() / len(self._wheel_bodies)
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
             # tyre is the same whatever the engine's step), integrated at MuJoCo's step
             dt = self.dt_s
-            self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
-                                          self._dt_mj if contact.tyres_each_substep else self.dt_s,
-                                          stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
-        self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
-        tc = _compiled_loop(contact.tyre_loop) if self._tyres is not None else None
+            bristle = (len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
+                       self._dt_mj if contact.tyres_each_substep else self.dt_s, 0.25 * share / dt**2, 0.5 * share / dt)
+            self._tyres = CoulombBristles(*bristle)
+            tc = _compiled_loop(contact.tyre_loop)
         if tc is not None:
-            core, m = self._tyres, self.model
-            slot = [self._wheel_geom.get(g, -1) for g in range(m.ngeom)]
-            f, ist = tc.new_state(core.n, core._mu, core._dt, core._k, core._c, self._wheel_bodies, self._wheel_qvel,
-                                  self._wheel_axis, self._terrain_geom, self._chassis, slot)
+            slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
+            f, ist = tc.new_state(*bristle, self._wheel_bodies, self._wheel_qvel, self._wheel_axis, self._terrain_geom,
+                                  self._chassis, slot)
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
