@@ -125,6 +125,11 @@ def _compiled_loop(choice: str):
         if choice == "compiled":
             raise InputError("ContactTuning.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
         return None
+    except RuntimeError as exc:  # numba installed but unable to compile or cache (e.g. no writable cache folder)
+        if choice == "compiled":
+            raise InputError(f"ContactTuning.tyre_loop = 'compiled': numba cannot build the loop ({exc})") from None
+        log.warning("the compiled tyre loop is unavailable (%s); using the Python loop", exc)
+        return None
     return _tyres_c
 
 
