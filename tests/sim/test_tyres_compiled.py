@@ -12,13 +12,14 @@ import pytest
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
-from offroadbench.sim import SimConfig, run_mission
+from offroadbench.sim import SimConfig, open_world, run_mission
 from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
 
 pytest.importorskip("mujoco")
 pytest.importorskip("numba")
 
 from offroadbench.sim.engines.mujoco import _tyres_c as tc  # noqa: E402
+from offroadbench.sim.engines.mujoco.settings import MuJoCoConfig  # noqa: E402
 from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld  # noqa: E402
 
 MUJOCO = SimConfig(engine="mujoco")
@@ -142,14 +143,16 @@ def test_the_loop_is_selectable_and_auto_falls_back_to_python_without_numba(monk
         assert w._fast is not None  # auto, numba installed
     with MuJoCoWorld(hm, "husky", SimConfig(engine="mujoco", tyre_model="bullet"), ContactTuning(tyre_loop="compiled")) as w:
         assert w._fast is None  # no coulomb tyres, no tyre loop
-    with pytest.raises(InputError, match=r"ContactTuning.tyre_loop = 'numba' is not known; allowed: auto, compiled, python"):
+    with pytest.raises(InputError, match=r"MuJoCoConfig.tyre_loop = 'numba' is not known; allowed: auto, compiled, python"):
         ContactTuning(tyre_loop="numba")
+    with open_world(hm, "husky", SimConfig(engine="mujoco", mujoco=MuJoCoConfig(tyre_loop="python"))) as w:
+        assert w._fast is None  # a study's [sim.mujoco] tyre_loop
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba now raises ImportError
     monkeypatch.delitem(sys.modules, "offroadbench.sim.engines.mujoco._tyres_c", raising=False)
     monkeypatch.delattr("offroadbench.sim.engines.mujoco._tyres_c", raising=False)
     with MuJoCoWorld(hm, "husky", MUJOCO) as w:
         assert w._fast is None
-    with pytest.raises(InputError, match=r"tyre_loop = 'compiled' needs numba: pip install 'offroadbench\[fast\]'"):
+    with pytest.raises(InputError, match=r"MuJoCoConfig.tyre_loop = 'compiled' needs numba: pip install 'offroadbench\[fast\]'"):
         MuJoCoWorld(hm, "husky", MUJOCO, ContactTuning(tyre_loop="compiled"))
 
 
