@@ -53,6 +53,10 @@ class MuJoCoConfig:
     servo_gain: float = 4.0
     """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
     1 / (1 + gain) per step before the torque limit."""
+    tyre_loop: str = "auto"
+    """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.engines.mujoco._tyres_c,
+    the same forces to the last bit at about a tenth of the cost), ``python`` (the interpreted loop
+    over CoulombBristles) or ``auto`` (compiled when numba is installed, else python)."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):
@@ -74,9 +78,14 @@ class MuJoCoConfig:
         check_int(self, "min_rate_hz", self.min_rate_hz, lo=1, hi=100_000)
         check_int(self, "ccd_iterations", self.ccd_iterations, lo=1, hi=1000)
         check_range(self, "servo_gain", self.servo_gain, lo=0, lo_open=True)
+        check_choice(self, "tyre_loop", self.tyre_loop, TYRE_LOOPS)
         for name in ("refsafe", "tyres_each_substep"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"MuJoCoConfig.{name} = {getattr(self, name)!r}: allowed true or false")
+
+
+#: values of MuJoCoConfig.tyre_loop
+TYRE_LOOPS = ("auto", "compiled", "python")
 
 
 def _check_pair(owner, name: str, value) -> None:

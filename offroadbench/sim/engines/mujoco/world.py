@@ -18,7 +18,10 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   PyBullet world uses) applies the friction as forces: each trial step starts with ``mj_step1``
   (kinematics, collisions), the tyre forces from the last step's contacts and the current
   velocities into ``xfrc_applied``, then ``mj_step2``, at each of the trial step's MuJoCo steps
-  (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction.
+  (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction. The
+  contact reading and the forces run compiled (offroadbench.sim.engines.mujoco._tyres_c, numba:
+  the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
+  installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
@@ -58,6 +61,25 @@ __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 log = logging.getLogger(__name__)
 
 
+def _compiled_loop(choice: str):
+    """offroadbench.sim.engines.mujoco._tyres_c for ``[sim.mujoco] tyre_loop = choice``, or None for the
+    Python loop (``auto`` without numba)."""
+    if choice == "python":
+        return None
+    try:
+        from offroadbench.sim.engines.mujoco import _tyres_c
+    except ImportError:
+        if choice == "compiled":
+            raise InputError("MuJoCoConfig.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
+        return None
+    except RuntimeError as exc:  # numba installed but unable to compile or cache (e.g. no writable cache folder)
+        if choice == "compiled":
+            raise InputError(f"MuJoCoConfig.tyre_loop = 'compiled': numba cannot build the loop ({exc})") from None
+        log.warning("the compiled tyre loop is unavailable (%s); using the Python loop", exc)
+        return None
+    return _tyres_c
+
+
 
 def _fmt(values) -> str:
     return " ".join(repr(float(v)) for v in values)
@@ -89,13 +111,23 @@ class MuJoCoWorld:
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
+        self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
             # tyre is the same whatever the engine's step), integrated at MuJoCo's step
             k, c = bristle_constants(self._mass_kg / len(self._wheel_bodies), self.dt_s)
-            self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
-                                          self._dt_mj if contact.tyres_each_substep else self.dt_s,
-                                          stiffness_n_m=k, damping_n_s_m=c)
+            bristle = (len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
+                       self._dt_mj if contact.tyres_each_substep else self.dt_s, k, c)
+            self._tyres = CoulombBristles(*bristle)
+            tc = _compiled_loop(contact.tyre_loop)
+        if tc is not None:
+            slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
+            f, ist = tc.new_state(*bristle, self._wheel_bodies, self._wheel_qvel, self._wheel_axis, self._terrain_geom,
+                                  self._chassis, slot)
+            d = self.data
+            tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
+            self._fast = (tc, f, ist)
         self._soil = None
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
@@ -332,6 +364,8 @@ class MuJoCoWorld:
         if self._tyres is not None:
             self._tyres.reset()
             self._tyres.clear()
+        if self._fast is not None:
+            self._fast[0].reset_state(self._fast[1], self._fast[2], len(self._loads))
         if self._soil is not None:
             self._soil.reset()
         settle(self)
@@ -351,6 +385,9 @@ class MuJoCoWorld:
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
         ``xfrc_applied``, ``mj_step2``, then the contacts."""
+        if self._fast is not None:
+            self._step_compiled()
+            return
         m, d = self.model, self.data
         each = self.contact.tyres_each_substep
         last = self.substeps - 1
@@ -371,6 +408,34 @@ class MuJoCoWorld:
             self._base_force = None
             if not self._forces:
                 d.xfrc_applied[self._chassis] = 0.0
+
+    def _step_compiled(self) -> None:
+        """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
+        sequence, the contacts read and the forces applied outside the interpreter."""
+        m, d = self.model, self.data
+        tc, f, ist = self._fast
+        each = self.contact.tyres_each_substep
+        last = self.substeps - 1
+        pushed = self._base_force
+        push = 14 * len(self._loads) + tc.F_PUSH_X
+        if pushed is not None:
+            f[push:push + 3] = pushed
+            f[push + 3] = 1.0
+        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.APPLY, tc.READ
+        for k in range(self.substeps):
+            if each or k == 0:
+                step1(m, d)
+                apply(qvel, xmat, xipos, xfrc, f, ist)
+                step2(m, d)
+            else:
+                mujoco.mj_step(m, d)  # the tyre forces of this trial step held in xfrc_applied
+            if each or k == last:
+                con = d.contact
+                read(con.geom, con.dist, con.pos, con.frame, con.efc_address, d.efc_force, f, ist)
+        if pushed is not None:
+            self._base_force = None
+            f[push + 3] = 0.0
 
     def _apply_tyres(self) -> None:
         """The tyre forces (``coulomb``: of the wheels touched in the last step; ``terramechanics``:
@@ -529,6 +594,8 @@ class MuJoCoWorld:
     def wheel_penetration_m(self) -> float:
         """Deepest penetration of any wheel into the terrain in the last step (0 if none), m; with the
         ``terramechanics`` tyre model, the deepest soil sinkage."""
+        if self._fast is not None:
+            return self._fast[0].penetration(self._fast[1], len(self._loads))
         if self._soil is not None:
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
@@ -543,6 +610,8 @@ class MuJoCoWorld:
 
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal force from the terrain in the last step, N (left, then right)."""
+        if self._fast is not None:
+            return self._fast[0].loads(self._fast[1], len(self._loads))
         return tuple(self._loads)
 
     def centre_of_mass_m(self) -> tuple[float, float, float]:

@@ -1,0 +1,140 @@
+"""Cost of the MuJoCo world's coulomb tyre loop per 60 Hz trial step: Python against compiled.
+
+The loop is the work the world does around MuJoCo at each of a trial step's MuJoCo steps (2 at the
+default 60 Hz trial rate and ``ContactTuning.min_rate_hz = 120``): read the wheels' terrain contacts
+after ``mj_step2`` and apply the tyre forces after ``mj_step1``. Both loops are timed on the same
+MuJoCo states, sampled along a paper mission (terrain 0 of D = 2.45, root seed 2023, the chassis
+touching the ground in some of them), alternating python and compiled in rounds (best of
+``--repeats`` rounds per state, so load hits both alike); the compiled loop is timed with the
+attribute look-ups its call needs (``d.contact`` and its fields), as the world makes them.
+It also times the whole trial step (``world.step``) both ways, over the mission's first
+``calls / 10`` steps.
+
+    .venv/bin/python benchmarks/bench_tyres.py [--states 12] [--repeats 7] [--smoke]
+
+``--smoke`` runs it in seconds on a small synthetic map (for CI: the script must not rot).
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+
+import mujoco
+import numpy as np
+
+from offroadbench.heightmap import Heightmap
+from offroadbench.sim import SimConfig
+from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld
+
+
+def _states(world: MuJoCoWorld, start, goal, count: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(qpos, qvel) of ``count`` moments of a straight drive from ``start`` towards ``goal``, 20 trial steps apart."""
+    world.spawn(*start, float(np.arctan2(goal[1] - start[1], goal[0] - start[0])))
+    out = []
+    for k in range(20 * count):
+        world.command_wheels(7.0 + 3.0 * np.sin(0.05 * k), 7.0 - 3.0 * np.sin(0.05 * k))
+        world.step()
+        if k % 20 == 19:
+            out.append((world.data.qpos.copy(), world.data.qvel.copy()))
+    return out
+
+
+def _python_loop(world: MuJoCoWorld):
+    def run(n: int) -> None:
+        for _ in range(n):
+            world._apply_tyres()
+            world._read_contacts()
+    return run
+
+
+def _compiled_loop(world: MuJoCoWorld):
+    tc, f, ist = world._fast
+    d = world.data
+    apply, read = tc.APPLY, tc.READ
+    qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+
+    def run(n: int) -> None:
+        for _ in range(n):
+            apply(qvel, xmat, xipos, xfrc, f, ist)
+            con = d.contact
+            read(con.geom, con.dist, con.pos, con.frame, con.efc_address, d.efc_force, f, ist)
+    return run
+
+
+def _at(world: MuJoCoWorld, state) -> None:
+    """Put ``world`` at ``state`` with its contacts of one MuJoCo step (mj_step1, mj_step2)."""
+    d = world.data
+    d.qpos[:], d.qvel[:] = state
+    mujoco.mj_step1(world.model, d)
+    mujoco.mj_step2(world.model, d)
+    d.qpos[:], d.qvel[:] = state
+    mujoco.mj_step1(world.model, d)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--states", type=int, default=12, help="MuJoCo states sampled along the mission")
+    ap.add_argument("--repeats", type=int, default=7, help="rounds per state (the best is kept)")
+    ap.add_argument("--calls", type=int, default=2000, help="loop calls per timing")
+    ap.add_argument("--smoke", action="store_true", help="a small synthetic map and few calls (seconds)")
+    args = ap.parse_args()
+    if args.smoke:
+        y, x = np.mgrid[0:81, 0:201] * 0.05
+        hm = Heightmap(0.3 + 0.08 * np.sin(2.1 * x) * np.cos(1.7 * y), 0.05)
+        start, goal = (2.0, 2.0), (9.0, 2.5)
+        args.states, args.repeats, args.calls = 2, 2, 200
+    else:
+        from bench_sim import _paper_terrain  # the paper terrain and missions (run as a script: benchmarks/ is on sys.path)
+        from offroadbench.analysis.roughness import RoughnessConfig
+        from offroadbench.navigation.missions import MissionConfig
+
+        hm, missions = _paper_terrain(2.45, RoughnessConfig(border_m=5.0), MissionConfig(count=1, length_m=35.0, border_m=5.0), 1)
+        start, goal = missions[0].start_xy_m, missions[0].goal_xy_m
+    worlds = {loop: MuJoCoWorld(hm, "husky", SimConfig(engine="mujoco"), ContactTuning(tyre_loop=loop))
+              for loop in ("python", "compiled")}
+    runners = {"python": _python_loop(worlds["python"]), "compiled": _compiled_loop(worlds["compiled"])}
+    states = _states(worlds["python"], start, goal, args.states)
+    substeps = worlds["python"].substeps
+    per = {loop: [] for loop in worlds}
+    ncon = []
+    for state in states:
+        for w in worlds.values():
+            _at(w, state)
+        ncon.append(worlds["python"].data.ncon)
+        for loop in worlds:
+            runners[loop](50)  # warm (and the compiled loop's first call compiles or loads from cache)
+        best = dict.fromkeys(worlds, float("inf"))
+        for _ in range(args.repeats):
+            for loop, run in runners.items():
+                t0 = time.perf_counter()
+                run(args.calls)
+                best[loop] = min(best[loop], (time.perf_counter() - t0) / args.calls)
+        for loop in worlds:
+            per[loop].append(best[loop])
+    # whole trial steps, the two worlds alternating
+    step_best = dict.fromkeys(worlds, float("inf"))
+    heading = float(np.arctan2(goal[1] - start[1], goal[0] - start[0]))
+    for _ in range(args.repeats):
+        for loop, w in worlds.items():
+            w.spawn(*start, heading)  # each timing from the same state: the first steps of the mission
+            t0 = time.perf_counter()
+            for k in range(args.calls // 10):
+                w.command_wheels(6.0, 5.5)
+                w.step()
+            step_best[loop] = min(step_best[loop], (time.perf_counter() - t0) / (args.calls // 10))
+    for w in worlds.values():
+        w.close()
+    print(f"{platform.processor() or platform.machine()}, python {platform.python_version()}, mujoco {mujoco.__version__}; "
+          f"{len(states)} states, contacts per MuJoCo step {min(ncon)}-{max(ncon)}; {substeps} MuJoCo steps per trial step")
+    py, cc = statistics.median(per["python"]), statistics.median(per["compiled"])
+    print(f"tyre loop per trial step (median over states, best of {args.repeats}): python {1e6 * substeps * py:.1f} us, "
+          f"compiled {1e6 * substeps * cc:.1f} us: {py / cc:.1f}x")
+    print(f"whole trial step (best of {args.repeats}): python {1e6 * step_best['python']:.1f} us, "
+          f"compiled {1e6 * step_best['compiled']:.1f} us: {step_best['python'] / step_best['compiled']:.2f}x")
+
+
+if __name__ == "__main__":
+    main()
