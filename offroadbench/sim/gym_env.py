@@ -76,7 +76,7 @@ from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig,
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, plan
 from offroadbench.navigation.rules import FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig, SimConfig
-from offroadbench.sim.trial.skid_steer import wheel_speeds
+from offroadbench.sim.trial.steering import drive_twist
 from offroadbench.sim.trial.runner import body_frame, body_velocity, vehicle_envelope
 from offroadbench.sim.trial.vehicle import VehicleSpec
 from offroadbench.sim.engine import TrialWorld, open_world
@@ -254,7 +254,7 @@ class TraverseEnv(gym.Env):
             raise InputError(f"action {a.tolist()}: not finite; expected (v, omega), two finite numbers "
                              "(the step was not taken)")
         a = np.clip(a, self.action_space.low, self.action_space.high)
-        world.command_wheels(*wheel_speeds(float(a[0]), float(a[1]), self.vehicle))
+        drive_twist(world, float(a[0]), float(a[1]))
         for _ in range(self._steps_per_tick):
             world.step()
         self._ticks += 1

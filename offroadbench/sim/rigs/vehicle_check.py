@@ -13,8 +13,9 @@ contact model and skid-steer drive the trials use:
 - **yaw-rate tracking**, in place and at cruise speed, at headings 0, 22.5 and 45 deg (Bullet's
   friction directions sit on the world axes, so a heading-dependent contact shows here) for
   commands 0.25-2 rad/s (capped at the vehicle's yaw-rate limit). The expected value is the
-  command after the wheel-speed saturation of :func:`offroadbench.sim.trial.skid_steer.wheel_speeds`
-  (:func:`~offroadbench.sim.trial.skid_steer.achievable_twist`); pass: 0.85-1.1x.
+  command after the drive's limits (:func:`offroadbench.sim.trial.steering.achievable`: skid-steer's
+  wheel-speed saturation, or a steered vehicle's minimum turning radius, whose vehicle has no
+  in-place rows); pass: 0.85-1.1x.
 - **straight-line drift**: lateral offset after 10 m driven open loop at cruise speed on flat
   ground (expected 0; pass: under 1 % of the distance).
 - **stopping distance** from top speed when the wheels are commanded to stop, against
@@ -69,7 +70,7 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import ENGINE_TYRE_MODELS, TrialWorld, open_world
-from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
@@ -144,7 +145,7 @@ def _mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, se
     started at rest at ``at`` (default: the middle of the map)."""
     c = world.hm.width_m / 2.0
     world.spawn(*(at or (c, c)), heading)
-    world.command_wheels(*wheel_speeds(v, omega, world.spec))
+    drive_twist(world, v, omega)
     _run(world, seconds / 2.0)
     yaws = []
     _run(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
@@ -201,14 +202,20 @@ def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
 def _yaw_tracking(world: TrialWorld, headings_deg, commands) -> list[CheckResult]:
     spec = world.spec
     cruise = min(1.0, spec.max_speed_m_s)
+    layout = reference_layout(spec, world.geometry.wheel_centres_m)
+    r_min = min_turn_radius_m(spec, layout)
     rows = []
-    for mode, v in (("in place", 0.0), (f"at {cruise:g} m/s", cruise)):
+    modes = (("in place", 0.0), (f"at {cruise:g} m/s", cruise)) if r_min == 0.0 else ((f"at {cruise:g} m/s", cruise),)
+    for mode, v in modes:
         for h in headings_deg:
             for w in commands:
                 w = min(w, spec.max_yaw_rate_rad_s)
-                _, w_ach = achievable_twist(v, w, spec)
+                _, w_ach = achievable(v, w, spec, layout)
                 got = _mean_yaw_rate(world, v, w, math.radians(h))
-                note = "" if math.isclose(w_ach, w, rel_tol=1e-9) else f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s"
+                note = "" if math.isclose(w_ach, w, rel_tol=1e-9) else (
+                    f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s" if r_min == 0.0 else
+                    f"command {w:g} rad/s, limited by the minimum turning radius {r_min:.2f} m "
+                    f"(steering limit {spec.max_steer_angle_deg:g} deg)")
                 rows.append(_ratio_row(f"yaw rate {mode}, heading {h:g} deg, command {w:g} rad/s",
                                        got, w_ach, "rad/s", 0.85, 1.1, note))
     return rows
@@ -220,7 +227,7 @@ def _drift(world: TrialWorld) -> CheckResult:
     heading = math.radians(22.5)
     x0, y0 = 2.0, 2.0
     world.spawn(x0, y0, heading)
-    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    drive_twist(world, v, 0.0)
     along = 0.0
     pos = world.base_state()[0]
     for _ in range(int(round(30.0 * world.sim.physics_rate_hz))):
@@ -238,7 +245,7 @@ def _stopping(world: TrialWorld) -> CheckResult:
     spec = world.spec
     v = spec.max_speed_m_s
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
-    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    drive_twist(world, v, 0.0)
     _run(world, 2.0 + 3.0 * v / spec.max_accel_m_s2)
     speed = math.hypot(*world.base_state()[2][:2])
     start = world.base_state()[0]
@@ -322,7 +329,7 @@ def _climbs(world: TrialWorld, grade_deg: float) -> bool:
     climbed = False
     for k in range(int(round(10.0 * rate))):
         v = min(0.5, 0.5 * k / rate, spec.max_speed_m_s)
-        world.command_wheels(*wheel_speeds(v, 0.0, spec))
+        drive_twist(world, v, 0.0)
         world.step()
         if world.base_state()[0][0] - x0 >= 1.0:
             climbed = True
@@ -398,7 +405,7 @@ def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float) -> bool:
     hm = _step_world(height_m, spec)
     with open_world(hm, spec, sim) as world:
         world.spawn(2.5, hm.height_m / 2.0, 0.0)
-        world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
+        drive_twist(world, min(1.0, spec.max_speed_m_s), 0.0)
         for _ in range(int(round(10.0 * sim.physics_rate_hz))):
             world.step()
             if world.base_state()[0][0] > 5.5:
@@ -498,14 +505,13 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
 
 def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
-    spec = world.spec
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
     rate = world.sim.physics_rate_hz
     weight = world.geometry.mass_kg * world.sim.gravity_m_s2
     drag, pulls = 0.0, []
     n = int(round(seconds * rate))
     for k in range(n):
-        world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / rate), 0.0, spec))
+        drive_twist(world, min(0.3, 0.3 * k / rate), 0.0)
         world.push_base(-drag, 0.0, 0.0)
         world.step()
         measured = world.wheel_slip()

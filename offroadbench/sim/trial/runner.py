@@ -2,7 +2,8 @@
 
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
-at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
+at control ticks the driver issues (v, omega), mapped to joint commands by the vehicle's steering
+kind (offroadbench.sim.trial.steering).
 The driver is the study's ``[planner]`` (offroadbench.navigation.drivers): a planner
 (offroadbench.navigation.planners; default ``straight``, the start-goal line) whose path pure
 pursuit follows, or a closed-loop policy (offroadbench.navigation.policies) fed the Gymnasium env's
@@ -32,8 +33,7 @@ from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.trial.controller import make_tracker
-from offroadbench.sim.trial.skid_steer import wheel_speeds
+from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker
 from offroadbench.sim.engine import TrialWorld
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
@@ -208,7 +208,7 @@ def drive_mission(
     else:
         waypoints = plan_within_limits(planner, problem)
     if policy is None:
-        tracker = make_tracker(waypoints, spec, controller)
+        tracker = make_vehicle_tracker(waypoints, spec, controller, world)
         length = tracker.length_m
     else:
         length = mission.length_m
@@ -237,14 +237,14 @@ def drive_mission(
         if ctrl_tick:
             if policy is None:
                 if replanner is not None and replanner.update(pos[:2]) is not None:
-                    tracker = make_tracker(replanner.waypoints, spec, controller)
+                    tracker = make_vehicle_tracker(replanner.waypoints, spec, controller, world)
                 cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
             else:
                 obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
                 a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
                 cmd_v = min(max(a[0], -v_lim), v_lim)
                 cmd_w = min(max(a[1], -w_lim), w_lim)
-            world.command_wheels(*wheel_speeds(cmd_v, cmd_w, spec))
+            drive_twist(world, cmd_v, cmd_w)
         if tel_tick:
             _check_state(planner.name, k * world.dt_s, pos, quat, lin, ang)
             progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
