@@ -33,7 +33,7 @@ from offroadbench.navigation.perception import Replanner
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker
+from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, min_turn_radius_m, reference_layout
 from offroadbench.sim.engine import TrialWorld
 
 __all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
@@ -141,7 +141,8 @@ def vehicle_envelope(world: TrialWorld) -> VehicleEnvelope:
     return VehicleEnvelope(length_m=geo.length_m, width_m=geo.width_m,
                            max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
                            max_slope=spec.wheel_friction * world.sim.terrain_friction,
-                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m)
+                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m,
+                           min_turn_radius_m=min_turn_radius_m(spec, reference_layout(spec, geo.wheel_centres_m)))
 
 
 @dataclass(frozen=True, eq=False)

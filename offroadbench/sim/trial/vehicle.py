@@ -75,6 +75,9 @@ class VehicleSpec:
     """Moment of inertia of each wheel about its axle as the motor sees it, kg m^2: the tyre's own
     plus the gearbox's reflected motor inertia (rotor inertia x gear ratio^2). Set on the wheel links
     after loading (None: the URDF's value). See offroadbench.sim.engines.pybullet.tyres for why it matters."""
+    driven_wheel_joints: tuple[str, ...] = ()
+    """The wheel joints with a motor (empty: all of them); the others roll freely (a rear-wheel-drive car's
+    front wheels)."""
     steering: str = "skid"
     """How the vehicle steers: ``skid``, ``ackermann`` or ``rocker_bogie`` (see the class docstring)."""
     steer_joints: tuple[str, ...] = ()
@@ -102,7 +105,7 @@ class VehicleSpec:
     def __post_init__(self) -> None:
         object.__setattr__(self, "left_wheel_joints", tuple(self.left_wheel_joints))
         object.__setattr__(self, "right_wheel_joints", tuple(self.right_wheel_joints))
-        for name in ("steer_joints", "steered_wheel_joints", "differential_joints"):
+        for name in ("driven_wheel_joints", "steer_joints", "steered_wheel_joints", "differential_joints"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         if not self.left_wheel_joints or not self.right_wheel_joints:
             raise InputError(f"vehicle {self.name!r}: left_wheel_joints and right_wheel_joints must not be empty")
@@ -126,6 +129,9 @@ class VehicleSpec:
         check_range(self, "max_steer_rate_deg_s", self.max_steer_rate_deg_s, lo=0)
         check_range(self, "steer_torque_limit_nm", self.steer_torque_limit_nm, lo=0)
         self._check_steering()
+        stray = [w for w in self.driven_wheel_joints if w not in self.wheel_joints]
+        if stray:
+            raise InputError(f"vehicle {self.name!r}: driven_wheel_joints {', '.join(stray)} are not wheel joints")
         if (self.tyre_stiffness_n_m is None) != (self.tyre_damping_n_s_m is None):
             raise InputError("vehicle: give both tyre_stiffness_n_m and tyre_damping_n_s_m, or neither")
         if self.tyre_stiffness_n_m is not None:
@@ -154,6 +160,10 @@ class VehicleSpec:
     @property
     def wheel_joints(self) -> tuple[str, ...]:
         return self.left_wheel_joints + self.right_wheel_joints
+
+    def is_driven(self, wheel_joint: str) -> bool:
+        """Whether ``wheel_joint`` has a motor (``driven_wheel_joints``; all wheels when it is empty)."""
+        return not self.driven_wheel_joints or wheel_joint in self.driven_wheel_joints
 
 
 def _toml_of(name: str, obj: object) -> Path:

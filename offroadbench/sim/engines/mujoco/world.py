@@ -295,7 +295,9 @@ class MuJoCoWorld:
         act = ET.SubElement(root, "actuator")
         for name in spec.wheel_joints:
             spin = spec.wheel_spin_inertia_kg_m2 or links[by_name[name].child].inertia[1]
-            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(tune.servo_gain * spin / self._dt_mj),
+            # an undriven wheel keeps its (idle) actuator slot with no gain: it rolls freely
+            gain = tune.servo_gain * spin / self._dt_mj if spec.is_driven(name) else 0.0
+            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(gain),
                           forcerange=_fmt((-spec.wheel_torque_limit_nm, spec.wheel_torque_limit_nm)))
         self._articulate(root, act, links, by_name)
         if any(j.kind != "fixed" and j.name not in wheel_names for j in joints):

@@ -215,6 +215,8 @@ class World:
         self.left_joints = [names[n] for n in spec.left_wheel_joints]
         self.right_joints = [names[n] for n in spec.right_wheel_joints]
         self.wheel_joints = self.left_joints + self.right_joints
+        # motor torque per wheel: the spec's limit, 0 on an undriven wheel (it rolls freely)
+        self._wheel_forces = [spec.wheel_torque_limit_nm if spec.is_driven(n) else 0.0 for n in spec.wheel_joints]
         cid = self._cid
         pb.changeDynamics(body, -1, lateralFriction=spec.chassis_friction, physicsClientId=cid)
         tyre = {}
@@ -276,7 +278,7 @@ class World:
         """One velocity command per wheel (``spec.wheel_joints`` order), rad/s, torque-limited."""
         pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
                                      targetVelocities=list(speeds_rad_s),
-                                     forces=[self.spec.wheel_torque_limit_nm] * len(self.wheel_joints),
+                                     forces=self._wheel_forces,
                                      physicsClientId=self._cid)
 
     def _measure_geometry(self) -> VehicleGeometry:
@@ -352,7 +354,7 @@ class World:
             self.wheel_joints,
             pb.VELOCITY_CONTROL,
             targetVelocities=[left_rad_s] * n_l + [right_rad_s] * n_r,
-            forces=[self.spec.wheel_torque_limit_nm] * (n_l + n_r),
+            forces=self._wheel_forces,
             physicsClientId=self._cid,
         )
 
