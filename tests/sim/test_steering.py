@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from offroadbench.errors import InputError
+from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial import skid_steer
 from offroadbench.sim.trial.ackermann import bicycle_steer_rad
 from offroadbench.sim.trial.steering import achievable, min_turn_radius_m, steered_commands
@@ -109,3 +110,52 @@ def test_the_rocker_differential_keeps_the_rockers_opposite(engine):
             left, right = (float(w.data.qpos[w.model.joint(n).qposadr[0]]) for n in spec.differential_joints)
     assert abs(left) > 0.05  # the block moved the rockers
     assert left == pytest.approx(-right, abs=2e-3)
+
+
+def test_the_car_follows_a_planned_arc_with_the_bicycle_tracker():
+    """A trial with the Ackermann car: the bicycle-model tracker steers it along a lattice path that
+    turns 90 degrees (spawned facing +x, goal to its left), never tighter than its turning radius."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.drivers import planner_from_table
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim.config import SimConfig
+    from offroadbench.sim.engine import open_world
+    from offroadbench.sim.trial.ackermann import BicycleTracker
+    from offroadbench.sim.trial.runner import drive_mission, vehicle_envelope
+    from offroadbench.sim.trial.steering import make_vehicle_tracker
+
+    hm = Heightmap.flat(161, 161, 0.1)
+    with open_world(hm, load_vehicle("hunter"), SimConfig()) as world:
+        assert vehicle_envelope(world).min_turn_radius_m == pytest.approx(1.3, abs=0.01)
+        assert isinstance(make_vehicle_tracker([(0.0, 0.0), (5.0, 0.0)], world.spec, ControllerConfig(), world),
+                          BicycleTracker)
+        mission = Mission(index=0, start_xy_m=(4.0, 4.0), goal_xy_m=(8.0, 10.0), heading_rad=0.0)
+        rec = drive_mission(world, mission, planner=planner_from_table({"name": "lattice"}),
+                            classes=np.zeros(hm.z.shape, dtype=np.uint8))
+    assert rec.result.success, rec.result.failure_reason
+    yaw_rate = np.abs(rec.telemetry["yaw_rate_body_rad_s"])
+    speed = np.hypot(rec.telemetry["vx_m_s"], rec.telemetry["vy_m_s"])
+    # never tighter than the smallest turning radius (a little slack for the tyres' slip)
+    assert np.all(yaw_rate <= speed / 1.3 * 1.15 + 0.05)
+
+
+def test_astar_refuses_a_car_and_lattice_keeps_to_its_turning_radius():
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.planners import plan
+    from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
+
+    z = np.zeros((121, 121))
+    z[55:65, 35:55] = 0.5  # a wall across the straight line: the path must turn round it
+    hm = Heightmap(z, 0.1)
+    car = VehicleEnvelope(min_turn_radius_m=3.0)
+    classes = np.where(z > 0, 2, 0).astype(np.uint8)
+    problem = PlanningProblem(hm=hm, classes=classes, start_xy=(3.0, 3.0), goal_xy=(6.0, 9.0), vehicle=car)
+    with pytest.raises(InputError, match="turn on the spot"):
+        plan("astar", problem)
+    path = plan("lattice", problem)
+    # the lattice's arcs: the heading turns by at most step / R per arc length step (R = 3 m, not 1.5 m)
+    seg = np.diff(path[:-1], axis=0)
+    heading = np.unwrap(np.arctan2(seg[:, 1], seg[:, 0]))
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    turn_rate = np.abs(np.diff(heading)) / (0.5 * (length[1:] + length[:-1]))
+    assert 0.1 < turn_rate.max() <= 1.0 / 3.0 * 1.05
