@@ -387,7 +387,7 @@ class MuJoCoWorld:
                     self._wheel_geom[g] = i
         self._n_left = len(self.spec.left_wheel_joints)
         # a wheel on a steering or suspension joint does not move with the chassis alone
-        self._articulated = len(self._wheel_bodies) + 1 < m.nbody
+        self._articulated = m.njnt > 1 + len(self._wheel_bodies)  # joints beyond the free joint and the wheels
 
     def geometry_mass(self) -> float:
         """Total mass of the vehicle's bodies, kg."""
