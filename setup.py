@@ -14,7 +14,7 @@ DATA = {
     "terrains": ["*.toml", "*.npy", "*.json", "*.png"],
     "vehicles": ["*.toml", "*.urdf", "*.sdf", "*.xml", "*.obj", "*.stl", "*.dae", "*.png"],
     "experiments": ["*.toml"],
-    "soils": ["*.toml"],
+    "soils": ["*.toml", "*.csv"],
 }
 #: sub-folders that stay in the repository (committed study outputs)
 KEEP_OUT = {"experiments": ["results", "results.*"]}

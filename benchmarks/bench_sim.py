@@ -46,6 +46,9 @@ against ``main`` and the median ratio of RMS vertical acceleration over the tria
 ``contact.FIELD=VALUE`` sets a field of the MuJoCo world's ContactTuning):
 
     .venv/bin/python benchmarks/bench_sim.py --engines 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'
+
+``--smoke`` runs every mode above once, with one mission on 201^2 maps and 6 m missions (seconds
+of work each; CI runs it so the script cannot rot); its figures mean nothing.
 """
 
 from __future__ import annotations
@@ -65,17 +68,38 @@ from offroadbench.terrain.recipe import generate_terrain, load_recipe
 from offroadbench.sim import SimConfig, World, load_vehicle, run_mission
 
 CELL = 0.05
+SMOKE = False
+"""--smoke: every terrain 201^2 and every mission 6 m with a 1 m border (set by main)."""
+
+
+def smoke_grid(recipe):
+    """``recipe`` on the smoke mode's small grid (unchanged outside it)."""
+    from offroadbench.terrain.recipe import apply_overrides
+
+    return apply_overrides(recipe, {"grid.rows": 201, "grid.cols": 201}) if SMOKE else recipe
+
+
+def terrain(preset: str, seed: int):
+    """The preset's terrain of ``seed`` (on the smoke grid under --smoke)."""
+    return generate_terrain(smoke_grid(load_recipe(preset)), seed)
+
+
+def mission_config(**fields) -> MissionConfig:
+    """A MissionConfig (6 m missions with a 1 m border under --smoke)."""
+    return MissionConfig(**(fields | ({"length_m": 6.0, "border_m": 1.0} if SMOKE else {})))
 
 
 def cylinder_wheel_vehicle(tmp: Path):
-    """The husky with true cylinder collision wheels (axis along y), written to ``tmp``."""
+    """The husky with true cylinder collision wheels (axis along y, the tyre's radius and width),
+    written to ``tmp``."""
+    import re
+
     spec = load_vehicle("husky")
-    text = Path(spec.urdf).read_text().replace(
-        '<collision>\n      <geometry><sphere radius="0.165"/></geometry>',
-        '<collision>\n      <origin xyz="0 0 0" rpy="1.5707963 0 0"/>\n'
-        '      <geometry><cylinder radius="0.165" length="0.125"/></geometry>',
-    )
-    assert text.count("<cylinder") == 8  # 4 visual + 4 collision
+    r, w = spec.wheel_radius_m, spec.wheel_width_m
+    text, n = re.subn(r'<collision>(\s*)<geometry><sphere radius="[0-9.]+"/></geometry>',
+                      rf'<collision>\1<origin xyz="0 0 0" rpy="1.5707963 0 0"/>\1'
+                      rf'<geometry><cylinder radius="{r}" length="{w}"/></geometry>', Path(spec.urdf).read_text())
+    assert n == 4, f"expected 4 sphere wheel collisions in {spec.urdf}, found {n}"
     urdf = tmp / "husky_cylinder.urdf"
     urdf.write_text(text)
     return dataclasses.replace(spec, urdf=str(urdf))
@@ -146,10 +170,10 @@ def compare_contact(args) -> None:
     wins = {(m, p): 0 for m in CONTACT_MODELS for p in ("straight", "astar")}
     trials = 0
     for seed in (int(s) for s in args.seeds.split(",")):
-        hm = generate_terrain(load_recipe(args.preset), seed)
+        hm = terrain(args.preset, seed)
         rc = RoughnessConfig()
         closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
-        missions = sample_missions(hm, closed, MissionConfig(count=args.missions), np.random.default_rng(seed))
+        missions = sample_missions(hm, closed, mission_config(count=args.missions), np.random.default_rng(seed))
         trials += len(missions)
         for planner in ("straight", "astar"):
             choice = planner_from_table({"name": planner})
@@ -158,7 +182,7 @@ def compare_contact(args) -> None:
                 with World(hm, vehicle, sim) as world:
                     for m in missions:
                         tw = time.perf_counter()
-                        r, _ = run_mission(world, m, planner=choice, classes=closed, border_m=MissionConfig().border_m)
+                        r, _ = run_mission(world, m, planner=choice, classes=closed, border_m=mission_config().border_m)
                         clock[model][1] += time.perf_counter() - tw
                         clock[model][0] += r.sim_time_s + sim.settle_time_s
                         wins[model, planner] += r.success
@@ -176,8 +200,8 @@ def compare_contact(args) -> None:
 def compare_soil(args) -> None:
     from offroadbench.terrain.recipe import apply_overrides
 
-    recipe = apply_overrides(load_recipe("lunar-mare"), {"grid.rows": 513, "grid.cols": 513,
-                                                         "layers.craters.population.d_max_m": 6.0})
+    recipe = smoke_grid(apply_overrides(load_recipe("lunar-mare"), {"grid.rows": 513, "grid.cols": 513,
+                                                                    "layers.craters.population.d_max_m": 6.0}))
     models = ("coulomb", "terramechanics")
     clock = {m: [0.0, 0.0] for m in models}
     outcomes = {m: [] for m in models}
@@ -186,7 +210,7 @@ def compare_soil(args) -> None:
         hm = generate_terrain(recipe, seed)
         rc = RoughnessConfig()
         closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
-        mcfg = MissionConfig(count=args.missions, length_m=15.0, border_m=2.0)
+        mcfg = mission_config(count=args.missions, length_m=15.0, border_m=2.0)
         missions = sample_missions(hm, closed, mcfg, np.random.default_rng(seed))
         worlds = {m: World(hm, husky, SimConfig(tyre_model=m, soil="lunar-regolith", gravity_m_s2=1.62))
                   for m in models}
@@ -216,10 +240,10 @@ def compare_iterations(args) -> None:
     clock = {n: [0.0, 0.0] for n in counts}
     results = {n: [] for n in counts}
     for seed in (int(s) for s in args.seeds.split(",")):
-        hm = generate_terrain(load_recipe(args.preset), seed)
+        hm = terrain(args.preset, seed)
         rc = RoughnessConfig()
         closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
-        missions = sample_missions(hm, closed, MissionConfig(count=args.missions), np.random.default_rng(seed))
+        missions = sample_missions(hm, closed, mission_config(count=args.missions), np.random.default_rng(seed))
         for n in counts:
             sim = SimConfig(solver_iterations=n)
             with World(hm, husky, sim) as world:
@@ -277,7 +301,7 @@ def _paper_terrain(d_high: float, rc, mcfg, n: int):
     from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain
     from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
-    recipe = apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d_high})
+    recipe = smoke_grid(apply_overrides(load_recipe("paper-d2.45"), {"layers.base.D_high": d_high}))
     prepared = prepare_terrain(recipe, terrain_seed(2023, 0), TrialSettings(missions=mcfg, roughness=rc),
                                [(k, mission_seed(2023, 0, k)) for k in range(n)])
     return prepared.hm, list(prepared.missions)
@@ -308,8 +332,8 @@ def paired(args) -> None:
     wall = {v: 0.0 for v in PAIRED}
     simt = {v: 0.0 for v in PAIRED}
     res = {v: [] for v in PAIRED}
-    rc = RoughnessConfig(border_m=5.0)
-    mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
+    rc = RoughnessConfig(border_m=1.0 if SMOKE else 5.0)
+    mcfg = mission_config(count=args.missions, length_m=35.0, border_m=5.0)
     print(f"paired variants {list(PAIRED)}; terrain 0 of each D (root seed 2023), {args.missions} missions each; "
           f"old tyre loop from {args.old_rev}", flush=True)
     for d in (2.3, 2.45, 2.6):
@@ -335,13 +359,23 @@ def paired(args) -> None:
               f"{sum(r.success for r in res[v]):>3d}/{len(res[v]):<4d} {flips:5d} {az:12.3f} {pen:10.1f}", flush=True)
 
 
+def _number(text: str):
+    """``text`` as an int or a float where it is one, else the text."""
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
 def _parse_variant(text: str) -> tuple[str, dict]:
     """``NAME:key=value,key=value`` (SimConfig fields) -> (NAME, changes)."""
     name, _, rest = text.partition(":")
     changes = {}
     for item in filter(None, rest.split(",")):
         key, _, value = item.partition("=")
-        changes[key] = int(value) if value.lstrip("-").isdigit() else value
+        changes[key] = _number(value)
     return name, changes
 
 
@@ -355,8 +389,8 @@ def engines(args) -> None:
     simt = dict.fromkeys(names, 0.0)
     build = dict.fromkeys(names, 0.0)
     res = {n: [] for n in names}
-    rc = RoughnessConfig(border_m=5.0)
-    mcfg = MissionConfig(count=args.missions, length_m=35.0, border_m=5.0)
+    rc = RoughnessConfig(border_m=1.0 if SMOKE else 5.0)
+    mcfg = mission_config(count=args.missions, length_m=35.0, border_m=5.0)
     print(f"engines {variants}; terrain 0 of each D (root seed 2023), {args.missions} missions each", flush=True)
     for d in (2.3, 2.45, 2.6):
         hm, missions = _paper_terrain(d, rc, mcfg, args.missions)
@@ -366,7 +400,8 @@ def engines(args) -> None:
             tuning = {k.split(".", 1)[1]: v for k, v in changes.items() if k.startswith("contact.")}
             sim = dataclasses.replace(SimConfig(), **{k: v for k, v in changes.items() if not k.startswith("contact.")})
             if tuning:  # MuJoCo contact settings (offroadbench.sim.engines.mujoco.world.ContactTuning)
-                from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld
+                from offroadbench.sim.engines.mujoco.settings import ContactTuning
+                from offroadbench.sim.engines.mujoco.world import MuJoCoWorld
 
                 worlds[n] = MuJoCoWorld(hm, "husky", sim, ContactTuning(**tuning))
             else:
@@ -403,7 +438,16 @@ def main() -> None:
     ap.add_argument("--engines", default=None,
                     help="paired engines, e.g. 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'")
     ap.add_argument("--soil", action="store_true", help="compare terramechanics with coulomb on lunar-mare")
+    ap.add_argument("--smoke", action="store_true", help="every mode once: 1 mission, 201^2 maps, 6 m missions (CI)")
     args = ap.parse_args()
+    if args.smoke:
+        smoke(args)
+        return
+    run_mode(args)
+
+
+def run_mode(args) -> None:
+    """Run the mode ``args`` selects (main's flags)."""
     if args.soil:
         args.missions = args.missions or 4
         compare_soil(args)
@@ -430,10 +474,10 @@ def main() -> None:
     args.missions = args.missions or 5
 
     t0 = time.perf_counter()
-    hm = generate_terrain(load_recipe(args.preset), args.seed)
+    hm = terrain(args.preset, args.seed)
     rc = RoughnessConfig()
     closed = close_rough(classify(hm, rc), rc.closing_radius_m, hm.cell_size_m)
-    missions = sample_missions(hm, closed, MissionConfig(count=args.missions), np.random.default_rng(args.seed))
+    missions = sample_missions(hm, closed, mission_config(count=args.missions), np.random.default_rng(args.seed))
     print(f"{args.preset} seed {args.seed}: {hm.rows}x{hm.cols}, terrain + missions {time.perf_counter() - t0:.1f} s; "
           f"{len(missions)} missions of 35 m")
     husky = load_vehicle("husky")
@@ -461,6 +505,18 @@ def main() -> None:
                   f"{flat_jitter(vehicle, sim):15.2f} {sanity(vehicle, sim):>8s}", flush=True)
             print("          outcomes: " + " ".join(r.failure_reason or "ok" for r in results)
                   + "; times " + " ".join(f"{r.sim_time_s:.0f}" for r in results))
+
+
+def smoke(args) -> None:
+    """Every mode once, small (``--smoke``)."""
+    global SMOKE
+    SMOKE = True
+    base = dict(vars(args), smoke=False, missions=1, seeds="1", old_rev="HEAD")
+    for name, changes in [("default", {}), ("contact", {"contact": True}), ("soil", {"soil": True}),
+                          ("iterations", {"iterations": "50,30"}), ("paired", {"paired": True}),
+                          ("engines", {"engines": "pybullet:;mujoco:engine=mujoco;mujoco-tuned:engine=mujoco,contact.wheel_margin_m=0.0"})]:
+        print(f"--- smoke: {name}", flush=True)
+        run_mode(argparse.Namespace(**(base | changes)))
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_study.py profile [--terrains 1] [--missions 4]
     .venv/bin/python benchmarks/bench_study.py plans [--missions 5] [--planner astar ...]
+    .venv/bin/python benchmarks/bench_study.py smoke
     .venv/bin/python benchmarks/bench_study.py compare [--terrains 1] [--missions 20] \
         [--variant NAME[:executor=local,workers=2,tree=PATH,KEY=VALUE...]] ...
 
@@ -13,6 +14,9 @@ is reset between phases through /proc/self/clear_refs) and the cost of committin
 
 ``plans`` times the planners on one paper terrain per D: the first mission of a terrain (which
 computes the footprint hazard) and the median of the others (which reuse it).
+
+``smoke`` runs ``profile`` and ``plans`` once on 161^2 maps (seconds; CI runs it so the script
+cannot rot); its figures mean nothing.
 
 ``compare`` runs the paper study cut to ``--terrains`` terrains per D (the same seeds and first
 terrains as the full study) once per variant, each in a fresh process, one after the other in
@@ -85,72 +89,71 @@ def bench_store(n: int = 5000) -> float:
         return (time.perf_counter() - t0) / n
 
 
-def profile(terrains: int, missions: int) -> None:
-    from offroadbench.analysis.roughness import classify_terrain
-    from offroadbench.sim import World, run_mission
-    from offroadbench.study import load_study
-    from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import plan_cells
-    from offroadbench.study.tasks import sample_mission
-    from offroadbench.terrain.recipe import generate_terrain
+def profile(terrains: int, missions: int, rows: int | None = None) -> None:
+    """Per terrain: the phases of the paper study's work, timed in this process (``rows``: a smaller
+    square grid than the study's, for the smoke mode)."""
+    from offroadbench.sim import open_world
+    from offroadbench.sim.trial.pipeline import prepare_terrain
+    from offroadbench.sim.trial.runner import drive_mission
 
-    study, _ = load_study(STUDY)
-    import dataclasses
-
-    study = dataclasses.replace(study, terrains_per_cell=terrains, missions_per_terrain=missions)
-    tasks = plan_tasks(study, plan_cells(study), set())
+    tasks, study = _tasks(terrains, missions, rows)
     print(f"python baseline: RSS {_status_mb('VmRSS'):.0f} MB")
-    print("terrain | terrain s | classes+missions s | world build s | build peak MB | RSS after build MB | "
+    print("terrain | terrain + classes + missions s | world build s | build peak MB | RSS after build MB | "
           "trials | spawn s/trial | steps s/trial | python s/trial | steps/trial | us/step | us python/tick")
-    tot = {"terrain": 0.0, "classes": 0.0, "build": 0.0, "spawn": 0.0, "step": 0.0, "python": 0.0}
+    tot = {"terrain": 0.0, "build": 0.0, "spawn": 0.0, "step": 0.0, "python": 0.0}
     n_trials = 0
     for task in tasks:
         cell = task.cell
+        settings = cell.trial_settings
         with Phase() as p_terrain:
-            hm = generate_terrain(cell.recipe(), task.terrain_seed)
-        with Phase() as p_classes:
-            maps = classify_terrain(hm, cell.section("roughness"))
-            mcfg = cell.section("missions")
-            ms = [sample_mission(hm, maps.closed, mcfg, k, seed) for k, seed in task.missions]
+            prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
         with Phase() as p_build:
-            world = World(hm, cell.section("vehicle"), cell.section("sim"))
+            world = open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim))
         spawn_s = step_s = trial_s = 0.0
         steps = ticks = 0
-        controller, rules = cell.section("controller"), cell.section("rules")
+        spawning = False
         with world:
             plain_step, plain_spawn = world.step, world.spawn
 
             def timed_step() -> None:
                 nonlocal step_s, steps
+                if spawning:  # the settling steps are the spawn's
+                    plain_step()
+                    return
                 t = time.perf_counter()
                 plain_step()
                 step_s += time.perf_counter() - t
                 steps += 1
 
             def timed_spawn(*a, **kw) -> None:
-                nonlocal spawn_s
+                nonlocal spawn_s, spawning
                 t = time.perf_counter()
-                plain_spawn(*a, **kw)
+                spawning = True
+                try:
+                    plain_spawn(*a, **kw)
+                finally:
+                    spawning = False
                 spawn_s += time.perf_counter() - t
 
             world.step, world.spawn = timed_step, timed_spawn
-            for m in ms:
+            for m in prepared.missions:
                 t = time.perf_counter()
-                _, tel = run_mission(world, m, controller=controller, rules=rules)
+                rec = drive_mission(world, m, settings=settings, classes=prepared.maps.closed)
                 trial_s += time.perf_counter() - t
-                ticks += len(tel["t_s"])
+                ticks += len(rec.telemetry["t_s"])
+        ms = prepared.missions
         python_s = trial_s - spawn_s - step_s
         k = len(ms)
         print(
-            f"D={cell.values.get('recipe.layers.base.D_high')} j={task.terrain} | {p_terrain.s:.2f} | {p_classes.s:.2f} | "
+            f"D={cell.values.get('recipe.layers.base.D_high')} j={task.terrain} | {p_terrain.s:.2f} | "
             f"{p_build.s:.2f} | {p_build.peak_mb:.0f} | {p_build.rss_mb:.0f} | {k} | {spawn_s / k:.3f} | {step_s / k:.3f} | "
             f"{python_s / k:.3f} | {steps / k:.0f} | {step_s / max(steps, 1) * 1e6:.0f} | {python_s / max(ticks, 1) * 1e6:.0f}"
         )
-        for key, v in (("terrain", p_terrain.s), ("classes", p_classes.s), ("build", p_build.s),
+        for key, v in (("terrain", p_terrain.s), ("build", p_build.s),
                        ("spawn", spawn_s), ("step", step_s), ("python", python_s)):
             tot[key] += v
         n_trials += k
-    store_s = bench_store() * n_trials
+    store_s = bench_store(200 if rows else 5000) * n_trials
     tot["store"] = store_s
     total = sum(tot.values())
     print(f"share of the time of {len(tasks)} terrains x {missions} trials: " +
@@ -160,46 +163,56 @@ def profile(terrains: int, missions: int) -> None:
 
 
 # ---------------------------------------------------------------------------- plans
-def plans(missions: int, planners: list[str]) -> None:
+def plans(missions: int, planners: list[str], rows: int | None = None) -> None:
     """Seconds per planned mission on one paper terrain per D: the first mission of a terrain (the
     footprint hazard is computed) and the median of the others (it is reused)."""
     import statistics
 
-    from offroadbench.analysis.roughness import classify_terrain
     from offroadbench.navigation.costmap import _HAZARD_CACHE
     from offroadbench.navigation.planners import PlanningProblem, plan
-    from offroadbench.sim import World
+    from offroadbench.sim import open_world
+    from offroadbench.sim.trial.pipeline import prepare_terrain
     from offroadbench.sim.trial.runner import vehicle_envelope
-    from offroadbench.study import load_study
-    from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import plan_cells
-    from offroadbench.study.tasks import sample_mission
-    from offroadbench.terrain.recipe import generate_terrain
 
-    import dataclasses
-
-    study, _ = load_study(STUDY)
-    study = dataclasses.replace(study, terrains_per_cell=1, missions_per_terrain=missions)
+    tasks, _ = _tasks(1, missions, rows)
     print("terrain | planner | first mission s | median of the others s | waypoints (median)")
-    for task in plan_tasks(study, plan_cells(study), set()):
+    for task in tasks:
         cell = task.cell
-        hm = generate_terrain(cell.recipe(), task.terrain_seed)
-        maps = classify_terrain(hm, cell.section("roughness"))
-        mcfg = cell.section("missions")
-        ms = [sample_mission(hm, maps.closed, mcfg, k, seed) for k, seed in task.missions]
-        with World(hm, cell.section("vehicle"), cell.section("sim")) as world:
+        settings = cell.trial_settings
+        prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
+        with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
             envelope = vehicle_envelope(world)
         for name in planners:
             _HAZARD_CACHE.clear()  # each planner's first mission computes the hazard
             times, sizes = [], []
-            for m in ms:
-                problem = PlanningProblem(hm=hm, classes=maps.closed, start_xy=m.start_xy_m, goal_xy=m.goal_xy_m,
-                                          border_m=mcfg.border_m, vehicle=envelope)
+            for m in prepared.missions:
+                problem = PlanningProblem(hm=prepared.hm, classes=prepared.maps.closed, start_xy=m.start_xy_m,
+                                          goal_xy=m.goal_xy_m, border_m=settings.missions.border_m, vehicle=envelope)
                 t = time.perf_counter()
                 sizes.append(len(plan(name, problem)))
                 times.append(time.perf_counter() - t)
             print(f"D={cell.values.get('recipe.layers.base.D_high')} | {name} | {times[0]:.2f} | "
                   f"{statistics.median(times[1:]) if len(times) > 1 else float('nan'):.2f} | {statistics.median(sizes):.0f}")
+
+
+def _tasks(terrains: int, missions: int, rows: int | None):
+    """The paper study's terrain tasks, cut to ``terrains`` per D and ``missions`` each; with
+    ``rows``, on a rows x rows grid with 5 m missions and a 1 m border (the smoke mode)."""
+    import dataclasses
+
+    from offroadbench.study import load_study
+    from offroadbench.study.runner import plan_tasks
+    from offroadbench.study.spec import plan_cells
+
+    study, _ = load_study(STUDY)
+    study = dataclasses.replace(study, terrains_per_cell=terrains, missions_per_terrain=missions)
+    if rows:
+        settings = {k: dict(v) for k, v in study.settings.items()}
+        settings["missions"] = {**settings.get("missions", {}), "length_m": 5.0, "border_m": 1.0}
+        settings["roughness"] = {**settings.get("roughness", {}), "border_m": 1.0}
+        study = dataclasses.replace(study, settings=settings, recipe_overrides={
+            **study.recipe_overrides, "grid.rows": rows, "grid.cols": rows})
+    return plan_tasks(study, plan_cells(study), set()), study
 
 
 # ---------------------------------------------------------------------------- compare
@@ -297,12 +310,16 @@ def main() -> None:
     c.add_argument("--terrains", type=int, default=1, help="terrains per D (full study: 20)")
     c.add_argument("--missions", type=int, default=20, help="missions per terrain (full study: 20)")
     c.add_argument("--variant", action="append", default=[], help="NAME[:k=v,...] (repeat); the first is the base")
+    sub.add_parser("smoke", help="profile and plans on 161^2 maps, one trial per D (CI: seconds)")
     args = ap.parse_args()
     sys.path.insert(0, str(ROOT))
     from offroadbench.study.store import machine_description
 
     print(f"machine: {machine_description()}; load average {os.getloadavg()[0]:.1f}")
-    if args.cmd == "profile":
+    if args.cmd == "smoke":  # every mode's code runs, on small maps (its figures mean nothing)
+        profile(1, 1, rows=161)
+        plans(2, ["astar", "lattice"], rows=161)
+    elif args.cmd == "profile":
         profile(args.terrains, args.missions)
     elif args.cmd == "plans":
         plans(args.missions, args.planner or ["astar", "lattice"])

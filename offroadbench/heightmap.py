@@ -47,6 +47,10 @@ class Heightmap:
         cell = float(self.cell_size_m)
         if not np.isfinite(cell) or cell <= 0:
             raise InputError(f"cell_size_m must be a finite number > 0, got {self.cell_size_m!r}")
+        from offroadbench.bounds import check_bounds, check_heights
+
+        check_bounds(self, "heightmap")  # a physical grid spacing (offroadbench.bounds.CELL_SIZE)
+        check_heights(float(z.min()), float(z.max()))  # physical heights (offroadbench.bounds.HEIGHT_M)
         z.setflags(write=False)
         object.__setattr__(self, "z", z)
         object.__setattr__(self, "cell_size_m", cell)

@@ -22,7 +22,8 @@ from offroadbench.errors import InputError
 
 __all__ = [
     "GRID_BYTES_PER_CELL", "WORKER_BYTES_PER_CELL", "TILE_BUILD_BYTES_PER_CELL", "WORKER_BASE_BYTES",
-    "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "available_memory_bytes", "check_memory",
+    "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
+    "check_memory",
     "check_recipe_memory", "workers_that_fit", "format_bytes",
 ]
 
@@ -40,8 +41,33 @@ def grid_bytes(rows: int, cols: int) -> int:
     return int(rows) * int(cols) * GRID_BYTES_PER_CELL
 
 
-def available_memory_bytes() -> int | None:
-    """Memory this process may still use: MemAvailable, capped by a cgroup limit; None if unknown."""
+def address_space_room_bytes() -> int | None:
+    """Address space this process may still map under its ``RLIMIT_AS`` (``ulimit -v``): the soft
+    limit less the current virtual size (``VmSize`` of /proc/self/status); None when unlimited or
+    unknown. Every process (each study worker too) has its own."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError, ValueError):
+        return None
+    if soft == resource.RLIM_INFINITY or soft < 0:
+        return None
+    used = 0
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmSize:"):
+                used = int(line.split()[1]) * 1024
+                break
+    except (OSError, ValueError):
+        pass
+    return max(0, soft - used)
+
+
+def available_memory_bytes(per_process: bool = True) -> int | None:
+    """Memory this process may still use: MemAvailable, capped by a cgroup limit and (unless
+    ``per_process`` is False: the machine's memory for several processes) by the room left under
+    ``RLIMIT_AS`` (:func:`address_space_room_bytes`); None if unknown."""
     avail = None
     try:
         for line in Path("/proc/meminfo").read_text().splitlines():
@@ -61,6 +87,9 @@ def available_memory_bytes() -> int | None:
             avail = room if avail is None else min(avail, room)
         except (OSError, ValueError):
             continue
+    room = address_space_room_bytes() if per_process else None
+    if room is not None:
+        avail = room if avail is None else min(avail, room)
     return avail
 
 
@@ -70,14 +99,25 @@ def check_recipe_memory(recipe, force: bool = False) -> None:
     check_memory(grid_bytes(rows, cols), f"{recipe.name}: a {rows}x{cols} grid", force)
 
 
-def check_memory(estimate_bytes: int, what: str, force: bool = False) -> None:
-    """Refuse ``what`` up front if its memory estimate exceeds the memory available."""
+def check_memory(estimate_bytes: int, what: str, force: bool = False, per_process_bytes: int | None = None) -> None:
+    """Refuse ``what`` up front if its memory estimate exceeds the memory available. With
+    ``per_process_bytes`` (work spread over processes, e.g. a study's workers) the total is held
+    against the machine's memory and each process's share against its own ``RLIMIT_AS``."""
     if force or os.environ.get(NO_MEMORY_CHECK_ENV, "") not in ("", "0"):
         return
-    avail = available_memory_bytes()
+    if per_process_bytes is not None:
+        room = address_space_room_bytes()
+        if room is not None and per_process_bytes > room:
+            raise InputError(
+                f"{what}: each process needs about {format_bytes(per_process_bytes)}, more than the "
+                f"{format_bytes(room)} its address-space limit (ulimit -v) leaves; raise the limit, or pass --force "
+                f"(or set {NO_MEMORY_CHECK_ENV}=1) to try anyway")
+    avail = available_memory_bytes(per_process=per_process_bytes is None)
     if avail is not None and estimate_bytes > avail:
+        limited = per_process_bytes is None and address_space_room_bytes() == avail
         raise InputError(
-            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available; "
+            f"{what} needs about {format_bytes(estimate_bytes)} of memory, more than the {format_bytes(avail)} available"
+            f"{' under this process address-space limit (ulimit -v)' if limited else ''}; "
             f"make it smaller, or pass --force (or set {NO_MEMORY_CHECK_ENV}=1) to try anyway"
         )
 
@@ -111,7 +151,7 @@ def world_bytes(rows: int, cols: int, tile_cells: int) -> int:
 def workers_that_fit(per_worker_bytes: int) -> int:
     """As many workers as both the cores and the available memory allow (at least one)."""
     workers = os.cpu_count() or 1
-    avail = available_memory_bytes()
+    avail = available_memory_bytes(per_process=False)  # each worker has its own address-space limit
     if avail is not None:
         workers = max(1, min(workers, avail // per_worker_bytes))
     return workers

@@ -223,8 +223,12 @@ def _type_text(annotation: Any) -> str:
 def field_docs(cls: type, *, skip: tuple[str, ...] = (), defaults: Any = None) -> tuple[FieldDoc, ...]:
     """The keys of config class ``cls``, in declaration order. ``defaults``: an instance whose values
     stand as the defaults (a vehicle's own values)."""
+    from offroadbench.bounds import BOUNDS
+
     docs = _attribute_docs(cls)
     ranges = _allowed_ranges(cls)
+    for name, bound in BOUNDS.get(cls.__name__, {}).items():  # physical bounds (sources: "Physical bounds")
+        ranges[name] = f"{ranges[name]}; physically {bound.text()}" if ranges.get(name) else f"physically {bound.text()}"
     hints = typing.get_type_hints(cls)
     out = []
     for f in dataclasses.fields(cls):
@@ -265,7 +269,7 @@ def _first_line(obj: Any) -> str:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -274,6 +278,7 @@ def _study_section() -> SectionDoc:
         "(the keys of `offroadbench generate --set`)."),
         ("`[reference]`: published numbers the report sets beside the study's (free-form; "
         "`offroadbench.study.report`)."),
+        ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
     return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
                       notes)
@@ -308,6 +313,7 @@ def _driver_entries() -> list[tuple[str, str, Any]]:
 
 
 def _planner_sections() -> list[SectionDoc]:
+    from offroadbench.navigation.perception import PerceptionConfig
     from offroadbench.navigation.planners import NoConfig, PlannerChoice
 
     entries = _driver_entries()
@@ -316,7 +322,12 @@ def _planner_sections() -> list[SectionDoc]:
         "planner", _qualname(PlannerChoice), _first_line(PlannerChoice),
         (FieldDoc("name", "str", "straight", "", f"one of {names} (and installed plug-ins)",
                   "The planner (pure pursuit follows its path) or closed-loop policy that drives every trial; "
-                  "the table's other keys are that entry's settings, below."),),
+                  "the table's other keys are what it perceives (the keys after `name`, "
+                  "offroadbench.navigation.perception.PerceptionConfig) and that entry's settings, below."),
+         *field_docs(PerceptionConfig)),
+        ("The keys after `name` apply to every planner and policy: the map-error keys, or `sensor = \"mast\"` "
+         "(offroadbench.navigation.sensor); `sensor = \"oracle\"` with the map-error keys at 0 is the true "
+         "map and pose.",),
     )
     out = [head]
     for kind, name, spec in entries:
@@ -347,6 +358,7 @@ def study_sections() -> list[SectionDoc]:
             skip = ("count",) if name == "missions" else ()
             notes = ("`count` is not a study key: `[study] missions_per_terrain` sets it.",) if skip else ()
             out.append(SectionDoc(name, _qualname(cls), _first_line(cls), field_docs(cls, skip=skip), notes))
+            out += _nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
     return out
 
 
@@ -377,8 +389,10 @@ FILE_KEYS: dict[str, tuple[str, tuple[FieldDoc, ...]]] = {
                  "A crater CSV (offroadbench.io.craters_csv): these craters are stamped instead of sampling the "
                  "population (read when the recipe is loaded)."),)),
     "dem": ("dem", (
-        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy or GeoTIFF), read when "
-                 "the recipe is loaded; none: the shipped sample DEM."),
+        FieldDoc("path", "str", None, "", "a path", "The DEM file (16-bit PNG + sidecar, .npy, a geographic .npz "
+                 "with non-square cells, or GeoTIFF), read when the recipe is loaded; `matplotlib:NAME`: a sample "
+                 "file shipped with matplotlib (`matplotlib:jacksboro_fault_dem.npz`, a real DEM); none: the "
+                 "shipped sample DEM."),
         FieldDoc("source_cell_size_m", "float", None, "m", "(0, inf)", "Cell size of a DEM file without metadata."),
         FieldDoc("source_relief_m", "float", None, "m", "[0, inf)", "Relief of a 16-bit PNG without metadata."),
         FieldDoc("nodata_level", "int", None, "", "integer 0 .. 65535", "16-bit level that marks missing heights "
@@ -436,6 +450,10 @@ TERRAIN_COLUMNS = (
      "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
     ("area_semi", "", "Fraction inside the border that is semi-rough (as above)."),
     ("area_high", "", "Fraction inside the border that is highly rough (as above)."),
+    ("twin_unexplained_var", "", "Only in cells with `[study] missions_from` whose missions come from another cell's "
+     "terrain: 1 - r^2 of this terrain's heights against that terrain's (same seed); for a band-limited arm against "
+     "its aliased twin, the share of the surface's variance carried by the W-M terms above the grid's Nyquist "
+     "frequency (offroadbench.study.tasks.prepare_cell)."),
 )
 
 #: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
@@ -510,6 +528,20 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
     return lines
 
 
+def _analysis_lines() -> list[str]:
+    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.plan)."""
+    from offroadbench.study import plan
+
+    doc = inspect.getdoc(plan) or ""
+    tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
+    return ["### `[analysis]`", "", f"{_md_cell(_first_line(plan.AnalysisPlan))} Source: "
+            f"`{_qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
+            "in its Confirmatory section and marks every other number exploratory; a plan changed after "
+            "trials were stored is refused.", "", *_md_table(field_docs(plan.AnalysisPlan, skip=("comparisons",))),
+            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(_first_line(plan.Comparison))} Source: "
+            f"`{_qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
+
+
 def render_reference() -> str:
     """The whole reference as Markdown (the text of ``docs/reference.md``)."""
     from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS
@@ -531,13 +563,17 @@ def render_reference() -> str:
     ]
     for s in study_sections():
         top, _, entry = s.name.partition(".")
-        title = f'`[{top}]` with `name = "{entry}"`' if entry else f"`[{top}]`"
+        title = f'`[{top}]` with `name = "{entry}"`' if entry and s.generator != "table" else f"`[{s.name}]`"
         summary = s.summary if s.summary.endswith(".") else s.summary + "."
         lines += [f"### {title}", "", f"{_md_cell(summary)} Source: `{s.source}`.", ""]
         if s.fields:
             lines += _md_table(s.fields) + [""]
         for note in s.notes:
             lines += [note, ""]
+    lines += _analysis_lines()
+    from offroadbench.bounds import reference_lines
+
+    lines += reference_lines()
     lines += [
         "## Terrain recipes",
         "",
@@ -557,10 +593,12 @@ def render_reference() -> str:
     lines += [
         "## Tables a study writes",
         "",
-        "### Trials (`offroadbench.study.load(DIR)`, `study export`, the report's `trials.csv`)",
+        "### Trials (`offroadbench.study.load(DIR)`, `study export`'s `trials.parquet` or `trials.csv`)",
         "",
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
-        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`."),
+        "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`. `study export` adds, after these, the "
+        "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
+        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",
@@ -594,6 +632,8 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
     keys without a default) are commented out."""
     lines = []
     for i, f in enumerate(s.fields):
+        if dataclasses.is_dataclass(f.default):
+            continue  # a nested table, printed as its own [table.key] (render_section_toml)
         info = "; ".join(t for t in (f.unit, f.allowed) if t)
         lines.append(f"# {_first_sentence(f.doc)}" + (f" ({info})" if info else ""))
         pre = "# " if commented_from is not None and i >= commented_from else ""
@@ -610,20 +650,54 @@ def _toml_block(s: SectionDoc, *, commented_from: int | None = None) -> list[str
 _STUDY_EXAMPLE = {"name": "my-study", "recipe": "paper-d2.45", "root_seed": 0}
 
 
+#: the study's free-form tables, printed after ``[study]``: (name, comment lines, example lines)
+_FREE_TABLES = (
+    ("grid", (
+        "Axes of the parameter grid: \"dotted.key\" = [values], one cell per combination (first axis slowest).",
+        "Keys: recipe (preset names or paths), recipe.<key of the recipe TOML>, <table>.<key> of a table below.",
+        "No axis: one cell. Uncomment or write your own:",
+    ), (
+        '# "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]',
+        '# "planner.name" = ["straight", "astar"]',
+    )),
+    ("recipe_overrides", (
+        "Fixed \"dotted.key\" = value changes of the recipe, for every cell (the keys of generate --set;",
+        "the recipe's own [grid] and [layers.*] tables: docs/reference.md, Terrain recipes).",
+    ), (
+        '# "grid.rows" = 257',
+        '# "grid.cols" = 257',
+    )),
+)
+
+
+def _free_table(name: str) -> list[str]:
+    for table, comments, examples in _FREE_TABLES:
+        if table == name:
+            return [f"[{table}]", *(f"# {c}" for c in comments), *examples, ""]
+    raise KeyError(name)
+
+
 def render_section_toml(section: str | None = None) -> str:
     """A study table (or, with ``section=None``, every table) with its defaults, as TOML with a
     comment per key. The output loads as it is; keys without a default are commented out (in
-    ``[study]`` the required keys get example values)."""
+    ``[study]`` the required keys get example values; ``[grid]`` and ``[recipe_overrides]`` are
+    printed empty, with commented examples)."""
     sections = study_sections()
     names = [s.name for s in sections if "." not in s.name]
+    free = [t for t, _, _ in _FREE_TABLES]
+    if section in free:
+        return "\n".join(_free_table(section)).rstrip() + "\n"
     if section is not None and section not in names:
         from offroadbench.registry import unknown_name
 
-        raise unknown_name("study table", section, names)
+        raise unknown_name("study table", section, names[:1] + free + names[1:])
     lines: list[str] = []
     for s in sections:
         top = s.name.split(".", 1)[0]
         if section is not None and top != section:
+            continue
+        if s.generator == "table":  # a nested table of the one above, e.g. [sim.mujoco]
+            lines += [f"[{s.name}]", f"# {s.summary} ({s.source})"] + _toml_block(s) + [""]
             continue
         if "." in s.name:
             if s.fields:
@@ -637,4 +711,7 @@ def render_section_toml(section: str | None = None) -> str:
                 for f in s.fields))
         # a vehicle's figures stay commented: set here, they would override another vehicle's own
         lines += _toml_block(s, commented_from=1 if s.name == "vehicle" else None) + [""]
+        if s.name == "study" and section is None:
+            for table in free:
+                lines += _free_table(table)
     return "\n".join(lines).rstrip() + "\n"

@@ -37,6 +37,7 @@ __all__ = [
     "study_files",
     "soil_files",
     "sample_dem",
+    "matplotlib_sample",
     "package_dir",
 ]
 
@@ -119,6 +120,16 @@ def study_files() -> dict[str, Path]:
 def soil_files() -> dict[str, Path]:
     """{soil name: TOML path} of every ``soils/<name>.toml`` (``lunar-regolith``, ``lete-sand``, ...)."""
     return _first_found("soils", "*.toml")
+
+
+def matplotlib_sample(name: str) -> Path:
+    """A sample data file shipped inside matplotlib (e.g. ``jacksboro_fault_dem.npz``, a real DEM)."""
+    from matplotlib import get_data_path
+
+    p = Path(get_data_path()) / "sample_data" / name
+    if not p.is_file():
+        raise InputError(f"matplotlib:{name}: matplotlib ships no such sample file (in {p.parent})")
+    return p
 
 
 def sample_dem() -> Path:

@@ -40,14 +40,15 @@ class TailReport:
         """True when either tail spans more than half the relief (a spire or a pit)."""
         return max(self.top_span_m, self.bottom_span_m) > 0.5 * self.relief_m
 
-    def message(self) -> str:
+    def message(self, remedy: str | None = None) -> str:
+        """The warning; ``remedy`` replaces the default advice (the ``--clip-percentile P`` option)."""
         pct = 100 * self.fraction
         which = "top" if self.top_span_m >= self.bottom_span_m else "bottom"
         span = max(self.top_span_m, self.bottom_span_m)
         return (
             f"the {which} {pct:g} % of samples span {span:.3g} m of the {self.relief_m:.3g} m relief "
             f"({100 * span / self.relief_m:.0f} %): a narrow spike sets the height range (and the 16-bit step of "
-            "exports); --clip-percentile P clips heights to the P..100-P percentiles (not in the paper)"
+            "exports); " + (remedy or "--clip-percentile P clips heights to the P..100-P percentiles (not in the paper)")
         )
 
 

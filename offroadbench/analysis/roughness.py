@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from offroadbench.errors import InputError
+
 from offroadbench.config import check_range
 from offroadbench.heightmap import Heightmap
 from offroadbench.levels16 import LEVELS, ue_z_range_m
@@ -133,6 +135,9 @@ def close_rough(classes: np.ndarray, radius_m: float, cell_size_m: float) -> np.
     radius_px = radius_m / cell_size_m
     if radius_px < 1:
         return classes.copy()
+    if radius_px > max(classes.shape):  # e.g. a cell size in the wrong unit: a disk of 3.6 TiB
+        raise InputError(f"closing_radius_m = {radius_m:g} m is {radius_px:.3g} cells at cell_size_m = {cell_size_m:g} m, "
+                         f"more than the {classes.shape[0]}x{classes.shape[1]} map; check the cell size and its unit")
     se = disk(radius_px)
     pad = int(np.ceil(radius_px))
     out = np.full(classes.shape, LOW, dtype=np.uint8)

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     level = logging.INFO if args.verbose else logging.WARNING
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     # Dask reads its log level when distributed is imported (here and in the workers it starts)
-    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "info" if args.verbose else "warning")
+    os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "info" if args.verbose else "critical")  # a worker's ERRORs: the study says it in one line
     logging.getLogger("distributed").setLevel(level)
     try:
         return int(args.func(args) or 0)
@@ -72,6 +72,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")
         return 130
+    except MemoryError as exc:  # past the up-front estimate (--force, or an estimate too low)
+        sys.stderr.write(f"offroadbench: error: out of memory ({_one_line(exc) or 'MemoryError'}); make the work "
+                         "smaller or give it more memory\n")
+        return EXIT_FAILED
     except BrokenPipeError:
         # the reader (e.g. `| head`) went away: stop quietly, as command-line tools do
         devnull = os.open(os.devnull, os.O_WRONLY)

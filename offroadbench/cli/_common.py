@@ -24,6 +24,8 @@ from offroadbench.progress import ProgressFn
 __all__ = [
     "int_at_least", "seed_arg", "positive_int", "float_at_least", "positive_float", "nonnegative_float",
     "parse_sets", "load_recipe_with_sets", "load_heightmap_arg", "crater_diameters",
+    "sets_text", "terrain_label", "recipe_meta", "count_text", "medians_text", "run_caption",
+    "add_plot_option", "plot_path",
     "grid_bytes", "check_memory", "check_recipe_memory", "available_memory_bytes",
     "check_output_file", "check_output_dir", "created_dirs", "save_figure", "format_table", "bar",
 ]
@@ -81,6 +83,34 @@ def parse_sets(pairs: list[str] | None) -> dict[str, object]:
     return out
 
 
+def sets_text(overrides: dict[str, object] | None) -> str:
+    """``{"layers.base.D_high": 2.6}`` -> ``"layers.base.D_high=2.6"`` (as typed after ``--set``)."""
+    import json
+
+    return ", ".join(f"{k}={v if isinstance(v, str) else json.dumps(v)}" for k, v in (overrides or {}).items())
+
+
+def terrain_label(recipe, seed: int, overrides: dict[str, object] | None = None) -> str:
+    """What a terrain is called in headers, titles and sidecars: the preset, its ``--set``
+    overrides (a changed terrain is not the preset) and the seed, e.g.
+    ``paper-d2.45 + layers.base.D_high=2.6 seed 0``."""
+    extra = sets_text(overrides)
+    return f"{recipe.name}{' + ' + extra if extra else ''} seed {seed}"
+
+
+def recipe_meta(recipe, seed: int, overrides: dict[str, object] | None = None) -> dict[str, object]:
+    """The provenance a written terrain carries (PNG sidecar, exports): preset name, seed, terrain
+    id, the resolved recipe, the ``--set`` overrides and the label, and the recipe's CRS if any."""
+    meta: dict[str, object] = {"recipe_name": recipe.name, "seed": seed, "terrain_id": recipe.terrain_id(seed),
+                               "recipe": dict(recipe.data)}
+    if overrides:
+        meta["overrides"] = dict(overrides)
+    meta["label"] = terrain_label(recipe, seed, overrides)
+    if recipe.data.get("recipe", {}).get("crs"):
+        meta["crs"] = recipe.data["recipe"]["crs"]
+    return meta
+
+
 def load_recipe_with_sets(name: str, sets: list[str] | None):
     """A preset or recipe TOML with the ``--set`` overrides applied (validated)."""
     from offroadbench.terrain.recipe import apply_overrides, load_recipe
@@ -100,18 +130,20 @@ def load_heightmap_arg(
     (``force`` skips that check).
     """
     if source.lower().endswith(".png"):
-        from offroadbench.io.png16 import png_shape, read_png16
+        from offroadbench.io.png16 import png_shape, read_png16, read_png16_metadata
 
         if sets:
             raise InputError("--set applies to presets and recipes, not to a PNG heightmap")
         rows, cols = png_shape(source)
         check_memory(grid_bytes(rows, cols), f"{source}: a {rows}x{cols} heightmap", force)
-        return read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m), Path(source).stem, None
+        hm = read_png16(source, cell_size_m=cell_size_m, relief_m=relief_m)
+        made = read_png16_metadata(source).get("label")  # what generate named it (preset, overrides, seed)
+        return hm, f"{Path(source).stem} ({made})" if made else Path(source).stem, None
     from offroadbench.terrain.recipe import load_terrain
 
     recipe = load_recipe_with_sets(source, sets)
     check_recipe_memory(recipe, force)
-    return load_terrain(recipe, seed)[0], f"{recipe.name} seed {seed}", recipe
+    return load_terrain(recipe, seed)[0], terrain_label(recipe, seed, parse_sets(sets)), recipe
 
 
 def crater_diameters(recipe, seed: int):
@@ -128,14 +160,59 @@ def crater_diameters(recipe, seed: int):
     return np.concatenate([np.asarray(t.diameter_m) for t in tables.values()])
 
 
+def add_plot_option(p: argparse.ArgumentParser, what: str, default: str) -> None:
+    """The one ``--plot [PATH]`` grammar of every command that draws: ``--plot PATH`` writes ``what``
+    at PATH (.png, .pdf or .svg); a bare ``--plot`` writes it at ``default``."""
+    p.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
+                   help=f"write {what} to PATH (.png, .pdf or .svg); a bare --plot writes it to {default}")
+
+
+def plot_path(plot: str | bool | None, default: str | Path) -> Path | None:
+    """The checked figure path of a ``--plot [PATH]`` value (None: no figure)."""
+    if not plot:
+        return None
+    return check_output_file(default if plot is True else plot, "--plot", suffixes=(".png", ".pdf", ".svg"))
+
+
 def save_figure(fig, path: str | Path, dpi: int = 150) -> Path:
     """Save a matplotlib Figure atomically (format from the suffix, default PNG)."""
     from offroadbench.io.atomic import atomic_path
 
+    from matplotlib.text import Text
+
     p = Path(path)
+    for t in fig.findobj(Text):  # a file name that is not UTF-8 (surrogate escapes) cannot be drawn
+        text = t.get_text()
+        if isinstance(text, str) and printable(text) != text:
+            t.set_text(printable(text))
     with atomic_path(p) as tmp:
         fig.savefig(tmp, dpi=dpi, format=p.suffix.lstrip(".") or "png")
     return p
+
+
+def count_text(n: int, noun: str) -> str:
+    """``1 mission``, ``3 missions``."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def medians_text(summary: dict) -> str:
+    """The medians line of a drive summary (``median_*`` keys): said plainly when no trial succeeded
+    (the metrics are of successful trials only), never a row of ``nan``."""
+    medians = {k[len("median_"):]: v for k, v in summary.items() if k.startswith("median_")}
+    if not int(summary.get("successes", 0)) or all(v != v for v in medians.values()):
+        return "no trial succeeded, so no traversal metrics (they are of successful trials only)"
+    return "medians of successful trials:\n  " + ", ".join(
+        f"{k} {v:.3f}" for k, v in medians.items() if v == v)
+
+
+def run_caption(sim) -> str:
+    """``pybullet, g = 9.81 m/s^2``: the engine and gravity a figure of driven trials was made with."""
+    return f"{sim.engine}, g = {sim.gravity_m_s2:g} m/s^2"
+
+
+def printable(text: str) -> str:
+    """``text`` with the surrogate escapes of a non-UTF-8 file name (os.fsdecode) shown as U+FFFD."""
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
 
 
 def format_table(df: pd.DataFrame, floatfmt: str = "{:.2f}") -> str:

@@ -34,10 +34,12 @@ def register(sub) -> None:
         "config", help="print a study table with its defaults as TOML (start a study from it)",
         description="Print the tables of a study TOML with every key at its default, one comment per key "
         "(meaning, unit, allowed values). With no SECTION, the whole file: [study] (example values for its "
-        "required keys), [roughness], [missions], [vehicle], [controller], [sim], [rules], [planner]. "
+        "required keys), [grid] and [recipe_overrides] (empty, with commented examples), [roughness], [missions], "
+        "[vehicle], [controller], [sim], [rules], [planner]. "
         "docs/reference.md documents the same keys and the output columns.")
     p.add_argument("section", nargs="?", default=None,
-                   help="one table: study, roughness, missions, vehicle, controller, sim, rules, planner")
+                   help="one table: study, grid, recipe_overrides, roughness, missions, vehicle, controller, sim, "
+                   "rules, planner")
     p.add_argument("--write-reference", metavar="PATH", default=None,
                    help="write the Markdown settings reference to PATH (the repository's docs/reference.md)")
     p.set_defaults(func=cmd_config)

@@ -47,19 +47,19 @@ SET_SECTIONS = ("sim", "controller", "rules", "roughness", "vehicle", "planner")
 
 def format_drive_run(run, label: str) -> str:
     """The per-mission table and the summary of a DriveRun."""
+    from offroadbench.cli._common import count_text, medians_text
+
     df = pd.DataFrame(run.rows())
     df["outcome"] = df["failure_reason"].replace("", "success")
     df["max_penetration_mm"] = 1000 * df["max_penetration_m"]
     s = run.summary
-    medians = ", ".join(f"{k[len('median_'):]} {v:.3f}" for k, v in s.items() if k.startswith("median_"))
     return "\n".join([
-        f"{label}: {len(run.missions)} missions of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
+        f"{label}: {count_text(len(run.missions), 'mission')} of {run.mission_config.length_m:g} m, vehicle {run.vehicle_name}, "
         f"planner {run.planner}, physics {run.sim.engine} {run.sim.physics_rate_hz} Hz, "
         f"gravity {run.sim.gravity_m_s2:g} m/s^2",
         format_table(df[[c for c, _ in _TABLE]].rename(columns=dict(_TABLE))),
         "",
-        f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); medians of successful trials:",
-        "  " + medians,
+        f"success rate {s['success_rate_pct']:.1f} % ({int(s['successes'])}/{int(s['trials'])}); " + medians_text(s),
     ])
 
 
@@ -77,13 +77,17 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
     """The missions, trajectories and time-series figures of a DriveRun."""
     from offroadbench.plots.traversal import plot_missions, plot_timeseries, plot_trajectories
 
+    from offroadbench.cli._common import run_caption
+
     hm, closed, border = run.heightmap, run.closed, run.mission_config.border_m
     shown = next((r for r in run.results if r.success), run.results[0])
+    label = f"{label} ({run_caption(run.sim)})"  # every figure names the gravity and the engine
     with created_dirs(*{p.parent for p in paths.values()}):
         save_figure(plot_missions(hm, closed, run.missions, border_m=border, title=f"{label}: missions"),
                     paths["missions"])
         save_figure(plot_trajectories(hm, closed, run.missions, run.telemetry, run.results, border_m=border,
-                                      paths=run.paths, title=f"{label}: trajectories ({run.planner})"),
+                                      paths=run.paths, beliefs=run.beliefs,
+                                      title=f"{label}: trajectories ({run.planner})"),
                     paths["trajectories"])
         save_figure(plot_timeseries(run.telemetry[shown.mission_index], title=f"{label}: mission "
                                     f"{shown.mission_index} ({shown.failure_reason or 'success'})"),
@@ -91,19 +95,59 @@ def write_drive_figures(run, label: str, paths: dict[str, Path]) -> list[Path]:
     return list(paths.values())
 
 
-def write_drive_run(run, out: Path) -> list[str]:
-    """trials.csv and telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
-    older runs still load with offroadbench.io.telemetry.load_telemetry); returns what was written."""
-    from offroadbench.io.atomic import atomic_path
+def drive_record(run, label: str = "", options: dict | None = None) -> dict:
+    """What ``drive --out`` keeps beside trials.csv (``settings.json``): the command's options, the terrain
+    and seeds, every setting the missions were driven with (the TrialSettings, the terrain's gravity
+    and soil filled in), the platform (offroadbench.study.fingerprint) and the code version."""
+    import dataclasses
+
+    from offroadbench.study.fingerprint import platform_fingerprint
+    from offroadbench.study.runner import code_version
+
+    settings = {f.name: _plain(getattr(run.settings, f.name)) for f in dataclasses.fields(run.settings)}
+    return {
+        "options": _plain(options or {}),
+        "terrain": label,
+        "terrain_seed": run.terrain_seed,
+        "mission_seeds": list(run.mission_seeds),
+        "settings": settings,
+        "platform": platform_fingerprint(),
+        "code_version": code_version(),
+    }
+
+
+def _plain(value):
+    """A config as JSON data (nested dataclasses as tables, tuples as lists, paths as strings)."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def write_drive_run(run, out: Path, label: str = "", options: dict | None = None) -> list[str]:
+    """trials.csv, telemetry/mission_NNN.parquet (the studies' telemetry format; ``.npz`` files of
+    older runs still load with offroadbench.io.telemetry.load_telemetry) and settings.json (what
+    drove them: :func:`drive_record`), all or nothing; returns what was written."""
+    import json
+
+    from offroadbench.io.export import staged_dir
     from offroadbench.io.telemetry import save_telemetry
 
-    tel_dir = out / "telemetry"
-    with created_dirs(out, tel_dir):
-        with atomic_path(out / "trials.csv") as tmp:
-            pd.DataFrame(run.rows()).to_csv(tmp, index=False)
+    # all or nothing (the export transaction): a full disk leaves no trials.csv without its telemetry
+    with staged_dir(out) as stage:
+        (stage / "telemetry").mkdir()
+        pd.DataFrame(run.rows()).to_csv(stage / "trials.csv", index=False)
         for index, tel in run.telemetry.items():
-            save_telemetry(tel, tel_dir / f"mission_{index:03d}.parquet")
-    return ["trials.csv", "telemetry/mission_*.parquet"]
+            save_telemetry(tel, stage / "telemetry" / f"mission_{index:03d}.parquet", sweep=False)
+        (stage / "settings.json").write_text(json.dumps(drive_record(run, label, options), indent=1, allow_nan=True) + "\n")
+    return ["trials.csv", "telemetry/mission_*.parquet", "settings.json"]
 
 
 def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
@@ -135,15 +179,14 @@ def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
 
 
 def vehicle_footprint(spec, sim) -> tuple[float, float]:
-    """(length, width) of the vehicle's footprint in metres, from its links' bounding boxes at rest
-    (offroadbench.sim.trial.runner.vehicle_envelope, on a small flat world)."""
+    """(length, width) of the vehicle's footprint in metres, as the trials' engine (``sim.engine``)
+    measures it (offroadbench.sim.engine.VehicleGeometry, on a small flat world)."""
     from offroadbench.heightmap import Heightmap
-    from offroadbench.sim import World
-    from offroadbench.sim.trial.runner import vehicle_envelope
+    from offroadbench.sim import open_world
 
-    with World(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
-        env = vehicle_envelope(world)
-    return env.length_m, env.width_m
+    with open_world(Heightmap.flat(9, 9, 0.5), spec, sim) as world:
+        geo = world.geometry
+    return geo.length_m, geo.width_m
 
 
 def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason: str, footprint_m, title: str,
@@ -160,19 +203,30 @@ def write_trial_animation(path: Path, hm, classes, path_xy, tel, failure_reason:
     t = np.asarray(tel["t_s"], float)
     rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 20.0
     frames = frame_indices(len(t), rate, fps=fps)
-    with created_dirs(path.parent):
+    with created_dirs(path.parent), bar(f"writing {path.name}", unit="frame") as progress:
         return save_animation(view.fig, lambda i: view.draw(tel, i, failure_reason=failure_reason), frames, path,
-                              fps=fps)
+                              fps=fps, progress=progress)
+
+
+def drive_settings(args: argparse.Namespace, tables: dict):
+    """The TrialSettings of a ``drive`` command, built from its tables as a study builds a cell's
+    (offroadbench.sim.trial.pipeline.TrialSettings.from_tables)."""
+    from offroadbench.analysis.roughness import RoughnessConfig
+    from offroadbench.sim.trial.pipeline import TrialSettings
+
+    border = tables["roughness"].get("border_m", RoughnessConfig().border_m)
+    return TrialSettings.from_tables({
+        **{k: v for k, v in tables.items() if k not in ("vehicle", "planner")},
+        "vehicle": {"name": args.vehicle, **tables["vehicle"]},
+        "planner": {"name": args.planner, **tables["planner"]},
+        "missions": {"count": args.missions, "length_m": args.length_m, "border_m": border},
+    }, where="drive (--vehicle, --planner, --border-m, --set)")
 
 
 def cmd_drive(args: argparse.Namespace) -> int:
-    from offroadbench.analysis.roughness import RoughnessConfig
-    from offroadbench.config import from_dict
-    from offroadbench.navigation.planners import planner_from_table
-    from offroadbench.navigation.rules import FailureRules
     from offroadbench.seeding import terrain_seed
-    from offroadbench.sim import ControllerConfig, SimConfig, drive_missions
-    from offroadbench.sim.trial.vehicle import vehicle_from_table
+    from offroadbench.sim import drive_missions
+    from offroadbench.sim.trial.pipeline import terrain_body
 
     if args.plot is True and args.out is None:
         raise InputError("--plot needs --out DIR to write the figures into (or give --plot PATH.png)")
@@ -186,33 +240,29 @@ def cmd_drive(args: argparse.Namespace) -> int:
         check_animation_path(args.animate)
         check_output_file(args.animate, "--animate")
     tables, recipe_sets = _drive_settings(args)
-    vehicle = vehicle_from_table({"name": args.vehicle, **tables["vehicle"]}, where="--vehicle/--set vehicle.*")
-    sim = from_dict(SimConfig, tables["sim"], where="--set sim.*")
-    controller = from_dict(ControllerConfig, tables["controller"], where="--set controller.*")
-    rules = from_dict(FailureRules, tables["rules"], where="--set rules.*")
-    roughness = from_dict(RoughnessConfig, tables["roughness"], where="--border-m/--set roughness.*")
-    planner = planner_from_table({"name": args.planner, **tables["planner"]}, where="--planner/--set planner.*")
+    settings = drive_settings(args, tables)
 
+    from offroadbench.study.runner import check_drive_size
+
+    # the same size limit as a study's (1e7 m missions would run for days): --force to run anyway
+    check_drive_size(args.missions, args.length_m,
+                     min(settings.controller.cruise_speed_m_s, settings.vehicle.max_speed_m_s), args.force)
     tseed = terrain_seed(args.seed, 0)  # drive --seed s is terrain 0 of root seed s (offroadbench.seeding)
     hm, label, recipe = load_heightmap_arg(args.terrain, tseed, sets=recipe_sets, force=args.force)
-    if recipe is not None:  # the terrain's body and soil (where --gravity / --set sim.* leave them open)
-        from offroadbench.cli.terrain import warn_relief_tails
+    if recipe is not None:
+        from offroadbench.cli.terrain import CLIP_ELSEWHERE, warn_relief_tails
 
-        warn_relief_tails(hm, label)
-        sim = sim.for_terrain(recipe.gravity_m_s2, recipe.soil)
-    else:  # a PNG: those of the recipe in its sidecar, if any
-        from offroadbench.bodies import terrain_gravity_and_soil
-        from offroadbench.io.png16 import read_png16_metadata
-
-        sim = sim.for_terrain(*terrain_gravity_and_soil(read_png16_metadata(args.terrain).get("recipe")))
+        warn_relief_tails(hm, label, CLIP_ELSEWHERE)
+    gravity, soil = terrain_body(args.terrain, recipe)  # where --gravity / --set sim.* leave them open
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
-                             length_m=args.length_m, vehicle=vehicle, sim=sim, controller=controller, rules=rules,
-                             roughness=roughness, planner=planner, progress=progress)
+                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress)
     print(format_drive_run(run, label))
     written = []
     if out is not None:
-        written += [f"{out}/{w}" for w in write_drive_run(run, out)]
+        written += [f"{out}/{w}" for w in write_drive_run(run, out, label=label,
+                                                                   options={k: v for k, v in vars(args).items()
+                                                                            if k != "func"})]
     if plots:
         written += [str(p) for p in write_drive_figures(run, label, plots)]
     if written:
@@ -220,9 +270,11 @@ def cmd_drive(args: argparse.Namespace) -> int:
     if args.animate:
         shown = next((r for r in run.results if not r.success), run.results[0])
         k = shown.mission_index
-        title = f"{label}: mission {k}, {run.planner}, {shown.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        title = f"{label}: mission {k}, {run.planner}, {run_caption(run.sim)}, {shown.failure_reason or 'success'}"
         path = write_trial_animation(Path(args.animate), run.heightmap, run.closed, run.paths[k], run.telemetry[k],
-                                     shown.failure_reason, vehicle_footprint(vehicle, sim), title)
+                                     shown.failure_reason, vehicle_footprint(run.settings.vehicle, run.sim), title)
         print(f"wrote {path} (mission {k})")
     return 0
 
@@ -238,7 +290,8 @@ def register(sub) -> None:
                    "mission k has seed mission_seed(seed, 0, k) (offroadbench.seeding)")
     p.add_argument("--missions", type=positive_int, default=20, help="number of missions (default 20)")
     p.add_argument("--length-m", type=positive_float, default=35.0, help="start-goal distance, m (default 35, paper)")
-    p.add_argument("--out", help="directory for trials.csv and telemetry/ (Parquet) (created if missing)")
+    p.add_argument("--out", help="directory for trials.csv, telemetry/ (Parquet) and settings.json (every setting, the "
+                   "platform and code version) (created if missing)")
     p.add_argument("--plot", nargs="?", const=True, default=None, metavar="PATH",
                    help="write the figures: --plot PATH.png writes the trajectories at PATH and PATH_missions.png, "
                    "PATH_timeseries.png beside it; a bare --plot writes missions.png, trajectories.png and "
@@ -260,9 +313,9 @@ def register(sub) -> None:
                    "sim.gravity_m_s2=1.62; any other key is a recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
     p.add_argument("--planner", default="straight",
-                   help="planner or policy (built-in: straight, astar, lattice, reactive; installed plug-ins too)")
+                   help="planner or policy (built-in: straight, astar, lattice, reactive, mppi; installed plug-ins too)")
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",
-                   help="skip the up-front memory estimate check (also OFFROADBENCH_NO_MEMORY_CHECK=1)")
+                   help="skip the up-front memory and work estimate checks (memory also OFFROADBENCH_NO_MEMORY_CHECK=1)")
     p.set_defaults(func=cmd_drive)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import time
+from pathlib import Path
 
 from offroadbench.errors import InputError
 
@@ -41,9 +42,9 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.clip_percentile:
         hm = clip_percentile(hm, args.clip_percentile)
     if recipe is not None:
-        meta = {"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)}
-        if recipe.data.get("recipe", {}).get("crs"):
-            meta["crs"] = recipe.data["recipe"]["crs"]
+        from offroadbench.cli._common import parse_sets, recipe_meta
+
+        meta = recipe_meta(recipe, args.seed, parse_sets(args.set))
         name = args.name or f"{recipe.name}_seed{args.seed}"
     else:
         from offroadbench.io.png16 import read_png16_metadata
@@ -53,7 +54,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         crs = side.get("crs") or ((side.get("recipe") or {}).get("recipe") or {}).get("crs")
         if crs:  # the generating recipe's CRS (the lunar presets' Moon CRS), kept in a GeoTIFF
             meta["crs"] = crs
-        name = args.name or label
+        name = args.name or Path(args.terrain).stem  # the PNG's stem (the label also names its recipe)
     if args.clip_percentile:
         meta["clip_percentile"] = args.clip_percentile
     tails = tail_report(hm)  # a spike that sets the 16-bit step of the image formats: exported as it is, said here

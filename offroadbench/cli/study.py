@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
-from offroadbench.io.atomic import atomic_path
+from offroadbench.io.atomic import atomic_path, atomic_paths
 
 EXPORT_FORMATS = ("parquet", "csv")
 #: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
@@ -40,8 +40,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: stop the study (and the worker) when one trial runs longer than this, s "
-                          "(default: generous against the trials' nominal time)")
+                     help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
+                          "replaced) and the study goes on (default: generous against the trials' nominal time; "
+                          "at most 30 days)")
+    run.add_argument("--retry-faults", action="store_true",
+                     help="run the trials stored as faults (past their limit, thrown while settling) again; "
+                          "a resume skips them otherwise")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
+                          "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
+                          "vehicle, planner, missions), any other key is a recipe override (as drive --set), "
+                          "e.g. --set study.terrains_per_cell=2 --set sim.engine=mujoco; repeatable")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory and study-size estimate checks (memory also "
                           "OFFROADBENCH_NO_MEMORY_CHECK=1)")
@@ -56,6 +65,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep = sub.add_parser("report", help="write the Markdown report with figures of a run directory")
     rep.add_argument("run_dir", help="run directory of a study")
     rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained file (figures inline, sortable per-trial "
+                     "table, the replay animations found in RUN_DIR/replays inline and linked from their trials)")
     rep.add_argument("--fig4", help="CELL:TERRAIN shown in Fig. 4 (default: the middle cell's first terrain)")
     rep.set_defaults(func=cmd_report)
 
@@ -100,8 +112,40 @@ def _workers(args: argparse.Namespace, plans) -> int | None:
         return args.workers  # one process here, or a cluster whose memory is not ours to judge
     per_worker = worker_memory_bytes(plans)
     workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
-    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force)
+    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force,
+                 per_process_bytes=per_worker)
     return workers
+
+
+def apply_sets(data: dict, sets: list[str] | None) -> dict:
+    """The study TOML dict with ``--set KEY=VALUE`` applied: ``study.FIELD`` into ``[study]``,
+    ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
+    that a grid axis varies is refused (it would be overwritten in every cell)."""
+    from offroadbench.cli._common import parse_sets
+    from offroadbench.study.spec import SECTIONS
+
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    grid = set(_flat_keys(out.get("grid", {})))
+    for item in sets or []:
+        key = item.partition("=")[0].strip()
+        head, dot, rest = key.partition(".")
+        if key in grid or f"recipe.{key}" in grid:
+            raise InputError(f"--set {item!r}: {key} is a grid axis of this study; change the grid in the file")
+        (value,) = parse_sets([item]).values()
+        if head == "study" or head in SECTIONS:
+            if not dot or not rest or "." in rest:
+                raise InputError(f"--set {item!r}: a study or settings key is {head}.FIELD=VALUE")
+            out.setdefault(head, {})[rest] = value
+        else:
+            out.setdefault("recipe_overrides", {})[key] = value
+    return out
+
+
+def _flat_keys(table: dict, prefix: str = "") -> list[str]:
+    keys = []
+    for k, v in table.items():
+        keys += _flat_keys(v, f"{prefix}{k}.") if isinstance(v, dict) else [f"{prefix}{k}"]
+    return keys
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -117,7 +161,13 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    study = study_from_dict(load_toml(path), where=str(path))
+    from offroadbench.study.executors import check_trial_timeout
+
+    try:
+        check_trial_timeout(args.trial_timeout_s)
+    except InputError as exc:
+        raise InputError(f"--trial-timeout-s: {exc}") from None
+    study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     try:
         plans = plan_cells(study, base_dir=path.parent)
@@ -128,7 +178,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
     workers = _workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
-    text = path.read_text()
+    text = path.read_text() + "".join(f"\n# run with: study run --set {item}" for item in args.set or [])
     counts = {"new": 0, "ok": 0}
 
     def success() -> dict:
@@ -144,15 +194,24 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         with bar(study.name, unit="trial", postfix=success) as progress:
             summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial)
+                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
+                                retry_faults=args.retry_faults)
     except Terminated:
-        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
+        from offroadbench.study.store import Store
+
+        with Store(out) as store:
+            stored = store.counts()[0]
+        sys.stderr.write(f"offroadbench: terminated; {counts['new']} trial(s) of this run saved, {stored} of "
+                         f"{study.n_trials} stored in {out}; "
+                         "run the same command again to resume\n")
         return EXIT_TERMINATED
     finally:
         signal.signal(signal.SIGTERM, old)
-    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful); "
+    faults = (f"; {summary.faults} fault(s), excluded from the statistics (see the report; --retry-faults runs "
+              "them again)") if summary.faults else ""
+    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
           f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
-    if summary.done == summary.total and not args.no_report:
+    if summary.complete and summary.done and not args.no_report:  # (a study of faults only has no statistics)
         path = write_report(out, out / "report")
         print(f"report: {path}")
     return 0
@@ -168,18 +227,27 @@ def cmd_export(args: argparse.Namespace) -> int:
     from offroadbench.study.stats import terrain_success
 
     trials = load(run_dir)
+    if len(trials):  # each row says what made it: the fixed settings beside the grid axes
+        from offroadbench.study.header import settings_columns
+        from offroadbench.study.results import load_meta
+
+        fixed = settings_columns(load_meta(run_dir))
+        fixed = fixed[["cell", *(c for c in fixed.columns if c not in trials.columns)]]
+        trials = trials.merge(fixed, on="cell", how="left")
     terrains = load_terrains(run_dir)  # with trials, successes and success rate, as the report's terrains.csv
     terrains = terrains.merge(terrain_success(trials), on=["cell", "terrain"], how="left") if len(trials) else terrains
     tables = (("trials", trials), ("terrains", terrains))
-    with created_dirs(out):
-        for name, df in tables:
-            path = out / f"{name}.{args.format}"
-            with atomic_path(path) as tmp:
-                if args.format == "csv":
-                    df.to_csv(tmp, index=False)
-                else:
-                    df.to_parquet(tmp, index=False)
-            print(f"{path} ({len(df)} rows)")
+    paths = [out / f"{name}.{args.format}" for name, _ in tables]
+    # all or nothing: both tables replace the old ones together (io.atomic.atomic_paths), so a
+    # killed export never leaves a new trials table beside an old terrains table
+    with created_dirs(out), atomic_paths(paths) as temps:
+        for (_, df), tmp in zip(tables, temps):
+            if args.format == "csv":
+                df.to_csv(tmp, index=False)
+            else:
+                df.to_parquet(tmp, index=False)
+    for path, (_, df) in zip(paths, tables):
+        print(f"{path} ({len(df)} rows)")
     return 0
 
 
@@ -193,8 +261,9 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
     return cell, terrain
 
 
-def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) -> Path:
-    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML) to ``out``."""
+def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
+    """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
+    ``html`` also the self-contained report.html) to ``out``."""
     from offroadbench.study.report import build_report
     from offroadbench.study.results import load_meta
 
@@ -214,7 +283,11 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None) 
         if toml:
             (stage / "study.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
-    return out / "report.md"
+        if html:
+            from offroadbench.study.html_report import report_html
+
+            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
+    return out / ("report.html" if html else "report.md")
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -222,7 +295,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
-    path = write_report(run_dir, out, _parse_fig4(args.fig4))
+    path = write_report(run_dir, out, _parse_fig4(args.fig4), html=args.html)
     print(f"report: {path}")
     return 0
 
@@ -280,7 +353,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
         from offroadbench.io.telemetry import save_telemetry
         from offroadbench.plots.study import fig_replay
 
-        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, "
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))  # the engine and gravity it drove
+        title = (f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, "
                  f"{r.failure_reason or 'success'} at t = {r.sim_time_s:.1f} s")
         fig = fig_replay(rep.hm, rep.classes, rep.cell.section("missions").border_m, rep.record.path_xy,
                          rep.record.telemetry, title=title)
@@ -293,7 +369,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.animate:
         from offroadbench.cli.drive import vehicle_footprint, write_trial_animation
 
-        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {r.failure_reason or 'success'}"
+        from offroadbench.cli._common import run_caption
+
+        caption = run_caption(rep.prepared.sim_for(rep.cell.section("sim")))
+        title = f"{run_dir.name} {name}: {rep.cell.section('planner').name}, {caption}, {r.failure_reason or 'success'}"
         footprint = vehicle_footprint(rep.cell.section("vehicle"), rep.cell.section("sim"))
         path = write_trial_animation(Path(args.animate), rep.hm, rep.classes, rep.record.path_xy, rep.record.telemetry,
                                      r.failure_reason, footprint, title)

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 from offroadbench.cli._common import (
+    add_plot_option,
     check_output_dir,
     check_output_file,
     check_recipe_memory,
@@ -20,6 +21,9 @@ from offroadbench.cli._common import (
     format_table,
     load_heightmap_arg,
     load_recipe_with_sets,
+    parse_sets,
+    plot_path,
+    recipe_meta,
     nonnegative_float,
     positive_float,
     positive_int,
@@ -36,14 +40,20 @@ TERRAIN_SEED_HELP = ("the terrain's OWN seed (default 0): the integer a study's 
                      "terrain_seed(s, j) (offroadbench.seeding)")
 
 
-def warn_relief_tails(hm, label: str) -> None:
+#: what the spire warning recommends where the command has no --clip-percentile (drive)
+CLIP_ELSEWHERE = ("to drive a clipped terrain, write it with `offroadbench generate TERRAIN --clip-percentile P "
+                  "-o T.png` (heights clipped to the P..100-P percentiles, not in the paper) and drive T.png")
+
+
+def warn_relief_tails(hm, label: str, remedy: str | None = None) -> None:
     """Log, once, that a few extreme samples hold most of the relief (the paper presets' corner spire,
-    offroadbench.analysis.relief), wherever a terrain is generated or read."""
+    offroadbench.analysis.relief), wherever a terrain is generated or read. ``remedy``: what to do
+    about it in this command (default: its own ``--clip-percentile P``)."""
     from offroadbench.analysis.relief import tail_report
 
     tails = tail_report(hm)
     if tails.dominated:
-        log.warning("%s: %s", label, tails.message())
+        log.warning("%s: %s", label, tails.message(remedy))
 
 
 # --------------------------------------------------------------------------- commands
@@ -67,20 +77,25 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from offroadbench.io.png16 import sidecar_path, write_png16
     from offroadbench.terrain.recipe import generate_terrain
 
+    from offroadbench.analysis.relief import check_clip_percentile, clip_percentile
+
     out = check_output_file(args.output, "-o", suffixes=(".png",))  # fail before the work, not after
+    check_clip_percentile(args.clip_percentile)
     recipe = load_recipe_with_sets(args.recipe, args.set)
     check_recipe_memory(recipe, args.force)
     t0 = time.perf_counter()
     hm = generate_terrain(recipe, args.seed)
     dt = time.perf_counter() - t0
-    warn_relief_tails(hm, f"{recipe.name} seed {args.seed}")
+    meta = recipe_meta(recipe, args.seed, parse_sets(args.set))
+    label = str(meta["label"])
+    if args.clip_percentile:
+        hm = clip_percentile(hm, args.clip_percentile)
+        meta["clip_percentile"] = args.clip_percentile
+    warn_relief_tails(hm, label)
     with created_dirs(out.parent):
-        meta = write_png16(
-            hm,
-            out,
-            meta={"recipe_name": recipe.name, "seed": args.seed, "terrain_id": recipe.terrain_id(args.seed), "recipe": dict(recipe.data)},
-        )
-    print(f"{recipe.name} seed {args.seed}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s")
+        meta = write_png16(hm, out, meta=meta)
+    print(f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s"
+          + (f", clipped to the {args.clip_percentile:g}..{100 - args.clip_percentile:g} percentiles" if args.clip_percentile else ""))
     for layer in recipe.layers:
         if hasattr(layer.config, "describe"):
             print(f"  layer {layer.name}: {layer.config.describe(recipe.grid)}")
@@ -109,6 +124,15 @@ def format_terrain_report(rep, label: str) -> str:
             100 * s["fraction_steeper_30deg"], s["psd_slope_beta"], s["fractal_dimension"],
         ),
     ]
+    dim = s["fractal_dimension"]
+    cratered = rep.crater_diameters_m is not None and rep.crater_diameters_m.size > 0
+    if cratered or not 2.0 < dim < 3.0:
+        lines.append(
+            "  caveat: D = 4 - beta/2 holds for a self-affine (fractal) surface only"
+            + (f"; {dim:.2f} is outside its range (2, 3)" if not 2.0 < dim < 3.0 else "")
+            + ("; craters add power at their own diameters and steepen the spectrum, so on a cratered "
+               "terrain the slope measures the craters as much as the base surface" if cratered else "")
+        )
     d = rep.crater_diameters_m
     if rep.crater_sfd_slope is not None:
         lines.append(f"Craters placed: {d.size}, D = {d.min():.2f} .. {d.max():.2f} m, "
@@ -123,9 +147,11 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
     rcfg = RoughnessConfig(border_m=args.border_m, closing_radius_m=args.closing_radius_m)
     check_clip_percentile(args.clip_percentile)
-    plot = None
-    if args.plot:
-        plot = check_output_file(args.plot, "--plot", suffixes=(".png", ".pdf", ".svg"))
+    src = Path(args.terrain)
+    stem = src.stem if src.suffix.lower() == ".png" else (
+        f"{src.stem if src.suffix.lower() == '.toml' else src.name}_seed{args.seed}")
+    plot = plot_path(args.plot, f"{stem}_classes.png")
+    if plot is not None:
         check_output_file(_surface_plot_path(plot), "--plot")
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
     hm = clip_percentile(hm, args.clip_percentile)  # P = 0 (the default) keeps every height
@@ -152,6 +178,8 @@ def cmd_roughness_study(args: argparse.Namespace) -> int:
     from offroadbench.study.roughness import PAPER_FIG5_CHANGES_PP, run_roughness_study
 
     out = check_output_dir(args.out, "--out")
+    # the figure is always written (the study's result); --plot PATH puts it elsewhere
+    figure = plot_path(args.plot if args.plot not in (None, True) else True, out / "roughness_study.png")
     recipe = load_recipe_with_sets(args.recipe, args.set)
     check_recipe_memory(recipe, args.force)
     t0 = time.perf_counter()
@@ -170,8 +198,9 @@ def cmd_roughness_study(args: argparse.Namespace) -> int:
         with atomic_path(out / "roughness_summary.csv") as tmp:
             res.summary.to_csv(tmp, index=False)
         fig = plot_roughness_study(res.summary, PAPER_FIG5_CHANGES_PP if len(args.dims) == 3 else None)
-        save_figure(fig, out / "roughness_study.png")
-    print(f"\nwrote {out}/roughness_terrains.csv, roughness_summary.csv, roughness_study.png")
+        with created_dirs(figure.parent):
+            save_figure(fig, figure)
+    print(f"\nwrote {out}/roughness_terrains.csv, roughness_summary.csv, {figure}")
     return 0
 
 
@@ -190,14 +219,17 @@ def register(sub) -> None:
     p.add_argument("--seed", type=seed_arg, default=0, help=TERRAIN_SEED_HELP)
     p.add_argument("-o", "--output", required=True, help="output .png (NAME.json is written beside it)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key, e.g. layers.base.D_high=2.6")
+    p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
+                   help="clip heights to the P..100-P percentiles before writing (not in the paper; e.g. 0.1 removes "
+                   "the paper presets' corner spire, so the 16-bit step follows the bulk; default 0 = keep every height)")
     add_force(p)
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("analyze", help="roughness classes of a terrain (PNG or preset)")
     p.add_argument("terrain", help="16-bit PNG heightmap, preset name or recipe .toml")
     p.add_argument("--seed", type=seed_arg, default=0, help="when TERRAIN is a preset: " + TERRAIN_SEED_HELP)
-    p.add_argument("--plot", metavar="PATH", help="write the figures: hillshade beside the class map (paper Fig. 4a) at "
-                   "PATH, the surface statistics at PATH_surface")
+    add_plot_option(p, "the figures: hillshade beside the class map (paper Fig. 4a) at PATH, the surface "
+                    "statistics at PATH_surface", "TERRAIN_seedN_classes.png (a PNG: its stem) in the working directory")
     p.add_argument("--border-m", type=float_at_least(0, "--border-m"), default=5.0, help="border excluded from the areas, m (default 5)")
     p.add_argument("--closing-radius-m", type=float_at_least(0, "--closing-radius-m"), default=0.25, help="closing disk radius, m (default 0.25)")
     p.add_argument("--clip-percentile", type=float, metavar="P", default=0.0,
@@ -219,6 +251,7 @@ def register(sub) -> None:
     p.add_argument("--dim-key", default="layers.base.D_high", help="dotted recipe key that --dims sets")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a dotted recipe key")
     p.add_argument("--out", default="runs/roughness-study", help="output directory, created if missing (default runs/roughness-study)")
+    add_plot_option(p, "the figure (median class areas against D; always written)", "--out/roughness_study.png")
     add_force(p)
     p.set_defaults(func=cmd_roughness_study)
 

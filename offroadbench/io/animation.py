@@ -5,7 +5,11 @@ The file appears whole or not at all: frames go to a temporary file beside it, r
 
 GIF frames share one palette (taken from the last frame, which shows every line and mark), so that Pillow stores each frame as
 its difference from the one before: a replay's map and strip stay still while the vehicle moves,
-and the file is several times smaller than with a palette per frame (matplotlib's PillowWriter)."""
+and the file is several times smaller than with a palette per frame (matplotlib's PillowWriter).
+The palette holds every colour the figure's lines, markers and texts are drawn in exactly (the rest
+is a median cut of the frame), so a small legend mark or a goal hidden under the vehicle in the last
+frame keeps its colour instead of taking a neighbour's (an orange curve's legend drawn in the
+failure red)."""
 
 from __future__ import annotations
 
@@ -58,14 +62,14 @@ def _gif_writer_class():
 
         def prime_palette(self, **savefig_kwargs):
             """Take the palette from the figure as it is now (call with the fullest frame drawn)."""
-            self._palette = self._rgb(**savefig_kwargs).quantize(colors=255)
+            self._palette = _palette_for(self._rgb(**savefig_kwargs), self.fig)
 
         def grab_frame(self, **savefig_kwargs):
             from PIL import Image
 
             frame = self._rgb(**savefig_kwargs)
             if self._palette is None:
-                self._palette = frame.quantize(colors=255)
+                self._palette = _palette_for(frame, self.fig)
             self._frames.append(frame.quantize(palette=self._palette, dither=Image.Dither.NONE))
 
         def finish(self):
@@ -73,6 +77,39 @@ def _gif_writer_class():
                                  duration=int(round(1000 / self.fps)), loop=0)
 
     return SharedPaletteGifWriter
+
+
+def _key_colours(fig, limit: int = 64) -> list[tuple[int, int, int]]:
+    """The opaque colours of the figure's lines, markers and texts, as 8-bit RGB (at most ``limit``)."""
+    from matplotlib.colors import to_rgba
+    from matplotlib.lines import Line2D
+    from matplotlib.text import Text
+
+    out: list[tuple[int, int, int]] = []
+    for artist in fig.findobj(lambda a: isinstance(a, (Line2D, Text))):
+        specs = ([artist.get_color(), artist.get_markerfacecolor(), artist.get_markeredgecolor()]
+                 if isinstance(artist, Line2D) else [artist.get_color()])
+        for spec in specs:
+            try:
+                r, g, b, a = to_rgba(spec)
+            except (ValueError, TypeError):
+                continue
+            rgb = (round(255 * r), round(255 * g), round(255 * b))
+            if a == 1.0 and rgb not in out:
+                out.append(rgb)
+    return out[:limit]
+
+
+def _palette_for(frame, fig):
+    """A palette image: the figure's key colours exactly, then a median cut of ``frame`` (256 in all)."""
+    from PIL import Image
+
+    keys = _key_colours(fig)
+    cut = frame.quantize(colors=256 - len(keys))
+    rest = cut.getpalette()[: 3 * (256 - len(keys))]
+    pal = Image.new("P", (1, 1))
+    pal.putpalette([v for rgb in keys for v in rgb] + rest + [0] * max(0, 768 - 3 * len(keys) - len(rest)))
+    return pal
 
 
 def check_animation_path(path: str | Path, flag: str = "--animate") -> Path:
@@ -88,8 +125,9 @@ def check_animation_path(path: str | Path, flag: str = "--animate") -> Path:
 
 
 def save_animation(fig, draw_frame: Callable[[int], None], frames: Iterable[int], path: str | Path, *,
-                   fps: float = 10.0, dpi: int = 80) -> Path:
-    """Write ``draw_frame(k)`` for each ``k`` of ``frames`` as one frame of ``path`` (.gif or .mp4)."""
+                   fps: float = 10.0, dpi: int = 80, progress: Callable[[int, int], None] | None = None) -> Path:
+    """Write ``draw_frame(k)`` for each ``k`` of ``frames`` as one frame of ``path`` (.gif or .mp4);
+    ``progress(done, total)`` is called after each frame (offroadbench.progress)."""
     from matplotlib import animation, rc_context
 
     p = check_animation_path(path, "animation")
@@ -108,9 +146,11 @@ def save_animation(fig, draw_frame: Callable[[int], None], frames: Iterable[int]
                 if frames and hasattr(writer, "prime_palette"):
                     draw_frame(frames[-1])  # the last frame shows every line and mark: its colours
                     writer.prime_palette()
-                for k in frames:
+                for done, k in enumerate(frames, 1):
                     draw_frame(k)
                     writer.grab_frame()
+                    if progress is not None:
+                        progress(done, len(frames))
             except BaseException:
                 proc = getattr(writer, "_proc", None)  # an ffmpeg pipe: stop it, write nothing
                 if proc is not None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -18,7 +19,7 @@ from typing import Iterator
 
 from offroadbench.errors import InputError
 
-__all__ = ["DISK_FULL", "atomic_path", "check_writable", "current_umask", "os_error", "remove_stale", "temp_prefix"]
+__all__ = ["DISK_FULL", "atomic_path", "atomic_paths", "finish_commits", "check_writable", "current_umask", "os_error", "remove_stale", "temp_prefix"]
 
 
 def check_writable(path: str | Path) -> Path:
@@ -87,10 +88,17 @@ DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
 
 def os_error(exc: OSError, path: str | Path) -> OSError:
     """A full disk (or quota) as an OSError whose ``filename`` is the output ``path`` (not a
-    temporary name), so the message names what could not be written; other OSErrors unchanged."""
+    temporary name), so the message names what could not be written; other OSErrors unchanged.
+    numpy's short write (``ndarray.tofile``: "N requested and M written", no errno) is a full disk
+    too: the kernel writes less than asked only when the device or a file-size limit is reached."""
     if exc.errno in DISK_FULL:
         return OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(path))
+    if exc.errno is None and _SHORT_WRITE.fullmatch(str(exc).strip()):
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
     return exc
+
+
+_SHORT_WRITE = re.compile(r"\d+ requested and \d+ written")
 
 
 @contextlib.contextmanager
@@ -123,4 +131,96 @@ def atomic_path(path: str | Path, *, sweep: bool = True) -> Iterator[Path]:
         raise err from None
     except BaseException:
         tmp_path.unlink(missing_ok=True)
+        raise
+
+
+# ---------------------------------------------------------------------------- several files (issue 30)
+_JOURNAL = ".offroadbench-commit"
+
+
+def finish_commits(directory: str | Path) -> list[Path]:
+    """Complete the commits of :func:`atomic_paths` that a killed writer left in ``directory``:
+    every rename its journal lists whose temporary file is still there is done, then the journal
+    is removed (a live writer's journal is left alone). Returns the files completed."""
+    import json
+
+    done: list[Path] = []
+    try:
+        entries = [e for e in os.scandir(directory) if e.name.startswith(_JOURNAL + ".") and e.name.endswith(".json")]
+    except OSError:
+        return done
+    for e in entries:
+        pid = e.name[len(_JOURNAL) + 1:].split(".", 1)[0]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        try:
+            pairs = json.loads(Path(e.path).read_text())
+            for tmp, final in pairs:
+                tmp_p, final_p = Path(directory) / tmp, Path(directory) / final
+                if tmp_p.exists():
+                    os.replace(tmp_p, final_p)
+                    done.append(final_p)
+            os.unlink(e.path)
+        except (OSError, ValueError, TypeError):
+            continue
+    return done
+
+
+@contextlib.contextmanager
+def atomic_paths(paths: list[str | Path]) -> Iterator[list[Path]]:
+    """All or nothing for several files in one directory: yield a temporary path for each; when
+    the block ends without an error they replace their targets together.
+
+    The commit point is a journal (``.offroadbench-commit.<pid>.json``, written atomically)
+    naming every rename; the renames follow and the journal goes. A writer killed between two
+    renames leaves the journal behind, and the next :func:`atomic_paths` (or
+    :func:`finish_commits`) in that directory completes the commit, so the set is always either
+    the old one or the new one once anything looks at it again. Before the journal is written,
+    any failure (a full disk: an OSError naming the target, as :func:`atomic_path`) leaves every
+    target as it was and no temporary file behind."""
+    import json
+
+    targets = [check_writable(p) for p in paths]
+    parents = {t.parent.resolve() for t in targets}
+    if len(parents) != 1:
+        raise ValueError("atomic_paths: every target must be in one directory")
+    directory = targets[0].parent
+    finish_commits(directory)
+    for t in targets:
+        remove_stale(directory, t.name)
+    temps: list[Path] = []
+    journal = directory / f"{_JOURNAL}.{os.getpid()}.json"
+    current = targets[0]
+    try:
+        for t in targets:
+            current = t
+            fd, tmp = tempfile.mkstemp(prefix=temp_prefix(t.name), suffix=".tmp", dir=directory)
+            os.close(fd)
+            temps.append(Path(tmp))
+        yield list(temps)
+        mode = 0o666 & ~current_umask()
+        for tmp in temps:
+            os.chmod(tmp, mode)
+        current = journal
+        with atomic_path(journal) as jtmp:
+            with open(jtmp, "w") as fh:
+                json.dump([[tmp.name, t.name] for tmp, t in zip(temps, targets)], fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+        for tmp, t in zip(temps, targets):  # committed: from here on a kill is completed later
+            current = t
+            os.replace(tmp, t)
+        journal.unlink(missing_ok=True)
+    except OSError as exc:
+        if not journal.exists():
+            for tmp in temps:
+                tmp.unlink(missing_ok=True)
+        err = os_error(exc, current)
+        if err is exc:
+            raise
+        raise err from None
+    except BaseException:
+        if not journal.exists():
+            for tmp in temps:
+                tmp.unlink(missing_ok=True)
         raise

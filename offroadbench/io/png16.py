@@ -176,7 +176,9 @@ def write_png16(hm: Heightmap, path: str | Path, meta: Mapping[str, Any] | None 
     data = png_metadata(hm, meta)
     info = PngInfo()
     for k, v in data.items():
-        info.add_text(k, v if isinstance(v, str) else json.dumps(v))
+        text = v if isinstance(v, str) else json.dumps(v)
+        # iTXt is UTF-8: a non-UTF-8 file name (surrogate escapes) is kept with U+FFFD in its place
+        info.add_text(k, text.encode("utf-8", "surrogateescape").decode("utf-8", "replace"))
     q = encode_png16(hm)
     img = Image.fromarray(q)  # uint16 -> mode "I;16": one 16-bit grayscale channel
     side = sidecar_path(png)
@@ -240,8 +242,20 @@ def read_png16(
             f"{p}: is {'an' if depth == 8 else 'a'} {depth}-bit grayscale PNG; a heightmap must be 16-bit "
             f"({2 ** depth} levels cannot resolve terrain heights)"
         )
+    import warnings
+
     try:
-        with Image.open(p) as img:
+        # the size was checked against the memory before (offroadbench.memory): PIL's own
+        # "decompression bomb" limits (a warning at 89 Mpixel, an error at twice that) say nothing more
+        limit = Image.MAX_IMAGE_PIXELS
+        try:
+            Image.MAX_IMAGE_PIXELS = None
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+                img = Image.open(p)
+        finally:
+            Image.MAX_IMAGE_PIXELS = limit
+        with img:
             img.load()
             q = np.asarray(img, dtype=np.uint16) if img.mode != "I" else np.asarray(img).astype(np.uint16)
             text = dict(getattr(img, "text", {}) or {})

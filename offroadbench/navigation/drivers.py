@@ -8,10 +8,13 @@ Two registries share the ``[planner] name`` namespace (a planner of the same nam
   ``act(observation) -> (v, omega)``; built in: offroadbench.navigation.policies.
 
 Each entry declares what it needs from the trial beyond the mission (:data:`NEEDS`): the closed
-class map (``classes``) and the vehicle's measured envelope (``vehicle``). The trial runner and the
+class map (``classes``), the vehicle's measured envelope (``vehicle``) and, for a policy, the
+believed pose and perceived elevation map in every observation (``map``: ``observation["pose"]``,
+x, y, yaw in map metres and radians; ``observation["elevation_m"]``, heights on the terrain's grid,
+NaN where unseen; the truth for the ``oracle`` arm, offroadbench.navigation.sensor otherwise). The trial runner and the
 study's workers read ``PlannerChoice.needs`` instead of testing names: the built-in ``straight``
 needs neither, so no class map is computed and no envelope measured for it. An entry that says
-nothing needs both (what every plug-in got before entries could say).
+nothing needs ``classes`` and ``vehicle`` (what every plug-in got before entries could say).
 
 Installed packages add entries through the entry-point groups ``offroadbench.planners`` and
 ``offroadbench.policies``. The built-in entries are registered by importing
@@ -54,8 +57,11 @@ __all__ = [
 ]
 
 #: what a driver may need from the trial beyond the mission: the closed roughness-class map the
-#: missions were drawn on, and the vehicle's envelope (measured from the loaded vehicle)
-NEEDS = frozenset({"classes", "vehicle"})
+#: missions were drawn on, the vehicle's envelope (measured from the loaded vehicle), and (policies)
+#: the believed pose and perceived elevation map in each observation
+NEEDS = frozenset({"classes", "vehicle", "map"})
+#: what an entry that says nothing needs
+DEFAULT_NEEDS = frozenset({"classes", "vehicle"})
 
 
 def _check_needs(kind: str, needs: frozenset[str]) -> frozenset[str]:
@@ -78,7 +84,7 @@ class PlannerSpec:
     plan: Callable[[PlanningProblem, Any], np.ndarray]
     config: type = NoConfig
     summary: str = ""
-    needs: frozenset[str] = NEEDS
+    needs: frozenset[str] = DEFAULT_NEEDS
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "needs", _check_needs("planner", self.needs))
@@ -113,7 +119,7 @@ class PolicySpec:
     make: Callable[[Any, PolicyContext], Policy]
     config: type = NoConfig
     summary: str = ""
-    needs: frozenset[str] = NEEDS
+    needs: frozenset[str] = DEFAULT_NEEDS
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "needs", _check_needs("policy", self.needs))
@@ -149,7 +155,7 @@ POLICIES: Registry[PolicySpec] = Registry(
 )
 
 
-def register_planner(name: str, *, config: type = NoConfig, summary: str = "", needs: frozenset[str] = NEEDS):
+def register_planner(name: str, *, config: type = NoConfig, summary: str = "", needs: frozenset[str] = DEFAULT_NEEDS):
     """Decorator: register ``fn(problem, cfg) -> waypoints`` as planner ``name`` with its config
     class and what it needs from the trial (:data:`NEEDS`)."""
 
@@ -161,7 +167,7 @@ def register_planner(name: str, *, config: type = NoConfig, summary: str = "", n
     return deco
 
 
-def register_policy(name: str, *, config: type = NoConfig, summary: str = "", needs: frozenset[str] = NEEDS):
+def register_policy(name: str, *, config: type = NoConfig, summary: str = "", needs: frozenset[str] = DEFAULT_NEEDS):
     """Decorator: register a class (or factory) ``make(cfg, context)`` as policy ``name``. Policy and
     planner names share the ``[planner] name`` namespace; a planner of the same name wins."""
 
@@ -216,9 +222,11 @@ def planner_from_table(table: Mapping[str, Any], where: str = "[planner]") -> Pl
         spec, kind = PLANNERS.get(name), "planner"
     elif name in POLICIES:
         spec, kind = POLICIES.get(name), "policy"
-    else:
-        PLANNERS.get(name)  # the did-you-mean error
-        raise AssertionError  # pragma: no cover
+    else:  # the did-you-mean error over both registries: --planner and [planner] name take either
+        from offroadbench.registry import unknown_name
+
+        raise unknown_name("planner or policy", name, [*PLANNERS.names(), *POLICIES.names()],
+                           extra=f"(planners: {', '.join(PLANNERS.names())}; policies: {', '.join(POLICIES.names())})")
     try:
         cfg = from_dict(spec.config, data, where=f"{where} ({name})")
     except TypeError as exc:

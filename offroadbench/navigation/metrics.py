@@ -5,6 +5,13 @@
 - Pitch and roll rates: the unwrapped pitch (about the transverse axis) and roll (about the
   longitudinal axis), both from a level reference, differentiated once; then their RMS.
 - Success rate, Eq. (5): ``100 * N_success / N_trials``.
+- Soft soil (the ``terramechanics`` tyre model): the wheels' sinkage as the median and 95th
+  percentile over the trial's *moving* samples, and the mean slip over the same samples. A moving
+  sample is one where the vehicle is driven: the wheel-speed command or the base's horizontal
+  speed is at least ``MOVING_SPEED_M_S``, which leaves out the vehicle settled at rest before the
+  start and stopped at the goal but keeps a vehicle spinning its wheels in place. Not the maximum:
+  the deepest sinkage of a trial is a transient spike (a wheel landing after a bump) in under 1 %
+  of its samples, 2-3x the typical sinkage (issue 28).
 
 Portability: every reduction here is plain Python on floats (``math.fsum``, ``math.hypot``) or an
 element-wise IEEE operation (``np.diff``, division), never a BLAS call or a SIMD reduction whose
@@ -32,7 +39,15 @@ __all__ = [
     "path_length",
     "success_rate",
     "stuck_index",
+    "MOVING_SPEED_M_S",
+    "moving_samples",
+    "percentile",
+    "mean_where",
+    "sinkage_summary",
 ]
+
+#: a telemetry sample is "moving" when the wheel-speed command or the base's speed is this or more, m/s
+MOVING_SPEED_M_S = 0.05
 
 
 def roll_pitch_yaw_from_quat(quat_xyzw: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -107,3 +122,37 @@ def stuck_index(xy_m: np.ndarray, window: int, distance_m: float) -> int | None:
         if all(math.hypot(x - x0, y - y0) < distance_m for x, y in p[end - window + 1 : end + 1]):
             return end
     return None
+
+
+def moving_samples(cmd_v_m_s: np.ndarray, vx_m_s: np.ndarray, vy_m_s: np.ndarray,
+                   threshold_m_s: float = MOVING_SPEED_M_S) -> np.ndarray:
+    """Boolean mask of the samples where the vehicle is driven: |wheel-speed command| or the base's
+    horizontal speed at least ``threshold_m_s`` (module docstring)."""
+    cmd = np.abs(np.asarray(cmd_v_m_s, dtype=float))
+    speed = np.hypot(np.asarray(vx_m_s, dtype=float), np.asarray(vy_m_s, dtype=float))
+    return (cmd >= threshold_m_s) | (speed >= threshold_m_s)
+
+
+def percentile(values, q: float) -> float:
+    """The ``q``-th percentile (0-100) of the finite values, linear between order statistics (numpy's
+    default ``linear`` method, written out in plain Python for portable bits); NaN when none."""
+    v = sorted(x for x in np.asarray(values, dtype=float).ravel().tolist() if math.isfinite(x))
+    if not v:
+        return float("nan")
+    pos = (len(v) - 1) * q / 100.0
+    lo = int(math.floor(pos))
+    hi = min(lo + 1, len(v) - 1)
+    return v[lo] + (v[hi] - v[lo]) * (pos - lo)
+
+
+def mean_where(values, mask) -> float:
+    """Mean of the finite ``values`` where ``mask`` holds (``math.fsum``); NaN when none."""
+    v = [x for x, m in zip(np.asarray(values, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist())
+         if m and math.isfinite(x)]
+    return math.fsum(v) / len(v) if v else float("nan")
+
+
+def sinkage_summary(sinkage_m, mask) -> tuple[float, float]:
+    """(median, 95th percentile) of the sinkage samples where ``mask`` holds, m; NaN when none."""
+    v = [x for x, m in zip(np.asarray(sinkage_m, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist()) if m]
+    return percentile(v, 50.0), percentile(v, 95.0)

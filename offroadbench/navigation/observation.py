@@ -46,12 +46,14 @@ class ObservationConfig:
 
 
 def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: int, spacing_m: float,
-                 fill_m: float) -> np.ndarray:
+                 fill_m: float, z_m: np.ndarray | None = None) -> np.ndarray:
     """Terrain heights (bilinear) on a ``cells x cells`` grid centred on (x, y), turned by ``yaw_rad``.
 
     ``patch[i, j]`` is the height at body-frame offset ``(x_b, y_b) = ((j - c) s, (i - c) s)`` with
     ``c = (cells - 1) / 2`` and ``s = spacing_m``: columns run forward, rows to the left, as
-    ``z[r, c]`` runs along x and y of the map. Samples outside the map read ``fill_m``.
+    ``z[r, c]`` runs along x and y of the map. Samples outside the map read ``fill_m``. ``z_m``
+    (the map's shape) replaces ``hm.z``: a sensor's map, whose unknown (NaN) cells make the samples
+    next to them NaN.
     """
     from scipy.ndimage import map_coordinates
 
@@ -62,19 +64,20 @@ def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: i
     yw = y_m + sin * xb + cos * yb
     col = xw / hm.cell_size_m
     row = yw / hm.cell_size_m
-    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
+    z = map_coordinates(hm.z if z_m is None else z_m, [row, col], order=1, mode="nearest")
     outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
     z[outside] = fill_m
     return z
 
 
 def observation(hm: Heightmap, cfg: ObservationConfig, goal_xy, pos, roll: float, pitch: float, yaw: float,
-                rates, v_body, fill_m: float) -> dict[str, np.ndarray]:
+                rates, v_body, fill_m: float, z_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """The observation of the vehicle at ``pos`` (x, y, z) with the given attitude, body rates and
-    body velocity, heading for ``goal_xy`` (see the module docstring)."""
+    body velocity, heading for ``goal_xy`` (see the module docstring). Under a sensor, ``pos`` and
+    ``yaw`` are the believed pose (with the true height) and ``z_m`` the sensor's map."""
     x, y, z = pos
     dx, dy = goal_xy[0] - x, goal_xy[1] - y
     cos, sin = math.cos(yaw), math.sin(yaw)
     state = np.array([cos * dx + sin * dy, -sin * dx + cos * dy, roll, pitch, *rates, *v_body], dtype=np.float32)
-    patch = height_patch(hm, x, y, yaw, cfg.patch_cells, cfg.patch_spacing_m, fill_m)
+    patch = height_patch(hm, x, y, yaw, cfg.patch_cells, cfg.patch_spacing_m, fill_m, z_m)
     return {"state": state, "height_patch": (patch - z).astype(np.float32)}

@@ -23,10 +23,13 @@ index and the exact bits of its start and goal, which are a pure function of the
 the terrain), on its own stream. So a trial's map error is the same in every run, order and worker
 count, and a replay rebuilds it.
 
-What it does not model: localisation error (the vehicle knows where it is), the class map (the
-``hazard = "classes"`` cost still reads the true closed class map; the default footprint hazard
-uses only the degraded heights), occlusion (everything within the radius is seen), and policies
-(a policy observes the true height patch; ``PerceptionConfig`` applies to planners).
+The map-error keys do not model localisation error, occlusion (everything within the radius is
+seen) or policies (a policy observes the true height patch under them); the class map (the
+``hazard = "classes"`` cost) is always the true closed class map. The ``mast`` sensor
+(``sensor = "mast"``, offroadbench.navigation.sensor) models occlusion, range-dependent height noise
+and localisation drift, for planners and policies alike; it replaces the map-error keys (which must
+then be 0). ``limits = "sheet"`` has the planners and policies plan with the vehicle's published
+limits (offroadbench.navigation.sensor.sheet_envelope).
 """
 
 from __future__ import annotations
@@ -40,10 +43,13 @@ from typing import Any
 
 import numpy as np
 
-from offroadbench.config import check_range
+from offroadbench.config import check_choice, check_range
+from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
 __all__ = [
+    "LIMITS",
+    "SENSORS",
     "PERCEPTION_STREAM",
     "PerceptionConfig",
     "Replanner",
@@ -52,6 +58,11 @@ __all__ = [
     "seen_map",
     "split_perception",
 ]
+
+#: the arms of ``sensor`` (offroadbench.navigation.sensor)
+SENSORS = ("oracle", "mast")
+#: where the planners' vehicle limits come from (``limits``)
+LIMITS = ("measured", "sheet")
 
 #: first spawn-key entry of the perception stream (terrains use 0, missions 1; offroadbench.seeding)
 PERCEPTION_STREAM = 2
@@ -72,17 +83,51 @@ class PerceptionConfig:
     """The planner sees the map within this distance of the vehicle's positions so far, m; 0 = the
     whole map from the start."""
     replan_every_m: float = 1.0
-    """With a sensing radius: re-plan after the vehicle has moved this far since the last plan, m."""
+    """With a sensing radius or the ``mast`` sensor: re-plan after the vehicle has moved this far
+    since the last plan, m."""
+    sensor: str = "oracle"
+    """What the planner or policy knows: ``oracle`` (the map above and the true pose) or ``mast`` (a
+    mast-mounted range sensor with occlusion, range noise and odometry drift,
+    offroadbench.navigation.sensor; the map-error keys above must then be 0)."""
+    sensor_range_m: float = 8.0
+    """``mast``: range of the sensor, m."""
+    mast_height_m: float = 0.75
+    """``mast``: height of the sensor above the ground under the vehicle, m."""
+    sensor_noise_per_range: float = 0.005
+    """``mast``: standard deviation of a seen height per metre of range (m per m)."""
+    scan_every_m: float = 0.25
+    """``mast``: the sensor scans each time the vehicle has moved this far, m."""
+    odometry_drift: float = 0.01
+    """``mast``: odometry drift: the standard deviation of the per-trial distance scale error and of
+    the heading error's random walk per square-root metre travelled (rad)."""
+    limits: str = "measured"
+    """The vehicle limits the planners and policies plan with: ``measured`` (from the simulated
+    vehicle) or ``sheet`` (the maker's published grade and step limits where its vehicle.toml gives
+    them, offroadbench.navigation.sensor.sheet_envelope)."""
 
     def __post_init__(self) -> None:
-        for name in ("map_noise_m", "map_noise_corr_m", "map_cell_m", "sensing_radius_m"):
+        for name in ("map_noise_m", "map_noise_corr_m", "map_cell_m", "sensing_radius_m",
+                     "sensor_noise_per_range", "odometry_drift"):
             check_range(self, name, getattr(self, name), lo=0.0)
-        check_range(self, "replan_every_m", self.replan_every_m, lo=0.0, lo_open=True)
+        for name in ("replan_every_m", "sensor_range_m", "mast_height_m", "scan_every_m"):
+            check_range(self, name, getattr(self, name), lo=0.0, lo_open=True)
+        check_choice(self, "sensor", self.sensor, SENSORS)
+        check_choice(self, "limits", self.limits, LIMITS)
+        if self.sensor == "mast" and (self.map_noise_m > 0 or self.map_cell_m > 0 or self.sensing_radius_m > 0):
+            raise InputError("PerceptionConfig: sensor = 'mast' builds its own map; map_noise_m, map_cell_m and "
+                             f"sensing_radius_m must be 0 (got {self.map_noise_m}, {self.map_cell_m}, "
+                             f"{self.sensing_radius_m})")
 
     @property
     def active(self) -> bool:
-        """Whether the planner's map differs from the truth at all."""
-        return self.map_noise_m > 0 or self.map_cell_m > 0 or self.sensing_radius_m > 0
+        """Whether the planner's map, pose or limits differ from the truth at all."""
+        return (self.map_noise_m > 0 or self.map_cell_m > 0 or self.sensing_radius_m > 0
+                or self.sensor != "oracle" or self.limits != "measured")
+
+    @property
+    def replanning(self) -> bool:
+        """Whether the planner re-plans as it goes (a sensing radius or the mast sensor)."""
+        return self.sensing_radius_m > 0 or self.sensor != "oracle"
 
 
 _KEYS = tuple(f.name for f in fields(PerceptionConfig))
@@ -189,8 +234,10 @@ class Replanner:
     re-planning position and the current plan, the path the planner meant the vehicle to take.
     """
 
-    def __init__(self, plan: Callable[[Any], np.ndarray], problem: Any, mission: Any, cfg: PerceptionConfig) -> None:
+    def __init__(self, plan: Callable[[Any], np.ndarray], problem: Any, mission: Any, cfg: PerceptionConfig,
+                 sensing: Any = None) -> None:
         self.plan_fn, self.problem, self.cfg = plan, problem, cfg
+        self.sensing = sensing if sensing is not None and sensing.name != "oracle" else None
         self.map = degrade(problem.hm, cfg, np.random.default_rng(perception_seed(mission)))
         hm = problem.hm
         self._rows = np.arange(hm.rows)[:, None] * hm.cell_size_m
@@ -205,18 +252,24 @@ class Replanner:
     def _plan(self, xy: np.ndarray) -> np.ndarray:
         import dataclasses
 
-        if self.cfg.sensing_radius_m > 0:
-            r = self.cfg.sensing_radius_m
-            self.seen |= (self._cols - xy[0]) ** 2 + (self._rows - xy[1]) ** 2 <= r * r
-        known = seen_map(self.map, self.seen)
+        if self.sensing is not None:  # the sensor's map: unseen cells continue the seen ground
+            z = self.sensing.z
+            self.seen = ~np.isnan(z)
+            known = seen_map(Heightmap(np.where(self.seen, z, 0.0), self.map.cell_size_m), self.seen)
+        else:
+            if self.cfg.sensing_radius_m > 0:
+                r = self.cfg.sensing_radius_m
+                self.seen |= (self._cols - xy[0]) ** 2 + (self._rows - xy[1]) ** 2 <= r * r
+            known = seen_map(self.map, self.seen)
         start = (float(xy[0]), float(xy[1]))
         problem = dataclasses.replace(self.problem, hm=known, start_xy=start)
         self._trace.append(np.asarray(start))
         return self.plan_fn(problem)
 
     def update(self, xy: Any) -> np.ndarray | None:
-        """A new plan from ``xy`` (map metres) if the vehicle moved ``replan_every_m`` since the last."""
-        if self.cfg.sensing_radius_m <= 0:
+        """A new plan from ``xy`` (map metres; the believed position under the ``mast`` sensor) if the
+        vehicle moved ``replan_every_m`` since the last."""
+        if not self.cfg.replanning:
             return None
         p = np.asarray(xy, dtype=float)[:2]
         if math.hypot(*(p - self._last)) < self.cfg.replan_every_m or not self.problem.inside_border(p)[0]:

@@ -9,9 +9,14 @@ A trial ends, checked in this order at every telemetry sample:
 * ``off_map``: the base left the map horizontally, or fell ``fall_depth_m`` below its lowest point;
 * success (end reason ``""``): the base within ``goal_tolerance_m`` of the goal (horizontal);
 * ``entrapped`` (soft soil; only when the caller gives the wheels' slip and sinkage, i.e. with the
-  ``terramechanics`` tyre model): the mean wheel slip above ``entrap_slip`` and the deepest wheel
-  sinkage above ``entrap_sinkage_fraction`` of the wheel radius at every sample of the last
-  ``entrap_window_s``: the wheels dig in instead of driving (Spirit at Troy, 2009);
+  ``terramechanics`` tyre model): the wheels turn but the vehicle does not go anywhere, and they
+  have dug in. Over the last ``entrap_window_s``: the mean wheel slip stayed above ``entrap_slip``
+  at every sample (the wheels turn much faster than the ground passes: a wheel that is not turned
+  has slip near 0), the base came less than ``entrap_progress_radii`` wheel radii closer to the
+  goal (a vehicle sliding back down a slope while its wheels spin forward made negative progress),
+  and the window's median deepest-wheel sinkage is at least ``entrap_sinkage_ratio`` times the
+  settled sinkage (the deepest sinkage at the trial's first sample, the vehicle at rest): Spirit at
+  Troy, 2009. See "Entrapment thresholds" below;
 * ``stuck``: the base stayed within ``stuck_distance_m`` of where it was one stuck window ago
   for the whole window (paper: 0.2 m in 30 s);
 * ``timeout``: the caller's clock passed ``timeout_factor`` times the nominal time (path length
@@ -22,13 +27,36 @@ with a 3x timeout: the timeout comes first. The window used is therefore
 ``min(stuck_window_s, stuck_window_max_fraction * timeout)``; with the defaults, 35 m missions
 keep the paper's 30 s and a 6 m mission (18 s timeout) gets 9 s. :func:`unreachable` names any
 rule a configuration makes impossible to fire, and :class:`RuleChecker` logs it as a warning.
+
+Entrapment thresholds, from single-wheel tests and the soil model (offroadbench.sim.tyre_laws.terramechanics):
+
+* ``entrap_slip = 0.6``: by slip 0.6 a wheel has most of its drawbar pull (the Wong-Reece pull of
+  the Husky's wheel on lunar regolith is 89 % of its peak there in lunar gravity, 98 % in Earth
+  gravity; ``offroadbench soil check``), so more slip buys little more traction, and single-wheel tests find the sinkage several
+  times the static one there (Ding et al. 2010: 3-7x at slip 0.6 for lugged wheels on a lunar
+  simulant).
+* ``entrap_sinkage_ratio = 1.5``: the soil model with slip-sinkage gives 1.8-2.2x the static
+  sinkage at slip 0.6 (lunar and Earth gravity, ``soils/lunar-regolith.toml``'s ``n1``), so 1.5x
+  is crossed by any wheel held at slip 0.6 or more, and not by load transfer alone on flat ground.
+  In this model the sinkage follows the slip quasi-statically (no excavation that accumulates over
+  time), so "sinkage rising" is measured against the settled sinkage, not as a trend within the
+  window; on a soil without slip-sinkage (``n1 = 0``) only load transfer raises it.
+* ``entrap_progress_radii = 1``: under one wheel radius of net progress towards the goal in 5 s
+  while the wheels turn at slip 0.6 or more. A wheel turning at 1 m/s for 5 s passes 5 m of rim:
+  one radius (0.165 m for the Husky) is a window slip above 0.96. A detour away from the goal
+  counts as no progress (at slip 0.6 or more and sunk 1.5x, a vehicle there is in trouble either
+  way).
+* ``entrap_window_s = 5``: about one wheel revolution per second at 1 m/s, so several
+  revolutions; far shorter than the 30 s stuck window.
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 import logging
 import math
+import statistics
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,12 +94,19 @@ class FailureRules:
     """The mission succeeds when the vehicle's centre is this close to the goal (horizontal), m."""
     fall_depth_m: float = 1.0
     """A vehicle this far below the lowest terrain point has left the map (``off_map``), m."""
-    entrap_slip: float = 0.8
-    """A trial fails as ``entrapped`` while the mean wheel slip stays above this ..."""
-    entrap_sinkage_fraction: float = 0.3
-    """... and the deepest wheel sinkage above this fraction of the wheel radius ..."""
+    entrap_slip: float = 0.6
+    """A trial fails as ``entrapped`` while the mean wheel slip stays above this: the wheels turn,
+    and by slip 0.6 a wheel has 89-98 % of its peak pull on lunar regolith while single-wheel tests
+    find its sinkage severalfold the static one (Ding et al. 2010: 3-7x; offroadbench.navigation.rules,
+    "Entrapment thresholds") ..."""
+    entrap_progress_radii: float = 1.0
+    """... and the base comes less than this many wheel radii closer to the goal (one radius in 5 s
+    at 1 m/s of wheel rim: a slip above 0.96) ..."""
+    entrap_sinkage_ratio: float = 1.5
+    """... with the window's median deepest-wheel sinkage at least this many times the settled
+    sinkage (at the trial's first sample; the soil model gives 1.8-2.2x at slip 0.6) ..."""
     entrap_window_s: float = 5.0
-    """... for this long, seconds."""
+    """... over this long, seconds (several wheel revolutions at 1 m/s)."""
 
     def __post_init__(self) -> None:
         check_range(self, "tip_angle_deg", self.tip_angle_deg, lo=0, hi=180, lo_open=True)
@@ -82,7 +117,8 @@ class FailureRules:
         check_range(self, "goal_tolerance_m", self.goal_tolerance_m, lo=0, lo_open=True)
         check_range(self, "fall_depth_m", self.fall_depth_m, lo=0, lo_open=True)
         check_range(self, "entrap_slip", self.entrap_slip, lo=0, hi=1)
-        check_range(self, "entrap_sinkage_fraction", self.entrap_sinkage_fraction, lo=0)
+        check_range(self, "entrap_progress_radii", self.entrap_progress_radii, lo=0, lo_open=True)
+        check_range(self, "entrap_sinkage_ratio", self.entrap_sinkage_ratio, lo=0)
         check_range(self, "entrap_window_s", self.entrap_window_s, lo=0, lo_open=True)
 
 
@@ -165,8 +201,9 @@ class RuleChecker:
         self.window = max(1, int(round(self.window_s * sample_rate_hz)))
         self.xy_hist: list[tuple[float, float]] = []
         self.entrap_window = max(1, round(rules.entrap_window_s * sample_rate_hz))
-        self._entrap_limit_m = None if wheel_radius_m is None else rules.entrap_sinkage_fraction * wheel_radius_m
-        self._dug_in = 0  # consecutive samples with slip and sinkage over the entrapment limits
+        self._radius_m = wheel_radius_m
+        self._settled_m: float | None = None  # the deepest sinkage at the first sample with one
+        self._dug: collections.deque = collections.deque(maxlen=self.entrap_window + 1)  # (x, y, slip, sinkage)
         for why in unreachable(rules, timeout_s, mission_length_m):
             _warn_once(why)
 
@@ -179,9 +216,26 @@ class RuleChecker:
         self.xy_hist.append((pos[0], pos[1]))
         reason = end_reason(self.rules, self.bounds, self.goal, pos, roll, pitch, self.xy_hist, self.window)
         if reason is None or reason == "stuck":
-            dug_in = (self._entrap_limit_m is not None and slip is not None and sinkage_m is not None
-                      and slip > self.rules.entrap_slip and sinkage_m > self._entrap_limit_m)
-            self._dug_in = self._dug_in + 1 if dug_in else 0
-            if self._dug_in >= self.entrap_window:
+            if self._entrapped(pos, slip, sinkage_m):
                 return "entrapped"
         return reason
+
+    def _entrapped(self, pos, slip: float | None, sinkage_m: float | None) -> bool:
+        """The ``entrapped`` rule on the samples of the last window (module docstring)."""
+        if self._radius_m is None or slip is None or sinkage_m is None:
+            self._dug.clear()
+            return False
+        if self._settled_m is None and sinkage_m > 0.0:
+            self._settled_m = sinkage_m
+        if slip <= self.rules.entrap_slip:
+            self._dug.clear()
+            return False
+        self._dug.append((pos[0], pos[1], slip, sinkage_m))
+        if len(self._dug) <= self.entrap_window or self._settled_m is None:
+            return False
+        x0, y0 = self._dug[0][0], self._dug[0][1]
+        gx, gy = self.goal
+        progress = math.hypot(gx - x0, gy - y0) - math.hypot(gx - pos[0], gy - pos[1])  # < 0: slid back
+        if progress >= self.rules.entrap_progress_radii * self._radius_m:
+            return False
+        return statistics.median(d[3] for d in self._dug) >= self.rules.entrap_sinkage_ratio * self._settled_m

@@ -19,10 +19,12 @@ it with the Agg canvas without touching the process's backend.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.patches import Polygon
+from matplotlib.patheffects import Normal, Stroke
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation import metrics
@@ -135,7 +137,8 @@ class TrialView:
                   interpolation="nearest")
         ax.imshow(np.asarray(classes)[rows, cols], cmap=class_cmap(), vmin=-0.5, vmax=2.5, origin="lower",
                   extent=extent, alpha=0.45, interpolation="nearest")
-        ax.plot(path[:, 0], path[:, 1], color="white", lw=1.6, ls="--", label="planned")
+        ax.plot(path[:, 0], path[:, 1], color="white", lw=1.6, ls="--", label="planned",
+                path_effects=[Stroke(linewidth=3.2, foreground="black"), Normal()])  # visible in the white legend
         ax.plot(*path[0], "o", color="limegreen", mec="black", ms=7, label="start")
         ax.plot(*path[-1], "o", color="red", mec="black", ms=7, label="goal")
         (self._trail,) = ax.plot([], [], color="black", lw=1.6, label="driven")
@@ -213,7 +216,7 @@ class TrialView:
         self._fail_text.set_text(f"{failure_reason} at {t:.1f} s" if failed else ("success" if last else ""))
         self._fail_text.set_color(FAIL_COLOUR if failed else "green")
         head = f"{self.title}   " if self.title else ""
-        self._head.set_text(f"{head}t = {t:5.1f} s")
+        self._head.set_text("\n".join(textwrap.wrap(f"{head}t = {t:5.1f} s", 120)))  # a long label wraps
 
     def _fit_strips(self) -> None:
         s = self._series

@@ -11,6 +11,7 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
+from matplotlib.patheffects import Normal, Stroke
 
 from offroadbench.analysis.roughness import CLASS_NAMES
 from offroadbench.plots.style import CLASS_COLOURS, class_legend_handles, draw_border, draw_classes, new_figure
@@ -101,17 +102,6 @@ def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: M
     return fig
 
 
-def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
-    """Soft soil: box plots of the mean wheel slip and the deepest wheel sinkage of every trial per
-    group driven on soil (offroadbench.study.stats.soil_boxes)."""
-    many = max((len(b) for b in boxes.values()), default=0) > 4
-    fig, axes = new_figure(1, len(metrics), figsize=(5.5 * len(metrics), 6.0 if many else 3.6))
-    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items()):
-        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
-    fig.suptitle("Soft soil: every trial (successful or not)", fontsize=10)
-    return fig
-
-
 def fig_missions(hm, classes: np.ndarray, closed: np.ndarray, border_m: float, trials: pd.DataFrame, *, title: str = ""):
     """Fig. 4 (Majhor & Bos 2023): class map, closed class map with the border, and the terrain's
     missions (start green, goal red; line white = success, black = failure).
@@ -146,8 +136,10 @@ def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel
     grid = fig.add_gridspec(4, 2, width_ratios=(1.15, 1.0))
     ax = fig.add_subplot(grid[:, 0])
     draw_classes(ax, closed, hm.extent_m)
-    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
-    ax.plot(path_xy[:, 0], path_xy[:, 1], color="white", lw=1.5, ls="--", label="planned")
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0,
+                label=f"mission border ({border_m:g} m)")
+    ax.plot(path_xy[:, 0], path_xy[:, 1], color="white", lw=1.5, ls="--", label="planned",
+            path_effects=[Stroke(linewidth=3.0, foreground="black"), Normal()])  # seen on the white legend too
     ax.plot(tel["x_m"], tel["y_m"], color="black", lw=1.5, label="driven")
     ax.plot(tel["x_m"][-1], tel["y_m"][-1], "X", color="red", mec="black", ms=9)
     ax.plot(*path_xy[0], "o", color="limegreen", mec="black", ms=7)
@@ -159,7 +151,7 @@ def fig_replay(hm, closed: np.ndarray, border_m: float, path_xy: np.ndarray, tel
     ax.set_ylim(max(ys.min() - pad, 0), min(ys.max() + pad, hm.height_m))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9, facecolor="0.8")  # the white lines show
     t = tel["t_s"]
     series = (
         (("z_m", "z (m)", 1.0),),
@@ -209,7 +201,8 @@ def fig_paths(hm, closed: np.ndarray, border_m: float, mission, drawn, *, title:
     # the figure takes the crop's shape (equal axes), with room for the title and labels
     fig, ax = new_figure(figsize=(9.5, float(np.clip(6.6 * (y1 - y0) / (x1 - x0) + 1.2, 3.2, 9.0))))
     draw_classes(ax, closed, hm.extent_m)
-    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0)
+    draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0,
+                label=f"mission border ({border_m:g} m)")
     colours = ("white", "black", "magenta", "cyan", "lime", "red")
     for (label, planned, driven, outcome), colour in zip(drawn, colours):
         if planned is not None:

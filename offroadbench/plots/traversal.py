@@ -3,6 +3,8 @@ time series of one trial. Functions return matplotlib Figures; the CLI saves the
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 from matplotlib.lines import Line2D
 
@@ -22,8 +24,13 @@ def _class_axes(hm: Heightmap, classes: np.ndarray, border_m: float | None, titl
         draw_border(ax, hm.extent_m, border_m)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(title)
+    ax.set_title(wrap_title(title))
     return fig, ax
+
+
+def wrap_title(title: str, width: int = 72) -> str:
+    """A long title (a terrain label with its overrides, engine and gravity) on several lines."""
+    return "\n".join(textwrap.wrap(title, width)) or title
 
 
 def plot_missions(hm: Heightmap, closed_classes: np.ndarray, missions, *, border_m: float | None = None,
@@ -43,14 +50,27 @@ def plot_missions(hm: Heightmap, closed_classes: np.ndarray, missions, *, border
 
 
 def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telemetry: dict, results, *,
-                      border_m: float | None = None, title: str = "trajectories", paths: dict | None = None):
+                      border_m: float | None = None, title: str = "trajectories", paths: dict | None = None,
+                      beliefs: dict | None = None):
     """Driven paths over the class map; each ends in a marker coloured by the outcome.
 
     ``telemetry`` maps mission index -> telemetry columns; ``results`` are the TrialResults;
     ``paths`` (optional) maps mission index -> planned waypoints (N, 2), drawn dotted (default:
-    the start-goal line).
+    the start-goal line). ``beliefs`` (optional, the ``mast`` sensor's,
+    offroadbench.navigation.sensor.Belief) maps mission index -> what the sensor left: the cells
+    no mission's sensor ever saw are greyed out, and each believed path is drawn dashed beside the
+    true (driven) one.
     """
     fig, ax = _class_axes(hm, closed_classes, border_m, title)
+    if beliefs:
+        seen = np.zeros(hm.shape, dtype=bool)
+        for b in beliefs.values():
+            seen |= b.seen
+        grey = np.zeros((*hm.shape, 4))
+        grey[~seen] = (0.35, 0.35, 0.35, 0.6)
+        ax.imshow(grey, origin="lower", extent=hm.extent_m, interpolation="nearest")
+        for b in beliefs.values():
+            ax.plot(b.trail_xy[:, 0], b.trail_xy[:, 1], color="royalblue", linewidth=1.2, linestyle="--", zorder=5)
     for m, r in zip(missions, results):
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         wp = (paths or {}).get(m.index)
@@ -65,6 +85,13 @@ def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telem
                     markeredgecolor="k", markersize=8)
     handles = [Line2D([], [], marker="X", linestyle="", color=c, markeredgecolor="k",
                           label=k or "success") for k, c in _OUTCOME_COLOURS.items()]
+    handles += [Line2D([], [], color="k", linewidth=0.7, linestyle=":", label="planned"),
+                Line2D([], [], color="k", linewidth=1.2, label="driven")]
+    if beliefs:
+        from matplotlib.patches import Patch
+
+        handles += [Line2D([], [], color="royalblue", linewidth=1.0, linestyle="--", label="believed path"),
+                    Patch(facecolor=(0.35, 0.35, 0.35, 0.6), label="never seen")]
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
     return fig
 
@@ -90,5 +117,5 @@ def plot_timeseries(tel: dict, *, title: str = "trial"):
     axes[3].set_ylabel("m/s, rad/s")
     axes[3].set_xlabel("time (s)")
     axes[3].legend(loc="upper right", fontsize=8)
-    fig.suptitle(title)
+    fig.suptitle(wrap_title(title, 100))
     return fig

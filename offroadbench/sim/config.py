@@ -12,12 +12,11 @@ from dataclasses import dataclass
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
-from offroadbench.sim.engine import ENGINE_TYRE_MODELS, ENGINES
+from offroadbench.sim.engine import ENGINES, TYRE_MODELS, engine_capabilities
+from offroadbench.sim.engines.mujoco.settings import MuJoCoConfig
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
-#: values of SimConfig.tyre_model
-TYRE_MODELS = ("bullet", "coulomb", "terramechanics")
 #: gravity of a trial whose study and terrain name none, m/s^2
 EARTH_GRAVITY_M_S2 = 9.81
 #: smallest tiled heightfield side, cells (smaller tiles only add bodies and seams)
@@ -74,6 +73,8 @@ class SimConfig:
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
     default) or ``mujoco`` (offroadbench.sim.engines.mujoco.world; ``pip install 'offroadbench[mujoco]'``).
     Both run the same trial, tyre model, telemetry and failure rules."""
+    mujoco: MuJoCoConfig = MuJoCoConfig()
+    """The MuJoCo engine's own settings (the ``[sim.mujoco]`` table; the other engines ignore it)."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)
@@ -99,7 +100,7 @@ class SimConfig:
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
         check_choice(self, "engine", self.engine, ENGINES.names())
-        models = ENGINE_TYRE_MODELS.get(self.engine, TYRE_MODELS)
+        models = engine_capabilities(self.engine).tyre_models  # the engine's own declaration
         if self.tyre_model not in models:
             raise InputError(f"SimConfig.tyre_model = {self.tyre_model!r} is not implemented on engine "
                              f"{self.engine!r}; allowed there: {', '.join(models)}")
@@ -119,7 +120,7 @@ class SimConfig:
 @dataclass(frozen=True, kw_only=True)
 class ControllerConfig:
     """Pure pursuit on the planned path (the study's ``[planner]``; default the start-goal line), with
-    a jerk-limited (ruckig) speed profile."""
+    a speed loop following a jerk-limited (ruckig) reference (offroadbench.sim.trial.controller)."""
 
     lookahead_m: float = 1.5
     """Pure-pursuit lookahead distance along the path, m (about 1.5 vehicle lengths)."""
@@ -127,11 +128,28 @@ class ControllerConfig:
     """Controller updates per second; must divide SimConfig.physics_rate_hz."""
     cruise_speed_m_s: float = 1.0
     """Target speed along the path, m/s (paper: 1 m/s); capped by the vehicle's max speed."""
+    speed_gain_1_s: float = 1.0
+    """Proportional gain of the wheel-speed command on the progress error (reference minus measured
+    progress), 1/s (offroadbench.sim.trial.controller)."""
+    speed_integral_gain_1_s2: float = 0.25
+    """Integral gain on the progress error, 1/s^2; with ``speed_gain_1_s`` = 1 the error's poles are
+    both at -0.5/s (critically damped)."""
+    speed_lag_bound_m: float = 0.5
+    """The speed reference is re-planned when the measured progress is more than this behind (or
+    ahead of) it, m: it is moved to this distance from the vehicle, keeping its speed."""
+    traction_slip_limit: float = 0.0
+    """Traction control: hold the wheel-speed command to ``max(v, 0.1 v_cruise) / (1 - limit)`` of
+    the measured speed ``v`` along the path, so the wheels slip at most about this much; 0: off
+    (the default)."""
 
     def __post_init__(self) -> None:
         check_range(self, "lookahead_m", self.lookahead_m, lo=0, lo_open=True)
         check_int(self, "control_rate_hz", self.control_rate_hz, lo=1, hi=1000)
         check_range(self, "cruise_speed_m_s", self.cruise_speed_m_s, lo=0, lo_open=True)
+        check_range(self, "speed_gain_1_s", self.speed_gain_1_s, lo=0)
+        check_range(self, "speed_integral_gain_1_s2", self.speed_integral_gain_1_s2, lo=0)
+        check_range(self, "speed_lag_bound_m", self.speed_lag_bound_m, lo=0, lo_open=True)
+        check_range(self, "traction_slip_limit", self.traction_slip_limit, lo=0, hi=1, hi_open=True)
 
 
 def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:

@@ -37,7 +37,11 @@ if TYPE_CHECKING:
     from offroadbench.sim.config import SimConfig
     from offroadbench.sim.trial.vehicle import VehicleSpec
 
-__all__ = ["ENGINES", "ENGINE_TYRE_MODELS", "TrialWorld", "VehicleGeometry", "open_world"]
+__all__ = ["ENGINES", "EngineCapabilities", "TYRE_MODELS", "TrialWorld", "VehicleGeometry", "engine_capabilities",
+           "open_world"]
+
+#: every tyre model (SimConfig.tyre_model); each engine declares which it implements
+TYRE_MODELS = ("bullet", "coulomb", "terramechanics")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -146,9 +150,32 @@ class TrialWorld(Protocol):
         """Height of the terrain's collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
 
 
-def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., TrialWorld]:
+@dataclass(frozen=True, kw_only=True)
+class EngineCapabilities:
+    """What an engine implements, declared by the engine itself (its package's ``CAPABILITIES``;
+    a plug-in engine's factory may carry a ``capabilities`` attribute). SimConfig validates its
+    ``tyre_model`` against it, and the rigs find their engine half through it."""
+
+    tyre_models: tuple[str, ...]
+    """The tyre models (SimConfig.tyre_model) the engine implements."""
+    soil_rig_module: str | None = None
+    """Module whose ``run_rig`` drives the single-wheel soil rig (offroadbench.sim.rigs.soil_check)
+    on this engine; None: no rig."""
+    settings: tuple[str, ...] = ()
+    """The SimConfig keys that this engine alone reads (its own table, e.g. ``mujoco`` for
+    ``[sim.mujoco]``, or keys of ``[sim]``); the other engines ignore them."""
+
+    def soil_rig(self) -> Callable[..., tuple[float, float, float]]:
+        """The engine's ``run_rig`` (imports the engine); an InputError where it has none."""
+        if self.soil_rig_module is None:
+            raise InputError("this engine has no single-wheel soil rig")
+        return importlib.import_module(self.soil_rig_module).run_rig
+
+
+def _lazy(module: str, name: str, package: str, extra: str, declared: str) -> Callable[..., TrialWorld]:
     """A constructor that imports its engine module only when a world is opened; a missing engine
-    package is an InputError saying what to install."""
+    package is an InputError saying what to install. ``declared`` names the engine's package, whose
+    ``CAPABILITIES`` (an :class:`EngineCapabilities`) it loads without importing the engine."""
 
     def make(hm, vehicle, sim):
         try:
@@ -162,18 +189,28 @@ def _lazy(module: str, name: str, package: str, extra: str) -> Callable[..., Tri
 
     make.__qualname__ = make.__name__ = f"{name}_factory"
     make.__doc__ = f"Open a {module}.{name}."
+    make.capabilities_module = declared
     return make
 
 
 #: physics engines by name (``SimConfig.engine``): each a callable ``(hm, vehicle, sim) -> TrialWorld``;
 #: installed packages add theirs through the entry-point group ``offroadbench.engines``
 ENGINES: Registry[Callable[..., TrialWorld]] = Registry("physics engine", entry_point_group="offroadbench.engines")
-ENGINES.add("pybullet", _lazy("offroadbench.sim.engines.pybullet.world", "World", "pybullet", "pybullet"))
-ENGINES.add("mujoco", _lazy("offroadbench.sim.engines.mujoco.world", "MuJoCoWorld", "mujoco", "mujoco"))
+ENGINES.add("pybullet", _lazy("offroadbench.sim.engines.pybullet.world", "World", "pybullet", "pybullet",
+                              "offroadbench.sim.engines.pybullet"))
+ENGINES.add("mujoco", _lazy("offroadbench.sim.engines.mujoco.world", "MuJoCoWorld", "mujoco", "mujoco",
+                            "offroadbench.sim.engines.mujoco"))
 
 
-#: tyre models (SimConfig.tyre_model) each engine implements
-ENGINE_TYRE_MODELS = {"pybullet": ("bullet", "coulomb", "terramechanics"), "mujoco": ("bullet", "coulomb")}
+def engine_capabilities(name: str) -> EngineCapabilities:
+    """What engine ``name`` declares it implements (importing no engine). A plug-in engine that
+    declares nothing is taken to implement every tyre model and no soil rig."""
+    factory = ENGINES.get(name)
+    declared = getattr(factory, "capabilities_module", None)
+    if declared is not None:
+        return importlib.import_module(declared).CAPABILITIES
+    caps = getattr(factory, "capabilities", None)
+    return caps if isinstance(caps, EngineCapabilities) else EngineCapabilities(tyre_models=TYRE_MODELS)
 
 
 def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:

@@ -7,10 +7,11 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
 :meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
 
 - **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
-  the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to wheel
-  speeds by the skid-steer drive (:func:`offroadbench.sim.trial.skid_steer.wheel_speeds`) and held for one
-  control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 Bullet steps).
-  Actions outside the Box are clipped. There is no speed profile: the agent commands the wheels.
+  the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to joint
+  commands by the vehicle's steering kind (:func:`offroadbench.sim.trial.steering.drive_twist`) and held for one
+  control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 physics steps).
+  Actions outside the Box are clipped to the vehicle's limits in float64, as the trial runner
+  clips a policy's (offroadbench.sim.trial.runner.clamp_action). There is no speed profile: the agent commands the wheels.
   A non-finite action (NaN or infinite in either component) or one that is not two numbers is
   refused with an InputError before anything reaches the physics: the episode and the world are
   left as they were (the agent may ``step`` again with a finite action). Clipping NaN has no
@@ -24,13 +25,24 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   rates (rad/s), and the base velocity in the body frame (forward, left, up; m/s);
   ``height_patch`` (float32, n x n): terrain heights relative to the base, on a square grid centred
   on the vehicle and aligned with its heading (see :func:`height_patch`).
+- **The trial**: an episode is a trial of the trial runner, stepped through the same per-tick code
+  (offroadbench.sim.trial.runner.TrialLoop): the same spawn, telemetry, failure rules (checked at
+  the telemetry rate, 20 Hz), timeout and metrics. Driving a mission with the same actions through
+  the env and through the trial runner (the actions as a policy) gives the same trial row and
+  telemetry (``tests/contracts/test_gym_env.py``); :meth:`TraverseEnv.trial_record` gives them.
+- **Settings**: a :class:`~offroadbench.sim.trial.pipeline.TrialSettings` (``settings=``, or built
+  from the other arguments): its vehicle, physics, controller (control rate, cruise speed), rules,
+  missions (length, border), roughness and observation. The terrain is prepared as a study prepares
+  it (offroadbench.sim.trial.pipeline.prepare_terrain), its recipe's ``[body]`` and ``[soil]``
+  included: ``TraverseEnv("lunar-mare")`` runs in the Moon's gravity, 1.62 m/s^2.
 - **End**: ``terminated`` on success (within ``rules.goal_tolerance_m`` of the goal) or on the
-  trial runner's failure rules (offroadbench.navigation.rules: tipped, off_map, success, stuck, with
-  the stuck window capped below the timeout), checked by the same code at the control rate; ``truncated`` at the timeout, the trials' rule
-  (offroadbench.navigation.rules.trial_timeout_s): ``rules.timeout_factor`` times the mission length
-  over the trials' cruise speed (ControllerConfig, 1 m/s) capped by the vehicle's top speed. ``info["failure_reason"]`` is "" while running and on success, else
-  one of ``tipped``, ``stuck``, ``off_map``, ``timeout``; ``info["success"]`` says whether the goal
-  was reached.
+  trial runner's failure rules (offroadbench.navigation.rules: tipped, off_map, stuck, entrapped,
+  with the stuck window capped below the timeout); ``truncated`` at the timeout, the trials' rule
+  (offroadbench.navigation.rules.trial_timeout_s): ``rules.timeout_factor`` times the mission
+  length over the controller's cruise speed capped by the vehicle's top speed.
+  ``info["failure_reason"]`` is "" while running and on success, else one of the failure reasons;
+  ``info["success"]`` says whether the goal was reached. A rule that fires at the start (a vehicle
+  spawned tipped) ends the first step, which then takes no physics step.
 - **Pose**: ``info["pose"]`` after ``reset`` and every ``step`` is the base's ground truth,
   ``{"x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "yaw_rad"}``: the position of the base (its
   centre of mass) on the map and the Z-Y-X Euler angles of the trial runner's telemetry (pitch
@@ -50,7 +62,8 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
       r = w_progress * (d_prev - d) - dt * (w_accel * a_z^2 + w_rate * (p^2 + q^2))
           + success_bonus [on success] - failure_penalty [on tipped, stuck or off_map]
 
-  ``a_z`` is the vertical acceleration of the base (change of its world z velocity over the tick)
+  ``a_z`` is the vertical acceleration of the base (change of its world z velocity over the tick;
+  ``dt`` the simulated time the step took, shorter where a rule ends the trial inside it)
   and ``p``, ``q`` the body roll and pitch rates: summed over an episode of duration T the penalty
   is ``T * (w_accel * RMS(a_z)^2 + w_rate * (RMS(p)^2 + RMS(q)^2))``, the squares of the paper's
   comfort metrics (Sec. 2.4). The progress term telescopes to ``d_0 - d_end``. A timeout adds
@@ -59,6 +72,7 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Mapping
@@ -67,19 +81,26 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from offroadbench.analysis.roughness import RoughnessConfig, classify_terrain
+from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
 from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig, height_patch, observation
-from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, plan
-from offroadbench.navigation.rules import FailureRules, RuleChecker, trial_timeout_s
+from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem
+from offroadbench.navigation.rules import FailureRules
 from offroadbench.sim.config import ControllerConfig, SimConfig
-from offroadbench.sim.trial.steering import drive_twist
-from offroadbench.sim.trial.runner import body_frame, body_velocity, vehicle_envelope
-from offroadbench.sim.trial.vehicle import VehicleSpec
 from offroadbench.sim.engine import TrialWorld, open_world
+from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain, terrain_body
+from offroadbench.sim.trial.runner import (
+    TrialLoop,
+    TrialRecord,
+    body_velocity,
+    clamp_action,
+    plan_within_limits,
+    vehicle_envelope,
+)
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",
            "STATE_FIELDS"]
@@ -123,12 +144,25 @@ class TraverseConfig:
             check_range(self, name, getattr(self, name), lo=0)
 
 
-def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None) -> Heightmap:
+def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None):
+    """(Heightmap, its gravity, its soil) of what the env was given (terrain_body)."""
     from offroadbench.terrain.recipe import load_terrain
 
     if overrides is None and not isinstance(terrain, Heightmap) and not str(terrain).lower().endswith(".png"):
         overrides = DEFAULT_OVERRIDES
-    return load_terrain(terrain, seed, overrides)[0]
+    hm, recipe = load_terrain(terrain, seed, overrides)
+    return (hm, *terrain_body(terrain, recipe))
+
+
+def _settings(config: TraverseConfig, vehicle, sim: SimConfig, rules: FailureRules,
+              roughness: RoughnessConfig) -> TrialSettings:
+    """The trial settings of the env's own arguments."""
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    return TrialSettings(vehicle=spec, sim=sim, controller=ControllerConfig(control_rate_hz=config.control_rate_hz),
+                         rules=rules, roughness=roughness,
+                         missions=MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m),
+                         observation=ObservationConfig(patch_cells=config.patch_cells,
+                                                       patch_spacing_m=config.patch_spacing_m))
 
 
 class TraverseEnv(gym.Env):
@@ -140,7 +174,12 @@ class TraverseEnv(gym.Env):
     terrain table shows (terrain j of a root seed s is ``offroadbench.seeding.terrain_seed(s, j)``),
     after ``overrides`` (dotted recipe keys; default
     :data:`DEFAULT_OVERRIDES`, a 12 m map; pass ``{}`` for the recipe's own size). The terrain and
-    its PyBullet world are built once, in the constructor; call :meth:`close` to free them.
+    its world are built once, in the constructor; call :meth:`close` to free them.
+
+    ``settings`` (a TrialSettings) gives the vehicle, physics, controller, rules, missions,
+    roughness and observation all at once; then ``vehicle``, ``sim``, ``rules`` and ``roughness``
+    must be left out, and ``config`` gives only the reward (its mission, control-rate and patch
+    fields are the settings'). Without it they are built from the arguments.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
@@ -151,39 +190,55 @@ class TraverseEnv(gym.Env):
         *,
         terrain_seed: int = 0,
         overrides: Mapping[str, Any] | None = None,
-        vehicle: VehicleSpec | str = "husky",
+        vehicle: VehicleSpec | str | None = None,
         config: TraverseConfig = TraverseConfig(),
-        sim: SimConfig = SimConfig(),
-        rules: FailureRules = FailureRules(),
-        roughness: RoughnessConfig = RoughnessConfig(),
+        sim: SimConfig | None = None,
+        rules: FailureRules | None = None,
+        roughness: RoughnessConfig | None = None,
+        settings: TrialSettings | None = None,
         planner: str | PlannerChoice | None = None,
         render_mode: str | None = None,
     ) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise InputError(f"render_mode {render_mode!r} is not supported; allowed: None, "
                              f"{', '.join(map(repr, self.metadata['render_modes']))}")
-        if sim.physics_rate_hz % config.control_rate_hz:
+        if settings is None:
+            settings = _settings(config, "husky" if vehicle is None else vehicle, sim or SimConfig(),
+                                 rules or FailureRules(), roughness or RoughnessConfig())
+        else:
+            given = [n for n, v in (("vehicle", vehicle), ("sim", sim), ("rules", rules), ("roughness", roughness))
+                     if v is not None]
+            if given:
+                raise InputError(f"TraverseEnv: give {', '.join(given)} inside settings, not beside it")
+            config = dataclasses.replace(
+                config, control_rate_hz=settings.controller.control_rate_hz,
+                mission_length_m=settings.missions.length_m, border_m=settings.missions.border_m,
+                patch_cells=settings.observation.patch_cells, patch_spacing_m=settings.observation.patch_spacing_m)
+        if settings.sim.physics_rate_hz % config.control_rate_hz:
             raise InputError(
                 f"TraverseConfig.control_rate_hz = {config.control_rate_hz} must divide "
-                f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
+                f"SimConfig.physics_rate_hz = {settings.sim.physics_rate_hz}"
             )
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
         self.planner = planner
         self.render_mode = render_mode
         self.cfg = config
-        self.rules = rules
-        self._obs_cfg = ObservationConfig(patch_cells=config.patch_cells, patch_spacing_m=config.patch_spacing_m)
-        self.hm = _terrain(terrain, terrain_seed, overrides)
-        self.closed_classes = classify_terrain(self.hm, roughness).closed  # the map the trials' missions use
-        self._mission_cfg = MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m)
-        self._world: TrialWorld | None = open_world(self.hm, vehicle, sim)
+        self.settings = settings
+        self.rules = settings.rules
+        hm, gravity, soil = _terrain(terrain, terrain_seed, overrides)
+        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil)
+        self.hm = hm
+        self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
+        self._mission_cfg = dataclasses.replace(settings.missions, count=1)
+        self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim))
         spec = self._world.spec
         self.vehicle = spec
+        self.sim = self._world.sim
+        """The physics the world runs (the terrain's gravity and soil filled in)."""
         self.envelope = vehicle_envelope(self._world)
         self.dt_s = 1.0 / config.control_rate_hz
-        self._steps_per_tick = sim.physics_rate_hz // config.control_rate_hz
-        self._fill_m = self.hm.z_min_m - rules.fall_depth_m
+        self._fill_m = hm.z_min_m - settings.rules.fall_depth_m
 
         high = np.array([spec.max_speed_m_s, spec.max_yaw_rate_rad_s], dtype=np.float32)
         self.action_space = spaces.Box(-high, high, dtype=np.float32)
@@ -194,6 +249,7 @@ class TraverseEnv(gym.Env):
         })
         self.mission: Mission | None = None
         self.path_xy: np.ndarray | None = None
+        self._loop: TrialLoop | None = None
         self._view = None  # the rgb_array view of the episode (built at the first render)
         self._shade = None  # the terrain's hillshade, for every episode's view
         self._track: dict[str, list[float]] = {}
@@ -220,30 +276,27 @@ class TraverseEnv(gym.Env):
         if self.planner is not None:
             problem = PlanningProblem(hm=self.hm, classes=self.closed_classes, start_xy=m.start_xy_m,
                                       goal_xy=m.goal_xy_m, border_m=self.cfg.border_m, vehicle=self.envelope)
-            self.path_xy = plan(self.planner, problem)
-        world.spawn(m.start_xy_m[0], m.start_xy_m[1], m.heading_rad)
-        self._ticks = 0
-        self._ended = False
-        timeout_s = trial_timeout_s(self.rules, m.length_m, ControllerConfig().cruise_speed_m_s,
-                                    self.vehicle.max_speed_m_s)  # the trials' rule (navigation.rules)
-        self._timeout_ticks = int(math.ceil(timeout_s * self.cfg.control_rate_hz - 1e-9))
+            self.path_xy = plan_within_limits(self.planner, problem)
         self._goal = np.asarray(m.goal_xy_m, dtype=float)
-        self._rules = RuleChecker(self.rules, (self.hm.width_m, self.hm.height_m, self.hm.z_min_m), self._goal,
-                                  timeout_s=timeout_s, sample_rate_hz=self.cfg.control_rate_hz,
-                                  mission_length_m=m.length_m)
+        s = self.settings
+        # an agent drives: the trial's nominal length is the mission's (as for a policy in the runner)
+        self._loop = loop = TrialLoop(world, m, length_m=m.length_m, controller=s.controller, rules=s.rules)
+        loop.record(self._progress)  # the start; a rule firing here ends the first step
+        self._ended = False
         state = self._read_state()
         self._dist = state["dist"]
         self._vz = state["lin"][2]
-        self._rules.xy_hist.append(state["pos"][:2])
+        self._t = loop.t_s
         self._state = state
         self._view, self._end_reason, self._track = None, None, {}
         self._record(state, 0.0)
         return self._observation(state), self._info(state, "")
 
     def step(self, action):
-        world = self._require_world()
+        self._require_world()
         if self.mission is None:
             raise RuntimeError("call reset() before step()")
+        loop = self._loop
         if self._ended:
             raise RuntimeError("the episode has ended (terminated or truncated); call reset() before step()")
         try:
@@ -253,36 +306,44 @@ class TraverseEnv(gym.Env):
         if not np.all(np.isfinite(a)):
             raise InputError(f"action {a.tolist()}: not finite; expected (v, omega), two finite numbers "
                              "(the step was not taken)")
-        a = np.clip(a, self.action_space.low, self.action_space.high)
-        drive_twist(world, float(a[0]), float(a[1]))
-        for _ in range(self._steps_per_tick):
-            world.step()
-        self._ticks += 1
+        v, w = clamp_action((float(a[0]), float(a[1])), self.vehicle)
+        loop.command(v, w)
+        if not loop.ended:  # a trial ended at reset (e.g. spawned tipped) ends this step, no physics
+            loop.step_to_next_control(self._progress) or loop.record(self._progress)
         state = self._read_state()
         self._state = state
-        reason = self._rules.check(state["pos"], state["roll"], state["pitch"])
 
         cfg = self.cfg
-        a_z = (state["lin"][2] - self._vz) / self.dt_s
+        dt = loop.t_s - self._t
+        a_z = (state["lin"][2] - self._vz) / dt if dt > 0.0 else 0.0
         p, q = state["rates"][0], state["rates"][1]
         reward = cfg.progress_weight * (self._dist - state["dist"])
-        reward -= self.dt_s * (cfg.accel_weight * a_z * a_z + cfg.rate_weight * (p * p + q * q))
+        reward -= dt * (cfg.accel_weight * a_z * a_z + cfg.rate_weight * (p * p + q * q))
         self._dist = state["dist"]
         self._vz = state["lin"][2]
+        self._t = loop.t_s
 
-        terminated = reason is not None
-        truncated = not terminated and self._ticks >= self._timeout_ticks
+        reason = loop.reason
+        truncated = reason == "timeout"
+        terminated = reason is not None and not truncated
         if reason == "":
             reward += cfg.success_bonus
         elif terminated:
             reward -= cfg.failure_penalty
-        if truncated:
-            reason = "timeout"
-        self._record(state, float(a[0]))
+        self._record(state, v)
         if terminated or truncated:
-            self._end_reason = reason or ""
+            self._end_reason = reason
         self._ended = terminated or truncated
         return self._observation(state), float(reward), terminated, truncated, self._info(state, reason or "")
+
+    def trial_record(self) -> TrialRecord:
+        """The episode as the trial runner records a trial: its row (TrialResult, once the episode has
+        ended), its telemetry, and the planned path (the start-goal line without a planner)."""
+        if self._loop is None:
+            raise RuntimeError("call reset() before trial_record()")
+        m = self.mission
+        path = self.path_xy if self.path_xy is not None else np.array([m.start_xy_m, m.goal_xy_m], dtype=float)
+        return TrialRecord(self._loop.result(), self._loop.telemetry(), np.asarray(path, dtype=float))
 
     def close(self) -> None:
         if self._world is not None:
@@ -296,25 +357,28 @@ class TraverseEnv(gym.Env):
             raise RuntimeError("the environment is closed")
         return self._world
 
+    def _progress(self, pos) -> float:
+        """A telemetry row's progress: the mission length less the distance left (as for a policy)."""
+        return self.mission.length_m - math.hypot(self._goal[0] - pos[0], self._goal[1] - pos[1])
+
     def _read_state(self) -> dict:
         world = self._require_world()
-        pos, quat, lin, ang = world.base_state()
-        roll, pitch, yaw, *rates = body_frame(world, quat, ang)
+        pos, quat, lin, ang, roll, pitch, yaw, rates = self._loop.state
         v_body = body_velocity(world, quat, lin)
         dist = math.hypot(self._goal[0] - pos[0], self._goal[1] - pos[1])
         return {"pos": pos, "lin": lin, "roll": roll, "pitch": pitch, "yaw": yaw, "rates": rates,
                 "v_body": v_body, "dist": dist}
 
     def _observation(self, s: dict) -> dict[str, np.ndarray]:
-        return observation(self.hm, self._obs_cfg, self._goal, s["pos"], s["roll"], s["pitch"], s["yaw"], s["rates"],
-                           s["v_body"], self._fill_m)
+        return observation(self.hm, self.settings.observation, self._goal, s["pos"], s["roll"], s["pitch"], s["yaw"],
+                           s["rates"], s["v_body"], self._fill_m)
 
     def _info(self, s: dict, reason: str) -> dict[str, Any]:
         return {
             "failure_reason": reason,
             "success": reason == "" and s["dist"] <= self.rules.goal_tolerance_m,
             "distance_to_goal_m": s["dist"],
-            "t_s": self._ticks * self.dt_s,
+            "t_s": self._loop.t_s,
             "mission": self.mission,
             "path_xy": None if self.path_xy is None else self.path_xy.copy(),
             "pose": {"x_m": float(s["pos"][0]), "y_m": float(s["pos"][1]), "z_m": float(s["pos"][2]),
@@ -325,7 +389,7 @@ class TraverseEnv(gym.Env):
         """One sample of the episode's track (the telemetry columns the rgb_array view draws)."""
         if self.render_mode != "rgb_array":
             return
-        values = {"t_s": self._ticks * self.dt_s, "x_m": s["pos"][0], "y_m": s["pos"][1], "z_m": s["pos"][2],
+        values = {"t_s": self._loop.t_s, "x_m": s["pos"][0], "y_m": s["pos"][1], "z_m": s["pos"][2],
                   "yaw_rad": s["yaw"], "roll_rad": s["roll"], "pitch_rad": s["pitch"], "vx_m_s": s["lin"][0],
                   "vy_m_s": s["lin"][1], "cmd_v_m_s": cmd_v}
         for k, v in values.items():
@@ -348,7 +412,7 @@ class TraverseEnv(gym.Env):
                 self._shade = hillshade(self.hm)
             self._view = TrialView(self.hm, self.closed_classes, path, shade=self._shade,
                                    footprint_m=(self.envelope.length_m, self.envelope.width_m),
-                                   t_max_s=self._timeout_ticks * self.dt_s,
+                                   t_max_s=self._loop.timeout_s,
                                    title=f"planner {self.planner.name}" if self.planner else "agent")
         self._view.draw({k: np.asarray(v) for k, v in self._track.items()}, failure_reason=self._end_reason)
         return self._view.to_rgb()

@@ -53,6 +53,10 @@ import numpy as np
 
 __all__ = [
     "Z95",
+    "sign_flip_power",
+    "fieller_set",
+    "isotonic_decreasing",
+    "logistic_fit_check",
     "BootstrapInterval",
     "LogisticFit",
     "breaking_point_logistic",
@@ -316,3 +320,90 @@ def terrains_needed(effect: float, sd: float, alpha: float = 0.05, power: float 
         if paired_power(n, effect, sd, alpha) >= power:
             return n
     return n_max + 1
+
+
+def fieller_set(fit: LogisticFit, threshold: float = 0.5, z: float = Z95) -> list[tuple[float, float]]:
+    """Fieller's (1954) confidence set of the x where the fitted success equals ``threshold``, as a
+    list of intervals: one bounded interval, two rays ((-inf, r1] and [r2, inf), when the slope is
+    not clearly non-zero), the whole line, or empty (no fit)."""
+    if not fit.converged or not math.isfinite(fit.slope) or fit.slope == 0 or not np.all(np.isfinite(fit.cov)):
+        return []
+    L = math.log(threshold / (1 - threshold))
+    a, b = fit.intercept - L, fit.slope
+    vaa, vab, vbb = fit.cov[0, 0], fit.cov[0, 1], fit.cov[1, 1]
+    z2 = z * z
+    qa, qb, qc = b * b - z2 * vbb, 2 * (a * b - z2 * vab), a * a - z2 * vaa
+    disc = qb * qb - 4 * qa * qc
+    if qa > 0:
+        r = math.sqrt(max(disc, 0.0))
+        return [((-qb - r) / (2 * qa), (-qb + r) / (2 * qa))]
+    if disc <= 0 or qa == 0:
+        return [(-math.inf, math.inf)]
+    r1, r2 = sorted(((-qb - math.sqrt(disc)) / (2 * qa), (-qb + math.sqrt(disc)) / (2 * qa)))
+    return [(-math.inf, r1), (r2, math.inf)]
+
+
+def logistic_fit_check(fit: LogisticFit, x: Sequence[float], y: Sequence[float]) -> tuple[float, int, float]:
+    """Goodness of fit of a logistic fit over the distinct x levels: Pearson's X^2 = sum over levels
+    of (observed - expected successes)^2 / (n p (1 - p)), its degrees of freedom (levels - 2) and the
+    chi-square p. It treats trials as independent (clustered trials inflate X^2), so a small p says
+    the curve misses the level means even before the clustering is counted."""
+    from scipy.stats import chi2
+
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    stat = 0.0
+    levels = np.unique(x[np.isfinite(x)])
+    for lv in levels:
+        sel = x == lv
+        n = int(sel.sum())
+        p = 1.0 / (1.0 + math.exp(-(fit.intercept + fit.slope * lv)))
+        var = n * p * (1 - p)
+        stat += (float(y[sel].sum()) - n * p) ** 2 / var if var > 0 else 0.0
+    df = levels.size - 2
+    return stat, df, float(chi2.sf(stat, df)) if df > 0 else math.nan
+
+
+def isotonic_decreasing(y: Sequence[float], w: Sequence[float] | None = None) -> np.ndarray:
+    """The non-increasing sequence closest to ``y`` in weighted least squares (pool-adjacent-violators,
+    Ayer et al. 1955): the fitted success at ordered levels when success may only fall."""
+    y = np.asarray(y, float)
+    w = np.ones_like(y) if w is None else np.asarray(w, float)
+    blocks: list[list[float]] = []  # [weighted mean, weight, count]
+    for v, wt in zip(y, w):
+        blocks.append([v, wt, 1])
+        while len(blocks) > 1 and blocks[-2][0] < blocks[-1][0]:
+            m2, w2, c2 = blocks.pop()
+            m1, w1, c1 = blocks.pop()
+            blocks.append([(m1 * w1 + m2 * w2) / (w1 + w2), w1 + w2, c1 + c2])
+    return np.concatenate([np.full(int(c), m) for m, _, c in blocks]) if blocks else np.array([])
+
+
+def sign_flip_power(pilot: Sequence[float], n_terrains: int, alpha: float, rng: np.random.Generator,
+                    n_sim: int = 1000, exact_max: int = 16, n_flips: int = 4000) -> float:
+    """Power of the two-sided exact sign-flip test of the mean (:func:`sign_flip_test`) at level
+    ``alpha``, by simulation: each simulated study draws ``n_terrains`` per-terrain differences with
+    replacement from ``pilot`` (the pilot's terrains taken as the truth, ties and skew included) and
+    tests them; power = the share with p <= alpha. Exact p for up to ``exact_max`` terrains, else
+    from ``n_flips`` random sign patterns (the same patterns for every simulated study). A test
+    whose smallest possible p, 2 / 2^K, exceeds ``alpha`` has power 0."""
+    d = _clean(pilot)
+    if d.size == 0 or n_terrains < 1:
+        return 0.0
+    if 2.0 / 2.0 ** n_terrains > alpha * (1 + 1e-12):
+        return 0.0
+    if n_terrains <= exact_max:
+        signs = 1 - 2 * ((np.arange(2 ** n_terrains)[:, None] >> np.arange(n_terrains)) & 1)
+    else:
+        signs = rng.choice([-1.0, 1.0], size=(n_flips, n_terrains))
+        signs[0] = 1.0
+    signs = signs.astype(float)
+    hits = 0
+    for _ in range(n_sim):
+        x = rng.choice(d, size=n_terrains, replace=True)
+        obs = abs(float(x.sum()))
+        if obs == 0:
+            continue
+        p = float(np.mean(np.abs(signs @ x) >= obs * (1 - 1e-12)))
+        hits += p <= alpha
+    return hits / n_sim

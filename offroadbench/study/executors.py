@@ -9,7 +9,7 @@ executor, a task's results depend only on the task, so all of them give the same
   trial back as soon as it finishes. Workers ignore Ctrl-C (the coordinator stops them) and die
   with the coordinator (``PR_SET_PDEATHSIG``), so a killed study leaves no orphans behind. With
   ``trial_timeout_s`` a worker that sends nothing for that long (a terrain build, or one trial,
-  that hangs) is killed and the study stops with a one-line StudyError naming the terrain.
+  that hangs) is killed and replaced, the trial is stored as a fault and the study goes on.
 * ``inline``: runs in the calling process (debugging, profiling).
 * ``dask``: one Dask task per terrain on a ``distributed`` cluster (``scheduler`` address, or a
   ``LocalCluster`` of ``workers`` processes when no address is given). A task's trials arrive
@@ -30,9 +30,10 @@ from typing import Callable, Sequence
 
 from offroadbench.errors import InputError, StudyError
 from offroadbench.registry import Registry
-from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFn, collect_terrain, run_terrain
+from offroadbench.study.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
+                                      remaining_task, run_terrain)
 
-__all__ = ["EXECUTORS", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
+__all__ = ["EXECUTORS", "MAX_TRIAL_TIMEOUT_S", "check_trial_timeout", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 
 Handle = Callable[[tuple], None]
 
@@ -85,7 +86,24 @@ def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
     return ("error", key, carried, f"{type(exc).__name__}: {exc}", tb)
 
 
-def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None:
+#: the largest per-trial wall-clock limit accepted, seconds (30 days): a larger one is no limit in
+#: practice, and timeouts beyond ``threading.TIMEOUT_MAX`` overflow (Dask's helper thread)
+MAX_TRIAL_TIMEOUT_S = 30 * 86400.0
+
+
+def check_trial_timeout(value: float | None) -> float | None:
+    """``trial_timeout_s`` validated: None (no limit) or a finite number of seconds in (0, 30 days]."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= MAX_TRIAL_TIMEOUT_S:
+        raise InputError(f"trial_timeout_s = {value!r}; must be > 0 and at most {MAX_TRIAL_TIMEOUT_S:g} seconds "
+                         "(30 days)")
+    return float(value)
+
+
+def _worker(task_q, conn, trial_fn: TrialFn | None, parent_pid: int) -> None:
+    """A worker process: pull tasks, send every message through its own pipe ``conn`` (a worker
+    killed for a hung trial takes only its own pipe with it)."""
     _die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the coordinator's SIGTERM handler is not the worker's
@@ -95,16 +113,16 @@ def _worker(task_q, result_q, trial_fn: TrialFn | None, parent_pid: int) -> None
         if task is None:
             return
         key = (task.cell.index, task.terrain)
-        result_q.put(("begin", key))
+        conn.send(("begin", key, os.getpid()))
         try:
             for msg in run_terrain(task, trial_fn):
                 if os.getppid() != parent_pid:
                     os._exit(1)
-                result_q.put(msg)
+                conn.send(msg)
         except BaseException as exc:  # report and stop: the coordinator decides
-            result_q.put(_error_message(key, exc, traceback.format_exc()))
+            conn.send(_error_message(key, exc, traceback.format_exc()))
             return
-        result_q.put(("done", key))
+        conn.send(("done", key))
 
 
 def task_failure(key: tuple[int, int], exc: BaseException | None, text: str, tb: str = "") -> Exception:
@@ -118,8 +136,41 @@ def task_failure(key: tuple[int, int], exc: BaseException | None, text: str, tb:
     return StudyError(f"{where} failed in a worker: {' '.join(text.split())}")
 
 
+class _Running:
+    """A task in a local worker: the task, the worker's pid, when it last sent something, whether
+    its terrain is built and which missions are finished."""
+
+    def __init__(self, task: TerrainTask, pid: int, now: float) -> None:
+        self.task, self.pid, self.since, self.built, self.finished = task, pid, now, False, set()
+
+    def hung_mission(self) -> int | None:
+        """The mission running when the limit passed (None: the terrain build)."""
+        if not self.built:
+            return None
+        return next((k for k, _ in self.task.missions if k not in self.finished), None)
+
+
+def timeout_faults(task: TerrainTask, hung: int | None, finished: set, limit_s: float,
+                   where: str = "") -> tuple[list[TrialFaulted], TerrainTask | None]:
+    """The fault message(s) of a task whose trial (``hung``; None: the terrain build) ran past
+    ``limit_s``, and the task of the missions still to run after it (None if none)."""
+    seeds = dict(task.missions)
+    cell, terrain = task.cell.index, task.terrain
+    if hung is None:  # the build hung: none of the task's missions can run
+        reason = f"the terrain build ran longer than {limit_s:g} s, the per-trial limit{where}"
+        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason)
+                for k, s in task.missions if k not in finished], None
+    reason = f"the trial ran longer than {limit_s:g} s, the per-trial limit{where}"
+    return [TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason)], remaining_task(task, hung)
+
+
 class LocalExecutor:
-    """``workers`` local processes (default: the number of cores)."""
+    """``workers`` local processes (default: the number of cores).
+
+    A worker whose task sends nothing for ``trial_timeout_s`` (a hung trial or terrain build) is
+    killed and replaced; the hung trial is handed back as a :class:`TrialFaulted` (stored as a
+    fault, not an outcome) and the task's later missions go back in the queue, so the study goes
+    on. The limit is checked as often as it needs to be: any limit is enforced."""
 
     poll_s = 0.5
 
@@ -128,79 +179,128 @@ class LocalExecutor:
         if scheduler:
             raise InputError("--scheduler is only for --executor dask")
         self.workers = workers or os.cpu_count() or 1
-        if trial_timeout_s is not None and not trial_timeout_s > 0:
-            raise InputError(f"trial_timeout_s = {trial_timeout_s!r}; must be > 0 seconds")
-        self.trial_timeout_s = trial_timeout_s
+        self.trial_timeout_s = check_trial_timeout(trial_timeout_s)
 
-    _timed_out = False
-
-    def _check_time(self, active: dict[tuple[int, int], float]) -> None:
-        if self.trial_timeout_s is None:
-            return
-        now = time.monotonic()
-        for (cell, terrain), since in active.items():
-            if now - since > self.trial_timeout_s:
-                self._timed_out = True
-                raise StudyError(f"cell {cell}, terrain {terrain}: a trial (or the terrain build) ran longer than "
-                                 f"{self.trial_timeout_s:g} s, the per-trial limit; its worker was stopped")
+    def _wait_s(self, running: dict) -> float:
+        if self.trial_timeout_s is None or not running:
+            return self.poll_s
+        first = min(r.since for r in running.values()) + self.trial_timeout_s
+        return min(self.poll_s, max(0.0, first - time.monotonic()) + 1e-3)
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
         import multiprocessing as mp
+        from multiprocessing.connection import wait
 
         if not tasks:
             return
         ctx = mp.get_context("fork")
-        task_q, result_q = ctx.Queue(), ctx.Queue()
-        n = min(self.workers, len(tasks))
+        task_q = ctx.Queue()
         for task in tasks:
             task_q.put(task)
-        for _ in range(n):
-            task_q.put(None)
-        procs = [
-            ctx.Process(target=_worker, args=(task_q, result_q, trial_fn, os.getpid()), daemon=True, name=f"study-{i}")
-            for i in range(n)
-        ]
-        for p in procs:
+        procs: dict = {}  # reading end of a worker's pipe -> its process
+        serial = iter(range(10**9))
+        by_key = {(t.cell.index, t.terrain): t for t in tasks}
+        running: dict[tuple[int, int], _Running] = {}
+        state = {"pending": len(tasks)}
+
+        def start() -> None:
+            reader, writer = ctx.Pipe(duplex=False)
+            p = ctx.Process(target=_worker, args=(task_q, writer, trial_fn, os.getpid()), daemon=True,
+                            name=f"study-{next(serial)}")
             p.start()
-        pending = len(tasks)
-        active: dict[tuple[int, int], float] = {}  # running task -> when it last sent something
-        try:
-            while pending:
-                self._check_time(active)
-                try:
-                    msg = result_q.get(timeout=self.poll_s)
-                except queue.Empty:
-                    dead = [p for p in procs if p.exitcode not in (None, 0)]
-                    if dead:
-                        raise StudyError(
-                            f"worker {dead[0].name} died (exit code {dead[0].exitcode}); "
-                            "finished trials are saved, run the same command again to resume"
-                        )
-                    continue
-                if isinstance(msg, (TerrainBuilt, TrialDone)):  # a task's message for the store
-                    active[msg.key] = time.monotonic()
-                    handle(msg)
-                    continue
-                kind = msg[0]  # the executor's own control messages: (kind, task key, ...)
-                if kind == "begin":
-                    active[msg[1]] = time.monotonic()
-                elif kind == "done":
-                    active.pop(msg[1], None)
-                    pending -= 1
-                elif kind == "error":
-                    raise task_failure(msg[1], msg[2], msg[3], msg[4])
-        finally:
-            for p in procs:
-                if p.is_alive():
-                    p.kill() if self._timed_out else p.terminate()  # a hung trial may ignore SIGTERM
-            for p in procs:
+            writer.close()  # the worker holds its own copy: EOF on the reader once it is gone
+            procs[reader] = p
+
+        def stop(reader) -> None:
+            p = procs.pop(reader)
+            if p.is_alive():
+                p.kill()  # a hung trial may ignore SIGTERM
+            p.join(timeout=5)
+            reader.close()
+
+        def receive(reader) -> None:
+            try:
+                msg = reader.recv()
+            except (EOFError, OSError):
+                p = procs[reader]
                 p.join(timeout=5)
-                if p.is_alive():  # pragma: no cover
-                    p.kill()
-                    p.join()
-            for q in (task_q, result_q):
-                q.cancel_join_thread()
-                q.close()
+                if p.exitcode not in (None, 0):
+                    raise StudyError(f"worker {p.name} died (exit code {p.exitcode}); "
+                                     "finished trials are saved, run the same command again to resume") from None
+                stop(reader)
+                return
+            if isinstance(msg, (TerrainBuilt, TrialDone, TrialFaulted)):  # a task's message for the store
+                r = running.get(msg.key)
+                if r is not None:
+                    r.since = time.monotonic()
+                    if isinstance(msg, TerrainBuilt):
+                        r.built = True
+                    else:
+                        r.finished.add(msg.mission)
+                handle(msg)
+                return
+            kind = msg[0]  # the executor's own control messages: (kind, task key, ...)
+            if kind == "begin":
+                running[msg[1]] = _Running(by_key[msg[1]], msg[2], time.monotonic())
+            elif kind == "done":
+                running.pop(msg[1], None)
+                state["pending"] -= 1
+            elif kind == "error":
+                raise task_failure(msg[1], msg[2], msg[3], msg[4])
+
+        def replace_hung(key: tuple[int, int]) -> None:
+            r = running[key]
+            reader = next((rd for rd, p in procs.items() if p.pid == r.pid), None)
+            while reader is not None and reader in procs and not reader.closed and reader.poll(0):
+                receive(reader)  # what it sent before the limit passed counts
+                if key not in running or time.monotonic() - running[key].since <= self.trial_timeout_s:
+                    return
+            del running[key]
+            hung = r.hung_mission()
+            log.warning("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
+                        key[0], key[1], "the terrain build" if hung is None else f"mission {hung}",
+                        self.trial_timeout_s)
+            if reader is not None and reader in procs:
+                stop(reader)
+            faults, rest = timeout_faults(r.task, hung, r.finished, self.trial_timeout_s)
+            for f in faults:
+                handle(f)
+            if rest is not None:
+                by_key[key] = rest
+                task_q.put(rest)
+            else:
+                state["pending"] -= 1
+            start()
+
+        for _ in range(min(self.workers, len(tasks))):
+            start()
+        finished = False
+        try:
+            while state["pending"]:
+                if self.trial_timeout_s is not None:
+                    now = time.monotonic()
+                    for key in [k for k, r in running.items() if now - r.since > self.trial_timeout_s]:
+                        replace_hung(key)
+                    if not state["pending"]:
+                        break
+                for reader in wait(list(procs), timeout=self._wait_s(running)):
+                    if reader in procs:
+                        receive(reader)
+            finished = True
+        finally:
+            if finished:  # every worker is idle: let them end
+                for _ in procs:
+                    task_q.put(None)
+            for reader in list(procs):
+                p = procs[reader]
+                if finished:
+                    p.join(timeout=5)
+                elif p.is_alive():
+                    p.terminate()
+                    p.join(timeout=5)
+                stop(reader)
+            task_q.cancel_join_thread()
+            task_q.close()
 
 
 # ---------------------------------------------------------------------------- dask
@@ -208,12 +308,15 @@ class TrialTimeout(RuntimeError):
     """A trial (or a terrain build) ran longer than the per-trial wall-clock limit on a Dask worker."""
 
 
-def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list[tuple]:
+def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list:
     """A terrain task on a Dask worker: quiet bootstrap, then every message of :func:`run_terrain`.
 
     With ``limit_s`` the work runs in a helper thread and every message (the terrain build, then
-    each trial) must arrive within ``limit_s`` seconds; otherwise TrialTimeout names the worker,
-    whose process the coordinator then restarts (a hung trial cannot be interrupted from Python).
+    each trial) must arrive within ``limit_s`` seconds. Otherwise the task returns what arrived,
+    the fault of the hung trial (:class:`TrialFaulted`) and a ``("restart", worker address,
+    missions after the hung one)`` request: the coordinator stores the fault, restarts this
+    worker (a hung trial cannot be interrupted from Python) and submits the rest. The wait is
+    sliced into short waits, so any limit up to MAX_TRIAL_TIMEOUT_S works.
     """
     _worker_bootstrap()
     if limit_s is None:
@@ -231,22 +334,31 @@ def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | Non
             q.put(("exc", exc))
 
     threading.Thread(target=work, daemon=True, name="offroadbench-trials").start()
-    out = []
+    out: list = []
+    built, finished = False, set()
+    deadline = time.monotonic() + limit_s
     while True:
         try:
-            kind, value = q.get(timeout=limit_s)
+            kind, value = q.get(timeout=min(60.0, max(0.0, deadline - time.monotonic())))
         except queue.Empty:
+            if time.monotonic() < deadline:
+                continue
             from distributed import get_worker
 
-            raise TrialTimeout(
-                f"cell {task.cell.index}, terrain {task.terrain}: a trial ran longer than {limit_s:g} s "
-                f"on Dask worker {get_worker().address}"
-            ) from None
+            address = get_worker().address
+            hung = next((k for k, _ in task.missions if k not in finished), None) if built else None
+            faults, rest = timeout_faults(task, hung, finished, limit_s, where=f" (Dask worker {address})")
+            return out + faults + [("restart", address, rest)]
         if kind == "end":
             return out
         if kind == "exc":
             raise value
         out.append(value)
+        deadline = time.monotonic() + limit_s
+        if isinstance(value, TerrainBuilt):
+            built = True
+        elif isinstance(value, (TrialDone, TrialFaulted)):
+            finished.add(value.mission)
 
 
 class _DropWhileDisconnected(logging.Filter):
@@ -266,7 +378,8 @@ class DaskExecutor:
     Faults. A worker that dies mid-task (SIGKILL, out of memory) loses only its task, which Dask
     runs again elsewhere (tasks are pure: the same rows come back); a task that killed
     ``distributed.scheduler.allowed-failures`` workers stops the study. A trial that runs longer
-    than ``trial_timeout_s`` stops the study and its worker is restarted. A lost scheduler, or no
+    than ``trial_timeout_s`` is stored as a fault, its worker restarted, and the task's later
+    missions submitted again: the study goes on. A lost scheduler, or no
     worker for ``no_worker_timeout_s``, stops the study. Every stop is a one-line StudyError;
     the trials committed so far stay, and running the study again resumes it.
     """
@@ -283,9 +396,7 @@ class DaskExecutor:
             raise InputError("--executor dask needs dask and distributed: pip install 'offroadbench[dask]'") from None
         self.workers = workers or os.cpu_count() or 1
         self.scheduler = scheduler
-        if trial_timeout_s is not None and not trial_timeout_s > 0:
-            raise InputError(f"trial_timeout_s = {trial_timeout_s!r}; must be > 0 seconds")
-        self.trial_timeout_s = trial_timeout_s
+        self.trial_timeout_s = check_trial_timeout(trial_timeout_s)
 
     def _connect(self):
         from distributed import Client, LocalCluster
@@ -295,7 +406,11 @@ class DaskExecutor:
                 return Client(self.scheduler, timeout=self.connect_timeout_s), None
             except (OSError, TimeoutError, ValueError) as exc:
                 raise InputError(f"--scheduler {self.scheduler}: cannot connect to a Dask scheduler there ({exc})") from None
-        cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        # the workers' and scheduler's own log lines (a restarted worker's ERRORs) stay quiet unless
+        # this process logs at INFO (-v): the study reports every stop in one line itself
+        quiet = logging.getLogger("distributed").getEffectiveLevel() > logging.INFO
+        cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.CRITICAL if quiet else logging.INFO)
         return Client(cluster), cluster
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
@@ -334,7 +449,10 @@ class DaskExecutor:
                         raise StudyError(f"the Dask tasks were cancelled ({' '.join(str(exc).split())[:200]})") from None
                     done = set()
                 for fut in done:
-                    self._collect(client, fut, futures[fut], handle)
+                    for rest in self._collect(client, fut, futures[fut], handle):
+                        new = client.submit(_dask_task, rest, trial_fn, self.trial_timeout_s, pure=False)
+                        futures[new] = rest
+                        pending.add(new)
                 if pending:
                     no_workers_since = self._check_workers(client, where, no_workers_since, time.monotonic())
         except BaseException:
@@ -344,7 +462,9 @@ class DaskExecutor:
             self._close(client, cluster, list(futures), failed)
             logging.getLogger("distributed.client").removeFilter(quiet)
 
-    def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> None:
+    def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> list[TerrainTask]:
+        """Hand a finished task's messages to ``handle``; returns the tasks to submit next (the
+        missions after a trial that ran past its limit, whose worker is restarted here)."""
         from distributed import KilledWorker
 
         key = (task.cell.index, task.terrain)
@@ -354,18 +474,6 @@ class DaskExecutor:
             exc = fut.exception()
             if isinstance(exc, KilledWorker):
                 raise StudyError(f"cell {key[0]}, terrain {key[1]} killed every Dask worker that ran it ({exc})")
-            if isinstance(exc, TrialTimeout):
-                worker = str(exc).rsplit(" ", 1)[-1]
-                quiet = logging.getLogger("distributed")  # the restart's own ERROR lines: the study says it in one
-                old_level = quiet.level
-                quiet.setLevel(logging.CRITICAL + 1)
-                try:
-                    client.restart_workers([worker], timeout=30)
-                except Exception as rexc:  # best effort: the stop below is what matters
-                    log.info("could not restart the hung Dask worker %s: %s", worker, rexc)
-                finally:
-                    quiet.setLevel(old_level)
-                raise StudyError(str(exc))
             tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
             raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)
         try:
@@ -373,8 +481,29 @@ class DaskExecutor:
         except (OSError, TimeoutError) as exc:  # CommClosedError is an OSError: the scheduler went away
             raise StudyError(f"lost the Dask scheduler while fetching cell {key[0]}, terrain {key[1]} "
                              f"({type(exc).__name__})") from None
+        follow: list[TerrainTask] = []
         for msg in msgs:
+            if isinstance(msg, tuple) and msg and msg[0] == "restart":
+                self._restart(client, msg[1])
+                if msg[2] is not None:
+                    follow.append(msg[2])
+                continue
             handle(msg)
+        return follow
+
+    @staticmethod
+    def _restart(client, worker: str) -> None:
+        """Restart a Dask worker whose trial hung (its helper thread cannot be stopped)."""
+        quiet = logging.getLogger("distributed")  # the restart's own ERROR lines: the study says it in one
+        old_level = quiet.level
+        quiet.setLevel(logging.CRITICAL + 1)
+        try:
+            client.restart_workers([worker], timeout=30)
+        except Exception as rexc:  # noqa: BLE001 - best effort: a nanny-less worker cannot be restarted
+            log.warning("could not restart the hung Dask worker %s (%s); its hung trial keeps a thread busy",
+                        worker, " ".join(str(rexc).split())[:200])
+        finally:
+            quiet.setLevel(old_level)
 
     def _check_workers(self, client, where: str, since: float | None, now: float) -> float | None:
         try:

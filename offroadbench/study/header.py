@@ -15,7 +15,7 @@ from typing import Any
 
 import pandas as pd
 
-__all__ = ["held_fixed", "report_title"]
+__all__ = ["held_fixed", "report_title", "settings_columns", "driver_files", "soil_conditions"]
 
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
@@ -55,6 +55,24 @@ def _on_terrain(sim: Any, recipe: Any) -> Any:
     return sim.for_terrain(*terrain_gravity_and_soil(recipe))
 
 
+def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
+    """The soil and gravity a cell's trials ran with, and where each came from: ``study`` (the
+    study's ``[sim]`` or grid sets it), ``terrain`` (the recipe's ``[soil]`` / ``[body]``) or
+    ``default`` (offroadbench.sim.tyre_laws.terramechanics.DEFAULT_SOIL, Earth's gravity)."""
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    info = meta["cells"][cell]
+    raw = info["settings"].get("sim", {})
+    sim = _sections(meta, cell)["sim"]
+    gravity, soil = terrain_gravity_and_soil(info.get("recipe"))
+
+    def source(key: str, terrain_value: Any) -> str:
+        return "study" if raw.get(key) is not None else "terrain" if terrain_value is not None else "default"
+
+    return {"soil": getattr(sim, "soil", None), "soil_source": source("soil", soil),
+            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity)}
+
+
 def _default(name: str) -> Any:
     from offroadbench.study.spec import build_section
 
@@ -68,6 +86,23 @@ def _fmt(v: Any) -> str:
     if isinstance(v, (list, tuple)):
         return ", ".join(map(_fmt, v))
     return str(v)
+
+
+def _stuck_window_text(rules: Any, secs: dict[str, Any]) -> str:
+    """The stuck window as the trials applied it: ``30 s``, or, where the mission's timeout caps it
+    (offroadbench.navigation.rules.stuck_window_s), ``15.3 s (30 s capped at 0.5 x the 30.6 s timeout)``."""
+    from offroadbench.navigation.rules import stuck_window_s, trial_timeout_s
+
+    missions, controller, vehicle = secs.get("missions"), secs.get("controller"), secs.get("vehicle")
+    try:
+        timeout = trial_timeout_s(rules, missions.length_m, controller.cruise_speed_m_s, vehicle.max_speed_m_s)
+    except AttributeError:  # a table that did not build here: the configured window
+        return f"{_fmt(rules.stuck_window_s)} s"
+    window = stuck_window_s(rules, timeout)
+    if window >= rules.stuck_window_s:
+        return f"{_fmt(rules.stuck_window_s)} s"
+    return (f"{window:.3g} s ({_fmt(rules.stuck_window_s)} s capped at {_fmt(rules.stuck_window_max_fraction)} x the "
+            f"{timeout:.3g} s timeout of a {_fmt(missions.length_m)} m mission)")
 
 
 def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
@@ -111,12 +146,13 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
         default = _default("rules")
         grid_rules = sorted(k for k in axes if k.startswith("rules."))
         value = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
-                 f"{_fmt(rules.stuck_window_s)} s; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
+                 f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
                  f"{_fmt(rules.goal_tolerance_m)} m")
         diff = [f.name for f in dataclasses.fields(rules) if getattr(rules, f.name) != getattr(default, f.name)]
         note = (f"varies: {', '.join(grid_rules)}; " if grid_rules else "") + (
             f"not the default: {', '.join(diff)}" if diff else "the paper's (Sec. 2.4)")
         rows.append({"setting": "failure rules", "value": value, "note": note})
+    rows += _files_rows(meta)
     overrides = study.get("recipe_overrides", {})
     recipe_axes = sorted(k for k in axes if k == "recipe" or k.startswith("recipe."))
     rows.append({"setting": "terrain recipe", "value": study["recipe"]
@@ -147,3 +183,72 @@ def report_title(meta: dict[str, Any]) -> str:
     if "vehicle.name" not in axes and getattr(vehicle, "name", "husky") != "husky":
         extra.append(f"vehicle `{vehicle.name}`")
     return f"Study report: {study['name']}" + (f" ({', '.join(extra)})" if extra else "")
+
+
+def settings_columns(meta: dict[str, Any]) -> pd.DataFrame:
+    """One row per cell: ``cell`` and the settings of the report header as the cell's trials ran
+    (``vehicle.name``, ``planner.name``, ``sim.gravity_m_s2``, ``sim.engine``, ... , ``recipe``
+    with its fixed overrides), so an exported trial row says what made it without the run's
+    metadata. Grid axes are the table's own columns already and are left out here."""
+    study = meta["study"]
+    overrides = study.get("recipe_overrides", {})
+    axes = {a["key"] for a in study["grid"]}
+    rows = []
+    for info in meta["cells"]:
+        cell = int(info["index"])
+        secs = _sections(meta, cell)
+        row: dict[str, Any] = {"cell": cell}
+        for table, field in (("vehicle", "name"), ("planner", "name"), *((t, f) for t, f, _ in _SHOWN)):
+            cfg = secs[table]
+            value = cfg.get(field) if isinstance(cfg, dict) else getattr(cfg, field, None)
+            if field == "soil" and getattr(cfg, "tyre_model", "") != "terramechanics":
+                continue
+            if f"{table}.{field}" not in axes:
+                row[f"{table}.{field}"] = value
+        rules = secs["rules"]
+        if dataclasses.is_dataclass(rules) and not any(k.startswith("rules.") for k in axes):
+            row["rules"] = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
+                            f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal")
+        if "recipe" not in axes:
+            row["recipe"] = study["recipe"] + (
+                f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else "")
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def driver_files(planner: Any) -> dict[str, dict[str, Any]]:
+    """The files a planner's or policy's config names (a trained model: the sb3 example's ``model``),
+    as the study found them when it was created: ``{"planner.FIELD": {"path", "bytes", "sha256"}}``.
+    Stored with the run (``cells[i]["files"]``) and shown in the report's header, so a report says
+    which model drove, not only its (possibly relative, since overwritten) name."""
+    import hashlib
+    from pathlib import Path
+
+    cfg = getattr(planner, "config", None)
+    out: dict[str, dict[str, Any]] = {}
+    if not dataclasses.is_dataclass(cfg):
+        return out
+    for f in dataclasses.fields(cfg):
+        value = getattr(cfg, f.name)
+        if not isinstance(value, str) or not Path(value).suffix or not Path(value).is_file():
+            continue
+        path = Path(value).resolve()
+        digest = hashlib.sha256()
+        with path.open("rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        out[f"planner.{f.name}"] = {"path": str(path), "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+    return out
+
+
+def _files_rows(meta: dict[str, Any]) -> list[dict[str, str]]:
+    """Header rows for the files the cells' drivers named (driver_files), one per distinct file."""
+    seen: dict[tuple[str, str], list[int]] = {}
+    for info in meta["cells"]:
+        for key, f in (info.get("files") or {}).items():
+            seen.setdefault((key, f"{f['path']} ({f['bytes']} bytes, sha256 {f['sha256'][:16]}...)"), []).append(
+                int(info["index"]))
+    n = len(meta["cells"])
+    return [{"setting": f"{key} (file)", "value": text,
+             "note": "" if len(cells) == n else f"cells {', '.join(map(str, cells))}"}
+            for (key, text), cells in seen.items()]

@@ -12,10 +12,16 @@ writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023
   reasons, run sessions (wall time, machine, version);
 * if the study has a ``[reference]`` table: the published numbers beside ours;
 * if the grid has a ``planner.name`` axis (a planner stress test, see offroadbench.study.stress):
-  success against the numeric axis per planner with Wilson intervals, breaking points with
-  bootstrap intervals, exact McNemar tests on the same missions, outcomes per planner with replay
-  commands for failures, medians of the traversal metrics of successes, and a figure of planned
-  and driven paths on one mission over the class map.
+  success against the numeric axis per planner with terrain-bootstrap intervals, breaking points
+  measured inside the studied levels (isotonic fit, terrain-bootstrap intervals; a logistic fit with
+  its goodness of fit for comparison), terrain-level paired tests on the same missions, the paired
+  aliasing (``band_limited``) and map-error (``map_noise_m``) arms with the per-terrain variance share
+  above Nyquist, outcomes per planner with replay commands for failures, medians of the traversal
+  metrics of successes, and a figure of planned and driven paths on one mission over the class map.
+
+The study's ``[analysis]`` plan (offroadbench.study.plan) is computed first, in "Confirmatory
+analysis"; every later section is marked "(exploratory)". The header names the code's git commit
+and whether its tree was clean, for every session.
 
 Categorical grid axes (planner, vehicle) get no "change between consecutive groups" table.
 
@@ -37,7 +43,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_soil, fig_success, short_label
+from offroadbench.plots.soil import conditions_text, fig_soil
+from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
 from offroadbench.study import stats
 from offroadbench.study.results import load, load_meta, load_terrains
 
@@ -100,8 +107,8 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None
-                        ) -> tuple[list[str], dict[str, pd.DataFrame]]:
+def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
+                        ours_changes: pd.DataFrame | None = None) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
     if not ref:
@@ -126,6 +133,9 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.
         names = sorted((n for n in changes if f"median_{n}" in summary),
                        key=lambda n: order.index(n) if n in order else len(order))
         ours = stats.median_changes(summary, names)
+        if ours_changes is not None and "ci95_low" in ours_changes:  # the report's terrain-bootstrap intervals
+            ours = ours.merge(ours_changes[["quantity", "from", "to", "ci95_low", "ci95_high"]],
+                              on=["quantity", "from", "to"], how="left")
         rows = []
         for name in names:
             mine = ours[ours["quantity"] == name].reset_index(drop=True)
@@ -136,7 +146,9 @@ def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.
                 o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
                 same = _direction_agrees(p_abs, o_abs)
                 rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
-                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs, "ours %": o_pct,
+                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs,
+                             **({"ours 95 % low": mine.loc[i, "ci95_low"], "ours 95 % high": mine.loc[i, "ci95_high"]}
+                                if "ci95_low" in mine else {}), "ours %": o_pct,
                              "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
                              "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
                                                                          mine.loc[i, "to"], p_abs)})
@@ -206,6 +218,90 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
     return [title, "", text, "", markdown_table(shown), ""], tab
 
 
+# ---------------------------------------------------------------------------- confirmatory
+def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
+                          ) -> tuple[list[str], pd.DataFrame | None]:
+    """The study's analysis plan, computed exactly (offroadbench.study.plan), or the note that it has none."""
+    from offroadbench.study.plan import confirmatory_table, stored_plan
+
+    plan = stored_plan(meta)
+    head = ["## Confirmatory analysis (the study's plan)", ""]
+    if plan is None:
+        return head + ["This run stores no analysis plan (`[analysis]`): **every number in this report is "
+                       "exploratory**.", ""], None
+    tab = confirmatory_table(plan, meta, trials, terrains)
+    rule = {"holm": "Holm's step-down adjustment", "bonferroni": "Bonferroni's adjustment"}[plan.multiplicity]
+    shown = tab.assign(**{f"{100 * plan.confidence:g} % interval": [f"[{a:.3g}, {b:.3g}]" for a, b in
+                                                                   zip(tab["ci_low"], tab["ci_high"])]})
+    shown = shown[["comparison", "metric", "stratum", "terrains", "control_mean", "treatment_mean", "effect",
+                   f"{100 * plan.confidence:g} % interval", "test", "p", "min_p", "p_adjusted", "reject"]]
+    rejected = int(tab["reject"].sum())
+    cols = meta.get("columns", {})
+    text = (f"Fixed before the run in the study's `[analysis]` table and stored with it; computed exactly as planned. "
+            f"{len(tab)} tests; family-wise alpha = {plan.alpha:g} with {rule} over all of them; {rejected} rejected. "
+            "Unit: the terrain (per-terrain value of the metric in each cell; effect = mean per-terrain difference, "
+            "treatment - control, with a terrain-cluster bootstrap interval that is not adjusted for multiplicity). "
+            "`min_p`: the smallest p the test can give with these terrains. Comparisons: "
+            + "; ".join(f"**{c.name}** ({', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.treatment.items())} "
+                        f"against {', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.control.items())}, {c.metric}, "
+                        f"{c.test})" for c in plan.comparisons)
+            + ". **Every other number in this report is exploratory** (sections marked so): chosen or read after "
+            "the data, not covered by the plan's error rate.")
+    return head + [text, "", markdown_table(shown), ""], tab
+
+
+def _mark_exploratory(lines: list[str]) -> list[str]:
+    """Append "(exploratory)" to every section heading after the confirmatory one, except the run's records."""
+    out, after = [], False
+    for line in lines:
+        if line.startswith("## Confirmatory"):
+            after = True
+        elif after and line.startswith("## ") and not line.startswith(("## Run sessions", "## Platforms")):
+            line = line + " (exploratory)"
+        out.append(line)
+    return out
+
+
+def _provenance(meta: dict[str, Any]) -> str:
+    """The code each session ran: git commit and whether the tree was clean (from the recorded version)."""
+    seen = []
+    for v in [meta.get("version", "")] + [r.get("version") or "" for r in meta.get("runs", [])]:
+        if v not in seen:
+            seen.append(v)
+    parts = []
+    for v in seen:
+        if "+git." in v:
+            commit = v.split("+git.", 1)[1]
+            dirty = commit.endswith("-dirty")
+            parts.append(f"commit `{commit.removesuffix('-dirty')}`, " + ("**dirty tree** (uncommitted changes)"
+                                                                         if dirty else "clean tree"))
+        else:
+            parts.append(f"offroadbench {v or '?'} (not a git checkout: commit unknown)")
+    return "; ".join(dict.fromkeys(parts))
+
+
+def _axis_effects_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str],
+                          meta: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
+    """Each grid axis's effect within every stratum of the others (each value against the axis's first), at
+    the terrain level with intervals: for grids with a categorical axis (engines, soil models)."""
+    study = meta["study"]
+    cells = {c["index"]: c["values"] for c in meta["cells"]}
+    pairs = []
+    for axis in study["grid"]:
+        key, first = axis["key"], axis["values"][0]
+        for i, v in cells.items():
+            if v[key] == first:
+                continue
+            j = next(k for k, w in cells.items() if w == {**v, key: first})
+            pairs.append((j, i))
+    names = ["success_rate_pct", *stats.METRICS]
+    if "mean_slip" in trials and np.isfinite(trials["mean_slip"].astype(float)).any():
+        names += list(stats.SOIL_METRICS)
+    lines, tab = _terrain_changes_section(trials, terrains, labels, names, study, pairs)
+    lines[0] = "## Changes at the terrain level: each axis within the others"
+    return lines, tab
+
+
 # ---------------------------------------------------------------------------- report
 def _sessions(meta: dict[str, Any]) -> pd.DataFrame:
     rows = []
@@ -270,6 +366,25 @@ def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return {"success": succ, "areas": areas, "metrics": pd.DataFrame(metrics)}
 
 
+# ---------------------------------------------------------------------------- faults (issue 30)
+def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """The report's list of faulted trials (``faults`` table of the store: no outcome, so no
+    statistic counts them); adds ``faults.csv`` to ``tables``. Nothing when there are none."""
+    from offroadbench.study.store import Store
+
+    with Store(run_dir) as store:
+        rows = store.fault_rows()
+    if not rows:
+        return []
+    df = pd.DataFrame(rows, columns=["cell", "terrain", "mission", "terrain_seed", "mission_seed", "reason", "session"])
+    tables["faults.csv"] = df
+    return ["## Faults", "",
+            f"{len(df)} trial(s) gave no outcome (past the per-trial limit, or the vehicle thrown while settling). "
+            "They are not trials of the study: every statistic above and below leaves them out. "
+            "`study run --retry-faults` runs them again.", "",
+            markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
+
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -313,6 +428,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     fixed = held_fixed(meta)
     tables["held_fixed.csv"] = fixed
+    faults = _faults_section(run_dir, tables)
+    n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
+    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
+    if confirm is not None:
+        tables["confirmatory.csv"] = confirm
     lines = [
         f"# {report_title(meta)}",
         "",
@@ -323,10 +443,12 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(fixed),
         "",
         f"- trials: **{len(trials)} of {n_total}** stored"
-        + ("" if len(trials) == n_total else " (**incomplete**: the study has not finished)"),
+        + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
+        + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
         f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
+        f"- code: {_provenance(meta)}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",
         "",
         "Statistics as in Majhor & Bos 2023, Sec. 2.4: medians, IQR = Q3 - Q1 (Eq. 6), outliers beyond "
@@ -334,10 +456,12 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "Success rate per terrain = successes / trials x 100 (Eq. 5). Traversal metrics are for "
         "successful trials only.",
         "",
+        *confirm_lines,
         "## Run sessions",
         "",
         markdown_table(sessions),
         "",
+        *faults,
         *_platforms_section(run_dir, meta)[0],
         "## Roughness classes (Fig. 5)",
         "",
@@ -364,13 +488,17 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
+        if bool(study.get("paired_terrains", True)):  # terrain-bootstrap intervals of each change
+            changes = stats.median_change_intervals(trials, terrains, changes, labels)
         for side in ("from", "to"):  # the sample size behind each median
             changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
                                     for g, q in zip(changes[side], changes["quantity"])]
         tables["median_changes.csv"] = changes
         small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
         lines += ["## Changes of the medians between consecutive groups", "",
-                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median. "
+                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median; "
+                  "`ci95_low`/`ci95_high`: a 95 % terrain-bootstrap interval of the change (terrains resampled, "
+                  "the same ones in both groups). "
                   f"A median of n < 10 moves by a whole sample's step (one terrain's success rate is a multiple "
                   f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
                   "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
@@ -384,17 +512,28 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(
             trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
         lines += terrain_lines
+    elif len(labels) > 1 and "planner.name" not in meta["columns"] and bool(study.get("paired_terrains", True)):
+        # a grid with a categorical axis (engine, tyre model): each axis's effect within the others
+        terrain_lines, tables["terrain_changes.csv"] = _axis_effects_section(trials, terrains, labels, meta)
+        lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     soil = stats.soil_boxes(trials, labels)
     if soil:
-        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS)
+        from offroadbench.study.header import soil_conditions
+
+        cond = {labels[c]: soil_conditions(meta, c) for c in sorted(labels) if labels[c] in next(iter(soil.values()))}
+        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS, cond)
         rows = [{"metric": f"{title} ({unit})", "group": g, "n": b["n"], "median": b["median"], "Q1": b["q1"],
                  "Q3": b["q3"], "max": float(np.nanmax(b["values"])) if b["n"] else math.nan}
                 for m, (title, unit) in stats.SOIL_METRICS.items() for g, b in soil[m].items()]
         lines += ["## Soft soil: slip and sinkage (every trial)", "", "![Soft soil](fig8_soil.png)", "",
-                  "Mean longitudinal slip of the wheels over the trial and the deepest wheel sinkage "
-                  "(Wong-Reece terramechanics tyre model), over every trial of the groups driven on soil, "
-                  "failed ones included.", "", markdown_table(pd.DataFrame(rows)), ""]
+                  "Per trial: the mean longitudinal slip of the wheels and the median and 95th percentile of "
+                  "the deepest wheel's sinkage, over the samples where the vehicle is driven (Wong-Reece "
+                  "terramechanics tyre model; offroadbench.navigation.metrics); the boxes are over every trial "
+                  "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
+                  "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
+                  "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
+                  markdown_table(pd.DataFrame(rows)), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",
@@ -403,13 +542,15 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "Classes: low (blue), semi (orange), high (yellow). Starts green, goals red.",
         "",
     ]
-    stress_lines, stress_figures, stress_tables = planner_sections(meta, trials, run_dir)
+    stress_lines, stress_figures, stress_tables = planner_sections(meta, trials, run_dir, terrains)
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"))
+    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
+                                                tables.get("median_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
+    lines = _mark_exploratory(lines)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
 
 
@@ -450,9 +591,9 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     between planners, at the middle level), over the closed class map."""
     from offroadbench.io.telemetry import load_telemetry
     from offroadbench.plots.study import fig_paths
-    from offroadbench.sim.trial.pipeline import prepare_terrain
     from offroadbench.study.runner import telemetry_paths
     from offroadbench.study.spec import CellPlan
+    from offroadbench.study.tasks import prepare_cell
 
     t = trials
     for col in strata:  # one stratum: the first value of every other axis
@@ -465,8 +606,7 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     rows = t[(t["terrain"] == terrain) & (t["mission"] == mission)]
     first = rows.iloc[0]
     plan = CellPlan.from_meta(meta, int(first["cell"]))
-    prepared = prepare_terrain(plan.recipe(), int(first["terrain_seed"]), plan.trial_settings,
-                               [(int(mission), int(first["mission_seed"]))])
+    prepared, _ = prepare_cell(plan, int(first["terrain_seed"]), [(int(mission), int(first["mission_seed"]))])
     hm, closed, m = prepared.hm, prepared.maps.closed, prepared.missions[0]
     drawn = []
     for r in rows.itertuples(index=False):
@@ -478,6 +618,12 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
         if tel_p.is_file():
             tel = load_telemetry(tel_p)
             driven = np.column_stack([tel["x_m"], tel["y_m"]])
+        if driven is None:  # [study] telemetry = "failed" keeps none of a success: re-run it, bit for bit
+            from offroadbench.study.tasks import replay_trial
+
+            rec = replay_trial(run_dir, int(r.cell), int(r.terrain), int(r.mission)).record
+            path = np.asarray(rec.path_xy) if path is None else path
+            driven = np.column_stack([rec.telemetry["x_m"], rec.telemetry["y_m"]])
         drawn.append((str(getattr(r, group)), path, driven, r.failure_reason or "success"))
     where = f"{level} = {first[level]}, " if level else ""
     title = f"Terrain {terrain}, mission {mission} ({where}seed {first['terrain_seed']}): planned (dashed) and driven paths"
@@ -497,8 +643,54 @@ def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: 
             "`*`: significant at the terrain level (Holm).", "", markdown_table(wide), ""]
 
 
-def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path
-                     ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
+#: arms a planner stress test compares within each stratum: column -> (title, what the paired test asks)
+_ARMS = {"band_limited": ("Aliasing: band-limited against aliased W-M surface",
+                          "whether removing the W-M terms above the grid's Nyquist frequency changes success on the "
+                          "same missions"),
+         "map_noise_m": ("Map error: degraded against perfect planner map",
+                         "whether planning on a map with height error changes success on the same missions")}
+
+
+def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: str, level: str | None,
+                  strata: Sequence[str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
+    """Paired tests of the two values of each arm axis (aliasing, map error) within every other stratum."""
+    from offroadbench.study import stress
+
+    lines: list[str] = []
+    tables: dict[str, pd.DataFrame] = {}
+    for arm, (title, asks) in _ARMS.items():
+        if arm not in strata:
+            continue
+        values = sorted(trials[arm].unique())
+        if len(values) != 2:
+            continue
+        by = [group, *(c for c in strata if c != arm)] + ([level] if level else [])
+        tab = stress.arm_table(trials, arm, values[0], values[1], by,
+                               terrains=terrains if arm == "band_limited" else None)
+        if tab.empty:
+            continue
+        name = f"{arm}_tests.csv"
+        tables[name] = tab
+        res = ("`area_high_*_pct`: mean high-roughness class area of each arm's terrains (how much roughness "
+               "the band limit removes); `mean_twin_unexplained_var`: the share of the aliased surface's height variance that the "
+               "band-limited twin of the same seed does not explain (1 - r^2), i.e. the variance carried by the "
+               "terms above the grid's Nyquist frequency, per terrain, averaged over the stratum; `spearman_...`: "
+               "its rank correlation with the per-terrain success difference. " if "mean_twin_unexplained_var" in tab
+               else "")
+        paired_note = ("The arms share every mission (`same_missions` = 1): the test is paired mission by mission "
+                       "within terrains." if (tab["same_missions"] == 1).all() else
+                       "**The arms do not share their missions** (`same_missions` < 1: each arm drew its missions "
+                       "on its own terrain), so the difference mixes the arm's effect with that of the missions; "
+                       "set `[study] missions_from` to pair them.")
+        lines += [f"### {title}", "",
+                  f"Per-terrain success difference ({values[1]} - {values[0]}, points) with a 95 % terrain-bootstrap "
+                  f"interval and the exact sign-flip p, within every stratum: {asks}. {paired_note} {res}"
+                  f"`p_holm`: Holm over this table's rows ([{name}]({name})).", "", markdown_table(tab), ""]
+    return lines, tables
+
+
+def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path,
+                     terrains: pd.DataFrame | None = None) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
     """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
     from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study import stress
@@ -511,9 +703,10 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     lines = ["## Planner stress test", "",
              f"Planners: {', '.join(f'`{p}`' for p in planners)}; every planner drove the same missions "
              "(same terrain and mission seeds). The unit of the tests is the terrain (the missions of one "
-             "terrain are not independent): Wilson intervals of success rates treat missions as independent "
-             "and are only descriptive; breaking points come from a logistic fit of success on the level, "
-             "clustered by terrain, with Fieller intervals; paired comparisons against "
+             "terrain are not independent): success rates have terrain-bootstrap intervals (the Wilson "
+             "interval, which treats missions as independent, is in planner_success.csv for comparison); "
+             "breaking points come from an isotonic fit of success on the level, inside the studied levels "
+             "only, with terrain-bootstrap intervals; paired comparisons against "
              f"`{baseline}` test the per-terrain success differences (exact sign-flip and Wilcoxon tests, "
              "Durkalski's cluster-adjusted McNemar, terrain-bootstrap interval), Holm-adjusted over the table.",
              ""]
@@ -528,32 +721,33 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
             figures[name] = fig = fig_success_vs_level(part, group, level)
             where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,)))
             if where:
-                fig.axes[0].set_title(f"Success per planner, {where} (95 % Wilson)", fontsize=10)
+                fig.axes[0].set_title(f"Success per planner, {where} (95 % terrain bootstrap)", fontsize=10)
             figs.append(f"![success{': ' + where if where else ''}]({name})")
-        shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low": 100 * by["ci95_low"],
-                             "95 % CI high": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
-                                                                     "success (%)", "95 % CI low", "95 % CI high"]]
+        shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low (terrains)": 100 * by["ci95_low"],
+                             "95 % CI high (terrains)": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
+                                                                     "success (%)", "95 % CI low (terrains)",
+                                                                     "95 % CI high (terrains)"]]
         bp = stress.breaking_points(trials, group, level, by=strata)
         tables["breaking_points.csv"] = bp
-        lo_lv, hi_lv = min(trials[level]), max(trials[level])
-
-        def fmt(v: float) -> str:
-            return "–" if math.isnan(v) else ("+inf" if v == math.inf else ("-inf" if v == -math.inf else f"{v:.3f}"))
-
-        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} at 50 % (logistic)": [
-            fmt(v) + (" (extrapolated)" if e else "") for v, e in zip(bp["breaking_point"], bp["extrapolated"])],
-            "95 % interval (Fieller)": [f"[{fmt(a)}, {fmt(b)}]" for a, b in zip(bp["ci95_low"], bp["ci95_high"])],
-            "terrains": bp["terrains"], "first level < 50 %": [f"> {hi_lv:g}" if v == math.inf else f"{v:g}"
-                                                              for v in bp["first_level_below"]]})
+        levels = sorted(trials[level].unique())
+        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
+            stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
+            zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"])],
+            "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"],
+            "logistic (comparison only)": [("–" if math.isnan(v) else f"{v:.3f}" + (" (extrapolated)" if e else ""))
+                                           for v, e in zip(bp["logistic_point"], bp["logistic_extrapolated"])],
+            "Fieller set": bp["fieller_set"], "logistic fit p": bp["logistic_gof_p"]})
         lines += ["### Success against " + level, "", *figs, "",
                   markdown_table(shown), "",
                   "### Breaking points", "",
-                  f"The {level} at which the fitted success probability is 50 % (logistic regression of trial "
-                  "success on the level, covariance clustered by terrain; `–`: no breaking point, either because "
-                  "success or failure is separated by the level (no fit) or because the fitted success does not "
-                  "fall as the level rises; an infinite end: the data do not bound it; 'extrapolated': beyond the "
-                  f"studied levels, a statement about the fitted curve only); studied: {lo_lv:g}-{hi_lv:g}.",
-                  "", markdown_table(bp_shown), ""]
+                  f"Where success falls below 50 %, measured inside the studied levels ({min(levels):g}-"
+                  f"{max(levels):g}) only: an isotonic (non-increasing) fit of success on {level}, interpolated "
+                  "between the two studied levels around the crossing, with a 95 % terrain-bootstrap interval "
+                  "('not reached up to x': the fit stays at or above 50 % up to the last level, in the share of "
+                  "resamples given). The logistic fit (clustered covariance) is shown for comparison only, with "
+                  "Fieller's set as the one or two pieces it is and the p of Pearson's goodness of fit over the "
+                  "levels (small: the curve does not follow the data); a logistic crossing outside the levels is "
+                  "an extrapolation, not a measurement.", "", markdown_table(bp_shown), ""]
     paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
@@ -567,6 +761,9 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   markdown_table(paired[cols]), ""]
         if strata and level:
             lines += _advantage_by_stratum(paired, group, level, strata)
+    arm_lines, arm_tables = _arm_sections(trials, terrains, group, level, strata)
+    lines += arm_lines
+    tables.update(arm_tables)
     reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
     reasons.columns.name = None
     tables["planner_failures.csv"] = reasons.reset_index()

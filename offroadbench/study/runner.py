@@ -19,6 +19,7 @@ from offroadbench import resources
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
+from offroadbench.study.header import driver_files
 from offroadbench.study.spec import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
 from offroadbench.io.outputs import missing_dirs
@@ -26,11 +27,11 @@ from offroadbench.memory import world_bytes
 from offroadbench.study.executors import StudyError, get_executor
 from offroadbench.study.fingerprint import platform_fingerprint
 from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
-from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFn, keeps_telemetry
+from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, keeps_telemetry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "StudyEstimate", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
            "save_trial_telemetry", "worker_memory_bytes"]
 
 
@@ -97,6 +98,14 @@ class RunSummary:
     """Successful trials stored after this call."""
     wall_s: float
     """Wall time of this call, seconds."""
+    faults: int = 0
+    """Trials stored as faults after this call (no outcome: past their limit, thrown while
+    settling; excluded from every statistic; a resume skips them unless ``retry_faults``)."""
+
+    @property
+    def complete(self) -> bool:
+        """Whether every trial of the study is stored, as a trial or as a fault."""
+        return self.done + self.faults >= self.total
 
 
 def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, int, int]]) -> list[TerrainTask]:
@@ -201,6 +210,19 @@ def check_study_size(study: StudyConfig, force: bool = False) -> StudyEstimate:
     return est
 
 
+def check_drive_size(missions: int, length_m: float, speed_m_s: float, force: bool = False) -> StudyEstimate:
+    """``drive``'s work estimated as a study's (one terrain of ``missions`` trials of ``length_m``
+    at ``speed_m_s``); refused (InputError with the estimate) past MAX_CPU_S unless ``force``."""
+    sim_s = length_m / speed_m_s if speed_m_s > 0 else float("inf")
+    est = StudyEstimate(cells=1, trials=int(missions), cpu_s=missions * sim_s / ESTIMATE_RTF + ESTIMATE_TERRAIN_S)
+    if not force and not est.cpu_s <= MAX_CPU_S:
+        raise InputError(f"drive: {missions} mission(s) of {length_m:g} m at {speed_m_s:g} m/s, about "
+                         f"{est.cpu_s / 3600:.3g} CPU-hours (at a real-time factor of {ESTIMATE_RTF:g}); "
+                         f"more than the {MAX_CPU_S / 86400:g} CPU-days run without --force: "
+                         "check --missions and --length-m, or give --force to run it anyway")
+    return est
+
+
 def worker_memory_bytes(plans: list[CellPlan]) -> int:
     """Peak memory estimate of one trial worker of the study: its largest terrain's world
     (offroadbench.memory.world_bytes)."""
@@ -238,8 +260,11 @@ def code_version() -> str:
 
 def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "", version: str = "") -> dict[str, Any]:
     """What the store records about the study (config, cells, seeds' root, version)."""
+    from offroadbench.study.inputs import trial_inputs
+
     return {
         "study_id": study_id(study, plans),
+        "trial_inputs": trial_inputs(study, plans),
         "study": to_dict(study),
         "study_toml": source_text,
         "columns": study.column_names(),
@@ -250,6 +275,8 @@ def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "",
                 "seed_key": p.key,
                 "recipe": dict(p.recipe_data),
                 "settings": {k: dict(v) for k, v in p.settings.items()},
+                **({"missions_recipe": dict(p.missions_recipe_data)} if p.missions_recipe_data is not None else {}),
+                "files": driver_files(p.trial_settings.planner),  # e.g. a policy's model: path, size, SHA-256
             }
             for p in plans
         ],
@@ -272,6 +299,7 @@ def run_study(
     source_text: str = "",
     progress: ProgressFn | None = None,
     on_trial: Callable[[Mapping[str, Any]], None] | None = None,
+    retry_faults: bool = False,
 ) -> RunSummary:
     """Run (or resume) ``study`` into ``run_dir``; every finished trial is committed at once.
 
@@ -281,7 +309,10 @@ def run_study(
     trial removes the store (and the directories) it created; one that fails later keeps every
     committed trial and its error says how to resume. ``executor_options`` go to the executor
     (``trial_timeout_s``: the per-trial wall-clock limit of the ``local`` and ``dask`` executors,
-    default :func:`default_trial_timeout_s`).
+    default :func:`default_trial_timeout_s`). A trial past that limit, or one whose vehicle was
+    thrown while settling, is stored as a fault (``faults`` table) and the study goes on; a
+    resume skips faulted trials unless ``retry_faults``. A resume whose resolved inputs
+    (:mod:`offroadbench.study.inputs`) differ from the stored ones is refused, naming the change.
     """
     options = dict(executor_options or {})
     if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
@@ -292,7 +323,11 @@ def run_study(
     t0 = time.perf_counter()
     run_dir = Path(run_dir)
     made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
-    lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
+    try:
+        lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
+    except BaseException:
+        _remove_dirs(made_dirs)
+        raise
     try:
         remove_stale_temp_files(run_dir)
         store = Store(run_dir, create=True)
@@ -304,18 +339,33 @@ def run_study(
     running = False
     try:
         store.init_meta(study_meta(study, plans, source_text, version))
+        store.mark_killed_sessions()  # we hold the lock: a session still "running" was killed
+        store.ensure_faults_table()
+        if retry_faults:
+            n = store.clear_faults()
+            if n:
+                log.info("%s: trying %d faulted trial(s) again", run_dir, n)
         repair_telemetry(store, run_dir, study.telemetry)
-        tasks = plan_tasks(study, plans, store.done_trials())
+        tasks = plan_tasks(study, plans, store.done_trials() | store.faulted_trials())
         total = study.n_trials
         done, _ = store.counts()
-        report(progress, done, total)
+        faults = len(store.faulted_trials())
+        report(progress, done + faults, total)
         run_id = store.start_run(executor, ex.workers, version, fingerprint)
         log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
 
-        def handle(msg: TerrainBuilt | TrialDone) -> None:
-            nonlocal ran, done
+        def handle(msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
+            nonlocal ran, done, faults
             if isinstance(msg, TerrainBuilt):
                 store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
+                return
+            if isinstance(msg, TrialFaulted):
+                if store.add_fault(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed, msg.reason,
+                                   run_id=run_id):
+                    faults += 1
+                    log.warning("cell %d, terrain %d, mission %d: stored as a fault (%s)", msg.cell, msg.terrain,
+                                msg.mission, msg.reason)
+                    report(progress, done + faults, total)
                 return
             cell, terrain, mission, row = msg.cell, msg.terrain, msg.mission, msg.row
             files: list[str] = []
@@ -328,7 +378,7 @@ def run_study(
                 done += 1
                 if on_trial is not None:
                     on_trial(row)
-                report(progress, done, total)
+                report(progress, done + faults, total)
 
         status, error = "interrupted", None
         running = True
@@ -343,8 +393,9 @@ def run_study(
         finally:
             store.finish_run(run_id, status, error)
         done, successes = store.counts()
+        faults = len(store.faulted_trials())
     except BaseException as exc:
-        stored = store.counts()[0]
+        stored = store.counts()[0] + len(store.faulted_trials())
         store.close()
         if store.created and stored == 0:
             # failed before any trial: leave no store (and no directory) behind
@@ -362,8 +413,8 @@ def run_study(
     store.close()
     lock.release()
     return RunSummary(
-        run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0
-    )
+        run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0,
+        faults=faults)
 
 
 def _remove_dirs(made: list[Path]) -> None:

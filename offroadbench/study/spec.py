@@ -10,6 +10,8 @@ File layout (every table but ``[study]`` is optional)::
     missions_per_terrain = 20
     paired_terrains = true          # see offroadbench.seeding
     telemetry = "failed"            # keep telemetry of: none | failed | all trials (Parquet)
+    missions_from = { "recipe.layers.base.wm.band_limited" = false }   # optional: draw every cell's
+                                    # missions on that cell's terrain (same seed): arms share missions
 
     [grid]                          # axes of the parameter grid: dotted key = [values]
     "recipe.layers.base.D_high" = [2.3, 2.45, 2.6]
@@ -25,6 +27,7 @@ File layout (every table but ``[study]`` is optional)::
     [sim]         # offroadbench.sim.SimConfig fields
     [rules]       # offroadbench.sim.FailureRules fields
     [reference]   # published numbers to set beside ours in the report (see offroadbench.study.report)
+    [analysis]    # the confirmatory analysis plan, fixed before the run (offroadbench.study.plan)
 
 Grid keys. ``recipe`` varies the recipe itself (values: preset names or paths);
 ``recipe.<dotted key>`` a key of the recipe TOML; ``<section>.<field>`` a field of one of the
@@ -77,8 +80,9 @@ _STUDY_KEYS = (
     "missions_per_terrain",
     "paired_terrains",
     "telemetry",
+    "missions_from",
 )
-_TOP_KEYS = ("study", "grid", "recipe_overrides", "reference", *SECTIONS)
+_TOP_KEYS = ("study", "grid", "recipe_overrides", "reference", "analysis", *SECTIONS)
 
 #: columns of the trial table that a grid axis may not be named after
 #: grid keys whose column is named after their table (``planner.name`` -> ``planner``)
@@ -131,6 +135,14 @@ class StudyConfig:
     """Raw settings tables by section name (roughness, missions, vehicle, controller, sim, rules)."""
     reference: Mapping[str, Any] = field(default_factory=dict)
     """Published numbers shown beside this study's in the report (free-form, see report)."""
+    missions_from: Mapping[str, Any] = field(default_factory=dict)
+    """Grid key -> value: every cell draws its missions on the terrain of the cell with these grid
+    values (same terrain seed), e.g. ``{"recipe.layers.base.wm.band_limited" = false}`` gives a
+    band-limited arm exactly the aliased arm's starts and goals, so the arms are paired mission by
+    mission. Empty: each cell draws on its own terrain."""
+    analysis: Any = None
+    """The confirmatory analysis plan (:class:`offroadbench.study.plan.AnalysisPlan`, the
+    ``[analysis]`` table), or None."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.strip() or "/" in self.name:
@@ -152,6 +164,23 @@ class StudyConfig:
             _check_axis(axis)
             if keys.count(axis.key) > 1:
                 raise InputError(f"grid: key {axis.key!r} appears twice")
+        if not isinstance(self.missions_from, Mapping):
+            raise InputError(f"study.missions_from = {self.missions_from!r}; must be a table of grid key = value")
+        axes = {a.key: a.values for a in self.grid}
+        for key, value in self.missions_from.items():
+            if key not in axes or not key.startswith("recipe"):
+                raise InputError(f"study.missions_from: {key!r} must be a recipe grid axis; recipe axes: "
+                                 f"{', '.join(k for k in axes if k.startswith('recipe')) or 'none'}")
+            if value not in axes[key]:
+                raise InputError(f"study.missions_from: {key} = {value!r} is not a value of the axis {list(axes[key])}")
+        if self.missions_from and not self.paired_terrains:
+            raise InputError("study.missions_from needs paired terrains (paired_terrains = true)")
+        if self.analysis is not None:
+            from offroadbench.study.plan import AnalysisPlan, check_plan
+
+            if not isinstance(self.analysis, AnalysisPlan):
+                raise InputError(f"study.analysis must be an AnalysisPlan, got {type(self.analysis).__name__}")
+            check_plan(self.analysis, self.grid, self.paired_terrains)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -209,13 +238,24 @@ class CellPlan:
     """The cell's recipe as a TOML dict, overrides and grid values applied."""
     settings: Mapping[str, Mapping[str, Any]]
     """Settings tables with the cell's grid values applied."""
+    missions_recipe_data: Mapping[str, Any] | None = None
+    """The recipe (TOML dict) of the terrain its missions are drawn on, when that is another cell's
+    (``[study] missions_from``); None: its own terrain."""
 
     @classmethod
     def from_meta(cls, meta: Mapping[str, Any], index: int) -> "CellPlan":
         """Cell ``index`` as a run directory's stored meta data holds it (``Store.meta()``)."""
         info = meta["cells"][index]
         return cls(index=index, values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
-                   settings=info["settings"])
+                   settings=info["settings"], missions_recipe_data=info.get("missions_recipe"))
+
+    def missions_recipe(self):
+        """The recipe whose terrain the cell's missions are drawn on (None: the cell's own)."""
+        if self.missions_recipe_data is None:
+            return None
+        from offroadbench.terrain.recipe import recipe_from_dict
+
+        return recipe_from_dict(dict(self.missions_recipe_data), source=f"cell {self.index} (missions)")
 
     def recipe(self):
         from offroadbench.terrain.recipe import recipe_from_dict
@@ -279,12 +319,19 @@ def plan_cells(study: StudyConfig, base_dir: Path | None = None, check_sections:
             target, _, fld = k.partition(".")
             if target in settings:
                 settings[target][fld] = v
+        missions_recipe = None
+        if study.missions_from and any(values.get(k) != v for k, v in study.missions_from.items()):
+            ref = {**values, **study.missions_from}
+            ref_over = {k.split(".", 1)[1]: v for k, v in ref.items() if k.startswith("recipe.")}
+            base = recipe_for(ref.get("recipe", study.recipe))
+            missions_recipe = dict(apply_overrides(base, ref_over).data if ref_over else base.data)
         plan = CellPlan(
             index=index,
             values=values,
             key=seeding.cell_key(values, study.paired_terrains),
             recipe_data=dict(recipe.data),
             settings={k: v for k, v in settings.items() if v},
+            missions_recipe_data=missions_recipe,
         )
         if check_sections:
             plan.trial_settings  # builds and validates every table once
@@ -297,8 +344,16 @@ def _fmt(values: Mapping[str, Any]) -> str:
 
 
 def study_id(study: StudyConfig, plans: list[CellPlan]) -> str:
-    """Stable id of a study: its config plus every cell's resolved recipe (a changed preset changes it)."""
-    return config_id({"study": to_dict(study), "recipes": [dict(p.recipe_data) for p in plans]})
+    """Stable id of a study: its config plus every cell's resolved recipe (a changed preset changes it).
+
+    The analysis plan is not part of it (a changed plan is refused on its own, with its own message:
+    offroadbench.study.plan.check_unchanged), nor is an empty ``missions_from`` (ids of studies
+    made before it existed stay the same)."""
+    data = to_dict(study)
+    data.pop("analysis", None)
+    if not data.get("missions_from"):
+        data.pop("missions_from", None)
+    return config_id({"study": data, "recipes": [dict(p.recipe_data) for p in plans]})
 
 
 # ---------------------------------------------------------------------------- loading
@@ -346,9 +401,13 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
                 raise InputError(f"{where}: [{name}] must be a table")
             settings[name] = dict(data[name])
     reference = data.get("reference", {})
+    from offroadbench.study.plan import plan_from_dict
+
     try:
+        analysis = plan_from_dict(data.get("analysis"), where=where)
         return StudyConfig(
-            **head, grid=tuple(grid), recipe_overrides=overrides, settings=settings, reference=dict(reference)
+            **head, grid=tuple(grid), recipe_overrides=overrides, settings=settings, reference=dict(reference),
+            analysis=analysis,
         )
     except TypeError as exc:  # a missing required key
         raise InputError(f"{where}: [study]: {exc}") from None

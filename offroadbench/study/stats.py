@@ -32,6 +32,7 @@ __all__ = [
     "group_summary",
     "failure_table",
     "median_changes",
+    "median_change_intervals",
     "group_labels",
     "success_boxes",
     "metric_boxes",
@@ -54,8 +55,9 @@ CLASSES = CLASS_NAMES
 
 #: soft-soil metrics (every trial of a cell driven on soil, ``terramechanics`` tyre model): column -> (title, unit)
 SOIL_METRICS: dict[str, tuple[str, str]] = {
-    "mean_slip": ("Mean wheel slip", "-"),
-    "max_penetration_m": ("Deepest wheel sinkage", "m"),
+    "mean_slip": ("Mean wheel slip (moving)", "-"),
+    "sinkage_median_m": ("Median wheel sinkage (moving)", "m"),
+    "sinkage_p95_m": ("95th percentile wheel sinkage (moving)", "m"),
 }
 
 
@@ -116,7 +118,8 @@ def soil_boxes(trials: pd.DataFrame, labels: dict[int, str]) -> dict[str, dict[s
     if "mean_slip" not in trials:
         return {}
     soil = sorted(c for c in labels if np.isfinite(trials.loc[trials["cell"] == c, "mean_slip"].astype(float)).any())
-    return {m: {labels[c]: box_stats(trials.loc[trials["cell"] == c, m]) for c in soil} for m in SOIL_METRICS} if soil else {}
+    return {m: {labels[c]: box_stats(trials.loc[trials["cell"] == c, m] if m in trials else ()) for c in soil}
+            for m in SOIL_METRICS} if soil else {}
 
 
 def group_summary(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str]) -> pd.DataFrame:
@@ -174,10 +177,50 @@ def median_changes(summary: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def median_change_intervals(trials: pd.DataFrame, terrains: pd.DataFrame, changes: pd.DataFrame,
+                            labels: dict[int, str], seed: int = 0, n_boot: int = 1000,
+                            level: float = 0.95) -> pd.DataFrame:
+    """Terrain-cluster bootstrap intervals of each row of :func:`median_changes` (``ci95_low``,
+    ``ci95_high``): the terrains are resampled (the same terrain indices in both groups: terrain j of
+    every cell shares its seed), and the change of the group medians is recomputed from the resampled
+    terrains' values (per-terrain success rates and class areas) or from all the successful trials
+    of the resampled terrains (Fig. 7 metrics, as the medians themselves are)."""
+    rng = np.random.default_rng(seed)
+    cell_of = {g: c for c, g in labels.items()}
+    per = terrain_values(trials, terrains, [n for n in changes["quantity"].unique() if not n in METRICS])
+    ok = trials[trials["success"].astype(bool)]
+    ids = sorted(trials["terrain"].unique())
+    draws = rng.integers(0, len(ids), size=(n_boot, len(ids)))
+    a = (1.0 - level) / 2.0
+    lows, highs = [], []
+    for r in changes.itertuples(index=False):
+        c0, c1 = cell_of[r[1]], cell_of[r[2]]
+        name = r[0]
+        if name in METRICS:
+            groups = [{t: g[name].dropna().to_numpy(float) for t, g in ok[ok["cell"] == c].groupby("terrain")}
+                      for c in (c0, c1)]
+            def med(g, d):
+                parts = [g[ids[i]] for i in d if ids[i] in g]
+                x = np.concatenate(parts) if parts else np.array([])
+                return float(np.percentile(x, 50, method=QUANTILE_METHOD)) if x.size else math.nan
+        else:
+            groups = [per[per["cell"] == c].set_index("terrain")[name].to_dict() for c in (c0, c1)]
+            def med(g, d):
+                x = np.array([g[ids[i]] for i in d if ids[i] in g], float)
+                x = x[np.isfinite(x)]
+                return float(np.percentile(x, 50, method=QUANTILE_METHOD)) if x.size else math.nan
+        stats = np.array([med(groups[1], d) - med(groups[0], d) for d in draws])
+        stats = stats[np.isfinite(stats)]
+        lo, hi = np.percentile(stats, [100 * a, 100 * (1 - a)], method="inverted_cdf") if stats.size else (math.nan,) * 2
+        lows.append(float(lo))
+        highs.append(float(hi))
+    return changes.assign(ci95_low=lows, ci95_high=highs)
+
+
 def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence[str]) -> pd.DataFrame:
     """One row per (cell, terrain), one column per quantity: the per-terrain success rate (Eq. 5),
-    class areas in % (``area_<class>_pct``), and each Fig. 7 metric's median over the terrain's
-    successful trials (NaN when it had none)."""
+    class areas in % (``area_<class>_pct``), each Fig. 7 metric's median over the terrain's
+    successful trials (NaN when it had none), and each soil metric's median over all its trials."""
     out = terrain_success(trials).set_index(["cell", "terrain"])[["success_rate_pct"]]
     ter = terrains.set_index(["cell", "terrain"])
     ok = trials[trials["success"].astype(bool)]
@@ -186,6 +229,8 @@ def terrain_values(trials: pd.DataFrame, terrains: pd.DataFrame, names: Sequence
             out[name] = 100.0 * ter[name[:-4]].reindex(out.index)
         elif name in METRICS and name in ok:
             out[name] = ok.groupby(["cell", "terrain"])[name].median().reindex(out.index)
+        elif name in SOIL_METRICS and name in trials:  # every trial, failed ones included
+            out[name] = trials.groupby(["cell", "terrain"])[name].median().reindex(out.index)
     return out.reset_index()
 
 

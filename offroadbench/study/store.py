@@ -34,6 +34,7 @@ does it again.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import logging
@@ -45,7 +46,7 @@ import time
 from pathlib import Path
 from typing import Any, Mapping
 
-from offroadbench.errors import InputError
+from offroadbench.errors import InputError, StudyError
 
 log = logging.getLogger(__name__)
 
@@ -76,7 +77,13 @@ CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
     executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
     host TEXT, machine TEXT, version TEXT, platform TEXT, error TEXT);
+CREATE TABLE IF NOT EXISTS faults (
+    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, mission INTEGER NOT NULL,
+    terrain_seed INTEGER NOT NULL, mission_seed INTEGER NOT NULL, reason TEXT NOT NULL,
+    run_id INTEGER, time REAL, PRIMARY KEY (cell, terrain, mission));
 """
+#: the faults table (issue 30), made by a run in a store that lacks it (older stores are read without it)
+_FAULTS_SQL = _SCHEMA[_SCHEMA.index("CREATE TABLE IF NOT EXISTS faults"):]
 #: columns added by schema 2, per table: (name, SQL type)
 _SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
                     "runs": (("platform", "TEXT"), ("error", "TEXT"))}
@@ -125,6 +132,14 @@ class Store:
                 self._migrate()
             self.columns = {t: {r[1] for r in self.con.execute(f"PRAGMA table_info({t})")} for t in ("trials", "runs")}
         except sqlite3.DatabaseError as exc:
+            if self.created:  # ours and empty: a failure here is the device's (a full disk), not the file's
+                con = getattr(self, "con", None)
+                if con is not None:
+                    with contextlib.suppress(sqlite3.Error):
+                        con.close()
+                remove_store(self.run_dir)
+                why = "no space left on the device" if _nearly_full(self.run_dir) else str(exc)
+                raise InputError(f"{path}: cannot create the study store ({why})") from None
             raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
 
     def _migrate(self) -> None:
@@ -141,9 +156,8 @@ class Store:
                         self.con.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
             self.con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
             self.con.execute("COMMIT")
-        except BaseException:
-            self.con.execute("ROLLBACK")
-            raise
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
         log.info("%s: store schema %d migrated to %d", self.path, version, SCHEMA_VERSION)
 
     def __enter__(self) -> "Store":
@@ -159,36 +173,86 @@ class Store:
     def meta(self) -> dict[str, Any]:
         return {k: json.loads(v) for k, v in self.con.execute("SELECT key, value FROM meta")}
 
-    def init_meta(self, values: Mapping[str, Any]) -> None:
-        """Write the study's metadata once; a store of another study refuses to be reused."""
+    def init_meta(self, values: Mapping[str, Any]) -> list[str]:
+        """Write the study's metadata once; a store of another configuration refuses to be reused.
+
+        ``values["trial_inputs"]`` (:func:`offroadbench.study.inputs.trial_inputs`) decides: a
+        resume whose resolved inputs differ from the stored ones is refused with one line naming
+        what changed (a soil, the vehicle or its URDF, a plug-in's version, the engine ...). A
+        store made before trial inputs were recorded falls back to the study id, and a refusal
+        names the study keys that differ. A change that leaves every input equal (a description,
+        a comment, a ``[reference]`` table, a default written out) is accepted: the new study
+        config replaces the stored one and ``meta.amendments`` records when and what changed.
+        Returns those changed keys ([] when nothing changed)."""
+        from offroadbench.study.inputs import COSMETIC_STUDY_KEYS, changed_inputs, changed_study_keys
+
         old = self.meta()
-        if old and old.get("study_id") != values["study_id"]:
-            raise InputError(
-                f"{self.run_dir} holds another study (id {old.get('study_id')}, this one is {values['study_id']}); "
-                "use another --out directory"
-            )
-        if old:
-            if old.get("version") != values.get("version"):
-                log.warning(
-                    "%s was started with offroadbench %s, resuming with %s",
-                    self.run_dir,
-                    old.get("version"),
-                    values.get("version"),
-                )
-            return
-        with self.con:
-            self.con.execute("BEGIN")
-            self.con.executemany(
-                "INSERT INTO meta (key, value) VALUES (?, ?)",
-                [(k, json.dumps(v, sort_keys=True)) for k, v in values.items()],
-            )
+        if not old:
+            self._write_meta(values)
+            return []
+        from offroadbench.study.plan import check_unchanged
+
+        # the [analysis] plan (issue 29) is fixed once a trial is stored; before, it may change
+        check_unchanged(old, values, self.counts()[0], str(self.run_dir))
+        keys = changed_study_keys(old.get("study") or {}, values.get("study") or {})
+        if "trial_inputs" in old and "trial_inputs" in values:
+            diffs = changed_inputs(old["trial_inputs"], values["trial_inputs"])
+            if diffs:
+                raise InputError(f"{self.run_dir} holds another study (its trials ran with another configuration; "
+                                 f"changed: {'; '.join(diffs)}); undo the change to resume, or use another --out "
+                                 "directory")
+        elif old.get("study_id") != values["study_id"]:
+            real = [k for k in keys if k.split(".")[0] not in (*COSMETIC_STUDY_KEYS, "analysis")]
+            old_recipes = [c.get("recipe") for c in old.get("cells", [])]
+            new_recipes = [c.get("recipe") for c in values.get("cells", [])]
+            if real or old_recipes != new_recipes:
+                what = ", ".join(real[:5]) + (f" and {len(real) - 5} more" if len(real) > 5 else "")
+                if old_recipes != new_recipes:
+                    what = f"{what}, the resolved recipe" if what else "the resolved recipe (a preset or recipe file changed)"
+                raise InputError(
+                    f"{self.run_dir} holds another study (id {old.get('study_id')}, this one is {values['study_id']}; "
+                    f"changed: {what}); use another --out directory")
+        if old.get("version") != values.get("version"):
+            log.warning("%s was started with offroadbench %s, resuming with %s", self.run_dir,
+                        old.get("version"), values.get("version"))
+        update: dict[str, Any] = {}
+        if "trial_inputs" not in old and "trial_inputs" in values:
+            update["trial_inputs"] = values["trial_inputs"]  # recorded from this run on
+        changed = keys or (["the study TOML's text (comments, layout)"]
+                           if old.get("study_toml") != values.get("study_toml") else [])
+        if changed:
+            log.warning("%s: the study changed only cosmetically (%s); resuming and recording the change",
+                        self.run_dir, ", ".join(changed))
+            amendments = list(old.get("amendments") or [])
+            amendments.append({"time": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "changed": changed,
+                               "previous_study_id": old.get("study_id")})
+            update.update({k: values[k] for k in ("study", "study_toml", "study_id") if k in values})
+            update["amendments"] = amendments
+        if update:
+            self._write_meta(update)
+        return changed
+
+    def _write_meta(self, values: Mapping[str, Any]) -> None:
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            self.con.executemany("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                                 [(k, json.dumps(v, sort_keys=True)) for k, v in values.items()])
+            self.con.execute("COMMIT")
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
 
     # ------------------------------------------------------------------ results
     def add_terrain(self, cell: int, terrain: int, terrain_seed: int, stats: Mapping[str, Any]) -> None:
-        self.con.execute(
-            "INSERT OR IGNORE INTO terrains (cell, terrain, terrain_seed, stats) VALUES (?, ?, ?, ?)",
-            (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)),
-        )
+        self._write("INSERT OR IGNORE INTO terrains (cell, terrain, terrain_seed, stats) VALUES (?, ?, ?, ?)",
+                    (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)))
+
+    def _write(self, sql: str, params: tuple = ()) -> sqlite3.Cursor:
+        """One statement in its own transaction; a full disk is an OSError naming the store."""
+        try:
+            return self.con.execute(sql, params)
+        except sqlite3.DatabaseError as exc:
+            _rollback(self.con, exc, self.path)
+            raise  # pragma: no cover - _rollback always raises
 
     def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping,
                   run_id: int | None = None, telemetry: list[str] | None = None) -> bool:
@@ -211,9 +275,8 @@ class Store:
             if cur.rowcount and run_id is not None:
                 self.con.execute("UPDATE runs SET finished=?, trials_run=trials_run+1 WHERE id=?", (time.time(), run_id))
             self.con.execute("COMMIT")
-        except BaseException:
-            self.con.execute("ROLLBACK")
-            raise
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
         if cur.rowcount == 0:
             (old,) = self.con.execute(
                 "SELECT row FROM trials WHERE cell=? AND terrain=? AND mission=?", (cell, terrain, mission)
@@ -249,9 +312,8 @@ class Store:
                 if cur.rowcount and run_id is not None:
                     self.con.execute("UPDATE runs SET trials_run=MAX(trials_run-1, 0) WHERE id=?", (run_id,))
             self.con.execute("COMMIT")
-        except BaseException:
-            self.con.execute("ROLLBACK")
-            raise
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
 
     def done_trials(self) -> set[tuple[int, int, int]]:
         return {tuple(r) for r in self.con.execute("SELECT cell, terrain, mission FROM trials")}
@@ -274,7 +336,7 @@ class Store:
     # ------------------------------------------------------------------ run sessions
     def start_run(self, executor: str, workers: int, version: str, fingerprint: Mapping[str, Any] | None = None) -> int:
         """Open a session; ``fingerprint`` is the platform the trials of this session run on."""
-        cur = self.con.execute(
+        cur = self._write(
             "INSERT INTO runs (started, executor, workers, status, host, machine, version, platform) "
             "VALUES (?, ?, ?, 'running', ?, ?, ?, ?)",
             (time.time(), executor, workers, platform.node(), machine_description(), version,
@@ -284,20 +346,119 @@ class Store:
 
     def finish_run(self, run_id: int, status: str, error: str | None = None) -> None:
         """Close a session (``error``: why it failed, one line). Its ``trials_run`` was counted by
-        :meth:`add_trial`, trial by trial."""
-        if error is not None and "error" in self.columns["runs"]:
-            self.con.execute("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
-                             (time.time(), status, " ".join(error.split())[:2000], run_id))
-        else:
-            self.con.execute("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
+        :meth:`add_trial`, trial by trial. Best effort: on a full disk the session stays open
+        (shown as ``killed`` later) and the error that stopped the run is the one reported."""
+        try:
+            if error is not None and "error" in self.columns["runs"]:
+                self._write("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
+                            (time.time(), status, " ".join(error.split())[:2000], run_id))
+            else:
+                self._write("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
+        except (OSError, sqlite3.DatabaseError) as exc:
+            log.info("%s: could not record the end of session %d (%s)", self.path, run_id, exc)
+
+    def mark_killed_sessions(self) -> int:
+        """Mark every session still ``running`` as ``killed``: call only while holding the run
+        directory's lock (no other session can be running then). Returns how many."""
+        return self._write("UPDATE runs SET status='killed' WHERE status='running'").rowcount
 
     def runs(self) -> list[dict[str, Any]]:
+        """Every session, oldest first. A session whose process is gone (SIGKILL, power cut) but
+        whose row still says ``running`` is shown as ``killed``: when it is not the last session,
+        or when it ran on this host and the run directory's lock names no live process."""
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
         names = [d[0] for d in cur.description]
         out = [dict(zip(names, r)) for r in cur.fetchall()]
         for r in out:  # the fingerprint as a dict (None in sessions of schema-1 stores)
             r["platform"] = json.loads(r["platform"]) if r.get("platform") else None
+        for i, r in enumerate(out):
+            if r.get("status") == "running" and (i < len(out) - 1 or (r.get("host") == platform.node()
+                                                                     and not _lock_holder_alive(self.run_dir))):
+                r["status"] = "killed"
         return out
+
+    # ------------------------------------------------------------------ faults (issue 30)
+    def ensure_faults_table(self) -> None:
+        """Add the ``faults`` table to a store made before it existed (a run does this)."""
+        self._write(_FAULTS_SQL.strip().rstrip(";"))
+
+    def add_fault(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, reason: str,
+                  run_id: int | None = None) -> bool:
+        """Store a trial that could not give an outcome (it ran past its limit, the vehicle was
+        thrown while settling): not a trial row, so no statistic sees it. Returns False if the
+        trial is already stored (as a trial or a fault)."""
+        if self.has_trial(cell, terrain, mission):
+            return False
+        cur = self._write(
+            "INSERT OR IGNORE INTO faults (cell, terrain, mission, terrain_seed, mission_seed, reason, run_id, time) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+            (cell, terrain, mission, terrain_seed, mission_seed, " ".join(str(reason).split())[:2000], run_id,
+             time.time()))
+        return bool(cur.rowcount)
+
+    def has_faults_table(self) -> bool:
+        return self.con.execute("SELECT 1 FROM sqlite_master WHERE type='table' AND name='faults'").fetchone() is not None
+
+    def fault_rows(self) -> list[tuple]:
+        """(cell, terrain, mission, terrain_seed, mission_seed, reason, run_id) of every fault."""
+        if not self.has_faults_table():
+            return []
+        return self.con.execute("SELECT cell, terrain, mission, terrain_seed, mission_seed, reason, run_id FROM faults "
+                                "ORDER BY cell, terrain, mission").fetchall()
+
+    def faulted_trials(self) -> set[tuple[int, int, int]]:
+        return {tuple(r[:3]) for r in self.fault_rows()}
+
+    def clear_faults(self) -> int:
+        """Forget every fault, so the next run tries those trials again (``--retry-faults``)."""
+        if not self.has_faults_table():
+            return 0
+        return self._write("DELETE FROM faults").rowcount
+
+
+def _nearly_full(directory: Path, margin: int = 1 << 20) -> bool:
+    """Whether the device of ``directory`` has less than ``margin`` bytes free (1 MiB)."""
+    try:
+        st = os.statvfs(directory)
+    except OSError:
+        return False
+    return st.f_bavail * st.f_frsize < margin
+
+
+def _lock_holder_alive(run_dir: Path) -> bool:
+    """Whether the run directory's lock file names a live process (a run removes the file as it
+    ends; a killed one leaves it behind with its dead pid)."""
+    try:
+        pid = int((Path(run_dir) / LOCK_NAME).read_text().strip())
+    except (OSError, ValueError):
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _rollback(con: sqlite3.Connection, exc: BaseException, path: Path) -> None:
+    """Roll back after ``exc`` and raise it, never masking it: SQLite may have rolled the
+    transaction back itself (on SQLITE_FULL), and a ROLLBACK's own "cannot rollback - no
+    transaction is active" must not replace "database or disk is full". A full disk becomes an
+    OSError(ENOSPC) naming the store (the CLI's one line); other errors are re-raised."""
+    try:
+        if con.in_transaction:
+            con.execute("ROLLBACK")
+    except sqlite3.Error as rexc:
+        log.info("%s: rollback after %s failed: %s", path, exc, rexc)
+    if isinstance(exc, sqlite3.DatabaseError):
+        text = str(exc).lower()
+        if "full" in text:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path)) from None
+        if "disk i/o" in text:  # e.g. a file-size limit, or a failing device
+            raise StudyError(f"{path}: the study store could not be written (disk I/O error: a full disk, a "
+                             "file-size limit or a failing device); what was committed before is kept") from None
+    raise exc
 
 
 def _create_store(path: Path) -> bool:
@@ -328,7 +489,7 @@ def _create_store(path: Path) -> bool:
     except sqlite3.DatabaseError as exc:
         if "full" in str(exc).lower():
             raise InputError(f"{path}: cannot create the study store (no space left on the device)") from None
-        raise
+        raise InputError(f"{path}: cannot create the study store ({exc})") from None
     finally:
         if tmp is not None:
             for q in (tmp, tmp.with_name(tmp.name + "-wal"), tmp.with_name(tmp.name + "-shm"),
@@ -393,8 +554,13 @@ class RunLock:
             if not same:  # locked a file its owner removed as it released it: try again
                 os.close(fd)
                 continue
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            try:
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            except OSError as exc:  # a full disk: leave no lock file behind
+                self.path.unlink(missing_ok=True)
+                os.close(fd)
+                raise InputError(f"{self.path}: cannot write the run directory's lock file ({_reason(exc)})") from None
             self.fd = fd
             return self
         raise RunDirLocked(f"{self.run_dir}: could not lock the run directory (other runs keep starting and stopping)")

@@ -8,7 +8,10 @@ machine) runs it without reading the study file. :func:`run_terrain` yields mess
   area fractions of Sec. 2.4, inside the border, before the closing);
 * :class:`TrialDone` after each trial (its ``kept`` is None, or ``{"telemetry": columns,
   "path_xy": waypoints}`` when the task's ``telemetry`` setting keeps this trial's telemetry:
-  ``failed``, failed trials only; ``all``).
+  ``failed``, failed trials only; ``all``);
+* :class:`TrialFaulted` for a trial that gave no outcome (:class:`offroadbench.errors.TrialFault`:
+  the vehicle was thrown while settling; executors send it too for a trial past its limit): the
+  task goes on with its next mission in a new world.
 
 The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
 ``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
@@ -23,19 +26,31 @@ settings and seeds) and says whether the new row equals the stored one.
 Seeds (:mod:`offroadbench.seeding`). The terrain is ``generate_terrain(recipe, terrain_seed)``;
 mission k of terrain j is drawn alone from its ``mission_seed`` on the
 closed class map (Majhor & Bos 2023, Sec. 2.3: start in low roughness, goal in low or semi, 35 m
-apart, 5 m border), so it does not depend on which other missions are drawn or pending.
+apart, 5 m border), so it does not depend on which other missions are drawn or pending. A cell whose
+missions come from another cell's terrain (``[study] missions_from``) draws them on that terrain
+(same seed) and drives them on its own (:func:`prepare_cell`), and its terrain row records
+``twin_unexplained_var``: the share of the two surfaces' height variance that one does not
+explain linearly in the other, 1 - r^2 (for a band-limited arm against its aliased twin: the
+share carried by the W-M terms above the grid's Nyquist frequency). For one W-M surface (Majhor &
+Bos 2023, Eq. 1) the terms are plane waves with the same phases in both twins, and 1 - r^2 equals
+the amplitude share sum_{n above Nyquist} gamma^(2 (D-3) n) / sum_n gamma^(2 (D-3) n) to within
+1 % (tests/study/test_run_sets.py); on the multifractal product (filtered, multiplied, rescaled
+layers) it is the same measure taken on the finished surface.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
 
+from offroadbench.errors import TrialFault
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["TerrainTask", "TerrainBuilt", "TrialDone", "TrialFn", "run_terrain", "collect_terrain", "keeps_telemetry",
+__all__ = ["prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
+           "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
@@ -91,6 +106,57 @@ class TrialDone:
         return (self.cell, self.terrain)
 
 
+@dataclass(frozen=True)
+class TrialFaulted:
+    """Message: one trial of a terrain task gave no outcome (a fault, stored apart from the trials)."""
+
+    cell: int
+    terrain: int
+    mission: int
+    terrain_seed: int
+    mission_seed: int
+    reason: str
+    """One line: why (e.g. "ran longer than 60 s, the per-trial limit")."""
+
+    @property
+    def key(self) -> tuple[int, int]:
+        """(cell, terrain): the task this message belongs to."""
+        return (self.cell, self.terrain)
+
+
+def remaining_task(task: TerrainTask, after: int | None) -> TerrainTask | None:
+    """``task`` with only the missions after mission ``after`` (None: all of them); None if none is left."""
+    order = [k for k, _ in task.missions]
+    rest = task.missions if after is None else task.missions[order.index(after) + 1:]
+    return dataclasses.replace(task, missions=tuple(rest)) if rest else None
+
+
+def unexplained_variance(z, twin) -> float:
+    """1 - r^2 of two surfaces of the same shape (r: Pearson correlation of their heights)."""
+    import numpy as np
+
+    a = np.asarray(z, float).ravel() - np.mean(z)
+    b = np.asarray(twin, float).ravel() - np.mean(twin)
+    den = float(np.sqrt(np.dot(a, a) * np.dot(b, b)))
+    return float(1.0 - (np.dot(a, b) / den) ** 2) if den > 0 else float("nan")
+
+
+def prepare_cell(cell: CellPlan, terrain_seed: int, missions) -> tuple[PreparedTerrain, dict[str, float]]:
+    """The cell's terrain with its missions ((index, seed) pairs), drawn on the cell's own terrain or,
+    with ``missions_from``, on the reference cell's terrain of the same seed; and the extra terrain
+    statistics (``twin_unexplained_var`` with a reference terrain)."""
+    settings = cell.trial_settings
+    ref = cell.missions_recipe()
+    if ref is None:
+        return prepare_terrain(cell.recipe(), terrain_seed, settings, missions), {}
+    twin = prepare_terrain(ref, terrain_seed, settings, missions)
+    own = prepare_terrain(cell.recipe(), terrain_seed, settings, twin.missions)
+    import dataclasses
+
+    own = dataclasses.replace(own, mission_seeds=twin.mission_seeds)
+    return own, {"twin_unexplained_var": unexplained_variance(own.hm.z, twin.hm.z)}
+
+
 def keeps_telemetry(setting: str, success: bool) -> bool:
     """Whether a trial's telemetry is kept under ``setting`` (none / failed / all)."""
     return setting == "all" or (setting == "failed" and not success)
@@ -102,23 +168,35 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
     cell = task.cell
     settings = cell.trial_settings
     t0 = time.perf_counter()
-    prepared = prepare_terrain(cell.recipe(), task.terrain_seed, settings, task.missions)
-    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()}
+    prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
     stats["build_s"] = time.perf_counter() - t0
     yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
-    for mission, item in zip(prepared.missions, trial_fn(prepared, settings)):
-        k = mission.index
-        kept = None
-        if hasattr(item, "result"):  # a TrialRecord
-            row = item.result.as_row()
-            if keeps_telemetry(task.telemetry, bool(row["success"])):
-                kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
-        else:
-            row = dict(item)
-        if int(row.get("mission_index", k)) != k:
-            raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
-        yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+    pending = list(prepared.missions)
+    while pending:
+        # a faulted trial ends its world (the engine's state is not to be trusted): the missions
+        # after it are driven in a new one
+        part = dataclasses.replace(prepared, missions=tuple(pending),
+                                   mission_seeds=tuple(seeds[m.index] for m in pending))
+        try:
+            for mission, item in zip(part.missions, trial_fn(part, settings)):
+                k = mission.index
+                kept = None
+                if hasattr(item, "result"):  # a TrialRecord
+                    row = item.result.as_row()
+                    if keeps_telemetry(task.telemetry, bool(row["success"])):
+                        kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
+                else:
+                    row = dict(item)
+                if int(row.get("mission_index", k)) != k:
+                    raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
+                pending.pop(0)
+                yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+            return
+        except TrialFault as exc:
+            k = pending.pop(0).index
+            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seeds[k], " ".join(str(exc).split()))
 
 
 def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[TerrainBuilt | TrialDone]:
@@ -181,7 +259,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     tseed, mseed, text = hit
     plan = CellPlan.from_meta(meta, cell)
     settings = plan.trial_settings
-    prepared = prepare_terrain(plan.recipe(), tseed, settings, [(mission, mseed)])
+    prepared, _ = prepare_cell(plan, tseed, [(mission, mseed)])
     rec = next(iter(drive_terrain(prepared, settings)))
     stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too

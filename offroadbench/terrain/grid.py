@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from offroadbench.bounds import check_bounds
 from offroadbench.config import check_choice, check_int, check_range
 
 __all__ = ["GridConfig", "QUANTISE_MODES"]
@@ -39,6 +40,7 @@ class GridConfig:
         check_int(self, "rows", self.rows, lo=3)
         check_int(self, "cols", self.cols, lo=3)
         check_range(self, "cell_size_m", self.cell_size_m, lo=0, lo_open=True)
+        check_bounds(self, "GridConfig")  # a physical grid spacing (offroadbench.bounds.CELL_SIZE)
         check_choice(self, "quantise", self.quantise, QUANTISE_MODES)
 
     @property

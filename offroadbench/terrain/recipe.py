@@ -34,7 +34,7 @@ Files. Generators never read files: a layer that names one (``crater_file`` of a
 layer; ``path``, ``source_cell_size_m``, ``source_relief_m`` and ``nodata_level`` of a ``dem``
 layer) has it read here, through :mod:`offroadbench.io`, when the recipe is built, and its config
 holds the data (``CraterConfig.craters``, ``DEMConfig.dem``). Relative paths are relative to the
-working directory.
+working directory; a DEM ``path = "matplotlib:NAME"`` names a sample file shipped with matplotlib.
 
 Randomness: each layer's generator is seeded from (seed, layer name)
 (:func:`offroadbench.seeding.layer_rng`), so adding, removing or reordering layers never changes
@@ -174,8 +174,14 @@ def _dem_file(params: dict[str, Any], where: str, key: str) -> dict[str, Any]:
         check_range(None, f"{key}.source_relief_m", opts["source_relief_m"], lo=0)
     if opts["nodata_level"] is not None:
         check_int(None, f"{key}.nodata_level", opts["nodata_level"], lo=0, hi=65535)
+    if path is None:
+        source = resources.sample_dem()
+    elif path.startswith("matplotlib:"):  # a real DEM shipped with matplotlib (terrains/jacksboro-*.toml)
+        source = resources.matplotlib_sample(path.partition(":")[2])
+    else:
+        source = Path(path)
     params["dem"] = read_dem(
-        Path(path) if path is not None else resources.sample_dem(),
+        source,
         cell_size_m=opts["source_cell_size_m"],
         relief_m=opts["source_relief_m"],
         nodata_level=opts["nodata_level"],

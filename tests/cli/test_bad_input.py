@@ -126,6 +126,22 @@ def base(tmp_path_factory) -> Path:
     big = ", ".join(repr(2.0 + 1e-6 * i) for i in range(20_001))
     (b / "huge.toml").write_text(STUDY.format(length=2.0).replace('"recipe.layers.base.D_high" = [2.3]',
                                                                    f'"missions.length_m" = [{big}]'))
+    # issue 30: values outside physical bounds, a 1e12 m spike, absurd cell sizes
+    _png16(b / "cell1e-6.png", sidecar={**meta, "cell_size_m": 1e-6})
+    _png16(b / "cell5e-324.png", sidecar={**meta, "cell_size_m": 5e-324})
+    _png16(b / "spike.png", sidecar={**meta, "z_max_m": 1e12})
+    from offroadbench import resources
+
+    soil = resources.soil_files()["lunar-regolith"].read_text()
+    (b / "absurd-soil.toml").write_text(soil.replace("k_phi = 820000.0", "k_phi = 1e300"))
+    (b / "thick-soil.toml").write_text(soil.replace("cohesion_pa = 170.0", "cohesion_pa = 1e300"))
+    husky = resources.vehicle_files()["husky"]
+    (b / "absurd-vehicle").mkdir()
+    for q in husky.parent.iterdir():
+        if q.is_file():
+            (b / "absurd-vehicle" / q.name).write_bytes(q.read_bytes())
+    v = b / "absurd-vehicle" / "vehicle.toml"
+    v.write_text(v.read_text().replace("wheel_torque_limit_nm = 28.0", "wheel_torque_limit_nm = 1e300"))
     return b
 
 
@@ -217,6 +233,20 @@ CASES = [
     ("run-name-slash", ["study", "run", "slash.toml"]),
     ("run-huge-grid", ["study", "run", "huge.toml", "--out", "r"]),
     ("run-timeout-inline", ["study", "run", "study.toml", "--executor", "inline", "--trial-timeout-s", "5", "--out", "r"]),
+    # issue 30
+    ("run-timeout-1e10", ["study", "run", "study.toml", "--trial-timeout-s", "1e10", "--out", "r"]),
+    ("run-timeout-dask-1e10", ["study", "run", "study.toml", "--executor", "dask", "--trial-timeout-s", "1e10",
+                               "--out", "r"]),
+    ("gen-cell-1e-6", ["generate", "paper-d2.45", "--set", "grid.cell_size_m=1e-6", "-o", "o.png"]),
+    ("gen-cell-5e-324", ["generate", "paper-d2.45", "--set", "grid.cell_size_m=5e-324", "-o", "o.png"]),
+    ("ana-cell-1e-6", ["analyze", "cell1e-6.png"]),
+    ("ana-cell-5e-324", ["analyze", "cell5e-324.png"]),
+    ("drive-spike-1e12", ["drive", "spike.png", "--border-m", "0.2", "--length-m", "1", "--missions", "1",
+                          "--out", "d"]),
+    ("drive-days-of-work", ["drive", "good.png", "--length-m", "1e7", "--out", "d"]),
+    ("drive-vehicle-absurd", ["drive", "good.png", "--vehicle", "absurd-vehicle/vehicle.toml", "--out", "d"]),
+    ("soil-check-absurd-k-phi", ["soil", "check", "absurd-soil.toml"]),
+    ("soil-check-absurd-cohesion", ["soil", "check", "thick-soil.toml"]),
     ("gen-recipe-deep", ["generate", "deep.toml", "-o", "o.png"]),
     ("ana-sidecar-deep", ["analyze", "deepjson.png"]),
     ("ana-sidecar-digits", ["analyze", "digits.png"]),
@@ -276,3 +306,104 @@ def test_cold_console_script_prints_one_line(base, case_id):
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "offroadbench.cli"]
     res = subprocess.run([*cmd, *argv], cwd=base, capture_output=True, text=True, timeout=30)
     _check(case_id, {"code": res.returncode, "timed_out": False, "stderr": res.stderr, "stdout": res.stdout})
+
+
+# ---------------------------------------------------------------------------- issue 30, item 6
+def _cli(args: list[str], cwd: Path, env: dict | None = None, preexec=None) -> subprocess.CompletedProcess:
+    import os
+
+    code = "import sys; from offroadbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    return subprocess.run([sys.executable, "-c", code, *args], cwd=cwd, capture_output=True, text=True, errors="replace", timeout=120,
+                          env={**os.environ, **(env or {})}, preexec_fn=preexec)
+
+
+def test_non_utf8_file_names_export_and_plot_without_a_traceback(base, tmp_path):
+    import os
+
+    name = os.fsdecode(b"m\xff.png")  # a file name that is not UTF-8
+    (tmp_path / name).write_bytes((base / "good.png").read_bytes())
+    (tmp_path / os.fsdecode(b"m\xff.json")).write_bytes((base / "good.json").read_bytes())
+    res = _cli(["export", name, "--format", "unreal", "--name", "ok", "-o", "ue"], tmp_path)
+    assert res.returncode == 0 and "Traceback" not in res.stderr, res.stderr
+    assert (tmp_path / "ue" / "ok.png").is_file()
+    res = _cli(["analyze", name, "--border-m", "0.2", "--plot", os.fsdecode(b"p\xff.png")], tmp_path)
+    assert res.returncode == 0 and "Traceback" not in res.stderr, res.stderr
+    assert (tmp_path / os.fsdecode(b"p\xff.png")).is_file()
+
+
+def test_a_huge_png_under_an_address_space_limit_is_one_line(tmp_path):
+    import resource
+
+    from PIL import Image
+
+    Image.fromarray(np.zeros((8000, 8000), np.uint16)).save(tmp_path / "big.png")
+    (tmp_path / "big.json").write_text(json.dumps({"cell_size_m": 0.05, "z_min_m": 0.0, "z_max_m": 1.0}))
+
+    def limit() -> None:  # 3 GiB of address space: the interpreter fits, the 8000^2 analysis (5 GB) does not
+        resource.setrlimit(resource.RLIMIT_AS, (3 * 2**30, 3 * 2**30))
+
+    res = _cli(["analyze", "big.png"], tmp_path, preexec=limit)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1, res.stderr
+    assert "address-space limit" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_a_policy_raising_in_drive_is_one_line(base, tmp_path, monkeypatch, capsys):
+    from offroadbench.cli import main
+    from offroadbench.navigation.drivers import POLICIES, PolicySpec
+
+    class Raises:
+        def __init__(self, cfg, context) -> None:
+            pass
+
+        def reset(self, problem) -> None:
+            pass
+
+        def act(self, obs):
+            raise ZeroDivisionError("division by zero in the policy")
+
+    POLICIES.add("raises-test", PolicySpec(Raises, summary="test policy"))
+    try:
+        monkeypatch.chdir(tmp_path)
+        code = main(["drive", "paper-d2.45", "--set", "grid.rows=161", "--set", "grid.cols=161", "--border-m", "1",
+                     "--length-m", "3", "--missions", "1", "--planner", "raises-test"])
+    finally:
+        POLICIES._entries.pop("raises-test", None)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(err) == 1, err
+    assert "policy 'raises-test' failed in act() at t = 0.00 s: ZeroDivisionError: division by zero" in err[0]
+
+
+def test_soil_list_names_an_invalid_user_soil_and_lists_the_others(base, tmp_path):
+    user = tmp_path / "user" / "soils"
+    user.mkdir(parents=True)
+    (user / "absurd.toml").write_text((base / "absurd-soil.toml").read_text().replace(
+        'name = "lunar-regolith"', 'name = "absurd"'))
+    res = _cli(["soil", "list"], tmp_path, env={"OFFROADBENCH_PATH": str(tmp_path / "user")})
+    assert res.returncode == 0, res.stderr
+    assert "lunar-regolith" in res.stdout and "absurd" not in res.stdout
+    assert res.stderr.count("\n") == 1 and "invalid soil absurd" in res.stderr and "k_phi = 1e+300" in res.stderr
+
+
+def test_drive_out_on_a_full_disk_leaves_nothing(tmp_path, monkeypatch):
+    import errno
+    from types import SimpleNamespace
+
+    from offroadbench.cli.drive import write_drive_run
+    from offroadbench.io import telemetry
+
+    calls = {"n": 0}
+    real = telemetry.save_telemetry
+
+    def fills_up(columns, path, **kw):
+        calls["n"] += 1
+        if calls["n"] == 2:  # the second mission's telemetry
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(columns, path, **kw)
+
+    monkeypatch.setattr(telemetry, "save_telemetry", fills_up)
+    run = SimpleNamespace(rows=lambda: [{"mission": 0}, {"mission": 1}],
+                          telemetry={k: {"t_s": np.arange(3.0), "x_m": np.zeros(3)} for k in (0, 1)})
+    with pytest.raises(OSError) as info:
+        write_drive_run(run, tmp_path / "out")
+    assert info.value.errno == errno.ENOSPC and str(tmp_path / "out") in str(info.value.filename)
+    assert list(tmp_path.iterdir()) == []  # no trials.csv without its telemetry, no staging folder

@@ -19,7 +19,8 @@ def test_drive_writes_csv_figures_and_prints_summary(tmp_path, capsys):
 
     assert list(df["terrain_seed"]) == [terrain_seed(2, 0)] * 2
     assert list(df["mission_seed"]) == [mission_seed(2, 0, 0), mission_seed(2, 0, 1)]
-    assert f"paper-d2.3 seed {terrain_seed(2, 0)}" in text
+    # the label names the preset with its --set overrides (issue 33): a changed terrain is not the preset
+    assert f"paper-d2.3 + grid.rows=301, grid.cols=301 seed {terrain_seed(2, 0)}" in text
     assert {"success", "failure_reason", "traversal_time_s", "rms_vertical_accel_m_s2"} <= set(df.columns)
     for name in ("missions.png", "trajectories.png", "timeseries.png", "telemetry/mission_000.parquet"):
         assert (out / name).stat().st_size > 0
@@ -82,3 +83,47 @@ def test_drive_on_a_small_map_under_lunar_gravity_with_plot_path(tmp_path, capsy
     assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--set", "sim.gravity=1"]) == 2
     assert "unknown key(s) gravity" in capsys.readouterr().err
     assert main(["drive", "paper-d2.3", *small, "--border-m", "2", "--set", "sim.a.b=1"]) == 2
+
+
+def test_drive_out_keeps_its_settings_platform_and_code_version(tmp_path):
+    """Issue 33 item 1 / issue 35 item 2: drive --out writes settings.json beside trials.csv: the
+    TrialSettings the missions were driven with (the terrain's gravity and soil filled in), the
+    seeds, the platform and the code version."""
+    import json
+
+    out = tmp_path / "run"
+    assert main(["drive", "lunar-mare", *SMALL, "--missions", "1", "--border-m", "2", "--out", str(out),
+                 "--set", "controller.cruise_speed_m_s=0.5", "--engine", "mujoco"]) == 0
+    rec = json.loads((out / "settings.json").read_text())
+    assert {"options", "terrain", "terrain_seed", "mission_seeds", "settings", "platform", "code_version"} <= set(rec)
+    s = rec["settings"]
+    assert s["sim"]["gravity_m_s2"] == 1.62 and s["sim"]["soil"] == "lunar-regolith"  # the preset's [body], [soil]
+    assert s["sim"]["engine"] == "mujoco" and s["controller"]["cruise_speed_m_s"] == 0.5
+    assert s["missions"] == {**s["missions"], "count": 1, "length_m": 4.0, "border_m": 2.0}
+    assert s["vehicle"]["name"] == "husky" and s["planner"]["name"] == "straight"
+    assert rec["mission_seeds"] == list(pd.read_csv(out / "trials.csv")["mission_seed"])
+    assert rec["platform"]["arch"] and rec["code_version"].startswith("0.")
+
+
+def test_the_footprint_is_measured_by_the_trials_engine(monkeypatch):
+    """Issue 35: drive --animate and study replay measure the footprint with the trials' engine;
+    under MuJoCo no PyBullet world is built."""
+    import importlib.util
+
+    import pytest
+
+    from offroadbench.cli.drive import vehicle_footprint
+    from offroadbench.sim import SimConfig, load_vehicle
+    from offroadbench.sim.engines.pybullet import world as pybullet_world
+
+    if importlib.util.find_spec("mujoco") is None:
+        pytest.skip("mujoco not installed")
+    spec = load_vehicle("husky")
+    expected = vehicle_footprint(spec, SimConfig())
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a PyBullet world was built under MuJoCo")
+
+    monkeypatch.setattr(pybullet_world.World, "__init__", refuse)
+    # the engines measure the same shapes (PyBullet's bounding boxes carry a small margin)
+    assert vehicle_footprint(spec, SimConfig(engine="mujoco")) == pytest.approx(expected, abs=3e-3)

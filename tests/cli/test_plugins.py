@@ -70,7 +70,7 @@ def test_installed_planner_drives_with_drive_planner(installed):
     bare = dict(os.environ)
     bare.pop("PYTHONPATH", None)
     p = _cli([*args[:-1], "via"], bare, tmp)
-    assert p.returncode == 2 and "unknown planner 'via'" in p.stderr
+    assert p.returncode == 2 and "unknown planner or policy 'via'" in p.stderr
 
 
 def test_installed_planner_and_policy_run_in_a_study_and_a_trial_replays(installed):

@@ -246,3 +246,87 @@ def test_info_pose_is_the_ground_truth_at_reset_and_every_step():
     turned = np.unwrap(yaws)
     # the commanded 0.5 rad/s, after the wheels spin up: the yaw rate of the last half second
     assert (turned[-1] - turned[10]) / 0.5 == pytest.approx(0.5, rel=0.15)
+
+
+class _Replay:
+    """A policy that plays a fixed list of actions, whatever it observes (then stands still)."""
+
+    def __init__(self, actions) -> None:
+        self.actions = list(actions)
+        self.i = 0
+
+    def reset(self, problem) -> None:
+        self.i = 0
+
+    def act(self, obs):
+        a = self.actions[self.i] if self.i < len(self.actions) else (0.0, 0.0)
+        self.i += 1
+        return a
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_the_env_and_the_trial_runner_drive_the_same_trial_for_the_same_actions(small_paper_recipe, engine):
+    """Issue 35: one mission, the same actions through the env and through the trial runner (the
+    actions as a policy): the same trial row, and the same telemetry up to the command the runner
+    chooses at the tick the trial ends (it is never applied; the env cannot know it)."""
+    import importlib.util
+
+    from offroadbench.navigation.drivers import POLICIES, PlannerChoice, PolicySpec
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.sim.engine import open_world
+    from offroadbench.sim.trial.pipeline import TrialSettings
+    from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS, drive_mission
+    from offroadbench.terrain.recipe import generate_terrain
+
+    if engine == "mujoco" and importlib.util.find_spec("mujoco") is None:
+        pytest.skip("mujoco not installed")
+    hm = generate_terrain(small_paper_recipe, 3)
+    settings = TrialSettings(sim=SimConfig(engine=engine), missions=MissionConfig(count=1, length_m=4.0, border_m=1.0))
+    mission = Mission.between(0, (2.0, 2.5), (5.5, 4.5))
+    actions = []
+    with TraverseEnv(hm, settings=settings, config=QUIET) as env:
+        obs, _ = env.reset(options={"mission": mission})
+        while True:
+            a = _goal_seeker(obs) * np.array([1.5, 1.0], dtype=np.float32)  # over the top speed: clipped alike
+            actions.append(tuple(float(x) for x in a))
+            obs, _, term, trunc, _ = env.step(a)
+            if term or trunc:
+                break
+        got = env.trial_record()
+    POLICIES.add("replay-test", PolicySpec(lambda cfg, context: _Replay(actions), summary="test: replays actions",
+                                           needs=frozenset()))
+    try:
+        with open_world(hm, settings.vehicle, settings.sim.for_terrain()) as world:
+            want = drive_mission(world, mission, planner=PlannerChoice("replay-test", kind="policy"),
+                                 controller=settings.controller, rules=settings.rules,
+                                 observation=settings.observation)
+    finally:
+        POLICIES._entries.pop("replay-test", None)
+    assert got.result == want.result and got.result.as_row().keys() == want.result.as_row().keys()
+    assert len(actions) > 20 and got.result.success
+    for name in TELEMETRY_COLUMNS:
+        a, b = got.telemetry[name], want.telemetry[name]
+        if name in ("cmd_v_m_s", "cmd_omega_rad_s"):
+            a, b = a[:-1], b[:-1]
+        assert np.array_equal(a, b), name
+
+
+def test_a_lunar_preset_runs_in_lunar_gravity_on_its_soil():
+    """Issue 35: the env prepares its terrain as a study does, the recipe's [body] and [soil] included."""
+    with TraverseEnv("lunar-mare", overrides={"grid.rows": 129, "grid.cols": 129}, config=SHORT) as env:
+        assert env.sim.gravity_m_s2 == pytest.approx(1.62)
+        assert env.sim.soil == "lunar-regolith"
+        _, info = env.reset(seed=0)
+        z0 = info["pose"]["z_m"]
+    with TraverseEnv("lunar-mare", overrides={"grid.rows": 129, "grid.cols": 129}, config=SHORT,
+                     sim=SimConfig(gravity_m_s2=9.81)) as env:  # the settings win where they name it
+        assert env.sim.gravity_m_s2 == 9.81
+        _, info = env.reset(seed=0)
+    assert info["pose"]["z_m"] < z0  # the same vehicle sits lower on its tyres in Earth gravity
+
+
+def test_settings_and_their_parts_are_not_given_twice():
+    from offroadbench.sim.trial.pipeline import TrialSettings
+
+    with pytest.raises(InputError, match="inside settings"):
+        TraverseEnv(FLAT, settings=TrialSettings(), sim=SimConfig())

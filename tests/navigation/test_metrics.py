@@ -89,3 +89,24 @@ def test_path_length_success_rate_and_stuck():
     assert metrics.stuck_index(xy * 100, window=20, distance_m=0.2) == 29  # 1 m steps: stuck once still
     moving = np.column_stack([np.arange(100) * 0.05, np.zeros(100)])
     assert metrics.stuck_index(moving, window=20, distance_m=0.2) is None
+
+
+def test_soil_statistics_over_moving_samples_ignore_rest_and_spikes():
+    from offroadbench.navigation.metrics import mean_where, moving_samples, percentile, sinkage_summary
+
+    n = 200
+    cmd = np.r_[np.zeros(10), np.full(n - 20, 1.0), np.zeros(10)]  # at rest, driven, stopped at the goal
+    vx = np.r_[np.zeros(10), np.full(n - 20, 0.8), np.zeros(10)]
+    moving = moving_samples(cmd, vx, np.zeros(n))
+    assert moving.sum() == n - 20
+    assert moving_samples([1.0], [0.0], [0.0])[0]  # wheels spinning in place: driven, so counted
+    sink = np.where(moving, 0.014, 0.009)
+    sink[50] = 0.037  # one spike (a wheel landing after a bump)
+    median, p95 = sinkage_summary(sink, moving)
+    assert median == pytest.approx(0.014) and p95 == pytest.approx(0.014)
+    slip = np.where(moving, 0.2, 0.0)
+    assert mean_where(slip, moving) == pytest.approx(0.2)
+    assert math.isnan(mean_where(slip, np.zeros(n, dtype=bool)))
+    x = np.random.default_rng(0).normal(size=33)
+    for q in (0.0, 5.0, 50.0, 95.0, 100.0):
+        assert percentile(x, q) == pytest.approx(float(np.percentile(x, q)), abs=1e-15)

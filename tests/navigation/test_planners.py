@@ -76,7 +76,7 @@ def test_registry_and_the_planner_table():
     assert set(PLANNERS) >= {"straight", "astar", "lattice"}
     wp = plan_straight(_problem(_open(), (1.0, 2.0), (9.5, 3.25)))
     assert wp.shape == (2, 2) and np.array_equal(wp, [[1.0, 2.0], [9.5, 3.25]])
-    with pytest.raises(InputError, match="unknown planner 'astra'; did you mean 'astar'"):
+    with pytest.raises(InputError, match=r"unknown planner or policy 'astra'; did you mean 'astar'.*policies: mppi, reactive"):
         planner_from_table({"name": "astra"})
     choice = planner_from_table({"name": "astar", "grid_m": 0.5})
     assert choice == PlannerChoice("astar", AStarConfig(grid_m=0.5), "planner") and choice.params["grid_m"] == 0.5
@@ -121,12 +121,13 @@ def test_entries_declare_what_they_need_and_the_runner_gives_exactly_that():
     both, ``reactive`` the vehicle; a plug-in that says nothing needs both. The runner hands a
     planner the class map and the measured envelope only when its entry declares them, and refuses
     to drive one that needs the class map without it."""
-    from offroadbench.navigation.drivers import NEEDS, PlannerSpec
+    from offroadbench.navigation.drivers import DEFAULT_NEEDS, NEEDS, PlannerSpec
     from offroadbench.navigation.policies import POLICIES
 
     assert PLANNERS.get("straight").needs == frozenset()
-    assert PLANNERS.get("astar").needs == PLANNERS.get("lattice").needs == NEEDS == {"classes", "vehicle"}
-    assert POLICIES.get("reactive").needs == {"vehicle"}
+    assert PLANNERS.get("astar").needs == PLANNERS.get("lattice").needs == DEFAULT_NEEDS == {"classes", "vehicle"}
+    assert NEEDS == {"classes", "vehicle", "map"} and PlannerSpec(plan_straight).needs == DEFAULT_NEEDS
+    assert POLICIES.get("reactive").needs == {"vehicle"} and POLICIES.get("mppi").needs == {"vehicle", "map"}
     assert PlannerChoice("straight").needs == frozenset() and planner_from_table({"name": "reactive"}).needs == {"vehicle"}
     with pytest.raises(ValueError, match="wheels"):
         PlannerSpec(plan_straight, needs=frozenset({"wheels"}))
@@ -139,7 +140,7 @@ def test_entries_declare_what_they_need_and_the_runner_gives_exactly_that():
             return problem.endpoints()
         return plan_spy
 
-    needs = {"_test_none": frozenset(), "_test_vehicle": frozenset({"vehicle"}), "_test_default": NEEDS}
+    needs = {"_test_none": frozenset(), "_test_vehicle": frozenset({"vehicle"}), "_test_default": DEFAULT_NEEDS}
     for name, need in needs.items():
         PLANNERS.add(name, PlannerSpec(spy(name), needs=need))
     try:

@@ -31,7 +31,7 @@ def test_the_runner_and_the_env_drive_a_policy_bit_for_bit_alike():
     with TraverseEnv(FLAT, config=TraverseConfig(mission_length_m=5.0, border_m=1.0)) as env:
         obs, _ = env.reset(seed=0, options={"mission": mission})
         policy = make_policy("reactive", choice.config, PolicyContext(
-            observation=env._obs_cfg, vehicle=env.envelope, track_m=env.vehicle.track_m, control_rate_hz=20))
+            observation=env.settings.observation, vehicle=env.envelope, track_m=env.vehicle.track_m, control_rate_hz=20))
         xy = []
         while True:
             obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))

@@ -4,6 +4,8 @@
 import numpy as np
 import pytest
 
+from offroadbench.errors import InputError
+
 from offroadbench.sim import ControllerConfig, load_vehicle
 from offroadbench.sim.trial.controller import LineTracker, PathTracker, SpeedProfile, pure_pursuit_omega
 from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
@@ -18,25 +20,33 @@ def test_pure_pursuit_curvature():
     assert pure_pursuit_omega(np.zeros(2), 0.0, np.array([0.0, 1.0]), 1.0, 0.5) == 0.5  # clipped
 
 
-def _kinematic_run(profile: SpeedProfile, dt: float, steps: int):
-    """Ideal tracking: the vehicle moves exactly at the commanded speed."""
+def _kinematic_run(profile: SpeedProfile, dt: float, steps: int, slip: float = 0.0):
+    """The vehicle moves at ``(1 - slip)`` of the commanded wheel speed (ideal tracking at slip 0).
+    (progress, commands, ground speeds)."""
     s = v = 0.0
-    vs = []
+    us, vs = [], []
     for _ in range(steps):
-        v = profile.command(s, v)
+        u = profile.command(s, v)
+        v = (1.0 - slip) * u
         s += v * dt
+        us.append(u)
         vs.append(v)
-    return s, np.array(vs)
+    return s, np.array(us), np.array(vs)
 
 
 def test_speed_profile_reaches_cruise_is_jerk_limited_and_stops_at_goal():
     dt = 0.05
     prof = SpeedProfile(10.0, dt, v_max=1.0, a_max=3.0, j_max=4.0)
-    s, v = _kinematic_run(prof, dt, 400)
+    s, v, _ = _kinematic_run(prof, dt, 400)
     assert v.max() == pytest.approx(1.0, abs=1e-6)
     assert s == pytest.approx(10.0, abs=0.02)
     assert v[-1] == pytest.approx(0.0, abs=1e-6)
-    acc = np.diff(np.concatenate([[0.0], v])) / dt
+    ref_v = []  # the reference itself is jerk-limited (the feedback adds only a small correction)
+    prof = SpeedProfile(10.0, dt, v_max=1.0, a_max=3.0, j_max=4.0)
+    for _ in range(400):
+        prof.command(prof.reference[0], prof.reference[1])  # a vehicle exactly on the reference
+        ref_v.append(prof.reference[1])
+    acc = np.diff(np.concatenate([[0.0], ref_v])) / dt
     jerk = np.diff(np.concatenate([[0.0], acc])) / dt
     assert np.abs(acc).max() <= 3.0 + 1e-6
     assert np.abs(jerk).max() <= 4.0 * 1.05  # discretised jerk within the limit
@@ -45,13 +55,61 @@ def test_speed_profile_reaches_cruise_is_jerk_limited_and_stops_at_goal():
     assert 10.5 < t_end < 12.5
 
 
-def test_speed_profile_restarts_from_measured_speed():
-    prof = SpeedProfile(10.0, 0.05, v_max=1.0, a_max=3.0, j_max=4.0)
+@pytest.mark.parametrize("slip", [0.2, 0.4])
+def test_under_steady_slip_the_ground_speed_reaches_the_reference(slip):
+    """Wheel-speed headroom (top speed 2 m/s, cruise 1 m/s): the feedback raises the command to
+    v_ref / (1 - s), so the ground speed reaches 1 m/s within 2 % and the vehicle stops at the goal;
+    the old re-plan-from-measurement loop settled near a dt / s instead."""
+    dt = 0.05
+    prof = SpeedProfile(30.0, dt, v_max=1.0, a_max=3.0, j_max=4.0, command_max_m_s=2.0)
+    s, u, v = _kinematic_run(prof, dt, 1000, slip=slip)
+    assert v.max() < 1.1  # the lag of the start is made up by a small overshoot (7.6 % at slip 0.4)
+    cruise = v[400:500]  # 20-25 s, 5-10 m before the goal
+    assert np.all(np.abs(cruise - 1.0) <= 0.02), (cruise.min(), cruise.max())
+    assert u[400:500].mean() == pytest.approx(1.0 / (1.0 - slip), rel=0.02)
+    assert s == pytest.approx(30.0, abs=0.05) and u[-1] == 0.0
+
+
+def test_without_headroom_the_command_holds_the_top_speed_and_does_not_wind_up():
+    """Top speed = cruise: under slip 0.3 the command sits at the top speed (never collapses towards
+    the measured 0.7 m/s), the lag stays within the re-plan bound, and the integral stays bounded."""
+    dt = 0.05
+    prof = SpeedProfile(30.0, dt, v_max=1.0, a_max=3.0, j_max=4.0, command_max_m_s=1.0, lag_bound_m=0.5)
+    s = v = 0.0
+    for k in range(400):
+        u = prof.command(s, v)
+        v = 0.7 * u
+        s += v * dt
+        if k > 40:
+            assert u == pytest.approx(1.0)
+            assert prof.reference[0] - s <= 0.5 + 1e-9
+    assert prof.replans > 0 and 0.0 <= prof.integral_m_s <= 1.0
+
+
+def test_a_stalled_vehicle_keeps_its_command_and_is_not_reset_to_its_measured_speed():
+    prof = SpeedProfile(10.0, 0.05, v_max=1.0, a_max=3.0, j_max=4.0, command_max_m_s=1.5)
+    s = 0.0
     for _ in range(60):
-        prof.command(2.0, 1.0)  # cruising
-    # the vehicle is suddenly stopped by an obstacle: the command restarts near the measured 0
-    assert prof.command(2.0, 0.0) < 0.2
+        s += 0.05 * prof.command(s, 1.0 if s > 0.5 else 0.5)
+    u = [prof.command(s, 0.0) for _ in range(100)]  # held by an obstacle for 5 s
+    assert min(u) >= 1.0  # v_ref + k_p * bound: the wheels keep turning
+    assert max(u) <= 1.5 and prof.integral_m_s <= 1.5  # saturated, no windup beyond the limit
     assert prof.command(10.5, 0.5) == 0.0  # past the goal: stop
+
+
+def test_traction_control_caps_the_command_at_the_slip_limit():
+    prof = SpeedProfile(20.0, 0.05, v_max=1.0, a_max=3.0, j_max=4.0, command_max_m_s=2.0, slip_limit=0.25)
+    for _ in range(40):
+        prof.command(0.0, 0.0)
+    assert prof.command(0.0, 0.0) == pytest.approx(0.1 / 0.75)  # creep speed / (1 - limit)
+    assert prof.command(0.0, 0.6) == pytest.approx(0.6 / 0.75)
+
+
+def test_speed_loop_settings_are_checked():
+    with pytest.raises(InputError, match="traction_slip_limit"):
+        ControllerConfig(traction_slip_limit=1.0)
+    with pytest.raises(InputError, match="speed_lag_bound_m"):
+        ControllerConfig(speed_lag_bound_m=0.0)
 
 
 def test_line_tracker_steers_back_to_the_line():

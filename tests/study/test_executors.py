@@ -103,7 +103,7 @@ def test_sigkill_and_ctrl_c_then_resume_equal_an_uninterrupted_run(tmp_path, wri
     assert len(resumed) == total
     assert not resumed.duplicated(["cell", "terrain", "mission"]).any()
     sessions = load_meta(out)["runs"]
-    assert [s["status"] for s in sessions] == ["running", "interrupted", "finished"]  # killed, Ctrl-C, done
+    assert [s["status"] for s in sessions] == ["killed", "interrupted", "finished"]  # SIGKILL, Ctrl-C, done
     assert sum(s["trials_run"] for s in sessions) == total
 
     study, cells = load_study(study_path)

@@ -172,5 +172,7 @@ def test_sigterm_ends_a_run_like_ctrl_c(tmp_path, write_tiny_study, stored_trial
     if stored_trials(out) < 24:
         assert proc.returncode == 143, err
         assert "terminated" in err and err.count("\n") == 1
+        # it says how many trials are saved (issue 33): this run's and the store's, of the study's 24
+        assert f", {stored_trials(out)} of 24 stored in {out};" in err and "trial(s) of this run saved" in err
         assert load_meta(out)["runs"][-1]["status"] == "interrupted"
     assert not (out / "study.lock").exists()

@@ -119,8 +119,10 @@ def _durkalski_astar(folder: Path) -> list[float]:
 def _straight_breaking_point(folder: Path) -> list[float]:
     from offroadbench.study.stress import breaking_points
 
-    bp = breaking_points(_paper_surface(folder), "planner", "D_high").set_index("planner")
-    return [float(bp.loc["straight", c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
+    # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
+    bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "map_noise_m"])
+    row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["map_noise_m"] == 0)].iloc[0]
+    return [float(row[c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
 
 
 def _terrain_success_changes(folder: Path) -> list[float]:
@@ -139,8 +141,21 @@ def _terrain_success_changes(folder: Path) -> list[float]:
             tab["p_holm"]]
 
 
+def _pooled_success_effect(axis: str, treatment, control) -> Callable[[Path], list[float]]:
+    """The mean per-terrain success difference (points) between two values of ``axis``, each terrain's
+    rate over every other cell (the plans' ``pool``)."""
+    def compute(folder: Path) -> list[float]:
+        rate = trial_table(folder).groupby([axis, "terrain"])["success"].mean().mul(100).unstack(axis)
+        return [float((rate[treatment] - rate[control]).mean())]
+    return compute
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
+    Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
+           _pooled_success_effect("engine", "mujoco", "pybullet")),
+    Sample("lunar-soil regolith against rigid ground", "lunar-soil", rf"missions succeed {_NUM} points",
+           lambda f: [-_pooled_success_effect("tyre_model", "terramechanics", "coulomb")(f)[0]]),
     Sample("majhor2023 successful trials", "majhor2023",
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
@@ -162,7 +177,7 @@ SAMPLES = [
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
-           rf"`straight` {_NUM} \[{_NUM}, {_NUM}\]", _straight_breaking_point),
+           rf"`straight` on the paper's surface at D_high = {_NUM}\s+\[{_NUM}, {_NUM}\]", _straight_breaking_point),
     Sample("planner-stress successes per planner and cell", "planner-stress",
            r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|\n\|[-|]+\|\n"
            + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for _ in range(12)),

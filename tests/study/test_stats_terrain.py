@@ -105,3 +105,26 @@ def test_report_tests_each_change_at_the_terrain_level(tmp_path):
     assert col in ref and ref.loc["area_low_pct", "terrains"] == 4
     # 4 terrains cannot give p < 0.05 (the smallest exact two-sided p is 2 / 16): never "yes"
     assert (ref[col] != "yes").all()
+
+
+def test_median_change_intervals_resample_terrains_in_both_groups():
+    from offroadbench.study.stats import group_summary, median_change_intervals, median_changes
+
+    rows = []
+    for j in range(8):
+        for m in range(4):
+            rows.append({"cell": 0, "terrain": j, "mission": m, "success": m < 2, "failure_reason": "",
+                         "rms_vertical_accel_m_s2": 1.0 + 0.1 * j, "traversal_time_s": 10.0})
+            rows.append({"cell": 1, "terrain": j, "mission": m, "success": True, "failure_reason": "",
+                         "rms_vertical_accel_m_s2": 1.5 + 0.1 * j, "traversal_time_s": 10.0})
+    trials = pd.DataFrame(rows)
+    terrains = pd.DataFrame([{"cell": c, "terrain": j, "area_low": 0.5, "area_semi": 0.3, "area_high": 0.2}
+                             for c in (0, 1) for j in range(8)])
+    labels = {0: "a", 1: "b"}
+    changes = median_changes(group_summary(trials, terrains, labels), ["success_rate_pct", "rms_vertical_accel_m_s2"])
+    out = median_change_intervals(trials, terrains, changes, labels, n_boot=300).set_index("quantity")
+    # every terrain gains 50 points: no resample can give anything else
+    assert out.loc["success_rate_pct", ["change", "ci95_low", "ci95_high"]].tolist() == [50.0, 50.0, 50.0]
+    # the same terrains in both groups: every terrain's metric is 0.5 higher, so is every resample's median
+    assert out.loc["rms_vertical_accel_m_s2", "ci95_low"] == pytest.approx(0.5)
+    assert out.loc["rms_vertical_accel_m_s2", "ci95_high"] == pytest.approx(0.5)

@@ -10,8 +10,13 @@ import pytest
 from offroadbench.study import load, run_study, study_from_dict
 from offroadbench.study.report import build_report
 from offroadbench.study.spec import plan_cells
+from offroadbench.study.clustered import fieller_set, isotonic_decreasing
 from offroadbench.study.stress import (
+    _fmt_set,
+    arm_table,
     breaking_points,
+    describe_breaking_point,
+    isotonic_crossing,
     first_level_below,
     mcnemar_exact,
     paired_table,
@@ -56,19 +61,54 @@ def _synthetic_trials(n_terrains, levels, missions, d50, width, rng, planner="p"
     return pd.DataFrame(rows)
 
 
-def test_logistic_breaking_points_locate_a_known_crossing():
+def test_breaking_points_locate_a_known_crossing_inside_the_levels():
     rng = np.random.default_rng(2)
     t = pd.concat([_synthetic_trials(30, [2.3, 2.6, 2.8, 2.9, 2.95, 2.99], 8, 2.85, 0.04, rng, "a"),
                    _synthetic_trials(30, [2.3, 2.6, 2.8, 2.9, 2.95, 2.99], 8, 2.95, 0.03, rng, "b")])
-    bp = breaking_points(t, "planner", "D_high").set_index("planner")
+    bp = breaking_points(t, "planner", "D_high", n_boot=400).set_index("planner")
     for name, truth in (("a", 2.85), ("b", 2.95)):
         r = bp.loc[name]
-        assert r["ci95_low"] < truth < r["ci95_high"] and r["ci95_high"] - r["ci95_low"] < 0.1
-        assert r["terrains"] == 30 and not r["extrapolated"]
+        # the isotonic crossing interpolates between studied levels: within a level step of the truth
+        assert r["ci95_low"] - 0.05 < truth < r["ci95_high"] + 0.05 and r["ci95_high"] - r["ci95_low"] < 0.15
+        assert r["terrains"] == 30 and 2.3 <= r["breaking_point"] <= 2.99
+        assert r["logistic_point"] == pytest.approx(truth, abs=0.03) and not r["logistic_extrapolated"]
     assert bp.loc["a", "breaking_point"] < bp.loc["b", "breaking_point"]
-    # a planner that never fails has no fitted crossing: nothing is invented
-    never = _synthetic_trials(6, [2.3, 2.6], 8, 9.0, 0.01, rng)
-    assert math.isnan(breaking_points(never, "planner", "D_high")["breaking_point"].iloc[0])
+    # a planner that never falls below 50 %: "not reached" (+inf), with the success at the last level
+    never = breaking_points(_synthetic_trials(6, [2.3, 2.6], 8, 9.0, 0.01, rng), "planner", "D_high", n_boot=200)
+    r = never.iloc[0]
+    assert r["breaking_point"] == math.inf and r["ci95_high"] == math.inf and r["not_reached_share"] == 1.0
+    assert r["success_at_last"] == 1.0
+    text = describe_breaking_point(r["breaking_point"], r["ci95_low"], r["ci95_high"], [2.3, 2.6],
+                                   r["success_at_last"], "D_high")
+    assert text.startswith("not reached up to D_high = 2.6 (success there 100 %)")
+
+
+def test_isotonic_crossing_never_leaves_the_studied_levels():
+    # success 0.9, 0.7, 0.3 at 2.9 / 2.95 / 2.99: crosses 0.5 halfway between 2.95 and 2.99
+    assert isotonic_crossing([2.9, 2.95, 2.99], [9, 7, 3], [10, 10, 10]) == pytest.approx(2.97)
+    # a rise is pooled away (pool-adjacent-violators): 0.6, 0.8 -> 0.7, 0.7, then 0.2
+    assert isotonic_crossing([1, 2, 3], [6, 8, 2], [10, 10, 10]) == pytest.approx(2 + 0.2 / 0.5)
+    assert isotonic_crossing([1, 2], [9, 8], [10, 10]) == math.inf
+    assert isotonic_crossing([1, 2], [3, 1], [10, 10]) == -math.inf
+
+
+def test_isotonic_decreasing_is_the_least_squares_monotone_fit():
+    assert isotonic_decreasing([3, 1, 2, 0]).tolist() == [3, 1.5, 1.5, 0]
+    assert isotonic_decreasing([1, 2], [3, 1]).tolist() == pytest.approx([1.25, 1.25])
+
+
+def test_fieller_set_prints_two_rays_when_the_slope_is_unclear():
+    from offroadbench.study.clustered import LogisticFit
+
+    sure = LogisticFit(intercept=30.0, slope=-10.0, cov=np.diag([0.01, 0.001]), n=100, clusters=10, converged=True)
+    (piece,) = fieller_set(sure)
+    assert piece[0] < 3.0 < piece[1]
+    # slope -1 with variance 1: not significant, the set is the outside of two roots
+    vague = LogisticFit(intercept=3.0, slope=-1.0, cov=np.array([[0.5, 0.0], [0.0, 1.0]]), n=100, clusters=10,
+                        converged=True)
+    pieces = fieller_set(vague)
+    assert len(pieces) == 2 and pieces[0][0] == -math.inf and pieces[1][1] == math.inf
+    assert _fmt_set(pieces).count("∪") == 1
 
 
 def test_paired_table_is_terrain_level():
@@ -188,3 +228,62 @@ def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
     assert len(by) == 2 * 2 * 2 * 2 and {"band_limited", "map_noise_m"} <= set(by.columns)
     assert len(rep.tables["breaking_points.csv"]) == 2 * 4
     assert {f"planner_success_{i}.png" for i in range(4)} <= set(rep.figures)
+
+
+def test_band_limited_arm_drives_the_aliased_arms_missions_and_the_plan_is_computed(tmp_path):
+    data = {**STUDY, "study": {**STUDY["study"], "terrains_per_cell": 3, "missions_per_terrain": 3,
+                               "missions_from": {"recipe.layers.base.wm.band_limited": False}},
+            "grid": {"planner.name": ["straight", "astar"], "recipe.layers.base.D_high": [2.9],
+                     "recipe.layers.base.wm.band_limited": [False, True]},
+            "analysis": {"comparisons": [{"name": "aliasing", "treatment": {"recipe.layers.base.wm.band_limited": True},
+                                          "control": {"recipe.layers.base.wm.band_limited": False},
+                                          "where": {"planner.name": "straight"}}]}}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path, executor="inline", trial_fn=fake_planner_trials)
+    df = load(tmp_path)
+    # one start and goal per (terrain, mission) over both surfaces and both planners
+    ends = df.groupby(["terrain", "mission"])[["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]].nunique()
+    assert (ends == 1).all().all()
+    rep = build_report(tmp_path)
+    arms = rep.tables["band_limited_tests.csv"]
+    assert (arms["same_missions"] == 1.0).all() and "paired mission by mission" in rep.markdown
+    # the band-limited surface lacks the terms above Nyquist: a positive share of the variance, below 1
+    assert ((arms["mean_twin_unexplained_var"] > 0) & (arms["mean_twin_unexplained_var"] < 1)).all()
+    conf = rep.tables["confirmatory.csv"]
+    assert len(conf) == 1 and conf["terrains"].iloc[0] == 3
+    straight = df[df["planner"] == "straight"]
+    rate = straight.groupby(["band_limited", "terrain"])["success"].mean().unstack("band_limited") * 100
+    assert conf["effect"].iloc[0] == pytest.approx((rate[True] - rate[False]).mean())
+    row = arms[arms["planner"] == "straight"].iloc[0]
+    assert row["diff_pct"] == pytest.approx(conf["effect"].iloc[0])
+    assert "## Confirmatory analysis" in rep.markdown and "## Success rate (Fig. 6) (exploratory)" in rep.markdown
+    # a plan changed after trials were stored is refused, in one line
+    from offroadbench.errors import InputError
+
+    data["analysis"]["alpha"] = 0.01
+    changed = study_from_dict(data)
+    with pytest.raises(InputError, match=r"the \[analysis\] plan differs from the one stored with its 36 trials"):
+        run_study(changed, plan_cells(changed), tmp_path, executor="inline", trial_fn=fake_planner_trials)
+
+
+def test_arm_table_pairs_missions_and_reports_the_resolution_statistic():
+    rows = []
+    for j in range(6):
+        for m in range(4):
+            for band in (False, True):
+                # the band-limited arm succeeds on one more mission per terrain; same ends in both arms
+                ok = m < (2 + (1 if band else 0))
+                rows.append({"planner": "straight", "band_limited": band, "terrain": j, "mission": m, "cell": int(band),
+                             "success": ok, "start_x_m": float(m), "start_y_m": 0.0, "goal_x_m": 1.0, "goal_y_m": float(j)})
+    t = pd.DataFrame(rows)
+    ter = pd.DataFrame([{"cell": c, "terrain": j, "area_high": 0.1 * (1 - c) + 0.01,
+                         "twin_unexplained_var": (0.2 + 0.01 * j) if c == 1 else np.nan} for c in (0, 1) for j in range(6)])
+    tab = arm_table(t, "band_limited", False, True, ["planner"], terrains=ter)
+    r = tab.iloc[0]
+    assert r["same_missions"] == 1.0 and r["terrains"] == 6 and r["missions"] == 24
+    assert r["diff_pct"] == pytest.approx(25.0) and r["p_sign_flip"] == pytest.approx(2 / 64)
+    assert r["mean_twin_unexplained_var"] == pytest.approx(0.225)
+    assert r["area_high_control_pct"] == pytest.approx(11.0) and r["area_high_treatment_pct"] == pytest.approx(1.0)
+    # missions drawn separately per arm: said as such
+    moved = t.assign(goal_x_m=np.where(t["band_limited"], 2.0, 1.0))
+    assert arm_table(moved, "band_limited", False, True, ["planner"])["same_missions"].iloc[0] == 0.0

@@ -14,7 +14,7 @@ from offroadbench.heightmap import Heightmap
 __all__ = ["fmt", "fmt_list", "span_m", "half_span_m", "describe", "grid_triangles", "write_json", "resample_bilinear", "save_png16_levels", "load_png16_levels"]
 
 #: meta keys copied into the description of a model file (SDF, MJCF, USD, Webots world)
-PROVENANCE_KEYS = ("recipe_name", "seed", "terrain_id", "source")
+PROVENANCE_KEYS = ("recipe_name", "seed", "overrides", "terrain_id", "source")
 
 
 def fmt(v: float) -> str:

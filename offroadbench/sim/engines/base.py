@@ -1,18 +1,23 @@
 """What every engine shares, written once above the engine packages (engines/pybullet, engines/mujoco).
 
-Nothing here imports a physics engine: these are the geometry and terrain facts each engine's
-world uses the same way.
+Nothing here imports a physics engine: the vehicle's URDF as data (links' masses, inertias and
+collision shapes, joints; :func:`read_urdf`, :func:`urdf_mass_kg`) and where a vehicle is spawned
+clear of the terrain (:func:`max_height_near`), each written once for every engine.
 """
 
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
+
+from offroadbench.errors import InputError
 
 if TYPE_CHECKING:
     from offroadbench.heightmap import Heightmap
 
-__all__ = ["max_height_near"]
+__all__ = ["UrdfJoint", "UrdfLink", "max_height_near", "read_urdf", "settle", "spawn_height_m", "urdf_mass_kg"]
 
 
 def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> float:
@@ -25,3 +30,106 @@ def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> f
     if c0 > c1 or r0 > r1:
         return hm.z_max_m
     return float(hm.z[r0 : r1 + 1, c0 : c1 + 1].max())
+
+
+def spawn_height_m(hm: Heightmap, x_m: float, y_m: float, chassis_reach_m: float, wheel_radius_m: float,
+                   bottom_m: float, clearance_m: float) -> float:
+    """Height of the vehicle's base at spawn, m: its lowest point ``bottom_m`` below the base and
+    ``clearance_m`` above the highest terrain sample within the chassis' reach (half its diagonal)
+    plus a wheel radius of (x, y)."""
+    ground = max_height_near(hm, x_m, y_m, chassis_reach_m + wheel_radius_m)
+    return ground + bottom_m + clearance_m
+
+
+def settle(world) -> None:
+    """The end of every engine's spawn: the wheels braked (commanded to 0 rad/s) while the vehicle
+    settles for ``sim.settle_time_s`` (the clock starts after it)."""
+    world.command_wheels(0.0, 0.0)
+    for _ in range(int(round(world.sim.settle_time_s * world.sim.physics_rate_hz))):
+        world.step()
+
+
+@dataclass(frozen=True)
+class UrdfLink:
+    """A URDF link: mass kg, centre of mass m, diagonal inertia kg m^2, collision shapes
+    (type, size tuple, position, euler angles)."""
+
+    name: str
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float]
+    shapes: tuple  # (type, size tuple, pos, euler)
+
+
+@dataclass(frozen=True)
+class UrdfJoint:
+    """A URDF joint: kind (``continuous``, ``revolute``, ``fixed``, ...), parent and child link, origin, axis."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    pos: tuple[float, float, float]
+    euler: tuple[float, float, float]
+    axis: tuple[float, float, float]
+
+
+def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]:
+    if text is None:
+        return (default,) * n
+    vals = tuple(float(v) for v in text.split())
+    if len(vals) != n:
+        raise ValueError(f"expected {n} numbers, got {text!r}")
+    return vals
+
+
+def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
+    """The links (mass, centre of mass, diagonal inertia, collision shapes) and joints of a URDF."""
+    try:
+        root = ET.parse(path).getroot()
+        links = {}
+        for el in root.findall("link"):
+            inertial = el.find("inertial")
+            mass, com, inertia = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            if inertial is not None:
+                origin = inertial.find("origin")
+                if origin is not None and any(_floats(origin.get("rpy"), 3)):
+                    raise ValueError(f"link {el.get('name')}: a rotated inertial frame is not supported")
+                com = _floats(origin.get("xyz") if origin is not None else None, 3)
+                mass = float(inertial.find("mass").get("value"))
+                i = inertial.find("inertia")
+                inertia = (float(i.get("ixx")), float(i.get("iyy")), float(i.get("izz")))
+            shapes = []
+            for col in el.findall("collision"):
+                origin = col.find("origin")
+                pos = _floats(origin.get("xyz") if origin is not None else None, 3)
+                euler = _floats(origin.get("rpy") if origin is not None else None, 3)
+                geo = col.find("geometry")[0]
+                if geo.tag == "box":
+                    shapes.append(("box", tuple(0.5 * v for v in _floats(geo.get("size"), 3)), pos, euler))
+                elif geo.tag == "sphere":
+                    shapes.append(("sphere", (float(geo.get("radius")),), pos, euler))
+                elif geo.tag == "cylinder":
+                    shapes.append(("cylinder", (float(geo.get("radius")), 0.5 * float(geo.get("length"))), pos, euler))
+                else:
+                    raise ValueError(f"link {el.get('name')}: collision geometry {geo.tag!r} is not supported")
+            links[el.get("name")] = UrdfLink(el.get("name"), mass, com, inertia, tuple(shapes))
+        joints = []
+        for el in root.findall("joint"):
+            origin = el.find("origin")
+            axis = el.find("axis")
+            joints.append(UrdfJoint(el.get("name"), el.get("type"), el.find("parent").get("link"),
+                                 el.find("child").get("link"),
+                                 _floats(origin.get("xyz") if origin is not None else None, 3),
+                                 _floats(origin.get("rpy") if origin is not None else None, 3),
+                                 _floats(axis.get("xyz") if axis is not None else None, 3) if axis is not None
+                                 else (1.0, 0.0, 0.0)))
+    except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError) as exc:
+        raise InputError(f"URDF {path}: cannot read it ({exc})") from None
+    return links, joints
+
+
+def urdf_mass_kg(path: str) -> float:
+    """Total mass of a URDF's links, kg (summed in the file's order)."""
+    links, _ = read_urdf(path)
+    return sum(link.mass for link in links.values())

@@ -72,7 +72,7 @@ import numpy as np
 from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
-from offroadbench.sim.engine import ENGINE_TYRE_MODELS, TrialWorld, open_world
+from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
 from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
@@ -502,7 +502,7 @@ def check_vehicle(
     report(progress, 5, total)
     rows.append(_step(spec, quick, geo.belly_m, geo.wheelbase_m, geo.overhang))
     report(progress, 6, total)
-    if "terramechanics" in ENGINE_TYRE_MODELS.get(sim.engine, ()):  # the soft-soil rows need that tyre model
+    if "terramechanics" in engine_capabilities(sim.engine).tyre_models:  # the soft-soil rows need that tyre model
         rows += soft_soil_checks(spec, sim)
     report(progress, 7, total)
     return rows

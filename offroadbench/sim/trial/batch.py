@@ -17,9 +17,10 @@ study with ``root_seed = s``, and the same seed gives the same missions and the 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -65,6 +66,11 @@ class DriveRun:
     """Name of the planner or policy that drove."""
     paths: Mapping[int, np.ndarray] = field(default_factory=dict)
     """Mission index -> planned waypoints (N, 2), map metres (a policy's: start and goal)."""
+    beliefs: Mapping[int, Any] = field(default_factory=dict)
+    """Mission index -> what the ``mast`` sensor left (offroadbench.navigation.sensor.Belief); empty for the oracle."""
+    settings: Any = None
+    """The TrialSettings the missions were driven with (offroadbench.sim.trial.pipeline), the
+    terrain's gravity and soil filled in."""
 
     @property
     def summary(self) -> dict[str, float]:
@@ -103,6 +109,9 @@ def drive_missions(
     rules: FailureRules = FailureRules(),
     roughness: RoughnessConfig = RoughnessConfig(),
     planner="straight",
+    settings=None,
+    gravity_m_s2: float | None = None,
+    soil: str | None = None,
     progress: ProgressFn | None = None,
 ) -> DriveRun:
     """Sample ``n`` missions of ``length_m`` on ``hm`` from the root ``seed`` and drive them all.
@@ -115,22 +124,35 @@ def drive_missions(
     mission border. An impossible
     request (a map too small for the mission length, no low-roughness start) is an InputError
     raised before any physics runs.
+
+    ``settings`` (a TrialSettings, as ``offroadbench drive`` builds from its options) replaces
+    ``length_m``, ``vehicle``, ``sim``, ``controller``, ``rules``, ``roughness`` and ``planner``
+    (its ``missions`` give the length and border; ``n`` the count). ``gravity_m_s2`` and ``soil``
+    are the terrain's (offroadbench.sim.trial.pipeline.terrain_body), used where ``sim`` leaves
+    them open.
     """
     from offroadbench.navigation.planners import PlannerChoice, planner_from_table
     from offroadbench.sim.trial.pipeline import TrialSettings, drive_terrain, prepare_terrain
     from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
-    choice = planner if isinstance(planner, PlannerChoice) else planner_from_table({"name": planner}, where="planner")
-    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    mcfg = MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m)
-    settings = TrialSettings(vehicle=spec, sim=sim, controller=controller, rules=rules, missions=mcfg,
-                             roughness=roughness, planner=choice)
+    if settings is None:
+        choice = planner if isinstance(planner, PlannerChoice) else planner_from_table({"name": planner},
+                                                                                       where="planner")
+        spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+        settings = TrialSettings(vehicle=spec, sim=sim, controller=controller, rules=rules, roughness=roughness,
+                                 missions=MissionConfig(count=n, length_m=length_m, border_m=roughness.border_m),
+                                 planner=choice)
+    settings = settings.replace(missions=dataclasses.replace(settings.missions, count=n))
     mseeds = tuple(mission_seed(seed, 0, k) for k in range(n))
-    prepared = prepare_terrain(hm, terrain_seed, settings, list(enumerate(mseeds)))
+    prepared = prepare_terrain(hm, terrain_seed, settings, list(enumerate(mseeds)), gravity_m_s2=gravity_m_s2,
+                               soil=soil)
     records = list(drive_terrain(prepared, settings, progress=progress))
+    sim = prepared.sim_for(settings.sim)
     return DriveRun(
-        heightmap=hm, closed=prepared.maps.closed, mission_config=mcfg, vehicle_name=spec.name, sim=sim,
-        missions=prepared.missions, mission_seeds=mseeds, terrain_seed=terrain_seed,
-        results=tuple(r.result for r in records), telemetry={r.result.mission_index: r.telemetry for r in records},
-        planner=choice.name, paths={r.result.mission_index: r.path_xy for r in records},
+        heightmap=hm, closed=prepared.maps.closed, mission_config=settings.missions,
+        vehicle_name=settings.vehicle.name, sim=sim, missions=prepared.missions, mission_seeds=mseeds,
+        terrain_seed=terrain_seed, results=tuple(r.result for r in records),
+        telemetry={r.result.mission_index: r.telemetry for r in records}, planner=settings.planner.name,
+        paths={r.result.mission_index: r.path_xy for r in records}, settings=settings.replace(sim=sim),
+        beliefs={r.result.mission_index: r.belief for r in records if r.belief is not None},
     )

@@ -1,17 +1,52 @@
-"""Path tracking on a straight start-goal line or a planned polyline: pure pursuit for steering,
-ruckig for speed.
+"""Path tracking on a straight start-goal line or a planned polyline: pure pursuit for steering, a
+reference-tracking speed loop (a ruckig jerk-limited reference, followed with feedback) for speed.
 
 Steering (pure pursuit, Coulter 1992): the goal point lies ``lookahead`` ahead of the vehicle's
 projection on the line (clamped to the goal); with ``alpha`` the bearing of that point in the
 vehicle frame and ``l`` its distance, the arc through it has curvature ``kappa = 2 sin(alpha) / l``
 and the yaw-rate command is ``omega = v * kappa``.
 
-Speed: every control tick, a one-dimensional ruckig problem runs from the *measured* progress
-along the line and the *measured* speed along it (with the previous commanded acceleration, so
-the command stays jerk-limited) to the goal at rest. The command is ruckig's velocity one tick
-ahead, clipped to [0, max speed] (a vehicle measured slightly over the limit would otherwise be
-commanded a small overshoot by the jerk-limited brake profile). Starting from the measurement each tick makes the profile react to slip and bumps; a
-vehicle that stalls is commanded to re-accelerate within the jerk limit.
+Speed: a two-degree-of-freedom loop, a feedforward reference plus feedback on its tracking error
+(the trajectory generator + feedforward + feedback structure of Astrom & Murray 2008, Feedback
+Systems, Sec. 8.5 "A general controller structure"; anti-windup by conditional integration,
+Astrom & Hagglund 2006, Advanced PID Control, ch. 3 "Integrator windup")::
+
+                  +-------------------+  v_ref (feedforward)
+      goal L ---->| ruckig reference  |-------------------------+
+                  | own state p, v, a |                         |
+                  +-------------------+                         v
+                     |  p_ref     ^                       +-----------+      +-----------+
+                     |            | re-plan only when     |    sum    |  u   |  wheels,  |
+                     v            | |p_ref - p| > bound   | v_ref +   |----->|  vehicle, |---+
+                  +------+        |                       | k_p e + I |      |  soil     |   |
+                  |  -   |--------+---------------------->| sat [0,   |      +-----------+   |
+                  +------+     e = p_ref - p              |   u_max]  |                      |
+                     ^                                    +-----------+                      |
+                     |          I += k_i e dt, unless u is held at a limit in e's direction   |
+                     +-------------------- measured progress p along the path ----------------+
+
+* The reference (progress ``p_ref``, speed ``v_ref``, acceleration ``a_ref``) is a 1-D ruckig
+  trajectory to the goal at rest, within the cruise speed, the vehicle's acceleration and jerk. It
+  starts once from the vehicle's measured progress and speed and then evolves from its *own* state
+  each control period (ruckig's output fed back as its input), so slip does not pull it down.
+* The wheel-speed command is ``u = v_ref + k_p e + I`` with the progress error ``e = p_ref - p``
+  and ``I = k_i int e dt``, saturated to ``[0, u_max]`` (``u_max`` the vehicle's top speed at the
+  tyre; under a steady slip ``s`` the wheels need ``v_ref / (1 - s)``, which the feedback supplies).
+  The integral stops growing while ``u`` is held at a limit in the direction ``e`` pushes it.
+* Re-plan: only when the vehicle is more than ``speed_lag_bound_m`` behind (or ahead of) the
+  reference is the reference moved, to that bound from the measured progress; its speed and
+  acceleration are kept. The command is therefore never reset to the measured speed: a vehicle that
+  is held back keeps being commanded ``v_ref + k_p * bound + I`` (the wheels dig; the ``entrapped``
+  rule judges that), and one that breaks free needs no new jerk-limited start.
+* Traction control (``traction_slip_limit``, off by default) caps ``u`` at
+  ``max(v, 0.1 v_cruise) / (1 - limit)`` of the measured speed ``v``, so the commanded slip stays
+  near the limit (the slip-limiting idea of rover traction control, e.g. the slip compensation
+  of Ishigami, Nagatani & Yoshida 2008; here only a cap, no slip estimator).
+* Past the goal (``p >= L``) the command is 0.
+
+Before 2026-11-26 the profile was re-planned every tick from the *measured* progress and speed, so
+under a steady slip ``s`` the command settled near ``v + a dt``, i.e. ``a dt / s``: on flat lunar
+regolith the Husky was commanded 0.6-0.7 m/s instead of 1 m/s (issue 28).
 """
 
 from __future__ import annotations
@@ -25,7 +60,7 @@ from offroadbench.errors import InputError
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.vehicle import VehicleSpec
 
-__all__ = ["pure_pursuit_omega", "SpeedProfile", "LineTracker", "PathTracker", "make_tracker"]
+__all__ = ["pure_pursuit_omega", "SpeedProfile", "speed_loop", "LineTracker", "PathTracker", "make_tracker"]
 
 
 def _dot2(x: float, y: float, unit) -> float:
@@ -52,10 +87,26 @@ def pure_pursuit_omega(
 
 
 class SpeedProfile:
-    """Jerk-limited speed along a path of given length, re-planned from measurements each tick."""
+    """A jerk-limited reference (progress, speed, acceleration) to the goal, and the wheel-speed
+    command that follows it (module docstring: the block diagram, the re-plan and the anti-windup).
 
-    def __init__(self, length_m: float, dt_s: float, v_max: float, a_max: float, j_max: float) -> None:
+    Args:
+        length_m: path length, m (the reference plans to rest there).
+        dt_s: control period, s.
+        v_max, a_max, j_max: the reference's speed (the cruise speed), acceleration and jerk limits.
+        command_max_m_s: the largest wheel-speed command, m/s (the vehicle's top speed at the tyre);
+            ``v_max`` if None.
+        lag_bound_m: the re-plan bound on |reference - measured progress|, m.
+        k_p_1_s, k_i_1_s2: feedback gains on the progress error, 1/s and 1/s^2.
+        slip_limit: traction control: the command is held to ``max(v, v_creep) / (1 - slip_limit)``
+            of the measured speed ``v`` (``v_creep`` = 10 % of ``v_max``); None: off.
+    """
+
+    def __init__(self, length_m: float, dt_s: float, v_max: float, a_max: float, j_max: float, *,
+                 command_max_m_s: float | None = None, lag_bound_m: float = 0.5, k_p_1_s: float = 1.0,
+                 k_i_1_s2: float = 0.25, slip_limit: float | None = None) -> None:
         self.length_m = float(length_m)
+        self.dt_s = float(dt_s)
         self._otg = Ruckig(1, dt_s)
         self._inp = InputParameter(1)
         self._out = OutputParameter(1)
@@ -65,23 +116,78 @@ class SpeedProfile:
         self._inp.target_position = [self.length_m]
         self._inp.target_velocity = [0.0]
         self._inp.target_acceleration = [0.0]
-        self._v_max = v_max
-        self._a_max = a_max
-        self._accel = 0.0
+        self._inp.current_position = [0.0]
+        self._inp.current_velocity = [0.0]
+        self._inp.current_acceleration = [0.0]
+        self._v_max = float(v_max)
+        self._u_max = float(v_max if command_max_m_s is None else max(command_max_m_s, v_max))
+        self._bound = float(lag_bound_m)
+        self._k_p = float(k_p_1_s)
+        self._k_i = float(k_i_1_s2)
+        self._slip_limit = slip_limit
+        self._started = False
+        self.integral_m_s = 0.0
+        """The integral term of the command, m/s (held in [0, command max])."""
+        self.replans = 0
+        """How often the reference was re-planned (the vehicle left the lag bound)."""
 
-    def command(self, progress_m: float, speed_m_s: float) -> float:
-        """Speed command (m/s, >= 0) for the next tick, from measured progress and speed."""
-        if progress_m >= self.length_m:
-            self._accel = 0.0
-            return 0.0
-        self._inp.current_position = [progress_m]
-        self._inp.current_velocity = [max(-self._v_max, min(self._v_max, speed_m_s))]
-        self._inp.current_acceleration = [self._accel]
+    @property
+    def reference(self) -> tuple[float, float, float]:
+        """(progress m, speed m/s, acceleration m/s^2) of the reference now."""
+        return (float(self._inp.current_position[0]), float(self._inp.current_velocity[0]),
+                float(self._inp.current_acceleration[0]))
+
+    def _advance(self) -> None:
+        """One control period of the reference, from its own state."""
+        if self._inp.current_position[0] >= self.length_m and abs(self._inp.current_velocity[0]) < 1e-9:
+            self._inp.current_position = [self.length_m]
+            self._inp.current_acceleration = [0.0]
+            return
         result = self._otg.update(self._inp, self._out)
         if result not in (Result.Working, Result.Finished):
-            raise RuntimeError(f"ruckig failed with {result} at progress {progress_m:.3f} m, speed {speed_m_s:.3f} m/s")
-        self._accel = max(-self._a_max, min(self._a_max, self._out.new_acceleration[0]))
-        return max(0.0, min(self._v_max, self._out.new_velocity[0]))
+            p, v, a = self.reference
+            raise RuntimeError(f"ruckig failed with {result} from reference progress {p:.3f} m, speed {v:.3f} m/s, "
+                               f"acceleration {a:.3f} m/s^2")
+        self._out.pass_to_input(self._inp)
+
+    def command(self, progress_m: float, speed_m_s: float) -> float:
+        """Wheel-speed command (m/s, >= 0) for the next period, from the measured progress along the
+        path and the measured speed along it."""
+        if progress_m >= self.length_m:
+            self.integral_m_s = 0.0
+            return 0.0
+        if not self._started:  # the reference starts where the vehicle is, at its speed
+            self._started = True
+            self._inp.current_position = [min(float(progress_m), self.length_m)]
+            self._inp.current_velocity = [max(0.0, min(self._v_max, float(speed_m_s)))]
+        self._advance()
+        p_ref, v_ref, _ = self.reference
+        error = p_ref - progress_m
+        if abs(error) > self._bound:
+            # re-plan: the reference is moved to the bound from the measured progress; its speed and
+            # acceleration are kept, so the command is not pulled down to the measured speed
+            self.replans += 1
+            p_ref = min(self.length_m, progress_m + math.copysign(self._bound, error))
+            self._inp.current_position = [p_ref]
+            error = p_ref - progress_m
+        u_max = self._u_max
+        if self._slip_limit is not None:
+            u_max = min(u_max, max(speed_m_s, 0.1 * self._v_max) / (1.0 - self._slip_limit))
+        unclipped = v_ref + self._k_p * error + self.integral_m_s
+        u = max(0.0, min(u_max, unclipped))
+        # anti-windup (conditional integration): the integral grows only while the command is not
+        # held at a limit in the direction the error pushes it
+        if (unclipped < u_max or error < 0.0) and (unclipped > 0.0 or error > 0.0):
+            self.integral_m_s = max(0.0, min(u_max, self.integral_m_s + self._k_i * error * self.dt_s))
+        return u
+
+
+def speed_loop(length_m: float, spec: VehicleSpec, cfg: ControllerConfig) -> SpeedProfile:
+    """The speed loop of a path of ``length_m`` for this vehicle and controller configuration."""
+    return SpeedProfile(length_m, 1.0 / cfg.control_rate_hz, min(cfg.cruise_speed_m_s, spec.max_speed_m_s),
+                        spec.max_accel_m_s2, spec.max_jerk_m_s3, command_max_m_s=spec.max_speed_m_s,
+                        lag_bound_m=cfg.speed_lag_bound_m, k_p_1_s=cfg.speed_gain_1_s,
+                        k_i_1_s2=cfg.speed_integral_gain_1_s2, slip_limit=cfg.traction_slip_limit or None)
 
 
 class LineTracker:
@@ -95,13 +201,7 @@ class LineTracker:
         self.unit = delta / self.length_m
         self.cfg = cfg
         self.spec = spec
-        self.speed = SpeedProfile(
-            self.length_m,
-            1.0 / cfg.control_rate_hz,
-            min(cfg.cruise_speed_m_s, spec.max_speed_m_s),
-            spec.max_accel_m_s2,
-            spec.max_jerk_m_s3,
-        )
+        self.speed = speed_loop(self.length_m, spec, cfg)
 
     def progress(self, pos_xy: np.ndarray) -> float:
         """Distance along the line of the projection of ``pos_xy``, metres."""
@@ -153,13 +253,7 @@ class PathTracker:
         self._seg = 0
         self._s = 0.0
         self._window_m = cfg.lookahead_m + 2.0
-        self.speed = SpeedProfile(
-            self.length_m,
-            1.0 / cfg.control_rate_hz,
-            min(cfg.cruise_speed_m_s, spec.max_speed_m_s),
-            spec.max_accel_m_s2,
-            spec.max_jerk_m_s3,
-        )
+        self.speed = speed_loop(self.length_m, spec, cfg)
 
     def _project(self, pos_xy: np.ndarray) -> tuple[int, float]:
         """(segment index, arc length) of the nearest point within the search window."""

@@ -40,7 +40,8 @@ from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle, vehicle_fr
 if TYPE_CHECKING:
     from offroadbench.sim.trial.runner import TrialResult
 
-__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions"]
+__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
+           "terrain_body"]
 
 
 def _builder(cls: type):
@@ -104,13 +105,6 @@ class TrialSettings:
         """A copy with some parts replaced (``dataclasses.replace``)."""
         return dataclasses.replace(self, **changes)
 
-    def drive_kwargs(self, maps: ClassMaps | None) -> dict[str, Any]:
-        """Keyword arguments of :func:`offroadbench.sim.trial.runner.drive_mission` for these settings."""
-        return {"planner": self.planner, "classes": None if maps is None else maps.closed,
-                "border_m": self.missions.border_m, "controller": self.controller, "rules": self.rules,
-                "observation": self.observation}
-
-
 @dataclass(frozen=True, eq=False)
 class PreparedTerrain:
     """A terrain ready to drive: its heights, class maps and missions (in driving order)."""
@@ -136,6 +130,26 @@ class PreparedTerrain:
         return sim.for_terrain(self.gravity_m_s2, self.soil)
 
 
+def terrain_body(terrain: Any = None, recipe: Any = None) -> tuple[float | None, str | None]:
+    """(gravity m/s^2, soil name) that a terrain names, None for what it names none of: the
+    ``[body]`` and ``[soil]`` of its recipe (``recipe``, or ``terrain`` itself when it is a Recipe),
+    or those of the recipe stored in a 16-bit PNG's sidecar (``terrain`` a ``.png`` path); a bare
+    Heightmap names neither. The one place a terrain's body and soil are read; SimConfig.for_terrain
+    then fills what the settings leave open."""
+    from offroadbench.terrain.recipe import Recipe
+
+    if recipe is None and isinstance(terrain, Recipe):
+        recipe = terrain
+    if recipe is not None:
+        return recipe.gravity_m_s2, recipe.soil
+    if isinstance(terrain, (str, Path)) and str(terrain).lower().endswith(".png"):
+        from offroadbench.bodies import terrain_gravity_and_soil
+        from offroadbench.io.png16 import read_png16_metadata
+
+        return terrain_gravity_and_soil(read_png16_metadata(terrain).get("recipe"))
+    return None, None
+
+
 def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
                     missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
                     gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
@@ -154,7 +168,7 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
         from offroadbench.terrain.recipe import generate_terrain
 
         hm = generate_terrain(terrain, seed)
-        gravity_m_s2, soil = terrain.gravity_m_s2, terrain.soil
+        gravity_m_s2, soil = terrain_body(terrain)
     maps = classify_terrain(hm, settings.roughness)
     items = list(missions)
     if items and isinstance(items[0], Mission):
@@ -175,11 +189,11 @@ def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
     needs = settings.planner.needs
     if "classes" in needs and prepared.maps is None:
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
-    kwargs = settings.drive_kwargs(prepared.maps if "classes" in needs else None)
+    classes = prepared.maps.closed if "classes" in needs else None
     n = len(prepared.missions)
     with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):
-            yield drive_mission(world, mission, **kwargs)
+            yield drive_mission(world, mission, settings=settings, classes=classes)
             report(progress, i + 1, n)
 
 

@@ -1,5 +1,8 @@
 """The trial runner: drive one mission in a World, apply the failure rules, compute the metrics.
 
+The per-tick code is :class:`TrialLoop`; :func:`drive_mission` drives it with a planner's path or a
+policy, the Gymnasium env (offroadbench.sim.gym_env) with an agent's actions, so both are one trial.
+
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
 at control ticks the driver issues (v, omega), mapped to joint commands by the vehicle's steering
@@ -20,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -30,14 +34,17 @@ from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
 from offroadbench.navigation.perception import Replanner
+from offroadbench.navigation.sensor import Belief, make_sensing, sheet_envelope
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, min_turn_radius_m, reference_layout
 from offroadbench.sim.engine import TrialWorld
+from offroadbench.sim.engines.base import max_height_near
+from offroadbench.bounds import check_settled
 
-__all__ = ["TrialResult", "TrialRecord", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission", "run_mission",
-           "vehicle_envelope", "body_velocity", "body_frame"]
+__all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
+           "run_mission", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
 
 #: telemetry columns, each a 1-D array sampled at SimConfig.telemetry_rate_hz
 TELEMETRY_COLUMNS = (
@@ -76,7 +83,8 @@ class TrialResult:
     rms_roll_rate_deg_s: float
     """RMS roll rate from the unwrapped roll angle, deg/s (Majhor & Bos 2023, Sec. 2.4)."""
     max_penetration_m: float
-    """Deepest wheel-terrain penetration seen at the telemetry ticks."""
+    """Deepest wheel-terrain penetration seen at the telemetry ticks (a transient maximum: on soil
+    use ``sinkage_median_m`` and ``sinkage_p95_m``)."""
     sim_time_s: float
     """Simulated time at the end of the trial (success, failure or timeout)."""
     final_distance_to_goal_m: float
@@ -92,9 +100,14 @@ class TrialResult:
     heading_deg: float
     """Direction from start to goal, degrees counter-clockwise from +x."""
     mean_slip: float = float("nan")
-    """Mean longitudinal wheel slip over the telemetry ticks with a wheel on the soil (the
-    ``terramechanics`` tyre model; NaN with the other models). ``max_penetration_m`` is then the
-    deepest soil sinkage."""
+    """Mean longitudinal wheel slip over the moving telemetry ticks with a wheel on the soil (the
+    ``terramechanics`` tyre model; NaN with the other models; moving: offroadbench.navigation.metrics)."""
+    sinkage_median_m: float = float("nan")
+    """Median of the deepest wheel's soil sinkage over the moving telemetry ticks, m (the
+    ``terramechanics`` tyre model; NaN with the other models)."""
+    sinkage_p95_m: float = float("nan")
+    """95th percentile of the deepest wheel's soil sinkage over the moving telemetry ticks, m (as
+    ``sinkage_median_m``)."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)
@@ -154,6 +167,146 @@ class TrialRecord:
     """TELEMETRY_COLUMNS, each a 1-D array."""
     path_xy: np.ndarray
     """The planner's waypoints (N, 2), map metres; for a policy, ``[start, goal]``."""
+    belief: Belief | None = None
+    """Under the ``mast`` sensor: the believed path and the map it built (None for the oracle)."""
+
+
+class TrialLoop:
+    """One trial in progress: the per-tick functions that :func:`drive_mission` and the Gymnasium env
+    (offroadbench.sim.gym_env) both call, so a trial is the same code whoever chooses the commands.
+
+    Built at the mission's start (the vehicle spawned and settled, the clock at 0, the state read
+    into :attr:`state`). Each control tick, the driver sets the wheels with :meth:`command` and
+    the tick is recorded with :meth:`record` (the telemetry row at a telemetry tick, Majhor & Bos
+    2023, Sec. 2.4: 20 Hz, and the failure rules, offroadbench.navigation.rules, checked on it);
+    :meth:`step_to_next_control` then runs the physics to the next control tick, recording the
+    telemetry ticks on the way. Either returns True once the trial has ended: a rule fired
+    (:attr:`reason`), or the timeout (``rules.timeout_factor`` times the nominal time ``length_m``
+    over the cruise speed). ``progress_m`` maps the base position to a row's progress along the path.
+
+    The trial runner commands first and then records a control tick (the row carries the command
+    chosen there); the env records on arriving at a tick (so the step that ends a trial says so)
+    and its next :meth:`command` writes the new command into that tick's row: the rows are the same.
+    """
+
+    def __init__(self, world: TrialWorld, mission: Mission, *, length_m: float, controller: ControllerConfig,
+                 rules: FailureRules, name: str = "agent", spawn_roll_rad: float = 0.0) -> None:
+        sim = world.sim
+        if sim.physics_rate_hz % controller.control_rate_hz:
+            raise InputError(
+                f"ControllerConfig.control_rate_hz = {controller.control_rate_hz} must divide "
+                f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
+            )
+        hm, spec = world.hm, world.spec
+        self.world = world
+        self.mission = mission
+        self.name = name
+        self.ctrl_every = sim.physics_rate_hz // controller.control_rate_hz
+        self.tel_every = sim.physics_rate_hz // sim.telemetry_rate_hz
+        self.goal = np.asarray(mission.goal_xy_m, dtype=float)
+        self.timeout_s = trial_timeout_s(rules, length_m, controller.cruise_speed_m_s, spec.max_speed_m_s)
+        self.n_steps = int(math.ceil(self.timeout_s * sim.physics_rate_hz))
+        self.checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), self.goal, timeout_s=self.timeout_s,
+                                   sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
+                                   wheel_radius_m=spec.wheel_radius_m)
+        self.rows: list[tuple] = []
+        self._row_k = -1  # the tick of the last row
+        self.slips: list[float] = []
+        self.cmd_v = self.cmd_w = 0.0
+        self.reason: str | None = None
+        """None while the trial runs, then "" (success) or its failure reason."""
+        self.traversal_time_s = float("nan")
+        self.end_step = self.n_steps
+        self.k = 0
+        world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
+        self._read()
+        # a vehicle thrown while settling is a fault, not a trial (offroadbench.bounds)
+        check_settled(self.state[0], self.state[2],
+                      max_height_near(hm, *mission.start_xy_m, spec.wheel_radius_m + spec.track_m),
+                      size_m=spec.track_m + 2 * spec.wheel_radius_m, where=f"mission {mission.index}")
+
+    def _read(self) -> None:
+        pos, quat, lin, ang = self.world.base_state()
+        roll, pitch, yaw, *rates = body_frame(self.world, quat, ang)
+        self.state = (pos, quat, lin, ang, roll, pitch, yaw, rates)
+        """(position, quaternion, linear and angular velocity, roll, pitch, yaw, body rates) at the
+        last control or telemetry tick (offroadbench.sim.engine.TrialWorld.base_state, body_frame)."""
+
+    @property
+    def t_s(self) -> float:
+        """Simulated time since the clock started, s."""
+        return self.k * self.world.dt_s
+
+    @property
+    def ended(self) -> bool:
+        """True once :meth:`record` or :meth:`step_to_next_control` has ended the trial."""
+        return self.reason is not None
+
+    def command(self, v_m_s: float, omega_rad_s: float) -> None:
+        """Drive at (v, omega) from this tick (the vehicle's steering kind maps it to joint commands:
+        offroadbench.sim.trial.steering); a row already recorded at this tick takes the command."""
+        self.cmd_v, self.cmd_w = v_m_s, omega_rad_s
+        drive_twist(self.world, v_m_s, omega_rad_s)
+        if self._row_k == self.k:
+            row = self.rows[-1]
+            self.rows[-1] = (*row[:17], v_m_s, omega_rad_s, *row[19:])
+
+    def record(self, progress_m) -> bool:
+        """At a telemetry tick, the row and the failure rules; then the timeout. True when the trial
+        has ended here."""
+        k, world = self.k, self.world
+        if k % self.tel_every == 0:
+            pos, quat, lin, ang, roll, pitch, yaw, rates = self.state
+            _check_state(self.name, k * world.dt_s, pos, quat, lin, ang)
+            self.rows.append((k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
+                              self.cmd_v, self.cmd_w, progress_m(pos), world.wheel_penetration_m()))
+            self._row_k = k
+            slip = world.wheel_slip()
+            self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
+            done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
+            if done is not None:
+                self.reason = done
+                self.end_step = k
+                if done == "":
+                    self.traversal_time_s = k * world.dt_s
+                return True
+        if k >= self.n_steps:
+            self.reason = "timeout"
+            return True
+        return False
+
+    def step_to_next_control(self, progress_m) -> bool:
+        """Physics steps up to the next control tick (its state read, not yet recorded), recording
+        the telemetry ticks on the way; True when the trial has ended on the way."""
+        world, tel_every, ctrl_every = self.world, self.tel_every, self.ctrl_every
+        while True:
+            world.step()
+            self.k = k = self.k + 1
+            tel, ctrl = k % tel_every == 0, k % ctrl_every == 0
+            if tel or ctrl:
+                self._read()
+            if ctrl:
+                return False
+            if self.record(progress_m):
+                return True
+
+    def result(self) -> TrialResult:
+        """The trial's row (:class:`TrialResult`), once it has ended."""
+        tel = self.telemetry()
+        reason = "timeout" if self.reason is None else self.reason
+        result = _result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
+                         1.0 / self.world.sim.telemetry_rate_hz, self.goal)
+        if any(map(math.isfinite, self.slips)):  # on soil: slip and sinkage over the moving samples
+            moving = metrics.moving_samples(tel["cmd_v_m_s"], tel["vx_m_s"], tel["vy_m_s"])
+            on_soil = moving & np.isfinite(np.asarray(self.slips))
+            median, p95 = metrics.sinkage_summary(tel["penetration_m"], on_soil)
+            result = dataclasses.replace(result, mean_slip=metrics.mean_where(self.slips, on_soil),
+                                         sinkage_median_m=median, sinkage_p95_m=p95)
+        return result
+
+    def telemetry(self) -> dict[str, np.ndarray]:
+        """The telemetry so far, TELEMETRY_COLUMNS."""
+        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows))}
 
 
 def drive_mission(
@@ -167,8 +320,14 @@ def drive_mission(
     rules: FailureRules = FailureRules(),
     observation: ObservationConfig = ObservationConfig(),
     spawn_roll_rad: float = 0.0,
+    settings: Any = None,
 ) -> TrialRecord:
-    """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy.
+    """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy, through
+    :class:`TrialLoop`.
+
+    ``settings`` (offroadbench.sim.trial.pipeline.TrialSettings, as :func:`drive_terrain` passes
+    them whole) gives the planner, controller, rules, observation and the missions' border in place
+    of those keyword arguments (the world already holds its vehicle and physics).
 
     ``classes`` is the closed roughness-class map the planner sees (the study's; needed by a driver
     whose registry entry declares it, see offroadbench.navigation.drivers.NEEDS), ``border_m`` the
@@ -177,6 +336,9 @@ def drive_mission(
     ``spawn_roll_rad`` tilts the vehicle about its long axis at spawn (a test hook: 90 deg puts it
     on its side).
     """
+    if settings is not None:
+        planner, controller, rules = settings.planner, settings.controller, settings.rules
+        observation, border_m = settings.observation, settings.missions.border_m
     sim = world.sim
     if sim.physics_rate_hz % controller.control_rate_hz:
         raise InputError(
@@ -185,26 +347,27 @@ def drive_mission(
         )
     hm = world.hm
     spec = world.spec
-    ctrl_every = sim.physics_rate_hz // controller.control_rate_hz
-    tel_every = sim.physics_rate_hz // sim.telemetry_rate_hz
-    tel_dt = 1.0 / sim.telemetry_rate_hz
     goal = np.asarray(mission.goal_xy_m, dtype=float)
 
     policy = tracker = replanner = None
     needs = planner.needs  # declared on the planner's or policy's registry entry
     if "classes" in needs and classes is None:
         raise InputError(f"{planner.kind} {planner.name!r} needs the class map (classes=...)")
+    perception = planner.perception
+    envelope = vehicle_envelope(world) if "vehicle" in needs else None
+    if envelope is not None and perception is not None and perception.limits == "sheet":
+        envelope = sheet_envelope(envelope, spec)
     problem = PlanningProblem(hm=hm, classes=classes if "classes" in needs else None, start_xy=mission.start_xy_m,
-                              goal_xy=mission.goal_xy_m, border_m=border_m,
-                              vehicle=vehicle_envelope(world) if "vehicle" in needs else None)
+                              goal_xy=mission.goal_xy_m, border_m=border_m, vehicle=envelope)
+    sensing = make_sensing(hm, perception, mission)  # what the driver knows: the truth, or the mast sensor's
     if planner.kind == "policy":
         waypoints = problem.endpoints()
-        policy = make_policy(planner.name, planner.config, PolicyContext(
+        policy = _policy_call(planner.name, "could not be built", make_policy, planner.name, planner.config, PolicyContext(
             observation=observation, vehicle=problem.vehicle, track_m=spec.track_m,
             control_rate_hz=controller.control_rate_hz))
-        policy.reset(problem)
+        _policy_call(planner.name, "failed in reset()", policy.reset, problem)
     elif planner.perception is not None:  # the planner sees a degraded map (navigation.perception)
-        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, planner.perception)
+        replanner = Replanner(lambda p: plan_within_limits(planner, p), problem, mission, perception, sensing)
         waypoints = replanner.waypoints
     else:
         waypoints = plan_within_limits(planner, problem)
@@ -213,66 +376,55 @@ def drive_mission(
         length = tracker.length_m
     else:
         length = mission.length_m
-    timeout_s = trial_timeout_s(rules, length, controller.cruise_speed_m_s, spec.max_speed_m_s)
-    n_steps = int(math.ceil(timeout_s * sim.physics_rate_hz))
-    checker = RuleChecker(rules, (hm.width_m, hm.height_m, hm.z_min_m), goal, timeout_s=timeout_s,
-                          sample_rate_hz=sim.telemetry_rate_hz, mission_length_m=mission.length_m,
-                          wheel_radius_m=spec.wheel_radius_m)
     fill_m = hm.z_min_m - rules.fall_depth_m
-    v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
 
-    world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
+    def progress_m(pos) -> float:
+        if replanner is None and tracker is not None:
+            return tracker.progress(np.array(pos[:2]))
+        return mission.length_m - math.hypot(goal[0] - pos[0], goal[1] - pos[1])
 
-    rows: list[tuple] = []
-    slips: list[float] = []
-    cmd_v = cmd_w = 0.0
-    reason = "timeout"
-    traversal_time = float("nan")
-    end_step = n_steps
-    for k in range(n_steps + 1):
-        tel_tick = k % tel_every == 0
-        ctrl_tick = k % ctrl_every == 0
-        if tel_tick or ctrl_tick:
-            pos, quat, lin, ang = world.base_state()
-            roll, pitch, yaw, *rates = body_frame(world, quat, ang)
-        if ctrl_tick:
-            if policy is None:
-                if replanner is not None and replanner.update(pos[:2]) is not None:
-                    tracker = make_vehicle_tracker(replanner.waypoints, spec, controller, world)
-                cmd_v, cmd_w, _ = tracker.command(np.array(pos[:2]), yaw, np.array(lin[:2]))
-            else:
-                obs = observe(hm, observation, goal, pos, roll, pitch, yaw, rates, body_velocity(world, quat, lin), fill_m)
-                a = _checked_action(planner.name, policy.act(obs), k * world.dt_s)
-                cmd_v = min(max(a[0], -v_lim), v_lim)
-                cmd_w = min(max(a[1], -w_lim), w_lim)
-            drive_twist(world, cmd_v, cmd_w)
-        if tel_tick:
-            _check_state(planner.name, k * world.dt_s, pos, quat, lin, ang)
-            progress = tracker.progress(np.array(pos[:2])) if replanner is None and tracker is not None else mission.length_m - math.hypot(
-                goal[0] - pos[0], goal[1] - pos[1])
-            rows.append(
-                (k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
-                 cmd_v, cmd_w, progress, world.wheel_penetration_m())
-            )
-            slip = world.wheel_slip()
-            if slip is not None:
-                slips.append(slip)
-            done = checker.check(pos, roll, pitch, slip, rows[-1][-1])
-            if done is not None:
-                reason = done
-                end_step = k
-                if done == "":
-                    traversal_time = k * world.dt_s
-                break
-        if k < n_steps:
-            world.step()
-
-    tel = {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*rows))}
-    result = _result(mission, tel, reason, traversal_time, end_step * world.dt_s, tel_dt, goal)
-    if slips:
-        result = dataclasses.replace(result, mean_slip=math.fsum(slips) / len(slips))
+    loop = TrialLoop(world, mission, length_m=length, controller=controller, rules=rules, name=planner.name,
+                     spawn_roll_rad=spawn_roll_rad)
+    while True:
+        pos, quat, lin, ang, roll, pitch, yaw, rates = loop.state
+        bx, by, byaw = sensing.update(pos, yaw)  # the believed pose (the true one for the oracle)
+        if policy is None:
+            if replanner is not None and replanner.update((bx, by)) is not None:
+                tracker = make_vehicle_tracker(replanner.waypoints, spec, controller, world)
+            v, w, _ = tracker.command(np.array((bx, by)), byaw, np.array(lin[:2]))
+        else:
+            obs = observe(hm, observation, goal, (bx, by, pos[2]), roll, pitch, byaw, rates,
+                          body_velocity(world, quat, lin), fill_m, None if sensing.name == "oracle" else sensing.z)
+            if "map" in needs:
+                obs["pose"], obs["elevation_m"] = np.array((bx, by, byaw)), sensing.z
+            act = _policy_call(planner.name, f"failed in act() at t = {loop.t_s:.2f} s", policy.act, obs)
+            v, w = clamp_action(_checked_action(planner.name, act, loop.t_s), spec)
+        loop.command(v, w)
+        if loop.record(progress_m) or loop.step_to_next_control(progress_m):
+            break
     path = replanner.trace if replanner is not None else waypoints
-    return TrialRecord(result, tel, np.asarray(path, dtype=float))
+    belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.seen)
+    return TrialRecord(loop.result(), loop.telemetry(), np.asarray(path, dtype=float), belief)
+
+
+def clamp_action(action: tuple[float, float], spec) -> tuple[float, float]:
+    """A (v, omega) command within the vehicle's top speed (either direction) and yaw-rate limit."""
+    v_lim, w_lim = spec.max_speed_m_s, spec.max_yaw_rate_rad_s
+    return min(max(action[0], -v_lim), v_lim), min(max(action[1], -w_lim), w_lim)
+
+
+def _policy_call(name: str, what: str, fn, *args):
+    """A policy's own code (built, reset, act): its exception is a one-line PluginError naming the
+    policy (the traceback goes to the log), as a planner's is (:func:`plan_within_limits`)."""
+    try:
+        return fn(*args)
+    except (PluginError, InputError):
+        raise
+    except Exception as exc:
+        import logging
+
+        logging.getLogger(__name__).info("policy %r %s", name, what, exc_info=True)
+        raise PluginError(f"policy {name!r} {what}: {type(exc).__name__}: {' '.join(str(exc).split())[:300]}") from exc
 
 
 def _checked_action(name: str, action, t_s: float) -> tuple[float, float]:

@@ -17,6 +17,7 @@ from typing import Any, Mapping
 from offroadbench import resources
 from offroadbench.config import check_choice, check_range, from_dict, load_toml
 from offroadbench.errors import InputError
+from offroadbench.bounds import check_bounds
 from offroadbench.registry import Registry, unknown_name
 
 __all__ = ["STEERING_KINDS", "VehicleSpec", "VEHICLES", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
@@ -137,6 +138,7 @@ class VehicleSpec:
         if self.tyre_stiffness_n_m is not None:
             check_range(self, "tyre_stiffness_n_m", self.tyre_stiffness_n_m, lo=0, lo_open=True)
             check_range(self, "tyre_damping_n_s_m", self.tyre_damping_n_s_m, lo=0)
+        check_bounds(self, f"vehicle {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
     def _check_steering(self) -> None:
         if self.steering == "skid":

@@ -9,7 +9,14 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["CoulombBristles"]
+__all__ = ["CoulombBristles", "bristle_constants"]
+
+
+def bristle_constants(share_kg: float, dt_s: float) -> tuple[float, float]:
+    """(stiffness N/m, damping N s/m) of a wheel's bristle for its share ``share_kg`` of the mass at
+    the trial's step ``dt_s``: ``k = m / (4 dt^2)`` and ``c = m / (2 dt)``, well inside the explicit
+    step's stability bound (``k dt^2 / m < 1``, ``c dt / m < 2``); every engine's ``coulomb`` tyres."""
+    return 0.25 * share_kg / dt_s**2, 0.5 * share_kg / dt_s
 
 
 class CoulombBristles:

@@ -10,6 +10,15 @@ of travel, with the entry angle ``theta_1 = acos(1 - h / r)`` and the exit angle
   ``sigma(theta) = (k_c / b + k_phi) r^n (cos(theta) - cos(theta_1))^n``; behind it the same law at
   the equivalent front angle ``theta_1 - theta / theta_m (theta_1 - theta_m)``.
 * **Maximum-stress angle** from the slip (Wong & Reece 1967): ``theta_m = (a_0 + a_1 |s|) theta_1``.
+* **Slip-sinkage** (Ding et al. 2011, J. Terramechanics 48, the slip-dependent sinkage exponent
+  ``N = n0 + n1 s``): the exponent of the normal stress is ``n(s) = n + n1 |s|``, so at the same
+  load a slipping wheel sinks deeper (with ``z < 1 m``, a larger exponent means a softer soil) and
+  a spinning wheel digs itself in. Wong & Reece's model alone barely changes the sinkage with slip
+  (9.2 -> 10.0 mm from slip 0 to 0.9 for the Husky on lunar regolith in lunar gravity), against
+  single-wheel tests where it grows severalfold (Ding et al. 2010: 3-7x at slip 0.6 with lugged
+  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``, with its source);
+  ``n1 = 0`` is the model without slip-sinkage. The moduli keep their values as ``n`` varies (as
+  Ding et al. do), so their units follow ``n(s)``.
 * **Shear stress** (Janosi & Hanamoto 1961): ``tau = (c + sigma tan(phi)) (1 - exp(-|j| / K))``, signed as
   ``j`` (the soil resists the displacement either way), with the
   shear displacement of a driven wheel (Wong & Reece 1967, Eq. 7)
@@ -53,6 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from offroadbench import resources
+from offroadbench.bounds import check_bounds
 from offroadbench.config import check_range, from_dict, load_toml
 from offroadbench.errors import InputError
 from offroadbench.registry import unknown_name
@@ -60,6 +70,7 @@ from offroadbench.registry import unknown_name
 __all__ = [
     "DEFAULT_SOIL",
     "SoilParams",
+    "SlipSinkageBand",
     "SoilTables",
     "build_tables",
     "entry_angle",
@@ -68,6 +79,7 @@ __all__ = [
     "load_soil",
     "max_stress_angle",
     "normal_stress",
+    "published_slip_sinkage",
     "shear_displacement",
     "soil_files",
     "static_sinkage",
@@ -109,6 +121,10 @@ class SoilParams:
     """theta_m = (a0 + a1 |s|) theta_1 (Wong & Reece 1967); Ishigami et al. 2007 use 0.4."""
     a1: float = 0.15
     """See a0; Ishigami et al. 2007 use 0.15."""
+    n1: float = 0.0
+    """Slip-sinkage: the sinkage exponent grows with slip, ``n(s) = n + n1 |s|`` (Ding et al. 2011,
+    their slip-dependent ``N = n0 + n1 s``), so a spinning wheel sinks deeper; 0: no slip-sinkage.
+    Dimensionless."""
 
     def __post_init__(self) -> None:
         check_range(self, "n", self.n, lo=0, lo_open=True, hi=3)
@@ -120,8 +136,14 @@ class SoilParams:
         check_range(self, "lateral_shear_modulus_m", self.lateral_shear_modulus_m, lo=0, lo_open=True)
         check_range(self, "a0", self.a0, lo=0, lo_open=True, hi=1)
         check_range(self, "a1", self.a1, lo=0, hi=1)
+        check_range(self, "n1", self.n1, lo=0, hi=2)
         if self.a0 + self.a1 >= 1.0:
             raise InputError(f"soil {self.name!r}: a0 + a1 = {self.a0 + self.a1:g} must be below 1 (theta_m < theta_1)")
+        check_bounds(self, f"soil {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
+
+    def exponent(self, slip):
+        """The sinkage exponent at slip ``s``: ``n + n1 |s|`` (Ding et al. 2011), dimensionless."""
+        return self.n + self.n1 * np.abs(slip)
 
     def modulus(self, width_m: float) -> float:
         """Bekker's ``k_c / b + k_phi`` for a wheel of width ``b``, N/m^(n+2); must be positive."""
@@ -156,6 +178,37 @@ def load_soil(name_or_path: str | Path) -> SoilParams:
     return from_dict(SoilParams, table, where=f"{path} [soil]")
 
 
+@dataclass(frozen=True, kw_only=True)
+class SlipSinkageBand:
+    """A published band of sinkage at a slip relative to the static sinkage (``soils/data/*.csv``)."""
+
+    slip: float
+    ratio_low: float
+    """Lowest published sinkage(slip) / sinkage(0)."""
+    ratio_high: float
+    """Highest published sinkage(slip) / sinkage(0)."""
+    wheel: str
+    soil: str
+    source: str
+    figure: str
+
+
+def published_slip_sinkage() -> list[SlipSinkageBand]:
+    """The published single-wheel slip-sinkage bands shipped in ``soils/data/slip-sinkage-*.csv``
+    (each file's header names its source, figure and tolerance)."""
+    import csv
+
+    out = []
+    folder = resources.shipped("soils") / "data"
+    for path in sorted(folder.glob("slip-sinkage-*.csv")) if folder.is_dir() else []:
+        lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+        for row in csv.DictReader(lines):
+            out.append(SlipSinkageBand(slip=float(row["slip"]), ratio_low=float(row["ratio_low"]),
+                                       ratio_high=float(row["ratio_high"]), wheel=row["wheel"], soil=row["soil"],
+                                       source=row["source"], figure=row["figure"]))
+    return out
+
+
 # ---------------------------------------------------------------------------- the model
 def entry_angle(radius_m, sinkage_m):
     """theta_1 = acos(1 - h / r), rad (0 for h <= 0)."""
@@ -167,14 +220,16 @@ def max_stress_angle(soil: SoilParams, theta1, slip):
     return (soil.a0 + soil.a1 * np.abs(slip)) * theta1
 
 
-def normal_stress(soil: SoilParams, radius_m: float, width_m: float, theta, theta1, theta_m):
-    """sigma(theta), Pa (Wong & Reece 1967, Eq. 1-2); arrays broadcast, 0 outside [0, theta_1]."""
+def normal_stress(soil: SoilParams, radius_m: float, width_m: float, theta, theta1, theta_m, slip=0.0):
+    """sigma(theta), Pa (Wong & Reece 1967, Eq. 1-2) with the exponent ``n(s)`` of the slip ``s``
+    (:meth:`SoilParams.exponent`); arrays broadcast, 0 outside [0, theta_1]."""
     theta = np.asarray(theta, dtype=float)
     front = theta >= theta_m
     with np.errstate(divide="ignore", invalid="ignore"):
         equiv = np.where(front, theta, theta1 - theta / np.where(theta_m > 0, theta_m, 1.0) * (theta1 - theta_m))
     base = np.clip(np.cos(equiv) - np.cos(theta1), 0.0, None)
-    sigma = soil.modulus(width_m) * radius_m**soil.n * base**soil.n
+    n = soil.exponent(slip)
+    sigma = soil.modulus(width_m) * radius_m**n * base**n
     return np.where((theta >= 0) & (theta <= theta1), sigma, 0.0)
 
 
@@ -208,7 +263,7 @@ def wheel_forces(soil: SoilParams, radius_m: float, width_m: float, sinkage_m, s
     theta_m = max_stress_angle(soil, theta1, s)
     th, w = _nodes(theta1, theta_m, order)
     t1, tm, ss = theta1[..., None], theta_m[..., None], s[..., None]
-    sigma = normal_stress(soil, radius_m, width_m, th, t1, tm)
+    sigma = normal_stress(soil, radius_m, width_m, th, t1, tm, ss)
     j = shear_displacement(radius_m, th, t1, ss)
     tau = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_angle_deg))) * np.sign(j) * (
         1.0 - np.exp(-np.abs(j) / soil.shear_modulus_m))
@@ -227,7 +282,7 @@ def lateral_force(soil: SoilParams, radius_m: float, width_m: float, sinkage_m, 
     theta1 = entry_angle(radius_m, h)
     theta_m = max_stress_angle(soil, theta1, s)
     th, w = _nodes(theta1, theta_m, order)
-    sigma = normal_stress(soil, radius_m, width_m, th, theta1[..., None], theta_m[..., None])
+    sigma = normal_stress(soil, radius_m, width_m, th, theta1[..., None], theta_m[..., None], s[..., None])
     jy = radius_m * np.where(np.isinf(lam), 1.0, lam)[..., None] * (theta1[..., None] - th)
     develop = np.where(np.isinf(lam)[..., None], 1.0, 1.0 - np.exp(-jy / soil.lateral_shear_modulus_m))
     tau_y = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_angle_deg))) * develop

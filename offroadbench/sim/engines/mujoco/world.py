@@ -38,7 +38,6 @@ import logging
 import math
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -47,136 +46,17 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.config import SimConfig
-from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
+from offroadbench.sim.tyre_laws.coulomb import CoulombBristles, bristle_constants
+from offroadbench.sim.tyre_laws.soil_wheels import soil_setup
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near
+from offroadbench.sim.engines.base import UrdfLink, max_height_near, read_urdf, settle, spawn_height_m
+from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
-__all__ = ["MuJoCoWorld", "MUJOCO_CONTACT"]
+__all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 
 log = logging.getLogger(__name__)
 
-
-@dataclass(frozen=True)
-class ContactTuning:
-    """MuJoCo contact settings that are not in the vehicle's spec (tuned to PyBullet's ride)."""
-
-    wheel_solref: tuple[float, float] | None = None
-    """solref of the wheel-terrain contact, (time constant s, damping ratio); None: from the
-    spec's tyre stiffness and damping (see the module docstring)."""
-    wheel_margin_m: float = 0.0
-    """Geom margin of the wheels: contacts are found within this distance, m."""
-    wheel_gap_m: float = 0.0
-    """Geom gap of the wheels: a found contact acts once closer than ``margin - gap``, m."""
-    refsafe: bool = True
-    """MuJoCo's ``refsafe``: time constants below two steps are raised to two steps."""
-    chassis_solref: tuple[float, float] = (0.02, 1.0)
-    """The chassis-terrain contact's solref (time constant s, damping ratio): MuJoCo's default."""
-    solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
-    """solimp of the wheels' contacts (MuJoCo's default)."""
-    chassis_solimp: tuple[float, float, float] = (0.9, 0.95, 0.001)
-    """solimp of the chassis' contacts (MuJoCo's default)."""
-    chassis_condim: int = 3
-    """Contact dimensionality of the chassis: 3 sliding friction (as Bullet), 4 adds torsional, 6 rolling."""
-    cone: str = "pyramidal"
-    """MuJoCo's friction cone for the contacts it owns (the chassis'): ``pyramidal`` or ``elliptic``."""
-    min_rate_hz: int = 120
-    """MuJoCo steps at least this often: a trial's step (``SimConfig.physics_rate_hz``) is split into
-    ``ceil(min_rate_hz / physics_rate_hz)`` MuJoCo steps, the tyre forces applied at each. Below
-    120 Hz the ride is bumpier than PyBullet's at 60 Hz (benchmarks/RESULTS.md, 'MuJoCo')."""
-    ccd_iterations: int = 10
-    """MuJoCo's convex-collision iterations (its default 35): 10 gave the same trials to the last
-    printed digit and 1.2x the speed on paper terrain (the chassis box against the hfield's prisms)."""
-    tyres_each_substep: bool = True
-    """True: the tyre forces are computed (and the contacts read) at every MuJoCo step. False:
-    once per trial step, from the contacts of its last MuJoCo step, and held over its MuJoCo
-    steps (as PyBullet applies them once per 60 Hz step): on the paper missions 1.2x the speed
-    with a ride as close to PyBullet's (RMS vertical acceleration -2.1 % against -4.6 %), but the
-    Jackal then fails 4 rows of ``vehicle check`` (a 2 rad/s turn at 1 m/s overshoots by 13 %,
-    it climbs a 0.118 m step against its 0.098 m bound), so it is not the default."""
-    servo_gain: float = 4.0
-    """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
-    1 / (1 + gain) per step before the torque limit."""
-
-
-#: the contact settings the MuJoCo world uses
-MUJOCO_CONTACT = ContactTuning()
-
-
-# ---------------------------------------------------------------------------- URDF
-@dataclass(frozen=True)
-class _Link:
-    name: str
-    mass: float
-    com: tuple[float, float, float]
-    inertia: tuple[float, float, float]
-    shapes: tuple  # (type, size tuple, pos, euler)
-
-
-@dataclass(frozen=True)
-class _Joint:
-    name: str
-    kind: str
-    parent: str
-    child: str
-    pos: tuple[float, float, float]
-    euler: tuple[float, float, float]
-    axis: tuple[float, float, float]
-
-
-def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]:
-    if text is None:
-        return (default,) * n
-    vals = tuple(float(v) for v in text.split())
-    if len(vals) != n:
-        raise ValueError(f"expected {n} numbers, got {text!r}")
-    return vals
-
-
-def _read_urdf(path: str) -> tuple[dict[str, _Link], list[_Joint]]:
-    """The links (mass, centre of mass, diagonal inertia, collision shapes) and joints of a URDF."""
-    try:
-        root = ET.parse(path).getroot()
-        links = {}
-        for el in root.findall("link"):
-            inertial = el.find("inertial")
-            mass, com, inertia = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-            if inertial is not None:
-                origin = inertial.find("origin")
-                if origin is not None and any(_floats(origin.get("rpy"), 3)):
-                    raise ValueError(f"link {el.get('name')}: a rotated inertial frame is not supported")
-                com = _floats(origin.get("xyz") if origin is not None else None, 3)
-                mass = float(inertial.find("mass").get("value"))
-                i = inertial.find("inertia")
-                inertia = (float(i.get("ixx")), float(i.get("iyy")), float(i.get("izz")))
-            shapes = []
-            for col in el.findall("collision"):
-                origin = col.find("origin")
-                pos = _floats(origin.get("xyz") if origin is not None else None, 3)
-                euler = _floats(origin.get("rpy") if origin is not None else None, 3)
-                geo = col.find("geometry")[0]
-                if geo.tag == "box":
-                    shapes.append(("box", tuple(0.5 * v for v in _floats(geo.get("size"), 3)), pos, euler))
-                elif geo.tag == "sphere":
-                    shapes.append(("sphere", (float(geo.get("radius")),), pos, euler))
-                elif geo.tag == "cylinder":
-                    shapes.append(("cylinder", (float(geo.get("radius")), 0.5 * float(geo.get("length"))), pos, euler))
-                else:
-                    raise ValueError(f"link {el.get('name')}: collision geometry {geo.tag!r} is not supported")
-            links[el.get("name")] = _Link(el.get("name"), mass, com, inertia, tuple(shapes))
-        joints = []
-        for el in root.findall("joint"):
-            origin = el.find("origin")
-            axis = el.find("axis")
-            joints.append(_Joint(el.get("name"), el.get("type"), el.find("parent").get("link"),
-                                 el.find("child").get("link"),
-                                 _floats(origin.get("xyz") if origin is not None else None, 3),
-                                 _floats(origin.get("rpy") if origin is not None else None, 3),
-                                 _floats(axis.get("xyz") if axis is not None else None, 3) if axis is not None
-                                 else (1.0, 0.0, 0.0)))
-    except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError) as exc:
-        raise InputError(f"URDF {path}: cannot build a MuJoCo model from it ({exc})") from None
-    return links, joints
 
 
 def _fmt(values) -> str:
@@ -189,12 +69,12 @@ class MuJoCoWorld:
     context manager."""
 
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig(),
-                 contact: ContactTuning = MUJOCO_CONTACT) -> None:
+                 contact: ContactTuning | None = None) -> None:
         self.hm = hm
         self.sim = sim = sim.for_terrain()  # Earth's gravity where nothing names one
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
-        self.contact = contact
+        self.contact = contact = sim.mujoco if contact is None else contact  # [sim.mujoco], unless given
         self.substeps = max(1, math.ceil(contact.min_rate_hz / sim.physics_rate_hz))
         self._dt_mj = self.dt_s / self.substeps
         t0 = time.perf_counter()
@@ -207,15 +87,23 @@ class MuJoCoWorld:
         self.data = mujoco.MjData(self.model)
         self._index()
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
+        self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         if sim.tyre_model == "coulomb":
-            share = self.geometry_mass() / len(self._wheel_bodies)
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
             # tyre is the same whatever the engine's step), integrated at MuJoCo's step
-            dt = self.dt_s
+            k, c = bristle_constants(self._mass_kg / len(self._wheel_bodies), self.dt_s)
             self._tyres = CoulombBristles(len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
                                           self._dt_mj if contact.tyres_each_substep else self.dt_s,
-                                          stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+                                          stiffness_n_m=k, damping_n_s_m=c)
+        self._soil = None
+        if sim.tyre_model == "terramechanics":
+            # the soil of the PyBullet world (tables and constants from the trial's step, the force
+            # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
+            n = len(self._wheel_bodies)
+            setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
+            self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
+        self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
         self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
@@ -237,7 +125,7 @@ class MuJoCoWorld:
     # ------------------------------------------------------------------ building
     def _mjcf(self) -> str:
         spec, sim, hm = self.spec, self.sim, self.hm
-        links, joints = _read_urdf(spec.urdf)
+        links, joints = read_urdf(spec.urdf)
         children = {j.parent: [] for j in joints}
         for j in joints:
             children[j.parent].append(j)
@@ -250,6 +138,7 @@ class MuJoCoWorld:
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
         coulomb = sim.tyre_model == "coulomb"
+        self._wheels_collide = sim.tyre_model != "terramechanics"  # the soil carries the wheels
         total_mass = sum(link.mass for link in links.values())
         share = total_mass / len(spec.wheel_joints)
         tune = self.contact
@@ -304,7 +193,7 @@ class MuJoCoWorld:
             # links on steering or suspension joints are not all parent and child: keep MuJoCo from
             # colliding the vehicle with itself (PyBullet loads URDFs without self-collision)
             for g in root.iter("geom"):
-                if g.get("name") != "terrain":
+                if g.get("name") != "terrain" and g.get("contype") != "0":
                     g.set("contype", "2")
                     g.set("conaffinity", "1")
         return ET.tostring(root, encoding="unicode")
@@ -329,7 +218,7 @@ class MuJoCoWorld:
             eq = ET.SubElement(root, "equality")
             ET.SubElement(eq, "joint", joint1=left, joint2=right, polycoef="0 -1 0 0 0")
 
-    def _add_link(self, el, link: _Link, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
+    def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
         spec, sim, tune = self.spec, self.sim, self.contact
         com = tuple(c - s for c, s in zip(link.com, shift))
         if link.mass > 0:
@@ -340,6 +229,9 @@ class MuJoCoWorld:
                               solimp=_fmt(tune.solimp if is_wheel else tune.chassis_solimp))
             if is_wheel:
                 g.set("name", f"wheel_{link.name}")
+                if not self._wheels_collide:
+                    g.set("contype", "0")
+                    g.set("conaffinity", "0")
                 g.set("margin", repr(tune.wheel_margin_m))
                 g.set("gap", repr(tune.wheel_gap_m))
                 g.set("solref", _fmt(tune.wheel_solref or self._tyre_solref(share)))
@@ -376,6 +268,7 @@ class MuJoCoWorld:
         self._terrain_geom = mujoco.mj_name2id(m, obj.mjOBJ_GEOM, "terrain")
         self._chassis = mujoco.mj_name2id(m, obj.mjOBJ_BODY, "chassis")
         joints = [mujoco.mj_name2id(m, obj.mjOBJ_JOINT, n) for n in self.spec.wheel_joints]
+        self._wheel_jnt = joints
         self._wheel_bodies = [int(m.jnt_bodyid[j]) for j in joints]
         self._wheel_qvel = [int(m.jnt_dofadr[j]) for j in joints]
         self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
@@ -419,7 +312,7 @@ class MuJoCoWorld:
             own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist()))
             spins.append(own + float(m.dof_armature[j]))
         return VehicleGeometry(
-            mass_kg=self.geometry_mass(),
+            mass_kg=self._mass_kg,
             wheel_spin_inertia_kg_m2=tuple(spins),
             wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
             length_m=hi[0] - lo[0],
@@ -464,17 +357,17 @@ class MuJoCoWorld:
                 if m.geom_bodyid[g] == self._chassis:
                     reach = max(reach, 0.5 * math.hypot(ghi[0] - glo[0], ghi[1] - glo[1]))
         bottom = base[2] - min(lows)
-        ground = self.max_height_near(x_m, y_m, reach + self.spec.wheel_radius_m)
-        d.qpos[2] = ground + bottom + self.sim.spawn_clearance_m
+        d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
+                                   self.sim.spawn_clearance_m)
         mujoco.mj_forward(m, d)
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0
         if self._tyres is not None:
             self._tyres.reset()
             self._tyres.clear()
-        self.command_wheels(0.0, 0.0)
-        for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
-            self.step()
+        if self._soil is not None:
+            self._soil.reset()
+        settle(self)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres
@@ -504,12 +397,12 @@ class MuJoCoWorld:
         each = self.contact.tyres_each_substep
         last = self.substeps - 1
         pushed = self._base_force
-        if pushed is not None and self._tyres is None:
+        if pushed is not None and not self._forces:
             d.xfrc_applied[self._chassis, 0:3] = pushed
         for k in range(self.substeps):
             if each or k == 0:
                 mujoco.mj_step1(m, d)
-                if self._tyres is not None:
+                if self._forces:
                     self._apply_tyres()
                 mujoco.mj_step2(m, d)
             else:
@@ -518,20 +411,23 @@ class MuJoCoWorld:
                 self._read_contacts()
         if pushed is not None:
             self._base_force = None
-            if self._tyres is None:
+            if not self._forces:
                 d.xfrc_applied[self._chassis] = 0.0
 
     def _apply_tyres(self) -> None:
-        """The tyre forces of the wheels touched in the last step, as forces and torques about each
-        wheel's centre of mass in ``xfrc_applied`` (one write of all rows)."""
+        """The tyre forces (``coulomb``: of the wheels touched in the last step; ``terramechanics``:
+        of every wheel on the soil), as forces and torques about each wheel's centre of mass in
+        ``xfrc_applied`` (one write of all rows)."""
         d, core = self.data, self._tyres
         xfrc = self._xfrc
         xfrc[:] = self._xfrc_zero
         if self._base_force is not None:
             k = 6 * self._chassis
             xfrc[k:k + 3] = self._base_force
-        touch = core.touch
-        if any(touch):
+        if self._soil is not None:
+            self._soil_forces(xfrc)
+        elif any(core.touch):
+            touch = core.touch
             qvel = d.qvel.tolist()
             r = d.xmat[self._chassis].tolist()
             xipos = d.xipos.tolist()
@@ -562,6 +458,41 @@ class MuJoCoWorld:
                 k = 6 * b
                 xfrc[k:k + 6] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
         d.xfrc_applied.flat[:] = xfrc
+
+    def _soil_forces(self, xfrc: list) -> None:
+        """The soil's force and torque on each wheel (offroadbench.sim.tyre_laws.soil_wheels) into
+        ``xfrc`` rows, from the wheels' poses and velocities now. The force acts at the wheel's centre
+        of mass, taken as its centre (both shipped vehicles' wheels have it on the axle)."""
+        d, soil = self.data, self._soil
+        qvel = d.qvel.tolist()
+        r = d.xmat[self._chassis].tolist()
+        xipos = d.xipos.tolist()
+        v0, v1, v2 = qvel[0:3]
+        wb0, wb1, wb2 = qvel[3:6]
+        w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2
+        w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
+        w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
+        c0 = xipos[self._chassis]
+        soil.begin()
+        for i, b in enumerate(self._wheel_bodies):
+            c = xipos[b]
+            if self._articulated:  # the wheel body's own velocity and axle (steering, rockers, bogies)
+                vel = np.zeros(6)
+                mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
+                axis = tuple(d.xaxis[self._wheel_jnt[i]].tolist())
+                out = soil.wheel_force(i, c, axis, tuple(vel[3:].tolist()), tuple(vel[:3].tolist()))
+                if out is not None:
+                    k = 6 * b
+                    xfrc[k:k + 6] = (*out[0], *out[1])
+                continue
+            rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
+            lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
+            a0, a1, a2 = self._axis_world(i, r)
+            s = qvel[self._wheel_qvel[i]]
+            out = soil.wheel_force(i, c, (a0, a1, a2), lin, (w0 + a0 * s, w1 + a1 * s, w2 + a2 * s))
+            if out is not None:
+                k = 6 * b
+                xfrc[k:k + 6] = (*out[0], *out[1])
 
     def _axis_world(self, i: int, r: list) -> tuple[float, float, float]:
         a = self._wheel_axis[i]  # in the chassis frame (the wheels hang straight off it)
@@ -655,12 +586,19 @@ class MuJoCoWorld:
                 2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y))
 
     def wheel_penetration_m(self) -> float:
-        """Deepest penetration of any wheel into the terrain in the last step (0 if none), m."""
+        """Deepest penetration of any wheel into the terrain in the last step (0 if none), m; with the
+        ``terramechanics`` tyre model, the deepest soil sinkage."""
+        if self._soil is not None:
+            return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
 
     def wheel_slip(self) -> float | None:
-        """None: the soil's slip belongs to the ``terramechanics`` tyre model, not implemented on MuJoCo."""
-        return None
+        """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
+        or None without the ``terramechanics`` tyre model or with no wheel on the soil."""
+        if self._soil is None or not self._soil.last:
+            return None
+        slips = [v[1] for v in self._soil.last.values()]
+        return sum(slips) / len(slips)
 
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal force from the terrain in the last step, N (left, then right)."""

@@ -58,7 +58,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
   benchmarks/RESULTS.md, 'Issue 25').
 
-This module (with ``contact.py`` and the terramechanics adapter ``soil_contact.py``) is the only
+This package (this module, ``tyres.py`` and the terramechanics adapter ``soil.py``) is the only
 code that calls pybullet for a trial: :class:`World` implements offroadbench.sim.engine.TrialWorld,
 the engine boundary, for PyBullet; the vehicle's geometry is measured once, at load
 (:meth:`World._measure_geometry`).
@@ -82,8 +82,9 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
+from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["World"]
@@ -101,6 +102,7 @@ class World:
         self.sim = sim.for_terrain()  # Earth's gravity and the default soil where nothing names them
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
+        self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -231,20 +233,20 @@ class World:
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
                                   physicsClientId=cid)
         self._articulate(body, names)
+        if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
+            n_links = pb.getNumJoints(body, physicsClientId=cid)
+            self._mass_kg = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
         self._tyres = None
         if self.sim.tyre_model == "terramechanics":
             from offroadbench.sim.engines.pybullet.soil import make_soil_tyres
 
-            self._tyres = make_soil_tyres(self, body)
+            self._tyres = make_soil_tyres(self, body, self._mass_kg)
         elif coulomb:
-            n_links = pb.getNumJoints(body, physicsClientId=cid)
-            mass = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
-            share = mass / len(self.wheel_joints)  # kg carried by one wheel on flat ground
-            dt = self.dt_s
-            # bristle well inside the explicit step's stability bound (k dt^2/m < 1, c dt/m < 2)
+            share = self._mass_kg / len(self.wheel_joints)  # kg carried by one wheel on flat ground
+            k, c = bristle_constants(share, self.dt_s)
             self._tyres = CoulombTyres(cid, body, self._terrain_set, self.wheel_joints,
-                                       spec.wheel_friction * self.sim.terrain_friction, dt,
-                                       stiffness_n_m=0.25 * share / dt**2, damping_n_s_m=0.5 * share / dt)
+                                       spec.wheel_friction * self.sim.terrain_friction, self.dt_s,
+                                       stiffness_n_m=k, damping_n_s_m=c)
         return body
 
     def _articulate(self, body: int, names: dict[str, int]) -> None:
@@ -296,7 +298,7 @@ class World:
         wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in self.wheel_joints]
         centres = [pb.getLinkState(body, j, physicsClientId=cid)[0] for j in self.wheel_joints]
         return VehicleGeometry(
-            mass_kg=sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links)),
+            mass_kg=self._mass_kg,
             wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1]
                                            for j in self.wheel_joints),
             wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
@@ -331,15 +333,13 @@ class World:
         for j in self.wheel_joints:
             pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
         aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
-        reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1]) + self.spec.wheel_radius_m
-        ground = self.max_height_near(x_m, y_m, reach)
-        z = ground + self._bottom_offset() + self.sim.spawn_clearance_m
+        reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1])
+        z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, self._bottom_offset(),
+                           self.sim.spawn_clearance_m)
         pb.resetBasePositionAndOrientation(body, [x_m, y_m, z], orn, physicsClientId=cid)
-        self.command_wheels(0.0, 0.0)
         if self._tyres is not None:
             self._tyres.reset()
-        for _ in range(int(round(self.sim.settle_time_s * self.sim.physics_rate_hz))):
-            self.step()
+        settle(self)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
         """Highest terrain sample in the square of half-side ``radius_m`` around (x, y), metres

@@ -1,0 +1,198 @@
+"""What a planner or policy knows during a trial: the truth (the ``oracle`` arm) or a mast sensor.
+
+``[planner] sensor`` (offroadbench.navigation.perception.PerceptionConfig) picks the arm:
+
+* ``oracle``: the planner's map is the true terrain (or its degraded copy, the map-error keys), the
+  vehicle knows exactly where it is. What every study did before the sensor model.
+* ``mast``: :class:`MastSensor`. A range sensor on a mast ``mast_height_m`` above the ground under
+  the vehicle scans all round (a spinning lidar) every ``scan_every_m`` the vehicle moves. A cell is
+  seen when the straight line from the sensor to it clears the terrain: the classic radial-sweep
+  viewshed (Franklin & Ray 1994, "Higher isn't necessarily better: visibility algorithms and
+  experiments", Advances in GIS Research): along each of ``ceil(2 pi R / cell)`` azimuths, samples every cell out to
+  the range ``R = sensor_range_m`` are visible when the tangent of their elevation angle from the
+  sensor is at least the largest of the samples before them. Crater floors behind a rim, the far
+  sides of ridges and ground beyond the range stay **unknown** (NaN), never guessed flat. A seen
+  height carries Gaussian noise of standard deviation ``sensor_noise_per_range * range`` (the height
+  error of a beam's angular error grows with range), drawn afresh at every scan; a cell keeps the
+  mean of the samples that fell in it at its latest scan.
+* **Localisation drift** (``odometry_drift``, mast only): the vehicle's believed pose is odometry, the
+  true displacement between control ticks scaled by ``1 + e_s`` (``e_s`` ~ N(0, odometry_drift^2), one
+  draw per trial: a wheel-radius error) and turned by a heading error ``psi`` that random-walks with
+  the distance travelled, ``psi(d + dd) = psi(d) + odometry_drift sqrt(dd) n`` (rad, ``dd`` in metres).
+  The position error after ``d`` metres is then of standard deviation about ``odometry_drift (d +
+  d^1.5 / sqrt(3))``: 0.28 m after 10 m and 1.2 m after 30 m at the default 0.01, the few per cent
+  of the distance of wheel odometry on rough ground. A scan is written into the map where the vehicle
+  believes it saw it, ``q = b + R(psi) (p - t)`` (``t`` the true and ``b`` the believed position), so
+  the map and the pose drift together, as a real map built from odometry does.
+
+What a driver does with unknown cells is its own choice: MPPI gives them a fixed hazard
+(offroadbench.navigation.policies.mppi); the cost-grid planners, which need finite heights, plan on
+the smooth continuation of the seen ground (offroadbench.navigation.perception.seen_map), re-planning
+from the believed position every ``replan_every_m``; a policy's height patch reads NaN there.
+
+``limits = "sheet"`` has the planners plan with the vehicle's published limits (:func:`sheet_envelope`)
+instead of those measured in the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from offroadbench.heightmap import Heightmap
+from offroadbench.navigation.perception import LIMITS, SENSORS, perception_seed
+
+__all__ = ["SENSORS", "LIMITS", "Oracle", "MastSensor", "make_sensing", "sheet_envelope", "viewshed"]
+
+
+
+class Oracle:
+    """The truth: the pose is the true pose, the map the given heights (the true terrain, or the
+    map-error keys' degraded copy for planners)."""
+
+    name = "oracle"
+
+    def __init__(self, z_m: np.ndarray) -> None:
+        self.z = z_m
+        self.pose = (math.nan, math.nan, math.nan)
+        self.trail: list[tuple[float, float]] = []
+
+    def update(self, pos, yaw: float) -> tuple[float, float, float]:
+        """The believed (x, y, yaw) at the true position ``pos`` (x, y[, z]) and heading: the truth."""
+        self.pose = (float(pos[0]), float(pos[1]), float(yaw))
+        return self.pose
+
+    @property
+    def seen(self) -> np.ndarray:
+        return ~np.isnan(self.z)
+
+
+def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The radial-sweep viewshed of a sensor at ``(xy, sensor_z_m)`` over ``hm`` (module docstring).
+
+    Returns the sample points' x, y (map metres), true heights and ranges, each (A, R) with A
+    azimuths and R radial samples, and flattened to the visible samples only (on the map and not
+    hidden by nearer terrain): four 1-D arrays.
+    """
+    from scipy.ndimage import map_coordinates
+
+    cell = hm.cell_size_m
+    n_r = max(1, int(range_m / cell))
+    n_a = max(8, int(math.ceil(2.0 * math.pi * range_m / cell)))
+    r = (np.arange(1, n_r + 1) * cell)[None, :]
+    phi = (np.arange(n_a) * (2.0 * math.pi / n_a))[:, None]
+    x = xy[0] + r * np.cos(phi)
+    y = xy[1] + r * np.sin(phi)
+    col, row = x / cell, y / cell
+    on = (col >= 0) & (col <= hm.cols - 1) & (row >= 0) & (row <= hm.rows - 1)
+    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
+    tan = (z - sensor_z_m) / r
+    tan = np.where(on, tan, np.inf)  # off the map: blocks the ray beyond it
+    horizon = np.maximum.accumulate(tan, axis=1)
+    before = np.concatenate([np.full((n_a, 1), -np.inf), horizon[:, :-1]], axis=1)
+    vis = on & (tan >= before - 1e-12) & np.cumprod(on, axis=1, dtype=bool)
+    rr = np.broadcast_to(r, x.shape)
+    return x[vis], y[vis], z[vis], rr[vis]
+
+
+class MastSensor:
+    """A mast-mounted range sensor and odometry (module docstring): ``update`` at every control tick
+    with the true pose; ``pose`` is the believed pose, ``z`` the map built so far (NaN unknown; a new
+    array after every scan), ``trail`` the believed positions at the ticks."""
+
+    name = "mast"
+
+    def __init__(self, hm: Heightmap, cfg: Any, rng: np.random.Generator, start_xy, heading_rad: float) -> None:
+        self.hm, self.cfg, self.rng = hm, cfg, rng
+        self.z = np.full(hm.shape, np.nan)
+        self.scale_error = float(cfg.odometry_drift * rng.standard_normal())
+        self.heading_error = 0.0
+        self._true = np.asarray(start_xy, dtype=float)[:2].copy()
+        self._belief = self._true.copy()
+        self.pose = (float(self._belief[0]), float(self._belief[1]), float(heading_rad))
+        self.trail = []
+        self.scans = 0
+        self._scanned_at = self._true.copy()
+        self._scan(self._true)
+
+    def _scan(self, true_xy: np.ndarray) -> None:
+        cfg, hm = self.cfg, self.hm
+        ground = hm.height_at(*np.clip(true_xy, 0.0, [hm.width_m, hm.height_m]))
+        x, y, z, r = viewshed(hm, true_xy, float(ground) + cfg.mast_height_m, cfg.sensor_range_m)
+        z = z + cfg.sensor_noise_per_range * r * self.rng.standard_normal(z.shape)
+        c, s = math.cos(self.heading_error), math.sin(self.heading_error)
+        dx, dy = x - true_xy[0], y - true_xy[1]
+        qx = self._belief[0] + c * dx - s * dy
+        qy = self._belief[1] + s * dx + c * dy
+        col = np.rint(qx / hm.cell_size_m).astype(np.int64)
+        row = np.rint(qy / hm.cell_size_m).astype(np.int64)
+        ok = (col >= 0) & (col < hm.cols) & (row >= 0) & (row < hm.rows)
+        flat = row[ok] * hm.cols + col[ok]
+        sums = np.bincount(flat, weights=z[ok], minlength=hm.z.size)
+        counts = np.bincount(flat, minlength=hm.z.size)
+        new = self.z.copy().ravel()
+        hit = counts > 0
+        new[hit] = sums[hit] / counts[hit]
+        self.z = new.reshape(hm.shape)
+        self.scans += 1
+        self._scanned_at = true_xy.copy()
+
+    def update(self, pos, yaw: float) -> tuple[float, float, float]:
+        """Odometry from the true position ``pos`` (x, y[, z]) and heading, and a scan when due:
+        the believed (x, y, yaw)."""
+        p = np.asarray(pos, dtype=float)[:2]
+        d = p - self._true
+        dist = math.hypot(*d)
+        if dist > 0.0:
+            c, s = math.cos(self.heading_error), math.sin(self.heading_error)
+            k = 1.0 + self.scale_error
+            self._belief = self._belief + k * np.array([c * d[0] - s * d[1], s * d[0] + c * d[1]])
+            self.heading_error += self.cfg.odometry_drift * math.sqrt(dist) * float(self.rng.standard_normal())
+            self._true = p.copy()
+        if math.hypot(*(p - self._scanned_at)) >= self.cfg.scan_every_m:
+            self._scan(p)
+        self.pose = (float(self._belief[0]), float(self._belief[1]), float(yaw) + self.heading_error)
+        self.trail.append((self.pose[0], self.pose[1]))
+        return self.pose
+
+    @property
+    def seen(self) -> np.ndarray:
+        """Which map cells have been seen (bool, the map's shape)."""
+        return ~np.isnan(self.z)
+
+
+def make_sensing(hm: Heightmap, cfg: Any, mission: Any, planner_map: Heightmap | None = None):
+    """The sensing of one trial: :class:`Oracle` on ``planner_map`` (default ``hm``) unless ``cfg``
+    (a PerceptionConfig or None) names the ``mast`` sensor; its stream is the mission's perception
+    stream (offroadbench.navigation.perception.perception_seed)."""
+    if cfg is None or cfg.sensor == "oracle":
+        return Oracle((planner_map or hm).z)
+    rng = np.random.default_rng(perception_seed(mission))
+    return MastSensor(hm, cfg, rng, mission.start_xy_m, mission.heading_rad)
+
+
+def sheet_envelope(envelope: Any, spec: Any) -> Any:
+    """``envelope`` (a VehicleEnvelope) with the limits the maker publishes (a VehicleSpec's
+    ``rated_*`` fields) where it gives them: ``max_slope = tan(min(rated climb grade, rated side
+    slope))`` (the cost grids judge slope whatever the heading) and ``max_step_m = rated_step_m``;
+    the rest as measured. Unchanged for a vehicle without a spec sheet."""
+    grades = [g for g in (spec.rated_climb_grade_deg, spec.rated_side_slope_deg) if g is not None]
+    changes: dict[str, float] = {}
+    if grades:
+        changes["max_slope"] = math.tan(math.radians(min(grades)))
+    if spec.rated_step_m is not None:
+        changes["max_step_m"] = float(spec.rated_step_m)
+    return replace(envelope, **changes) if changes else envelope
+
+
+@dataclass(frozen=True, eq=False)
+class Belief:
+    """What the sensor left at the end of a trial (for plots): the believed path and what was seen."""
+
+    trail_xy: np.ndarray
+    """Believed positions at the control ticks, (N, 2) map metres."""
+    seen: np.ndarray
+    """Which map cells the sensor's map holds at the end (bool, the map's shape; in the believed frame)."""

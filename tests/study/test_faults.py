@@ -1,0 +1,443 @@
+"""Reliability, round three (issue 30): a resume never mixes two configurations, a trial with no
+outcome is a fault and the study goes on, a full store is one line, killed sessions say so.
+
+A cheap stand-in replaces the physics (tests.study.test_run.fake_trials).
+"""
+
+from __future__ import annotations
+
+import copy
+import errno
+import os
+import shutil
+import sqlite3
+import time
+from pathlib import Path
+
+import pytest
+
+from offroadbench import resources
+from offroadbench.errors import InputError, TrialFault
+from offroadbench.study import load, load_meta, run_study, study_from_dict
+from offroadbench.study.executors import MAX_TRIAL_TIMEOUT_S, check_trial_timeout
+from offroadbench.study.spec import plan_cells
+from offroadbench.study.store import LOCK_NAME, Store
+from tests.study.test_run import STUDY, fake_trials
+
+
+def cells_of(data: dict):
+    study = study_from_dict(copy.deepcopy(data))
+    return study, plan_cells(study)
+
+
+def small(**settings) -> dict:
+    data = copy.deepcopy(STUDY)
+    data["study"].update(terrains_per_cell=1, missions_per_terrain=3)
+    data.update(copy.deepcopy(settings))
+    return data
+
+
+# ---------------------------------------------------------------------------- Deliver 1: inputs
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """An OFFROADBENCH_PATH folder with a copy of the lunar regolith and of the Husky."""
+    root = tmp_path / "user"
+    (root / "soils").mkdir(parents=True)
+    text = resources.soil_files()["lunar-regolith"].read_text().replace('name = "lunar-regolith"', 'name = "my-soil"')
+    (root / "soils" / "my-soil.toml").write_text(text)
+    husky = resources.vehicle_files()["husky"].parent
+    shutil.copytree(husky, root / "vehicles" / "my-husky")
+    toml = root / "vehicles" / "my-husky" / "vehicle.toml"
+    toml.write_text(toml.read_text().replace('name = "husky"', 'name = "my-husky"'))
+    monkeypatch.setenv(resources.ENV_VAR, str(root))
+    return root
+
+
+def _edit(path: Path, old: str, new: str) -> None:
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+
+
+def test_a_resume_refuses_an_edited_soil_naming_the_parameter(tmp_path, user_dir):
+    data = small(sim={"tyre_model": "terramechanics", "soil": "my-soil"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    _edit(user_dir / "soils" / "my-soil.toml", "k_phi = 820000.0", "k_phi = 1000000.0")
+    with pytest.raises(InputError, match=r"soil parameters: .*k_phi 820000.0 -> 1000000.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    assert len(load(tmp_path / "run")) == 6  # nothing of the new soil was added
+
+
+def test_a_resume_refuses_an_edited_vehicle_or_urdf(tmp_path, user_dir):
+    data = small(vehicle={"name": "my-husky"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    toml = user_dir / "vehicles" / "my-husky" / "vehicle.toml"
+    _edit(toml, "wheel_torque_limit_nm = 28.0", "wheel_torque_limit_nm = 12.0")
+    with pytest.raises(InputError, match=r"another study .*vehicle .*wheel_torque_limit_nm 28.0 -> 12.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    _edit(toml, "wheel_torque_limit_nm = 12.0", "wheel_torque_limit_nm = 28.0")
+    urdf = user_dir / "vehicles" / "my-husky" / "husky.urdf"
+    urdf.write_bytes(urdf.read_bytes() + b"\n<!-- edited -->\n")
+    with pytest.raises(InputError, match=r"vehicle .*urdf_sha256"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_changed_engine_or_planner_version_is_named(tmp_path, monkeypatch):
+    from offroadbench.study import inputs
+
+    data = small()
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    monkeypatch.setattr(inputs, "_engine", lambda name: {"name": name, "package": f"{name} 99.0"})
+    with pytest.raises(InputError, match=r"physics engine or its version: \[0\].package pybullet .* -> pybullet 99.0"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_cosmetic_change_is_accepted_and_recorded(tmp_path):
+    data = small()
+    first = run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:  # an unfinished study: drop one trial so the resume has work
+        store.drop_trials([(0, 0, 2, 1)])
+    cosmetic = copy.deepcopy(data)
+    cosmetic["study"]["description"] = "now with words"
+    cosmetic["reference"] = {"source": "a paper"}
+    cosmetic["sim"] = {"physics_rate_hz": 60}  # the default, written out
+    summary = run_study(*cells_of(cosmetic), tmp_path, executor="inline", trial_fn=fake_trials)
+    assert summary.ran == 1 and summary.done == first.done
+    meta = load_meta(tmp_path)
+    (amend,) = meta["amendments"]
+    assert {"description", "reference.source", "settings.sim.physics_rate_hz"} <= set(amend["changed"])
+    assert meta["study"]["description"] == "now with words"
+    # the study's real settings still refuse, naming the key
+    real = copy.deepcopy(cosmetic)
+    real["sim"] = {"physics_rate_hz": 120}
+    with pytest.raises(InputError, match=r"trial settings: .*sim.physics_rate_hz 60 -> 120"):
+        run_study(*cells_of(real), tmp_path, executor="inline", trial_fn=fake_trials)
+
+
+def test_a_store_without_recorded_inputs_names_the_study_key_that_differs(tmp_path):
+    data = small()
+    run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    con.execute("DELETE FROM meta WHERE key='trial_inputs'")  # as an older offroadbench left it
+    con.commit()
+    con.close()
+    other = copy.deepcopy(data)
+    other["study"]["missions_per_terrain"] = 4
+    with pytest.raises(InputError, match=r"holds another study .*changed: missions_per_terrain"):
+        run_study(*cells_of(other), tmp_path, executor="inline", trial_fn=fake_trials)
+    described = copy.deepcopy(data)
+    described["study"]["description"] = "only words"
+    assert run_study(*cells_of(described), tmp_path, executor="inline", trial_fn=fake_trials).ran == 0
+    assert "trial_inputs" in load_meta(tmp_path)  # recorded from now on
+
+
+# ---------------------------------------------------------------------------- Deliver 2: faults
+def thrown_on(mission: int):
+    """fake_trials whose trial ``mission`` throws the vehicle while it settles (a TrialFault)."""
+
+    def trials(prepared, settings):
+        for row in fake_trials(prepared, settings):
+            if row["mission_index"] == mission:
+                raise TrialFault("the vehicle was thrown 26 m while it settled")
+            yield row
+
+    return trials
+
+
+def test_a_thrown_vehicle_is_a_fault_not_an_outcome_and_the_terrain_goes_on(tmp_path):
+    study, cells = cells_of(small())
+    summary = run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
+    assert (summary.done, summary.faults) == (4, 2) and summary.complete
+    stored = load(tmp_path)
+    assert sorted(stored["mission"].unique()) == [0, 2]  # mission 2 ran after the fault, in a new world
+    with Store(tmp_path) as store:
+        faults = store.fault_rows()
+    assert [(c, t, m) for c, t, m, *_ in faults] == [(0, 0, 1), (1, 0, 1)]
+    assert all("thrown 26 m" in f[5] for f in faults)
+
+
+def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
+    from offroadbench.study.report import build_report
+
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
+    rep = build_report(tmp_path)
+    assert "## Faults" in rep.markdown and "thrown 26 m" in rep.markdown and "incomplete" not in rep.markdown
+    assert "**4 of 6** stored, 2 fault(s)" in rep.markdown
+    assert len(rep.tables["faults.csv"]) == 2
+    assert rep.tables["summary.csv"]["trials"].sum() == 4
+
+
+def test_a_limit_shorter_than_the_poll_is_enforced(tmp_path, monkeypatch):
+    from offroadbench.study.executors import LocalExecutor
+
+    monkeypatch.setattr(LocalExecutor, "poll_s", 60.0)  # the deadline, not the poll, sets the wait
+    def slow_mission_1(prepared, settings):
+        for row in fake_trials(prepared, settings):
+            if row["mission_index"] == 1:
+                time.sleep(30)
+            yield row
+
+    study, cells = cells_of(small())
+    t0 = time.monotonic()
+    summary = run_study(study, cells, tmp_path, executor="local", workers=1, trial_fn=slow_mission_1,
+                        executor_options={"trial_timeout_s": 2.0})
+    assert time.monotonic() - t0 < 25
+    assert (summary.done, summary.faults) == (4, 2)
+
+
+@pytest.mark.parametrize("value", [0, -1, float("nan"), float("inf"), 1e10, MAX_TRIAL_TIMEOUT_S * 1.01, True, "5"])
+def test_a_limit_beyond_the_sane_range_is_refused(value):
+    with pytest.raises(InputError, match="trial_timeout_s"):
+        check_trial_timeout(value)
+
+
+@pytest.mark.parametrize("limit", [MAX_TRIAL_TIMEOUT_S, 1e10])
+def test_a_dask_task_waits_in_slices_so_no_limit_overflows(limit):
+    """A limit past ``threading.TIMEOUT_MAX`` made every Dask task fail with OverflowError; the task
+    now waits in short slices (1e10 s is refused by the CLI, but the task would cope)."""
+    from offroadbench.study.executors import _dask_task
+    from offroadbench.study.runner import plan_tasks
+    from offroadbench.study.tasks import TerrainBuilt, TrialDone
+
+    study, cells = cells_of(small())
+    task = plan_tasks(study, cells, set())[0]
+    msgs = _dask_task(task, fake_trials, limit)
+    assert isinstance(msgs[0], TerrainBuilt) and [type(m) for m in msgs[1:]] == [TrialDone] * 3
+
+
+def test_a_thrown_vehicle_is_told_from_one_at_rest():
+    from offroadbench.bounds import check_settled
+
+    check_settled((1.0, 2.0, 0.25), (0.01, 0.0, -0.02), ground_z_m=0.1, size_m=0.9)  # at rest on its wheels
+    with pytest.raises(TrialFault, match=r"thrown while it settled \(base 26 m above"):
+        check_settled((1.0, 2.0, 26.1), (0.0, 0.0, 0.5), ground_z_m=0.1, size_m=0.9)
+    with pytest.raises(TrialFault, match="moving at 12 m/s"):
+        check_settled((1.0, 2.0, 0.3), (12.0, 0.0, 0.0), ground_z_m=0.1, size_m=0.9)
+    with pytest.raises(TrialFault):
+        check_settled((1.0, 2.0, float("nan")), (0.0, 0.0, 0.0), ground_z_m=0.1)
+
+
+# ---------------------------------------------------------------------------- Deliver 3: a full store
+class _FullAt:
+    """A connection whose INSERT INTO trials fails with SQLITE_FULL from the ``n``-th trial on,
+    after SQLite has rolled the transaction back itself (as it does on a full disk): the ROLLBACK
+    that followed used to raise "cannot rollback - no transaction is active" over it."""
+
+    def __init__(self, con, n: int) -> None:
+        self._con, self._n, self._seen = con, n, 0
+
+    def __getattr__(self, name):
+        return getattr(self._con, name)
+
+    def execute(self, sql, *args):
+        if sql.startswith("INSERT OR IGNORE INTO trials"):
+            self._seen += 1
+            if self._seen >= self._n:
+                self._con.execute("ROLLBACK")
+                raise sqlite3.OperationalError("database or disk is full")
+        return self._con.execute(sql, *args)
+
+
+def test_a_full_disk_in_a_trial_commit_is_one_oserror_naming_the_store(tmp_path, monkeypatch):
+    study, cells = cells_of(small())
+    real_init = Store.__init__
+
+    def init(self, *a, **k):
+        real_init(self, *a, **k)
+        if k.get("create"):
+            self.con = _FullAt(self.con, 3)
+
+    monkeypatch.setattr(Store, "__init__", init)
+    with pytest.raises(OSError) as info:
+        run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "study.sqlite")
+    monkeypatch.undo()
+    assert not (tmp_path / LOCK_NAME).exists()
+    assert len(load(tmp_path)) == 2  # what was committed stays
+    assert run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials).done == study.n_trials
+
+
+def test_a_full_disk_while_locking_leaves_no_lock_file(tmp_path, monkeypatch):
+    from offroadbench.study.store import RunLock
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "pwrite", full)
+    with pytest.raises(InputError, match=r"study.lock: cannot write the run directory's lock file \(no space left"):
+        RunLock(tmp_path / "run").acquire()
+    assert not (tmp_path / "run" / LOCK_NAME).exists()
+
+
+# ---------------------------------------------------------------------------- Deliver 7: sessions
+def test_a_killed_session_is_shown_as_killed_and_recorded_so_by_the_next_run(tmp_path):
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    con.execute("UPDATE runs SET status='running', finished=NULL")  # as a SIGKILLed run leaves it
+    con.commit()
+    con.close()
+    dead = os.fork()
+    if dead == 0:
+        os._exit(0)
+    os.waitpid(dead, 0)
+    (tmp_path / LOCK_NAME).write_text(f"{dead}\n")  # its lock file, naming its dead pid
+    assert load_meta(tmp_path)["runs"][0]["status"] == "killed"
+    (tmp_path / LOCK_NAME).write_text(f"{os.getpid()}\n")  # a live holder: still running
+    assert load_meta(tmp_path)["runs"][0]["status"] == "running"
+    (tmp_path / LOCK_NAME).unlink()
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:
+        stored = [r for r in store.con.execute("SELECT status FROM runs ORDER BY id")]
+    assert stored == [("killed",), ("finished",)]
+
+
+# ---------------------------------------------------------------------------- Deliver 5: export
+def _export_rows(out: Path) -> tuple[int, int]:
+    import pandas as pd
+
+    return len(pd.read_csv(out / "trials.csv")), int(pd.read_csv(out / "terrains.csv")["trials"].sum())
+
+
+@pytest.mark.parametrize("cut", ["after_first_rename", "disk_full_on_second_table"])
+def test_study_export_is_all_or_nothing(tmp_path, cut):
+    from offroadbench.cli import main
+    from offroadbench.io import atomic
+
+    study, cells = cells_of(small())
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:
+        store.drop_trials([(0, 0, 2, 1)])
+    assert main(["study", "export", str(tmp_path), "--format", "csv"]) == 0
+    assert _export_rows(tmp_path) == (5, 5)  # the old pair
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)  # now 6 trials
+    pid = os.fork()
+    if pid == 0:  # the export, cut at one point
+        try:
+            if cut == "after_first_rename":
+                real, n = os.replace, [0]
+
+                def replace(a, b):
+                    real(a, b)
+                    if str(b).endswith(".csv"):
+                        n[0] += 1
+                        if n[0] == 1:
+                            os._exit(9)  # killed between the two tables
+
+                atomic.os.replace = replace
+            else:
+                import pandas as pd
+
+                real_csv, n = pd.DataFrame.to_csv, [0]
+
+                def to_csv(self, *a, **k):
+                    n[0] += 1
+                    if n[0] == 2:
+                        raise OSError(errno.ENOSPC, "No space left on device")
+                    return real_csv(self, *a, **k)
+
+                pd.DataFrame.to_csv = to_csv
+            code = main(["study", "export", str(tmp_path), "--format", "csv"])
+        finally:
+            os._exit(code if "code" in locals() else 3)
+    _, status = os.waitpid(pid, 0)
+    if cut == "after_first_rename":
+        assert os.WEXITSTATUS(status) == 9
+        atomic.finish_commits(tmp_path)  # what the next export (or reader) does first
+        assert _export_rows(tmp_path) == (6, 6)  # the new pair, completed
+    else:
+        assert os.WEXITSTATUS(status) == 1  # the CLI's one line for a full disk
+        assert _export_rows(tmp_path) == (5, 5)  # the old pair, untouched
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".") and ("commit" in p.name or
+                                                                                  p.name.endswith(".tmp"))]
+
+
+# ---------------------------------------------------------------------------- as a user: the CLI
+HUNG_STUDY = """
+[study]
+name = "hung"
+recipe = "paper-d2.45"
+root_seed = 3
+terrains_per_cell = 1
+missions_per_terrain = 3
+
+[recipe_overrides]
+"grid.rows" = 161
+"grid.cols" = 161
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 3.0
+border_m = 1.0
+
+[planner]
+name = "hangs-once-test"
+"""
+
+
+def test_a_study_with_a_hanging_trial_finishes_the_rest_and_reports_the_fault(tmp_path, monkeypatch, capsys):
+    """Done-when of issue 30: a study with one hanging trial finishes every other trial, reports the
+    hung one as a fault, and its statistics exclude it; a resume skips it, --retry-faults runs it."""
+    import math
+
+    from offroadbench.cli import main
+    from offroadbench.navigation.drivers import POLICIES, PolicySpec
+
+    marker = tmp_path / "hung.marker"
+
+    class HangsOnce:
+        """Drives at the goal; the first act() of the second episode anywhere hangs (once)."""
+
+        episodes = 0
+
+        def __init__(self, cfg, context) -> None:
+            pass
+
+        def reset(self, problem) -> None:
+            HangsOnce.episodes += 1
+            self.episode = HangsOnce.episodes
+
+        def act(self, obs):
+            if self.episode == 2 and not marker.exists():
+                marker.write_text("hung")
+                time.sleep(600)
+            gx, gy = obs["state"][:2]
+            return (0.8, max(-1.5, min(1.5, 2.0 * math.atan2(gy, gx))))
+
+    POLICIES.add("hangs-once-test", PolicySpec(HangsOnce, summary="test policy"))
+    try:
+        (tmp_path / "study.toml").write_text(HUNG_STUDY)
+        out = tmp_path / "run"
+        args = ["study", "run", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "1",
+                "--trial-timeout-s", "4"]
+        assert main(args) == 0
+        text = capsys.readouterr().out
+        assert "2 / 3 trials" in text and "1 fault(s)" in text
+        report = (out / "report" / "report.md").read_text()
+        assert "## Faults" in report and "ran longer than 4 s" in report and "**2 of 3** stored, 1 fault(s)" in report
+        assert len(load(out)) == 2
+        assert main([*args, "--no-report"]) == 0 and "this run: 0 trials" in capsys.readouterr().out
+        assert main([*args, "--retry-faults"]) == 0  # the marker is there: it runs now
+        assert "3 / 3 trials" in capsys.readouterr().out
+        assert "## Faults" not in (out / "report" / "report.md").read_text()
+    finally:
+        POLICIES._entries.pop("hangs-once-test", None)
+
+
+def test_memory_check_reads_the_address_space_limit_per_process(monkeypatch):
+    from offroadbench import memory
+
+    monkeypatch.setattr(memory, "address_space_room_bytes", lambda: 2 * 2**30)
+    monkeypatch.delenv(memory.NO_MEMORY_CHECK_ENV, raising=False)
+    with pytest.raises(InputError, match="address-space limit"):
+        memory.check_memory(3 * 2**30, "a 6000x6000 heightmap")
+    # a study's workers: each has its own limit, so four of 1 GB fit under a 2 GB limit each ...
+    monkeypatch.setattr(memory, "available_memory_bytes", lambda per_process=True: 2 * 2**30 if per_process
+                        else 64 * 2**30)
+    memory.check_memory(4 * 2**30, "4 workers", per_process_bytes=2**30)
+    # ... but not one of 3 GB
+    with pytest.raises(InputError, match="each process needs about 3.0 GB"):
+        memory.check_memory(3 * 2**30, "1 worker", per_process_bytes=3 * 2**30)
