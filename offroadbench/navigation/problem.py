@@ -41,11 +41,15 @@ class VehicleEnvelope:
     """Height of the belly above flat ground, m (Husky: 0.13 m, the spec sheet's and the URDF's)."""
     wheel_radius_m: float = 0.1651
     """Wheel radius, m (Husky: 0.1651 m): a wheel rides on the terrain's envelope at this radius."""
+    min_turn_radius_m: float = 0.0
+    """Smallest turning radius, m (0: turns in place, as a skid-steer; an Ackermann car's is
+    offroadbench.sim.trial.steering.min_turn_radius_m)."""
 
     def __post_init__(self) -> None:
         for name in ("length_m", "width_m", "max_speed_m_s", "max_yaw_rate_rad_s", "max_slope", "max_step_m",
                      "ground_clearance_m", "wheel_radius_m"):
             check_range(self, name, getattr(self, name), lo=0, lo_open=True)
+        check_range(self, "min_turn_radius_m", self.min_turn_radius_m, lo=0)
 
     @property
     def half_diagonal_m(self) -> float:

@@ -7,8 +7,8 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
 :meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
 
 - **Action**: ``(v, omega)``, forward speed (m/s) and yaw rate (rad/s, CCW +), in a Box bounded by
-  the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to wheel
-  speeds by the skid-steer drive (:func:`offroadbench.sim.trial.skid_steer.wheel_speeds`) and held for one
+  the vehicle's ``max_speed_m_s`` (either direction) and ``max_yaw_rate_rad_s``; mapped to joint
+  commands by the vehicle's steering kind (:func:`offroadbench.sim.trial.steering.drive_twist`) and held for one
   control tick (``1 / control_rate_hz``, 20 Hz by default, i.e. physics_rate / 20 physics steps).
   Actions outside the Box are clipped to the vehicle's limits in float64, as the trial runner
   clips a policy's (offroadbench.sim.trial.runner.clamp_action). There is no speed profile: the agent commands the wheels.

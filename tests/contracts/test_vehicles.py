@@ -1,6 +1,7 @@
 """Contract over every known vehicle: it loads, and its TOML agrees with its URDF (the wheel joints
 exist, spin about the body's y axis, the wheel radius is the wheels' collision radius and the track
-is the lateral distance between the left and right wheel joints)."""
+is the lateral distance between the left and right wheel joints, measured in the body frame through
+any steering knuckle, rocker or bogie; the steering and differential joints exist)."""
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -27,10 +28,24 @@ def test_vehicle_contract(name):
         assert joint.get("type") == "continuous"
         axis = np.array([float(v) for v in joint.find("axis").get("xyz").split()])
         assert np.allclose(np.abs(axis), [0, 1, 0])
-        ys[jname] = float(joint.find("origin").get("xyz").split()[1])
+        ys[jname] = _body_y(joints, joint)
         wheel = links[joint.find("child").get("link")]
         radii = [float(g.get("radius")) for c in wheel.iter("collision") for g in c.find("geometry")]
         assert radii and all(r == pytest.approx(spec.wheel_radius_m, rel=1e-6) for r in radii)
     left = np.mean([ys[j] for j in spec.left_wheel_joints])
     right = np.mean([ys[j] for j in spec.right_wheel_joints])
     assert left - right == pytest.approx(spec.track_m, rel=1e-3)
+    for jname in spec.steer_joints + spec.differential_joints:
+        assert joints.get(jname) is not None and joints[jname].get("type") == "revolute", jname
+
+
+def _body_y(joints: dict, joint) -> float:
+    """y of a joint in the root link's frame: the joint origins summed up the chain (no rotations)."""
+    by_child = {j.find("child").get("link"): j for j in joints.values()}
+    y = 0.0
+    while joint is not None:
+        origin = joint.find("origin")
+        assert origin is None or not any(float(v) for v in (origin.get("rpy") or "0 0 0").split())
+        y += float(origin.get("xyz").split()[1]) if origin is not None else 0.0
+        joint = by_child.get(joint.find("parent").get("link"))
+    return y

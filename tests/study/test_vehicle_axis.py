@@ -34,3 +34,12 @@ def test_vehicle_axis_runs_each_vehicle_and_reports_without_consecutive_changes(
     report = build_report(tmp_path)
     assert "median_changes.csv" not in report.tables
     assert "between consecutive groups" not in report.markdown
+
+
+def test_a_vehicle_axis_takes_every_steering_kind():
+    """Every shipped vehicle resolves on a grid axis, with its own steering kind (issue 32)."""
+    names = ["husky", "jackal", "talon", "hunter", "sojourner"]
+    study = study_from_dict({**STUDY, "grid": {"vehicle.name": names}})
+    kinds = {c.section("vehicle").name: c.section("vehicle").steering for c in plan_cells(study)}
+    assert kinds == {"husky": "skid", "jackal": "skid", "talon": "skid", "hunter": "ackermann",
+                     "sojourner": "rocker_bogie"}

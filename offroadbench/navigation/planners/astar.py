@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from offroadbench.config import check_range
+from offroadbench.errors import InputError
 from offroadbench.navigation.costmap import MOVES, CostConfig, CostGrid, cost_grid, no_path
 from offroadbench.navigation.drivers import register_planner
 from offroadbench.navigation.problem import PlanningProblem
@@ -105,8 +106,12 @@ def plan_astar(problem: PlanningProblem, cfg: AStarConfig = AStarConfig()) -> np
     hazard, or by roughness and nearness to high cells with ``hazard = "classes"``). Cannot see:
     the vehicle's heading and turning (the path may start sideways or turn on the spot; the
     footprint hazard is the worst over every heading), wheel slip and momentum, the tracker's own
-    errors, anything the cell size blurs out.
+    errors, anything the cell size blurs out. A vehicle that cannot turn in place (an Ackermann car:
+    ``VehicleEnvelope.min_turn_radius_m`` > 0) is refused.
     """
+    if problem.vehicle is not None and problem.vehicle.min_turn_radius_m > 0.0:
+        raise InputError(f"planner 'astar' plans paths that may turn on the spot; this vehicle turns no tighter than "
+                         f"{problem.vehicle.min_turn_radius_m:.2f} m: use planner 'lattice' (arcs of bounded curvature)")
     for relaxed in (False, True):
         grid = cost_grid(problem, cfg, relaxed)
         cells = _astar(grid.cost, grid.cell_of(problem.start_xy), grid.cell_of(problem.goal_xy))

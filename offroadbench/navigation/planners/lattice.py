@@ -3,6 +3,7 @@ cost grid (offroadbench.navigation.costmap)."""
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 from dataclasses import dataclass
@@ -84,8 +85,11 @@ def plan_lattice(problem: PlanningProblem, cfg: LatticeConfig = LatticeConfig())
     tighter than ``turn_radius_m``, plus ``turn_weight`` per radian turned. Cannot see: the
     footprint's heading (the hazard is the worst over every heading), wheel slip and momentum,
     the tracker's own errors; its heuristic (8-connected cell steps, turning ignored) is not
-    exact, so the path is near-optimal, not provably optimal.
+    exact, so the path is near-optimal, not provably optimal. The arcs are never tighter than the
+    vehicle's own smallest turning radius (``VehicleEnvelope.min_turn_radius_m``, an Ackermann car's).
     """
+    if problem.vehicle is not None and problem.vehicle.min_turn_radius_m > cfg.turn_radius_m:
+        cfg = dataclasses.replace(cfg, turn_radius_m=problem.vehicle.min_turn_radius_m)
     for relaxed in (False, True):
         found = _lattice_search(problem, cfg, relaxed)
         if found is not None:

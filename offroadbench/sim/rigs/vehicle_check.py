@@ -13,11 +13,13 @@ contact model and skid-steer drive the trials use:
 - **yaw-rate tracking**, in place and at cruise speed, at headings 0, 22.5 and 45 deg (Bullet's
   friction directions sit on the world axes, so a heading-dependent contact shows here) for
   commands 0.25-2 rad/s (capped at the vehicle's yaw-rate limit). The expected value is the
-  command after the wheel-speed saturation of :func:`offroadbench.sim.trial.skid_steer.wheel_speeds`
-  (:func:`~offroadbench.sim.trial.skid_steer.achievable_twist`); pass: 0.85-1.1x.
+  command after the drive's limits (:func:`offroadbench.sim.trial.steering.achievable`: skid-steer's
+  wheel-speed saturation, or a steered vehicle's minimum turning radius, whose vehicle has no
+  in-place rows); pass: 0.85-1.1x.
 - **straight-line drift**: lateral offset after 10 m driven open loop at cruise speed on flat
   ground (expected 0; pass: under 1 % of the distance).
-- **stopping distance** from top speed when the wheels are commanded to stop, against
+- **stopping distance** of the whole vehicle's centre of mass from top speed when the wheels are
+  commanded to stop (stopped: under 1 cm/s for 0.5 s), against
   ``v^2 / (2 a)`` with ``a = min(max_accel, mu g, n tau / (r m_eff))``: the vehicle's rated
   deceleration, what the grip allows, or what the motors can do against the vehicle's mass plus
   the drive train's reflected mass ``m_eff = m + sum(I_spin) / r^2``; pass: 0.5-1.5x.
@@ -39,6 +41,8 @@ contact model and skid-steer drive the trials use:
   Husky fails this row).
 - **highest step climbed** at cruise speed from 1.5 m away (bisection on the height of a step
   across a 2 cm grid). Expected: the geometric bound of :func:`step_bound_m` (wheel radius, chassis nose, belly clearing the edge); pass: 0.6-1.05x.
+  A rocker-bogie's middle and rear wheels push the front one up the face: about a wheel diameter
+  (Bickler 1998); pass: 0.75-1.25x.
 
 **Soft soil** (:func:`soft_soil_checks`, the ``terramechanics`` tyre model on lunar regolith in
 lunar gravity, offroadbench.sim.tyre_laws.terramechanics):
@@ -69,7 +73,7 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
-from offroadbench.sim.trial.skid_steer import achievable_twist, wheel_speeds
+from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
@@ -144,7 +148,7 @@ def _mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, se
     started at rest at ``at`` (default: the middle of the map)."""
     c = world.hm.width_m / 2.0
     world.spawn(*(at or (c, c)), heading)
-    world.command_wheels(*wheel_speeds(v, omega, world.spec))
+    drive_twist(world, v, omega)
     _run(world, seconds / 2.0)
     yaws = []
     _run(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
@@ -201,14 +205,20 @@ def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
 def _yaw_tracking(world: TrialWorld, headings_deg, commands) -> list[CheckResult]:
     spec = world.spec
     cruise = min(1.0, spec.max_speed_m_s)
+    layout = reference_layout(spec, world.geometry.wheel_centres_m)
+    r_min = min_turn_radius_m(spec, layout)
     rows = []
-    for mode, v in (("in place", 0.0), (f"at {cruise:g} m/s", cruise)):
+    modes = (("in place", 0.0), (f"at {cruise:g} m/s", cruise)) if r_min == 0.0 else ((f"at {cruise:g} m/s", cruise),)
+    for mode, v in modes:
         for h in headings_deg:
             for w in commands:
                 w = min(w, spec.max_yaw_rate_rad_s)
-                _, w_ach = achievable_twist(v, w, spec)
+                _, w_ach = achievable(v, w, spec, layout)
                 got = _mean_yaw_rate(world, v, w, math.radians(h))
-                note = "" if math.isclose(w_ach, w, rel_tol=1e-9) else f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s"
+                note = "" if math.isclose(w_ach, w, rel_tol=1e-9) else (
+                    f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s" if r_min == 0.0 else
+                    f"command {w:g} rad/s, limited by the minimum turning radius {r_min:.2f} m "
+                    f"(steering limit {spec.max_steer_angle_deg:g} deg)")
                 rows.append(_ratio_row(f"yaw rate {mode}, heading {h:g} deg, command {w:g} rad/s",
                                        got, w_ach, "rad/s", 0.85, 1.1, note))
     return rows
@@ -220,7 +230,7 @@ def _drift(world: TrialWorld) -> CheckResult:
     heading = math.radians(22.5)
     x0, y0 = 2.0, 2.0
     world.spawn(x0, y0, heading)
-    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    drive_twist(world, v, 0.0)
     along = 0.0
     pos = world.base_state()[0]
     for _ in range(int(round(30.0 * world.sim.physics_rate_hz))):
@@ -238,23 +248,28 @@ def _stopping(world: TrialWorld) -> CheckResult:
     spec = world.spec
     v = spec.max_speed_m_s
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
-    world.command_wheels(*wheel_speeds(v, 0.0, spec))
+    drive_twist(world, v, 0.0)
     _run(world, 2.0 + 3.0 * v / spec.max_accel_m_s2)
     speed = math.hypot(*world.base_state()[2][:2])
-    start = world.base_state()[0]
+    # the whole vehicle's centre of mass (a suspended body swings on its rockers as the wheels stop)
+    start = world.centre_of_mass_m()
     world.command_wheels(0.0, 0.0)
+    still, settle = 0, int(round(0.5 * world.sim.physics_rate_hz))
     for _ in range(int(round(5.0 * world.sim.physics_rate_hz))):
         world.step()
-        if math.hypot(*world.base_state()[2][:2]) < 0.01:
+        # stopped: under 1 cm/s for 0.5 s (a suspended body swings through 0 while it stops)
+        still = still + 1 if math.hypot(*world.base_state()[2][:2]) < 0.01 else 0
+        if still >= settle:
             break
-    end = world.base_state()[0]
+    end = world.centre_of_mass_m()
     dist = math.hypot(end[0] - start[0], end[1] - start[1])
     mu = spec.wheel_friction * world.sim.terrain_friction
-    n = len(spec.wheel_joints)
+    n = sum(map(spec.is_driven, spec.wheel_joints))
+    share = n / len(spec.wheel_joints)  # the driven (braking) wheels' share of the weight, about
     spin = sum(world.geometry.wheel_spin_inertia_kg_m2)
     m_eff = world.geometry.mass_kg + spin / spec.wheel_radius_m**2
     motors = n * spec.wheel_torque_limit_nm / (spec.wheel_radius_m * m_eff)
-    decel = min(spec.max_accel_m_s2, mu * world.sim.gravity_m_s2, motors)
+    decel = min(spec.max_accel_m_s2, share * mu * world.sim.gravity_m_s2, motors)
     expected = speed * speed / (2.0 * decel)
     return _ratio_row("stopping distance from top speed", dist, expected, "m", 0.5, 1.5,
                       f"from {speed:.2f} m/s; v^2 / (2 a), a = min(max_accel, mu g, n tau / (r m_eff)) = "
@@ -322,7 +337,7 @@ def _climbs(world: TrialWorld, grade_deg: float) -> bool:
     climbed = False
     for k in range(int(round(10.0 * rate))):
         v = min(0.5, 0.5 * k / rate, spec.max_speed_m_s)
-        world.command_wheels(*wheel_speeds(v, 0.0, spec))
+        drive_twist(world, v, 0.0)
         world.step()
         if world.base_state()[0][0] - x0 >= 1.0:
             climbed = True
@@ -332,7 +347,8 @@ def _climbs(world: TrialWorld, grade_deg: float) -> bool:
 
 
 def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float, wheels_per_axle: int,
-                    wheel_radius_m: float, torque_nm: float, mu: float, g: float = 9.81) -> float:
+                    wheel_radius_m: float, torque_nm: float, mu: float, g: float = 9.81,
+                    driven: tuple[bool, bool] = (True, True)) -> float:
     """Steepest grade a rigid two-axle vehicle climbs at constant speed, degrees (quasi-static).
 
     On a grade ``theta`` the axle loads are ``m g (cos(theta) / 2 -+ sin(theta) h / (2 a))`` (front,
@@ -340,14 +356,16 @@ def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float
     each axle pushes at most ``min(mu N_axle, n tau / r)``: its grip or its motors' torque. The
     grade is the largest ``theta`` at which the two together still match ``m g sin(theta)``, and at
     most the pitch-over angle ``atan(a / h)``, where the front axle's load reaches zero and the
-    vehicle would turn over backwards about the rear axle.
+    vehicle would turn over backwards about the rear axle. ``driven``: whether the (front, rear)
+    axle has motors (a rear-wheel-drive car's front axle pushes nothing).
     """
 
     def margin(theta: float) -> float:
         c, s = math.cos(theta), math.sin(theta)
         shift = s * com_height_m / (2.0 * half_wheelbase_m)
         push = sum(min(mu * mass_kg * g * max(0.0, 0.5 * c + sign * shift),
-                       wheels_per_axle * torque_nm / wheel_radius_m) for sign in (-1.0, 1.0))
+                       wheels_per_axle * torque_nm / wheel_radius_m)
+                   for sign, on in zip((-1.0, 1.0), driven) if on)
         return push - mass_kg * g * s
 
     lo, hi = 0.0, 0.5 * math.pi
@@ -367,8 +385,12 @@ def _climb(world: TrialWorld, com_height_m: float) -> CheckResult:
     mu = spec.wheel_friction * world.sim.terrain_friction
     half_base = 0.5 * world.geometry.wheelbase_m
     per_axle = len(spec.wheel_joints) // 2
+    xs = [c[0] for c in world.geometry.wheel_centres_m]
+    mid = 0.5 * (max(xs) + min(xs))
+    driven = tuple(any(spec.is_driven(n) and (x > mid) == front for n, x in zip(spec.wheel_joints, xs))
+                   for front in (True, False))
     expected = climb_limit_deg(world.geometry.mass_kg, com_height_m, half_base, per_axle, spec.wheel_radius_m,
-                               spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2)
+                               spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2, driven)
     grip = math.degrees(math.atan(mu))
     note = (f"quasi-static limit with load transfer to the rear axle, per-axle grip (mu = {mu:g}) and motor "
             f"torque ({spec.wheel_torque_limit_nm:g} N m per wheel); grip alone: {grip:.1f} deg")
@@ -398,8 +420,10 @@ def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float) -> bool:
     hm = _step_world(height_m, spec)
     with open_world(hm, spec, sim) as world:
         world.spawn(2.5, hm.height_m / 2.0, 0.0)
-        world.command_wheels(*wheel_speeds(min(1.0, spec.max_speed_m_s), 0.0, spec))
-        for _ in range(int(round(10.0 * sim.physics_rate_hz))):
+        v = min(1.0, spec.max_speed_m_s)
+        drive_twist(world, v, 0.0)
+        # 10 s, or twice the time the 3 m to the finish take at cruise speed for a slower vehicle
+        for _ in range(int(round(max(10.0, 6.0 / v) * sim.physics_rate_hz))):
             world.step()
             if world.base_state()[0][0] > 5.5:
                 return True
@@ -427,15 +451,23 @@ def step_bound_m(wheel_radius_m: float, belly_m: float, wheelbase_m: float, over
 
 
 def _step(spec: VehicleSpec, sim: SimConfig, belly_m: float, wheelbase_m: float, overhang: bool) -> CheckResult:
-    top = 1.2 * spec.wheel_radius_m
+    lo, hi = 0.6, 1.05
+    if spec.steering == "rocker_bogie":
+        # the middle and rear wheels push the front wheel up the step face: a rocker-bogie climbs about
+        # a wheel diameter (Bickler 1998, "Roving over Mars"; Lindemann and Voorhees 2005); "about": 0.75-1.25x
+        expected = 2.0 * spec.wheel_radius_m
+        why = "the middle and rear wheels push the front one up the face: about a wheel diameter (Bickler 1998)"
+        lo, hi = 0.75, 1.25
+    else:
+        expected = step_bound_m(spec.wheel_radius_m, belly_m, wheelbase_m, overhang)
+        why = ("the chassis nose reaches past the tyres and strikes a step higher than the belly" if overhang
+               else "the tilted belly must clear the step edge between the axles")
+    top = 1.2 * max(spec.wheel_radius_m, expected)
     height = _bisect(lambda h: _climbs_step(spec, sim, h), 0.0, top, 0.01)
-    expected = step_bound_m(spec.wheel_radius_m, belly_m, wheelbase_m, overhang)
-    why = ("the chassis nose reaches past the tyres and strikes a step higher than the belly" if overhang
-           else "the tilted belly must clear the step edge between the axles")
     note = f"geometric bound (wheel radius {spec.wheel_radius_m:g} m, belly {belly_m:.3f} m): {why}"
     if spec.rated_step_m is not None:
         note += f"; the sheet's {spec.rated_step_m:g} m is set beside it"
-    return dataclasses.replace(_ratio_row("highest step climbed at cruise speed", height, expected, "m", 0.6, 1.05,
+    return dataclasses.replace(_ratio_row("highest step climbed at cruise speed", height, expected, "m", lo, hi,
                                           note), sheet=spec.rated_step_m)
 
 
@@ -498,14 +530,13 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
 
 def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
-    spec = world.spec
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
     rate = world.sim.physics_rate_hz
     weight = world.geometry.mass_kg * world.sim.gravity_m_s2
     drag, pulls = 0.0, []
     n = int(round(seconds * rate))
     for k in range(n):
-        world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / rate), 0.0, spec))
+        drive_twist(world, min(0.3, 0.3 * k / rate), 0.0)
         world.push_base(-drag, 0.0, 0.0)
         world.step()
         measured = world.wheel_slip()

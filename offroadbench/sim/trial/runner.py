@@ -5,7 +5,8 @@ policy, the Gymnasium env (offroadbench.sim.gym_env) with an agent's actions, so
 
 Loop, per physics step at ``k * dt``: at telemetry ticks (20 Hz) the base state is recorded and
 the failure rules of offroadbench.navigation.rules are checked (tipped, off_map, success, stuck);
-at control ticks the driver issues (v, omega), mapped to wheel speeds by the skid-steer drive.
+at control ticks the driver issues (v, omega), mapped to joint commands by the vehicle's steering
+kind (offroadbench.sim.trial.steering).
 The driver is the study's ``[planner]`` (offroadbench.navigation.drivers): a planner
 (offroadbench.navigation.planners; default ``straight``, the start-goal line) whose path pure
 pursuit follows, or a closed-loop policy (offroadbench.navigation.policies) fed the Gymnasium env's
@@ -37,8 +38,7 @@ from offroadbench.navigation.sensor import Belief, make_sensing, sheet_envelope
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.trial.controller import make_tracker
-from offroadbench.sim.trial.skid_steer import wheel_speeds
+from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, min_turn_radius_m, reference_layout
 from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
@@ -154,7 +154,8 @@ def vehicle_envelope(world: TrialWorld) -> VehicleEnvelope:
     return VehicleEnvelope(length_m=geo.length_m, width_m=geo.width_m,
                            max_speed_m_s=spec.max_speed_m_s, max_yaw_rate_rad_s=spec.max_yaw_rate_rad_s,
                            max_slope=spec.wheel_friction * world.sim.terrain_friction,
-                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m)
+                           max_step_m=float(step), ground_clearance_m=geo.belly_m, wheel_radius_m=spec.wheel_radius_m,
+                           min_turn_radius_m=min_turn_radius_m(spec, reference_layout(spec, geo.wheel_centres_m)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -242,10 +243,10 @@ class TrialLoop:
         return self.reason is not None
 
     def command(self, v_m_s: float, omega_rad_s: float) -> None:
-        """Drive at (v, omega) from this tick (the skid-steer drive's wheel speeds); a row already
-        recorded at this tick takes the command."""
+        """Drive at (v, omega) from this tick (the vehicle's steering kind maps it to joint commands:
+        offroadbench.sim.trial.steering); a row already recorded at this tick takes the command."""
         self.cmd_v, self.cmd_w = v_m_s, omega_rad_s
-        self.world.command_wheels(*wheel_speeds(v_m_s, omega_rad_s, self.world.spec))
+        drive_twist(self.world, v_m_s, omega_rad_s)
         if self._row_k == self.k:
             row = self.rows[-1]
             self.rows[-1] = (*row[:17], v_m_s, omega_rad_s, *row[19:])
@@ -371,7 +372,7 @@ def drive_mission(
     else:
         waypoints = plan_within_limits(planner, problem)
     if policy is None:
-        tracker = make_tracker(waypoints, spec, controller)
+        tracker = make_vehicle_tracker(waypoints, spec, controller, world)
         length = tracker.length_m
     else:
         length = mission.length_m
@@ -389,7 +390,7 @@ def drive_mission(
         bx, by, byaw = sensing.update(pos, yaw)  # the believed pose (the true one for the oracle)
         if policy is None:
             if replanner is not None and replanner.update((bx, by)) is not None:
-                tracker = make_tracker(replanner.waypoints, spec, controller)
+                tracker = make_vehicle_tracker(replanner.waypoints, spec, controller, world)
             v, w, _ = tracker.command(np.array((bx, by)), byaw, np.array(lin[:2]))
         else:
             obs = observe(hm, observation, goal, (bx, by, pos[2]), roll, pitch, byaw, rates,

@@ -15,17 +15,27 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench import resources
-from offroadbench.config import check_range, from_dict, load_toml
+from offroadbench.config import check_choice, check_range, from_dict, load_toml
 from offroadbench.errors import InputError
 from offroadbench.bounds import check_bounds
 from offroadbench.registry import Registry, unknown_name
 
-__all__ = ["VehicleSpec", "VEHICLES", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
+__all__ = ["STEERING_KINDS", "VehicleSpec", "VEHICLES", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
+
+#: the steering kinds a vehicle.toml may name (VehicleSpec.steering)
+STEERING_KINDS = ("skid", "ackermann", "rocker_bogie")
 
 
 @dataclass(frozen=True, kw_only=True)
 class VehicleSpec:
-    """A skid-steer vehicle: its URDF, geometry the drive needs, limits and contact friction."""
+    """A ground vehicle: its URDF, geometry the drive needs, limits and contact friction.
+
+    ``steering`` picks how (v, omega) commands become joint commands and which path tracker drives it
+    (offroadbench.sim.trial.steering): ``skid`` (both sides at their own speed: wheeled skid-steer,
+    and tracks as rows of road wheels), ``ackermann`` (steered front wheels, bicycle-model pure
+    pursuit: offroadbench.sim.trial.ackermann) or ``rocker_bogie`` (six wheels, corner-wheel
+    steering, rockers tied by a differential).
+    """
 
     name: str
     """Short name, e.g. ``husky``."""
@@ -66,6 +76,25 @@ class VehicleSpec:
     """Moment of inertia of each wheel about its axle as the motor sees it, kg m^2: the tyre's own
     plus the gearbox's reflected motor inertia (rotor inertia x gear ratio^2). Set on the wheel links
     after loading (None: the URDF's value). See offroadbench.sim.engines.pybullet.tyres for why it matters."""
+    driven_wheel_joints: tuple[str, ...] = ()
+    """The wheel joints with a motor (empty: all of them); the others roll freely (a rear-wheel-drive car's
+    front wheels)."""
+    steering: str = "skid"
+    """How the vehicle steers: ``skid``, ``ackermann`` or ``rocker_bogie`` (see the class docstring)."""
+    steer_joints: tuple[str, ...] = ()
+    """Steering joints (revolute about the body's z axis, position-controlled; ``ackermann`` and
+    ``rocker_bogie``), each turning the wheel of the same index in ``steered_wheel_joints``."""
+    steered_wheel_joints: tuple[str, ...] = ()
+    """The wheel joints the ``steer_joints`` turn, in the same order (each also in the left or right list)."""
+    max_steer_angle_deg: float = 0.0
+    """Largest steering angle of a steered wheel, degrees (``ackermann``, ``rocker_bogie``)."""
+    max_steer_rate_deg_s: float = 0.0
+    """Largest steering rate, deg/s (the steering servo's speed)."""
+    steer_torque_limit_nm: float = 0.0
+    """Largest torque of a steering servo, N m."""
+    differential_joints: tuple[str, ...] = ()
+    """``rocker_bogie``: the left and right rocker joints, tied by the differential so that their
+    angles relative to the body are opposite (the body's pitch is the mean of the rockers')."""
     rated_climb_grade_deg: float | None = None
     """Steepest grade the maker says the vehicle climbs, degrees (spec sheet; shown beside the
     measured figure by offroadbench.sim.rigs.vehicle_check, never used in the simulation)."""
@@ -77,6 +106,8 @@ class VehicleSpec:
     def __post_init__(self) -> None:
         object.__setattr__(self, "left_wheel_joints", tuple(self.left_wheel_joints))
         object.__setattr__(self, "right_wheel_joints", tuple(self.right_wheel_joints))
+        for name in ("driven_wheel_joints", "steer_joints", "steered_wheel_joints", "differential_joints"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
         if not self.left_wheel_joints or not self.right_wheel_joints:
             raise InputError(f"vehicle {self.name!r}: left_wheel_joints and right_wheel_joints must not be empty")
         for name in ("wheel_radius_m", "track_m", "max_speed_m_s", "max_accel_m_s2", "max_jerk_m_s3",
@@ -94,6 +125,14 @@ class VehicleSpec:
             check_range(self, "rated_step_m", self.rated_step_m, lo=0, lo_open=True)
         if self.wheel_spin_inertia_kg_m2 is not None:
             check_range(self, "wheel_spin_inertia_kg_m2", self.wheel_spin_inertia_kg_m2, lo=0, lo_open=True)
+        check_choice(self, "steering", self.steering, STEERING_KINDS)
+        check_range(self, "max_steer_angle_deg", self.max_steer_angle_deg, lo=0, hi=90)
+        check_range(self, "max_steer_rate_deg_s", self.max_steer_rate_deg_s, lo=0)
+        check_range(self, "steer_torque_limit_nm", self.steer_torque_limit_nm, lo=0)
+        self._check_steering()
+        stray = [w for w in self.driven_wheel_joints if w not in self.wheel_joints]
+        if stray:
+            raise InputError(f"vehicle {self.name!r}: driven_wheel_joints {', '.join(stray)} are not wheel joints")
         if (self.tyre_stiffness_n_m is None) != (self.tyre_damping_n_s_m is None):
             raise InputError("vehicle: give both tyre_stiffness_n_m and tyre_damping_n_s_m, or neither")
         if self.tyre_stiffness_n_m is not None:
@@ -101,9 +140,32 @@ class VehicleSpec:
             check_range(self, "tyre_damping_n_s_m", self.tyre_damping_n_s_m, lo=0)
         check_bounds(self, f"vehicle {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
+    def _check_steering(self) -> None:
+        if self.steering == "skid":
+            if self.steer_joints or self.differential_joints:
+                raise InputError(f"vehicle {self.name!r}: steering = 'skid' takes no steer_joints or differential_joints")
+            return
+        if not self.steer_joints or len(self.steer_joints) != len(self.steered_wheel_joints):
+            raise InputError(f"vehicle {self.name!r}: steering = {self.steering!r} needs steer_joints and "
+                             f"steered_wheel_joints of the same length > 0, got {len(self.steer_joints)} and "
+                             f"{len(self.steered_wheel_joints)}")
+        stray = [w for w in self.steered_wheel_joints if w not in self.wheel_joints]
+        if stray:
+            raise InputError(f"vehicle {self.name!r}: steered_wheel_joints {', '.join(stray)} are not wheel joints")
+        zero = [n for n in ("max_steer_angle_deg", "max_steer_rate_deg_s", "steer_torque_limit_nm") if getattr(self, n) <= 0]
+        if zero:
+            raise InputError(f"vehicle {self.name!r}: steering = {self.steering!r} needs {', '.join(zero)} > 0")
+        if self.steering == "rocker_bogie" and len(self.differential_joints) != 2:
+            raise InputError(f"vehicle {self.name!r}: steering = 'rocker_bogie' needs differential_joints = "
+                             f"[left rocker, right rocker], got {list(self.differential_joints)}")
+
     @property
     def wheel_joints(self) -> tuple[str, ...]:
         return self.left_wheel_joints + self.right_wheel_joints
+
+    def is_driven(self, wheel_joint: str) -> bool:
+        """Whether ``wheel_joint`` has a motor (``driven_wheel_joints``; all wheels when it is empty)."""
+        return not self.driven_wheel_joints or wheel_joint in self.driven_wheel_joints
 
 
 def _toml_of(name: str, obj: object) -> Path:

@@ -166,7 +166,7 @@ class MuJoCoWorld:
         if len(roots) != 1:
             raise InputError(f"URDF {spec.urdf}: expected one root link, found {roots}")
         by_name = {j.name: j for j in joints}
-        missing = [n for n in spec.wheel_joints if n not in by_name]
+        missing = [n for n in spec.wheel_joints + spec.steer_joints + spec.differential_joints if n not in by_name]
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
         coulomb = sim.tyre_model == "coulomb"
@@ -216,9 +216,39 @@ class MuJoCoWorld:
         act = ET.SubElement(root, "actuator")
         for name in spec.wheel_joints:
             spin = spec.wheel_spin_inertia_kg_m2 or links[by_name[name].child].inertia[1]
-            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(tune.servo_gain * spin / self._dt_mj),
+            # an undriven wheel keeps its (idle) actuator slot with no gain: it rolls freely
+            gain = tune.servo_gain * spin / self._dt_mj if spec.is_driven(name) else 0.0
+            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(gain),
                           forcerange=_fmt((-spec.wheel_torque_limit_nm, spec.wheel_torque_limit_nm)))
+        self._articulate(root, act, links, by_name)
+        if any(j.kind != "fixed" and j.name not in wheel_names for j in joints):
+            # links on steering or suspension joints are not all parent and child: keep MuJoCo from
+            # colliding the vehicle with itself (PyBullet loads URDFs without self-collision)
+            for g in root.iter("geom"):
+                if g.get("name") != "terrain" and g.get("contype") != "0":
+                    g.set("contype", "2")
+                    g.set("conaffinity", "1")
         return ET.tostring(root, encoding="unicode")
+
+    def _articulate(self, root, act, links, by_name) -> None:
+        """Steering servos after the wheel motors (position actuators, stiff against the steered
+        link's inertia about the steering axis, limited to the spec's steering torque) and the
+        rockers' differential as a joint equality (angles opposite: the body pitches by the mean of
+        the rockers'), for steered and rocker-bogie vehicles."""
+        spec = self.spec
+        for name in spec.steer_joints:
+            link = links[by_name[name].child]
+            wheel = next(j for j in by_name.values() if j.parent == link.name)
+            inertia = link.inertia[2] + links[wheel.child].inertia[2] + links[wheel.child].mass * sum(
+                p * p for p in wheel.pos[:2])
+            kp = self.contact.servo_gain * max(inertia, 1e-6) / self._dt_mj**2
+            ET.SubElement(act, "position", name=f"steer_{name}", joint=name, kp=repr(kp),
+                          kv=repr(2.0 * math.sqrt(kp * max(inertia, 1e-6))),
+                          forcerange=_fmt((-spec.steer_torque_limit_nm, spec.steer_torque_limit_nm)))
+        if spec.differential_joints:
+            left, right = spec.differential_joints
+            eq = ET.SubElement(root, "equality")
+            ET.SubElement(eq, "joint", joint1=left, joint2=right, polycoef="0 -1 0 0 0")
 
     def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
         spec, sim, tune = self.spec, self.sim, self.contact
@@ -270,6 +300,7 @@ class MuJoCoWorld:
         self._terrain_geom = mujoco.mj_name2id(m, obj.mjOBJ_GEOM, "terrain")
         self._chassis = mujoco.mj_name2id(m, obj.mjOBJ_BODY, "chassis")
         joints = [mujoco.mj_name2id(m, obj.mjOBJ_JOINT, n) for n in self.spec.wheel_joints]
+        self._wheel_jnt = joints
         self._wheel_bodies = [int(m.jnt_bodyid[j]) for j in joints]
         self._wheel_qvel = [int(m.jnt_dofadr[j]) for j in joints]
         self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
@@ -280,6 +311,8 @@ class MuJoCoWorld:
                 if m.geom_bodyid[g] == b:
                     self._wheel_geom[g] = i
         self._n_left = len(self.spec.left_wheel_joints)
+        # a wheel on a steering or suspension joint does not move with the chassis alone
+        self._articulated = m.njnt > 1 + len(self._wheel_bodies)  # joints beyond the free joint and the wheels
 
     def geometry_mass(self) -> float:
         """Total mass of the vehicle's bodies, kg."""
@@ -382,6 +415,15 @@ class MuJoCoWorld:
         for i in range(len(self._wheel_bodies)):
             ctrl[i] = left_rad_s if i < n else right_rad_s
 
+    def command_wheel_speeds(self, speeds_rad_s) -> None:
+        """One velocity target per wheel (``spec.wheel_joints`` order), rad/s."""
+        self.data.ctrl[: len(self._wheel_bodies)] = speeds_rad_s
+
+    def command_steering(self, angles_rad) -> None:
+        """Steering-joint targets, rad (``spec.steer_joints`` order; servos after the wheel motors)."""
+        n = len(self._wheel_bodies)
+        self.data.ctrl[n : n + len(angles_rad)] = angles_rad
+
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
         ``xfrc_applied``, ``mj_step2``, then the contacts."""
@@ -464,6 +506,14 @@ class MuJoCoWorld:
                 if not touch[i]:
                     continue
                 c = xipos[b]
+                if self._articulated:  # the wheel body's own velocity (steering, rockers, bogies)
+                    vel = np.zeros(6)
+                    mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
+                    fx, fy, fz, px, py, pz = core.wheel_force(i, c, tuple(vel[3:].tolist()), tuple(vel[:3].tolist()))
+                    ox, oy, oz = px - c[0], py - c[1], pz - c[2]
+                    k = 6 * b
+                    xfrc[k:k + 6] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
+                    continue
                 rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
                 lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
                 a0, a1, a2 = self._axis_world(i, r)
@@ -491,6 +541,15 @@ class MuJoCoWorld:
         soil.begin()
         for i, b in enumerate(self._wheel_bodies):
             c = xipos[b]
+            if self._articulated:  # the wheel body's own velocity and axle (steering, rockers, bogies)
+                vel = np.zeros(6)
+                mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
+                axis = tuple(d.xaxis[self._wheel_jnt[i]].tolist())
+                out = soil.wheel_force(i, c, axis, tuple(vel[3:].tolist()), tuple(vel[:3].tolist()))
+                if out is not None:
+                    k = 6 * b
+                    xfrc[k:k + 6] = (*out[0], *out[1])
+                continue
             rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
             lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
             a0, a1, a2 = self._axis_world(i, r)

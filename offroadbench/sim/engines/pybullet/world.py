@@ -210,9 +210,15 @@ class World:
         missing = [n for n in spec.wheel_joints if n not in names]
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
+        extra = [n for n in spec.steer_joints + spec.differential_joints if n not in names]
+        if extra:
+            raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(extra)}")
+        self.steer_joints = [names[n] for n in spec.steer_joints]
         self.left_joints = [names[n] for n in spec.left_wheel_joints]
         self.right_joints = [names[n] for n in spec.right_wheel_joints]
         self.wheel_joints = self.left_joints + self.right_joints
+        # motor torque per wheel: the spec's limit, 0 on an undriven wheel (it rolls freely)
+        self._wheel_forces = [spec.wheel_torque_limit_nm if spec.is_driven(n) else 0.0 for n in spec.wheel_joints]
         cid = self._cid
         pb.changeDynamics(body, -1, lateralFriction=spec.chassis_friction, physicsClientId=cid)
         tyre = {}
@@ -226,6 +232,7 @@ class World:
                 ixx, _, izz = pb.getDynamicsInfo(body, j, physicsClientId=cid)[2]
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
                                   physicsClientId=cid)
+        self._articulate(body, names)
         if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
             n_links = pb.getNumJoints(body, physicsClientId=cid)
             self._mass_kg = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
@@ -241,6 +248,40 @@ class World:
                                        spec.wheel_friction * self.sim.terrain_friction, self.dt_s,
                                        stiffness_n_m=k, damping_n_s_m=c)
         return body
+
+    def _articulate(self, body: int, names: dict[str, int]) -> None:
+        """Joints other than the wheels (steered and rocker-bogie vehicles): every other revolute joint
+        passive (its default motor off), the steering joints held at 0 by their servos, and the
+        rockers' differential as a gear constraint (rocker angles opposite: the body pitches by the
+        mean of the two rockers')."""
+        cid, spec = self._cid, self.spec
+        driven = set(self.wheel_joints) | set(self.steer_joints)
+        for j in names.values():
+            if j not in driven and pb.getJointInfo(body, j, physicsClientId=cid)[2] == pb.JOINT_REVOLUTE:
+                pb.setJointMotorControl2(body, j, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
+        if self.steer_joints:
+            self.command_steering([0.0] * len(self.steer_joints), body)
+        if spec.differential_joints:
+            left, right = (names[n] for n in spec.differential_joints)
+            gear = pb.createConstraint(body, left, body, right, pb.JOINT_GEAR, [0, 1, 0], [0, 0, 0], [0, 0, 0],
+                                       physicsClientId=cid)
+            pb.changeConstraint(gear, gearRatio=1.0, maxForce=1e4, erp=0.2, physicsClientId=cid)
+
+    def command_steering(self, angles_rad, body: int | None = None) -> None:
+        """Steering-joint targets, rad (``spec.steer_joints`` order): position servos limited to the
+        spec's steering torque and rate."""
+        spec = self.spec
+        for j, a in zip(self.steer_joints, angles_rad):
+            pb.setJointMotorControl2(self.vehicle_id if body is None else body, j, pb.POSITION_CONTROL,
+                                     targetPosition=a, force=spec.steer_torque_limit_nm,
+                                     maxVelocity=math.radians(spec.max_steer_rate_deg_s), physicsClientId=self._cid)
+
+    def command_wheel_speeds(self, speeds_rad_s) -> None:
+        """One velocity command per wheel (``spec.wheel_joints`` order), rad/s, torque-limited."""
+        pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
+                                     targetVelocities=list(speeds_rad_s),
+                                     forces=self._wheel_forces,
+                                     physicsClientId=self._cid)
 
     def _measure_geometry(self) -> VehicleGeometry:
         """The vehicle as loaded (offroadbench.sim.engine.VehicleGeometry): in the air at
@@ -313,7 +354,7 @@ class World:
             self.wheel_joints,
             pb.VELOCITY_CONTROL,
             targetVelocities=[left_rad_s] * n_l + [right_rad_s] * n_r,
-            forces=[self.spec.wheel_torque_limit_nm] * (n_l + n_r),
+            forces=self._wheel_forces,
             physicsClientId=self._cid,
         )
 
