@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import typing
+
 from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, _first_line, _qualname, field_docs
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+
 from offroadbench.errors import InputError
 from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.engines.base import UrdfLink, read_urdf
