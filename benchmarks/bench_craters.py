@@ -52,7 +52,7 @@ def main() -> None:
     rows = []
     for profile in ("martin2014", "yoshikawa", "li_fresh"):
         table = population(args.count, profile, np.random.default_rng(1), side_m)
-        t = best_of(lambda: stamp_craters(base, table, np.random.default_rng(2)), args.repeats)
+        t = best_of(lambda table=table: stamp_craters(base, table, np.random.default_rng(2)), args.repeats)
         rows.append((f"{args.count} {profile} craters on {n}^2 (0.3-10 m, k = 1.8)", f"{t:.2f} s"))
     table = population(args.count, "martin2014", np.random.default_rng(1), side_m)
     opts = StampOptions(rim_irregularity=0.05, roughness=0.05)

@@ -121,7 +121,7 @@ def main() -> None:
         for loop, w in worlds.items():
             w.spawn(*start, heading)  # each timing from the same state: the first steps of the mission
             t0 = time.perf_counter()
-            for k in range(args.calls // 10):
+            for _ in range(args.calls // 10):
                 w.command_wheels(6.0, 5.5)
                 w.step()
             step_best[loop] = min(step_best[loop], (time.perf_counter() - t0) / (args.calls // 10))

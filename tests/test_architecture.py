@@ -311,3 +311,26 @@ def test_layers_point_one_way():
             if private and not (m == owner or m.startswith(owner + ".")):
                 offenders.append(f"{m} -> {n} (private to {owner})")
     assert offenders == []
+
+
+#: the most lines a module of the package may have: above it a module does more than one job
+MAX_MODULE_LINES = 500
+
+
+def _long_modules(root: Path, limit: int) -> list[str]:
+    return sorted(f"{p.relative_to(root.parent)}: {n} lines" for p in root.rglob("*.py")
+                  if (n := len(p.read_text().splitlines())) > limit)
+
+
+def test_no_module_over_500_lines():
+    """Each module does one job: one over the limit is split along the jobs it does (issue 35)."""
+    assert _long_modules(PKG, MAX_MODULE_LINES) == []
+
+
+def test_the_module_length_check_sees_a_long_module(tmp_path):
+    """The check above is not vacuous: a module one line over the limit is named, one at it is not."""
+    pkg = tmp_path / "offroadbench"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "sub" / "long.py").write_text("x = 1\n" * (MAX_MODULE_LINES + 1))
+    (pkg / "ok.py").write_text("x = 1\n" * MAX_MODULE_LINES)
+    assert _long_modules(pkg, MAX_MODULE_LINES) == [f"offroadbench/sub/long.py: {MAX_MODULE_LINES + 1} lines"]

@@ -83,7 +83,7 @@ def test_flat_configs_load_or_raise_input_error(cls, data):
 @given(whole=TOML)
 def test_any_toml_value_as_a_whole_table(whole):
     for cls in CLASSES:
-        _assert_loads_or_input_error(lambda d: from_dict(cls, d), whole)
+        _assert_loads_or_input_error(lambda d, cls=cls: from_dict(cls, d), whole)
 def _leaves(d, prefix=()):
     for k, v in d.items():
         if isinstance(v, dict):

@@ -73,7 +73,7 @@ def search_from_data(data: Mapping[str, Any], where: str = "search", base_dir: P
     for g in plan.groups:
         for x in (lo, hi, (lo + hi) / 2):
             try:
-                trial_cell(plan, g, 0, x).trial_settings
+                _ = trial_cell(plan, g, 0, x).trial_settings  # builds and validates every table
             except InputError as exc:
                 raise InputError(f"{where}: [search] with {search.values(x)}: {exc}") from None
     return plan

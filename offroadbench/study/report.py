@@ -29,6 +29,9 @@ Categorical grid axes (planner, vehicle) get no "change between consecutive grou
 ``median_change.<quantity> = [[change, change_pct], ...]`` (one pair per step between
 consecutive cells; NaN = not reported) and ``outliers.<quantity> = [count per cell]``.
 Quantities are the summary names: ``success_rate_pct``, ``area_<class>_pct`` or a Fig. 7 metric.
+
+The sections live beside this module: ``report_paper`` (reference, confirmatory, terrain and axis
+changes), ``report_planners`` (the planner stress test) and ``report_format`` (Markdown tables).
 """
 
 from __future__ import annotations
@@ -37,7 +40,6 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -46,6 +48,15 @@ import pandas as pd
 from offroadbench.plots.soil import conditions_text, fig_soil
 from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
 from offroadbench.study import stats
+from offroadbench.study.report_format import markdown_table
+from offroadbench.study.report_paper import (
+    _axis_effects_section,
+    _confirmatory_section,
+    _mark_exploratory,
+    _reference_sections,
+    _terrain_changes_section,
+)
+from offroadbench.study.report_planners import _numeric, planner_sections
 from offroadbench.study.results import load, load_meta, load_terrains
 
 __all__ = ["Report", "build_report", "markdown_table"]
@@ -57,27 +68,6 @@ class Report:
     markdown: str
     figures: dict[str, Any] = field(default_factory=dict)
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
-
-
-# ---------------------------------------------------------------------------- formatting
-def _fmt(v: Any, digits: int = 3) -> str:
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    if isinstance(v, (float, np.floating)):
-        if math.isnan(v):
-            return "–"
-        return f"{v:.{digits}g}" if abs(v) >= 1e-3 or v == 0 else f"{v:.2e}"
-    return str(v)
-
-
-def markdown_table(df: pd.DataFrame, digits: int = 3) -> str:
-    """A GitHub Markdown table of ``df`` (index dropped), numbers to ``digits`` significant digits."""
-    head = "| " + " | ".join(map(str, df.columns)) + " |"
-    sep = "|" + "|".join("---" for _ in df.columns) + "|"
-    body = ["| " + " | ".join(_fmt(v, digits) for v in row) + " |" for row in df.itertuples(index=False)]
-    return "\n".join([head, sep, *body])
 
 
 # ---------------------------------------------------------------------------- figures
@@ -97,171 +87,6 @@ def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     return fig_missions(hm, maps.classes, maps.closed, rcfg.border_m, t, title=title)
 
 
-# ---------------------------------------------------------------------------- reference
-def _direction_agrees(paper: float, ours: float) -> str:
-    """``yes``/``no`` if the changes have the same/opposite sign; the paper's zero is its own case."""
-    if math.isnan(paper) or math.isnan(ours):
-        return "–"
-    if paper == 0:
-        return "paper: no change"
-    return "yes" if np.sign(paper) == np.sign(ours) else "no"
-
-
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
-                        ours_changes: pd.DataFrame | None = None) -> tuple[list[str], dict[str, pd.DataFrame]]:
-    lines: list[str] = []
-    tables: dict[str, pd.DataFrame] = {}
-    if not ref:
-        return lines, tables
-    lines += ["## Side by side with the published numbers", "", f"Source: {ref.get('source', 'reference')}.", ""]
-    groups = list(summary["group"])
-    if "successes" in ref:
-        paper_n = list(ref.get("trials", [math.nan] * len(groups)))
-        rows = []
-        for i, g in enumerate(groups):
-            ps = ref["successes"][i] if i < len(ref["successes"]) else math.nan
-            pn = paper_n[i] if i < len(paper_n) else math.nan
-            ours_s, ours_n = int(summary["successes"].iloc[i]), int(summary["trials"].iloc[i])
-            rows.append({"group": g, "paper successes": f"{ps} / {pn}", "paper %": 100.0 * ps / pn,
-                         "ours successes": f"{ours_s} / {ours_n}", "ours %": 100.0 * ours_s / ours_n if ours_n else math.nan})
-        df = pd.DataFrame(rows)
-        tables["reference_successes.csv"] = df
-        lines += ["### Successful trials", "", markdown_table(df), ""]
-    changes = ref.get("median_change", {})
-    if changes:
-        order = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
-        names = sorted((n for n in changes if f"median_{n}" in summary),
-                       key=lambda n: order.index(n) if n in order else len(order))
-        ours = stats.median_changes(summary, names)
-        if ours_changes is not None and "ci95_low" in ours_changes:  # the report's terrain-bootstrap intervals
-            ours = ours.merge(ours_changes[["quantity", "from", "to", "ci95_low", "ci95_high"]],
-                              on=["quantity", "from", "to"], how="left")
-        rows = []
-        for name in names:
-            mine = ours[ours["quantity"] == name].reset_index(drop=True)
-            for i, pair in enumerate(changes[name]):
-                if i >= len(mine):
-                    break
-                p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
-                o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
-                same = _direction_agrees(p_abs, o_abs)
-                rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
-                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs,
-                             **({"ours 95 % low": mine.loc[i, "ci95_low"], "ours 95 % high": mine.loc[i, "ci95_high"]}
-                                if "ci95_low" in mine else {}), "ours %": o_pct,
-                             "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
-                             "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
-                                                                         mine.loc[i, "to"], p_abs)})
-        df = pd.DataFrame(rows)
-        tables["reference_median_changes.csv"] = df
-        lines += [
-            "### Changes of the group medians from one group to the next",
-            "",
-            "Percent = change / the earlier median. Success rate and class areas change in percentage points "
-            "(the paper's wording does not say whether its class-area changes are points or relative).",
-            "",
-            markdown_table(df),
-            "",
-        ]
-    outliers = ref.get("outliers", {})
-    if outliers:
-        rows = []
-        for name, counts in outliers.items():
-            if f"outliers_{name}" not in summary:
-                continue
-            for i, g in enumerate(groups):
-                rows.append({"quantity": name, "group": g, "paper outliers": counts[i] if i < len(counts) else math.nan,
-                             "ours outliers": int(summary[f"outliers_{name}"].iloc[i]),
-                             "ours n": int(summary[f"n_{name}"].iloc[i])})
-        df = pd.DataFrame(rows)
-        tables["reference_outliers.csv"] = df
-        lines += ["### 1.5 IQR outliers", "", markdown_table(df), ""]
-    return lines, tables
-
-
-def _terrain_verdict(terrain: pd.DataFrame | None, name: str, frm: str, to: str, paper: float) -> dict[str, Any]:
-    """The terrain-level columns of one paper claim: our per-terrain change, its Holm p, and whether
-    it is significant at the terrain level in the paper's direction."""
-    if terrain is None or terrain.empty:
-        return {}
-    hit = terrain[(terrain["quantity"] == name) & (terrain["from"] == frm) & (terrain["to"] == to)]
-    if hit.empty:
-        return {"terrains": math.nan, "terrain-level p (Holm)": math.nan, "significant at the terrain level": "–"}
-    r = hit.iloc[0]
-    if math.isnan(paper) or paper == 0:
-        verdict = "–"
-    elif not r["significant"]:
-        verdict = "no"
-    else:
-        verdict = "yes" if np.sign(paper) == np.sign(r["mean_change"]) else "no (opposite direction)"
-    return {"terrains": int(r["terrains"]), "terrain-level p (Holm)": r["p_holm"],
-            "significant at the terrain level": verdict}
-
-
-def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
-                             study: dict[str, Any], pairs: list[tuple[int, int]] | None = None
-                             ) -> tuple[list[str], pd.DataFrame]:
-    """Changes between groups (consecutive, or ``pairs``) tested with the terrain as the unit
-    (stats.terrain_changes)."""
-    paired = bool(study.get("paired_terrains", True))
-    tab = stats.terrain_changes(trials, terrains, labels, names, paired=paired, pairs=pairs)
-    how = ("per-terrain differences (terrain j of every group shares its seed): mean with a 95 % terrain-bootstrap "
-           "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
-           if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
-           "Mann-Whitney U p (in the p_wilcoxon column)")
-    shown = tab.assign(step=[f"{short_label(a, True)} → {short_label(b, True)}" for a, b in zip(tab["from"], tab["to"])])
-    shown = shown[["quantity", "step", *[c for c in tab.columns if c not in ("quantity", "from", "to")]]]
-    text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
-            "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
-            "of successful trials.")
-    title = "## Changes at the terrain level" + ("" if pairs is None else ": every group against the first")
-    return [title, "", text, "", markdown_table(shown), ""], tab
-
-
-# ---------------------------------------------------------------------------- confirmatory
-def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
-                          ) -> tuple[list[str], pd.DataFrame | None]:
-    """The study's analysis plan, computed exactly (offroadbench.study.plan), or the note that it has none."""
-    from offroadbench.study.plan import confirmatory_table, stored_plan
-
-    plan = stored_plan(meta)
-    head = ["## Confirmatory analysis (the study's plan)", ""]
-    if plan is None:
-        return head + ["This run stores no analysis plan (`[analysis]`): **every number in this report is "
-                       "exploratory**.", ""], None
-    tab = confirmatory_table(plan, meta, trials, terrains)
-    rule = {"holm": "Holm's step-down adjustment", "bonferroni": "Bonferroni's adjustment"}[plan.multiplicity]
-    shown = tab.assign(**{f"{100 * plan.confidence:g} % interval": [f"[{a:.3g}, {b:.3g}]" for a, b in
-                                                                   zip(tab["ci_low"], tab["ci_high"])]})
-    shown = shown[["comparison", "metric", "stratum", "terrains", "control_mean", "treatment_mean", "effect",
-                   f"{100 * plan.confidence:g} % interval", "test", "p", "min_p", "p_adjusted", "reject"]]
-    rejected = int(tab["reject"].sum())
-    cols = meta.get("columns", {})
-    text = (f"Fixed before the run in the study's `[analysis]` table and stored with it; computed exactly as planned. "
-            f"{len(tab)} tests; family-wise alpha = {plan.alpha:g} with {rule} over all of them; {rejected} rejected. "
-            "Unit: the terrain (per-terrain value of the metric in each cell; effect = mean per-terrain difference, "
-            "treatment - control, with a terrain-cluster bootstrap interval that is not adjusted for multiplicity). "
-            "`min_p`: the smallest p the test can give with these terrains. Comparisons: "
-            + "; ".join(f"**{c.name}** ({', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.treatment.items())} "
-                        f"against {', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.control.items())}, {c.metric}, "
-                        f"{c.test})" for c in plan.comparisons)
-            + ". **Every other number in this report is exploratory** (sections marked so): chosen or read after "
-            "the data, not covered by the plan's error rate.")
-    return head + [text, "", markdown_table(shown), ""], tab
-
-
-def _mark_exploratory(lines: list[str]) -> list[str]:
-    """Append "(exploratory)" to every section heading after the confirmatory one, except the run's records."""
-    out, after = [], False
-    for line in lines:
-        if line.startswith("## Confirmatory"):
-            after = True
-        elif after and line.startswith("## ") and not line.startswith(("## Run sessions", "## Platforms")):
-            line = line + " (exploratory)"
-        out.append(line)
-    return out
-
-
 def _provenance(meta: dict[str, Any]) -> str:
     """The code each session ran: git commit and whether the tree was clean (from the recorded version)."""
     seen = []
@@ -278,28 +103,6 @@ def _provenance(meta: dict[str, Any]) -> str:
         else:
             parts.append(f"offroadbench {v or '?'} (not a git checkout: commit unknown)")
     return "; ".join(dict.fromkeys(parts))
-
-
-def _axis_effects_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str],
-                          meta: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
-    """Each grid axis's effect within every stratum of the others (each value against the axis's first), at
-    the terrain level with intervals: for grids with a categorical axis (engines, soil models)."""
-    study = meta["study"]
-    cells = {c["index"]: c["values"] for c in meta["cells"]}
-    pairs = []
-    for axis in study["grid"]:
-        key, first = axis["key"], axis["values"][0]
-        for i, v in cells.items():
-            if v[key] == first:
-                continue
-            j = next(k for k, w in cells.items() if w == {**v, key: first})
-            pairs.append((j, i))
-    names = ["success_rate_pct", *stats.METRICS]
-    if "mean_slip" in trials and np.isfinite(trials["mean_slip"].astype(float)).any():
-        names += list(stats.SOIL_METRICS)
-    lines, tab = _terrain_changes_section(trials, terrains, labels, names, study, pairs)
-    lines[0] = "## Changes at the terrain level: each axis within the others"
-    return lines, tab
 
 
 # ---------------------------------------------------------------------------- report
@@ -554,235 +357,3 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
 
 
-# ---------------------------------------------------------------------------- planner stress test
-def _numeric(values) -> bool:
-    return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
-
-
-def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str]]:
-    """(planner column, the level column or None, the other grid columns) of a study with a planner
-    axis. The level is the one numeric axis, or the one numeric recipe axis (e.g. ``D_high``) when
-    there are several; every other axis (``band_limited``, ``map_noise_m``, ...) is a stratum."""
-    columns = meta["columns"]
-    axes = meta["study"]["grid"]
-    planner = columns.get("planner.name")
-    numeric = [a["key"] for a in axes if _numeric(a["values"])]
-    if len(numeric) > 1:
-        numeric = [k for k in numeric if k.startswith("recipe.")]
-    level = columns[numeric[0]] if len(numeric) == 1 else None
-    strata = [columns[a["key"]] for a in axes if columns[a["key"]] not in (planner, level)]
-    return planner, level, strata
-
-
-def _replay_examples(trials: pd.DataFrame, group: str, run_dir: str, per_reason: int = 2) -> pd.DataFrame:
-    rows = []
-    failed = trials[~trials["success"].astype(bool)]
-    for (g, reason), t in failed.groupby([group, "failure_reason"], sort=True):
-        for r in t.head(per_reason).itertuples(index=False):
-            rows.append({group: g, "failure": reason, "trials": len(t),
-                         "replay": f"`offroadbench study replay {run_dir} --cell {r.cell} --terrain {r.terrain} "
-                                   f"--mission {r.mission} --plot`"})
-    return pd.DataFrame(rows)
-
-
-def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, group: str, level: str | None,
-                  strata: Sequence[str] = ()):
-    """Planned and driven paths of every planner on one mission (the one whose outcomes differ most
-    between planners, at the middle level), over the closed class map."""
-    from offroadbench.io.telemetry import load_telemetry
-    from offroadbench.plots.study import fig_paths
-    from offroadbench.study.runner import telemetry_paths
-    from offroadbench.study.spec import CellPlan
-    from offroadbench.study.tasks import prepare_cell
-
-    t = trials
-    for col in strata:  # one stratum: the first value of every other axis
-        t = t[t[col] == t[col].min()]
-    if level is not None:
-        levels = sorted(t[level].unique())
-        t = t[t[level] == levels[len(levels) // 2]]
-    spread = t.groupby(["terrain", "mission"])["success"].agg(lambda s: s.astype(float).std(ddof=0))
-    terrain, mission = spread.sort_values(ascending=False, kind="stable").index[0]
-    rows = t[(t["terrain"] == terrain) & (t["mission"] == mission)]
-    first = rows.iloc[0]
-    plan = CellPlan.from_meta(meta, int(first["cell"]))
-    prepared, _ = prepare_cell(plan, int(first["terrain_seed"]), [(int(mission), int(first["mission_seed"]))])
-    hm, closed, m = prepared.hm, prepared.maps.closed, prepared.missions[0]
-    drawn = []
-    for r in rows.itertuples(index=False):
-        tel_p, path_p = telemetry_paths(run_dir, r.cell, r.terrain, r.mission)
-        path = driven = None
-        if path_p.is_file():
-            xy = load_telemetry(path_p)
-            path = np.column_stack([xy["x_m"], xy["y_m"]])
-        if tel_p.is_file():
-            tel = load_telemetry(tel_p)
-            driven = np.column_stack([tel["x_m"], tel["y_m"]])
-        if driven is None:  # [study] telemetry = "failed" keeps none of a success: re-run it, bit for bit
-            from offroadbench.study.tasks import replay_trial
-
-            rec = replay_trial(run_dir, int(r.cell), int(r.terrain), int(r.mission)).record
-            path = np.asarray(rec.path_xy) if path is None else path
-            driven = np.column_stack([rec.telemetry["x_m"], rec.telemetry["y_m"]])
-        drawn.append((str(getattr(r, group)), path, driven, r.failure_reason or "success"))
-    where = f"{level} = {first[level]}, " if level else ""
-    title = f"Terrain {terrain}, mission {mission} ({where}seed {first['terrain_seed']}): planned (dashed) and driven paths"
-    return fig_paths(hm, closed, plan.section("missions").border_m, m, drawn, title=title)
-
-
-def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: list[str]) -> list[str]:
-    """Each planner's terrain-level advantage over the baseline per stratum (rows) and level (columns):
-    how it changes with, e.g., the planner map's error or the band limit."""
-    p = paired[paired[level] != "all"].copy()
-    p["cell"] = [f"{d:+.0f} [{lo:+.0f}, {hi:+.0f}]{' *' if sig else ''}" for d, lo, hi, sig in
-                 zip(p["terrain_diff_pct"], p["terrain_ci95_low"], p["terrain_ci95_high"], p["significant"])]
-    wide = p.pivot_table(index=[group, *strata], columns=level, values="cell", aggfunc="first").reset_index()
-    wide.columns = [str(c) if c in (group, *strata) else f"{level} = {c}" for c in wide.columns]
-    return ["### Advantage over the baseline per " + " and ".join(f"`{c}`" for c in strata), "",
-            "Mean per-terrain success difference in points with its 95 % terrain-bootstrap interval; "
-            "`*`: significant at the terrain level (Holm).", "", markdown_table(wide), ""]
-
-
-#: arms a planner stress test compares within each stratum: column -> (title, what the paired test asks)
-_ARMS = {"band_limited": ("Aliasing: band-limited against aliased W-M surface",
-                          "whether removing the W-M terms above the grid's Nyquist frequency changes success on the "
-                          "same missions"),
-         "map_noise_m": ("Map error: degraded against perfect planner map",
-                         "whether planning on a map with height error changes success on the same missions")}
-
-
-def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: str, level: str | None,
-                  strata: Sequence[str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
-    """Paired tests of the two values of each arm axis (aliasing, map error) within every other stratum."""
-    from offroadbench.study import stress
-
-    lines: list[str] = []
-    tables: dict[str, pd.DataFrame] = {}
-    for arm, (title, asks) in _ARMS.items():
-        if arm not in strata:
-            continue
-        values = sorted(trials[arm].unique())
-        if len(values) != 2:
-            continue
-        by = [group, *(c for c in strata if c != arm)] + ([level] if level else [])
-        tab = stress.arm_table(trials, arm, values[0], values[1], by,
-                               terrains=terrains if arm == "band_limited" else None)
-        if tab.empty:
-            continue
-        name = f"{arm}_tests.csv"
-        tables[name] = tab
-        res = ("`area_high_*_pct`: mean high-roughness class area of each arm's terrains (how much roughness "
-               "the band limit removes); `mean_twin_unexplained_var`: the share of the aliased surface's height variance that the "
-               "band-limited twin of the same seed does not explain (1 - r^2), i.e. the variance carried by the "
-               "terms above the grid's Nyquist frequency, per terrain, averaged over the stratum; `spearman_...`: "
-               "its rank correlation with the per-terrain success difference. " if "mean_twin_unexplained_var" in tab
-               else "")
-        paired_note = ("The arms share every mission (`same_missions` = 1): the test is paired mission by mission "
-                       "within terrains." if (tab["same_missions"] == 1).all() else
-                       "**The arms do not share their missions** (`same_missions` < 1: each arm drew its missions "
-                       "on its own terrain), so the difference mixes the arm's effect with that of the missions; "
-                       "set `[study] missions_from` to pair them.")
-        lines += [f"### {title}", "",
-                  f"Per-terrain success difference ({values[1]} - {values[0]}, points) with a 95 % terrain-bootstrap "
-                  f"interval and the exact sign-flip p, within every stratum: {asks}. {paired_note} {res}"
-                  f"`p_holm`: Holm over this table's rows ([{name}]({name})).", "", markdown_table(tab), ""]
-    return lines, tables
-
-
-def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path,
-                     terrains: pd.DataFrame | None = None) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
-    """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
-    from offroadbench.plots.study import fig_success_vs_level
-    from offroadbench.study import stress
-
-    group, level, strata = _stress_axes(meta)
-    if group is None:
-        return [], {}, {}
-    planners = sorted(trials[group].unique())
-    baseline = "straight" if "straight" in planners else planners[0]
-    lines = ["## Planner stress test", "",
-             f"Planners: {', '.join(f'`{p}`' for p in planners)}; every planner drove the same missions "
-             "(same terrain and mission seeds). The unit of the tests is the terrain (the missions of one "
-             "terrain are not independent): success rates have terrain-bootstrap intervals (the Wilson "
-             "interval, which treats missions as independent, is in planner_success.csv for comparison); "
-             "breaking points come from an isotonic fit of success on the level, inside the studied levels "
-             "only, with terrain-bootstrap intervals; paired comparisons against "
-             f"`{baseline}` test the per-terrain success differences (exact sign-flip and Wilcoxon tests, "
-             "Durkalski's cluster-adjusted McNemar, terrain-bootstrap interval), Holm-adjusted over the table.",
-             ""]
-    figures: dict[str, Any] = {}
-    tables: dict[str, pd.DataFrame] = {}
-    if level is not None:
-        by = stress.success_by_level(trials, group, level, by=strata)
-        tables["planner_success.csv"] = by
-        figs = []
-        for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
-            name = f"planner_success_{i}.png" if strata else "planner_success.png"
-            figures[name] = fig = fig_success_vs_level(part, group, level)
-            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,)))
-            if where:
-                fig.axes[0].set_title(f"Success per planner, {where} (95 % terrain bootstrap)", fontsize=10)
-            figs.append(f"![success{': ' + where if where else ''}]({name})")
-        shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low (terrains)": 100 * by["ci95_low"],
-                             "95 % CI high (terrains)": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
-                                                                     "success (%)", "95 % CI low (terrains)",
-                                                                     "95 % CI high (terrains)"]]
-        bp = stress.breaking_points(trials, group, level, by=strata)
-        tables["breaking_points.csv"] = bp
-        levels = sorted(trials[level].unique())
-        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
-            stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
-            zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"])],
-            "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"],
-            "logistic (comparison only)": [("–" if math.isnan(v) else f"{v:.3f}" + (" (extrapolated)" if e else ""))
-                                           for v, e in zip(bp["logistic_point"], bp["logistic_extrapolated"])],
-            "Fieller set": bp["fieller_set"], "logistic fit p": bp["logistic_gof_p"]})
-        lines += ["### Success against " + level, "", *figs, "",
-                  markdown_table(shown), "",
-                  "### Breaking points", "",
-                  f"Where success falls below 50 %, measured inside the studied levels ({min(levels):g}-"
-                  f"{max(levels):g}) only: an isotonic (non-increasing) fit of success on {level}, interpolated "
-                  "between the two studied levels around the crossing, with a 95 % terrain-bootstrap interval "
-                  "('not reached up to x': the fit stays at or above 50 % up to the last level, in the share of "
-                  "resamples given). The logistic fit (clustered covariance) is shown for comparison only, with "
-                  "Fieller's set as the one or two pieces it is and the p of Pearson's goodness of fit over the "
-                  "levels (small: the curve does not follow the data); a logistic crossing outside the levels is "
-                  "an extrapolation, not a measurement.", "", markdown_table(bp_shown), ""]
-    paired = stress.paired_table(trials, group, level, baseline, by=strata)
-    if not paired.empty:
-        tables["paired_tests.csv"] = paired
-        cols = [group, "versus", *strata, level or "level", "terrains", "pairs", "only this", "only baseline",
-                "terrain_diff_pct", "terrain_ci95_low", "terrain_ci95_high", "bootstrap_distinct", "p_sign_flip",
-                "p_wilcoxon", "p_durkalski", "p_holm", "significant", "mcnemar_p_missions"]
-        lines += ["### Paired comparisons on the same missions", "",
-                  "Per-terrain success difference in points (mean over terrains, 95 % terrain-bootstrap interval "
-                  "and its distinct resamples); `significant`: Holm-adjusted sign-flip p < 0.05. "
-                  "`mcnemar_p_missions` treats missions as independent and is shown only for comparison.", "",
-                  markdown_table(paired[cols]), ""]
-        if strata and level:
-            lines += _advantage_by_stratum(paired, group, level, strata)
-    arm_lines, arm_tables = _arm_sections(trials, terrains, group, level, strata)
-    lines += arm_lines
-    tables.update(arm_tables)
-    reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
-    reasons.columns.name = None
-    tables["planner_failures.csv"] = reasons.reset_index()
-    lines += ["### Outcomes per planner", "", markdown_table(reasons.reset_index()), ""]
-    examples = _replay_examples(trials, group, str(run_dir))
-    if not examples.empty:
-        tables["replay_examples.csv"] = examples
-        lines += ["### Failures to replay", "",
-                  "Each command re-runs one trial bit for bit from the run directory and draws it "
-                  "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
-    ok = trials[trials["success"].astype(bool)]
-    keys = [group, *strata] + ([level] if level else [])
-    rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
-        f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
-    tables["planner_metrics.csv"] = rms
-    lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
-    try:
-        figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level, strata)
-        lines += ["### Planned and driven paths", "", "![paths](planner_paths.png)", ""]
-    except (OSError, KeyError, IndexError) as exc:  # a partial run without telemetry: say so, do not fail
-        lines += [f"(No path figure: {exc}.)", ""]
-    return lines, figures, tables

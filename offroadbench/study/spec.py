@@ -334,7 +334,7 @@ def plan_cells(study: StudyConfig, base_dir: Path | None = None, check_sections:
             missions_recipe_data=missions_recipe,
         )
         if check_sections:
-            plan.trial_settings  # builds and validates every table once
+            _ = plan.trial_settings  # builds and validates every table once
         plans.append(plan)
     return plans
 

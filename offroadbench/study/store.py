@@ -30,6 +30,9 @@ mission) makes a second copy impossible. WAL journal with ``synchronous=NORMAL``
 loses no committed row and leaves a consistent database; only a power cut may lose the last
 few commits. A trial that was in flight when the process died has no row, so the next run
 does it again.
+
+The lock is :mod:`offroadbench.study.run_lock`; the file (schema, checks, removal) is
+:mod:`offroadbench.study.store_file`.
 """
 
 from __future__ import annotations
@@ -47,50 +50,15 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench.errors import InputError, StudyError
+from offroadbench.study.run_lock import LOCK_NAME, RunDirLocked, RunLock, _lock_holder_alive, _reason
+from offroadbench.study.store_file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, _FAULTS_SQL, _SCHEMA,
+                                           _SCHEMA2_COLUMNS, _check_existing, _nearly_full, remove_stale_temp_files,
+                                           remove_store, store_path)
 
 log = logging.getLogger(__name__)
 
 __all__ = ["LOCK_NAME", "SCHEMA_VERSION", "STORE_NAME", "RunDirLocked", "RunLock", "Store", "remove_stale_temp_files",
            "remove_store", "store_path"]
-
-STORE_NAME = "study.sqlite"
-#: the lock file of a run directory (see :class:`RunLock`)
-LOCK_NAME = "study.lock"
-
-#: schema version written to ``PRAGMA user_version``; a store with a higher one is refused
-SCHEMA_VERSION = 2
-#: ``PRAGMA application_id`` of an offroadbench store ("ORB1"); stores made before it was set have 0
-APPLICATION_ID = 0x4F524231
-_TABLES = ("meta", "terrains", "trials", "runs")
-_SQLITE_MAGIC = b"SQLite format 3\x00"
-
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
-CREATE TABLE IF NOT EXISTS terrains (
-    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, terrain_seed INTEGER NOT NULL,
-    stats TEXT NOT NULL, PRIMARY KEY (cell, terrain));
-CREATE TABLE IF NOT EXISTS trials (
-    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, mission INTEGER NOT NULL,
-    terrain_seed INTEGER NOT NULL, mission_seed INTEGER NOT NULL, success INTEGER NOT NULL,
-    row TEXT NOT NULL, telemetry TEXT, run_id INTEGER, PRIMARY KEY (cell, terrain, mission));
-CREATE TABLE IF NOT EXISTS runs (
-    id INTEGER PRIMARY KEY AUTOINCREMENT, started REAL NOT NULL, finished REAL,
-    executor TEXT, workers INTEGER, trials_run INTEGER DEFAULT 0, status TEXT,
-    host TEXT, machine TEXT, version TEXT, platform TEXT, error TEXT);
-CREATE TABLE IF NOT EXISTS faults (
-    cell INTEGER NOT NULL, terrain INTEGER NOT NULL, mission INTEGER NOT NULL,
-    terrain_seed INTEGER NOT NULL, mission_seed INTEGER NOT NULL, reason TEXT NOT NULL,
-    run_id INTEGER, time REAL, PRIMARY KEY (cell, terrain, mission));
-"""
-#: the faults table (issue 30), made by a run in a store that lacks it (older stores are read without it)
-_FAULTS_SQL = _SCHEMA[_SCHEMA.index("CREATE TABLE IF NOT EXISTS faults"):]
-#: columns added by schema 2, per table: (name, SQL type)
-_SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
-                    "runs": (("platform", "TEXT"), ("error", "TEXT"))}
-
-
-def store_path(run_dir: str | Path) -> Path:
-    return Path(run_dir) / STORE_NAME
 
 
 class Store:
@@ -416,31 +384,6 @@ class Store:
         return self._write("DELETE FROM faults").rowcount
 
 
-def _nearly_full(directory: Path, margin: int = 1 << 20) -> bool:
-    """Whether the device of ``directory`` has less than ``margin`` bytes free (1 MiB)."""
-    try:
-        st = os.statvfs(directory)
-    except OSError:
-        return False
-    return st.f_bavail * st.f_frsize < margin
-
-
-def _lock_holder_alive(run_dir: Path) -> bool:
-    """Whether the run directory's lock file names a live process (a run removes the file as it
-    ends; a killed one leaves it behind with its dead pid)."""
-    try:
-        pid = int((Path(run_dir) / LOCK_NAME).read_text().strip())
-    except (OSError, ValueError):
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def _rollback(con: sqlite3.Connection, exc: BaseException, path: Path) -> None:
     """Roll back after ``exc`` and raise it, never masking it: SQLite may have rolled the
     transaction back itself (on SQLITE_FULL), and a ROLLBACK's own "cannot rollback - no
@@ -501,171 +444,6 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
-
-
-def _reason(exc: OSError) -> str:
-    if exc.errno == errno.ENOSPC:
-        return "no space left on the device"
-    return exc.strerror or str(exc)
-
-
-class RunDirLocked(InputError):
-    """Another live process holds the run directory's lock."""
-
-
-class RunLock:
-    """An exclusive, OS-level lock on a run directory while a study runs in it.
-
-    ``fcntl.flock`` on ``DIR/study.lock``, which holds the owner's pid. The kernel releases the
-    lock when the process ends, however it ends (SIGKILL included), so a stale lock never blocks a
-    later run. A second process is refused at once with :class:`RunDirLocked`: "a study is running
-    in DIR (pid N)". The directory is created if missing. On release the lock file is removed
-    while still locked; a process that opened it just before re-checks, after locking, that it
-    locked the file that is at the path, and otherwise tries again.
-    """
-
-    def __init__(self, run_dir: str | Path) -> None:
-        self.run_dir = Path(run_dir)
-        self.path = self.run_dir / LOCK_NAME
-        self.fd: int | None = None
-
-    def acquire(self) -> RunLock:
-        import fcntl
-
-        for _ in range(100):
-            try:
-                self.run_dir.mkdir(parents=True, exist_ok=True)
-                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
-            except FileNotFoundError:  # the directory was removed by a run that failed meanwhile
-                continue
-            except OSError as exc:
-                raise InputError(f"{self.path}: cannot create the run directory's lock file ({_reason(exc)})") from None
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                pid = self._read_pid(fd)
-                os.close(fd)
-                raise RunDirLocked(f"a study is running in {self.run_dir} (pid {pid}); wait for it to end "
-                                   "or use another --out directory") from None
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
-            except FileNotFoundError:
-                same = False
-            if not same:  # locked a file its owner removed as it released it: try again
-                os.close(fd)
-                continue
-            try:
-                os.ftruncate(fd, 0)
-                os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-            except OSError as exc:  # a full disk: leave no lock file behind
-                self.path.unlink(missing_ok=True)
-                os.close(fd)
-                raise InputError(f"{self.path}: cannot write the run directory's lock file ({_reason(exc)})") from None
-            self.fd = fd
-            return self
-        raise RunDirLocked(f"{self.run_dir}: could not lock the run directory (other runs keep starting and stopping)")
-
-    @staticmethod
-    def _read_pid(fd: int) -> str:
-        for _ in range(50):  # the owner writes its pid just after it locks
-            text = os.pread(fd, 32, 0).decode(errors="replace").strip()
-            if text:
-                return text
-            time.sleep(0.01)
-        return "unknown"
-
-    def release(self) -> None:
-        if self.fd is None:
-            return
-        try:
-            self.path.unlink(missing_ok=True)
-        finally:
-            os.close(self.fd)  # closing the last descriptor releases the flock
-            self.fd = None
-
-    def __enter__(self) -> RunLock:
-        return self.acquire()
-
-    def __exit__(self, *exc) -> None:
-        self.release()
-
-
-def remove_stale_temp_files(run_dir: str | Path) -> list[Path]:
-    """Remove the temporary files a killed run left in ``run_dir`` and its ``telemetry`` folder
-    (``.NAME.XXXX.tmp`` of :func:`offroadbench.io.atomic.atomic_path` and of store creation).
-    Call only while holding the directory's :class:`RunLock`. Returns what was removed."""
-    removed = []
-    for d in (Path(run_dir), Path(run_dir) / "telemetry"):
-        if not d.is_dir():
-            continue
-        for q in d.iterdir():
-            name = q.name
-            if name.startswith(".") and (name.endswith(".tmp") or ".tmp-" in name) and q.is_file():
-                q.unlink(missing_ok=True)
-                removed.append(q)
-    if removed:
-        log.info("%s: removed %d temporary file(s) of an earlier run", run_dir, len(removed))
-    return removed
-
-
-def _check_existing(path: Path) -> None:
-    """Refuse, without writing to it, a ``study.sqlite`` that is not a readable store of ours.
-
-    The schema version and application id are read from the file header (SQLite file format:
-    big-endian integers at offsets 60 and 68), so a newer or foreign store is refused without
-    opening it. The tables and a quick integrity check need a read-only connection, which may
-    create the ``-wal``/``-shm`` side files; those it created are removed again.
-    """
-    try:
-        with path.open("rb") as fh:
-            head = fh.read(100)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot be read ({exc.strerror})") from None
-    if not head:
-        raise InputError(f"{path}: is empty, not a study store; remove it or use another --out directory")
-    if not head.startswith(_SQLITE_MAGIC):
-        raise InputError(f"{path}: is not an SQLite database, so not a study store; use another --out directory")
-    if len(head) < 100:
-        raise InputError(f"{path}: is a truncated SQLite database; restore it or use another --out directory")
-    version = int.from_bytes(head[60:64], "big")
-    app_id = int.from_bytes(head[68:72], "big")
-    if app_id not in (0, APPLICATION_ID):
-        raise InputError(f"{path}: is an SQLite database of another program, not a study store; use another --out directory")
-    if version > SCHEMA_VERSION:
-        raise InputError(
-            f"{path}: was written by a newer offroadbench (store schema {version}; this one reads up to "
-            f"{SCHEMA_VERSION}); upgrade offroadbench to use it"
-        )
-    sides = [path.with_name(path.name + suffix) for suffix in ("-wal", "-shm")]
-    existed = [q.exists() for q in sides]
-    try:
-        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=30.0)
-        try:
-            tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-            if not set(_TABLES) <= tables:
-                raise InputError(
-                    f"{path}: is an SQLite database of another program (tables: {', '.join(sorted(tables)) or 'none'}), "
-                    "not a study store; use another --out directory"
-                )
-            check = con.execute("PRAGMA quick_check").fetchone()[0]
-            if check != "ok":
-                raise InputError(f"{path}: is corrupt ({check}); restore it or use another --out directory")
-            con.execute("SELECT COUNT(*) FROM trials").fetchone()
-        finally:
-            con.close()
-    except sqlite3.DatabaseError as exc:
-        raise InputError(f"{path}: is corrupt or not a study store ({exc})") from None
-    finally:
-        for q, was in zip(sides, existed):
-            if not was:
-                q.unlink(missing_ok=True)
-
-
-def remove_store(run_dir: str | Path) -> None:
-    """Delete ``study.sqlite`` and its WAL files (for a study that failed before any trial)."""
-    p = store_path(run_dir)
-    for q in (p, p.with_name(p.name + "-wal"), p.with_name(p.name + "-shm"), p.with_name(p.name + "-journal")):
-        q.unlink(missing_ok=True)
 
 
 def machine_description() -> str:

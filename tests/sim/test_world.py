@@ -214,7 +214,7 @@ def test_empty_then_replaced_heightfield_drives_bit_for_bit_like_one_built_from_
     for cls, lean_heap in ((World, True), (_DirectBuildWorld, False), (World, False)):
         with monkeypatch.context() as m:
             if not lean_heap:
-                m.setattr("offroadbench.sim.engines.pybullet.world._glibc", lambda: None)
+                m.setattr("offroadbench.sim.engines.pybullet.heap._glibc", lambda: None)
             with cls(hm, sim=one_field) as world:
                 (body,) = world.terrain_bodies
                 aabb = pb.getAABB(body, physicsClientId=world.client_id)

@@ -88,7 +88,7 @@ def test_the_html_report_holds_every_figure_and_table_of_the_markdown(run):
     assert md_figures and set(md_figures) <= {p.name for p in out.glob("*.png")}
     inline = {img["data-name"]: img["src"] for img in page.images if "data-name" in img}
     assert set(inline) == set(md_figures)
-    for name, src in inline.items():
+    for src in inline.values():
         assert src.startswith("data:image/png;base64,")
         assert base64.b64decode(src.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
 

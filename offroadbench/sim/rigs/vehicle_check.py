@@ -57,15 +57,16 @@ lunar gravity, offroadbench.sim.tyre_laws.terramechanics):
   drawbar pull, against four times a wheel's Wong-Reece pull at a quarter of the weight; pass:
   within 10 % of the expected pull or 1 % of the weight.
 
-All measurements are in SI units; angles are reported in degrees.
+All measurements are in SI units; angles are reported in degrees. The soft-soil rows are in
+:mod:`offroadbench.sim.rigs.soft_soil_check`, the row type and the measuring helpers in
+:mod:`offroadbench.sim.rigs.vehicle_measure`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -75,130 +76,20 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
 from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.rigs.vehicle_measure import (CheckResult, _FLAT_CELL_M, _STEP_CELL_M, _abs_row, _bisect, _climbs,
+                                                   _com_height, _left_load, _mean_yaw_rate, _ramp_tilt, _ratio_row,
+                                                   _run, _set_gravity)
+from offroadbench.sim.rigs.soft_soil_check import (SOFT_SOIL, SOFT_SOIL_GRAVITY_M_S2, soft_soil_checks,
+                                                   soil_climb_limit_deg)
 
 __all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
            "soft_soil_checks", "soil_climb_limit_deg", "SOFT_SOIL", "SOFT_SOIL_GRAVITY_M_S2"]
 
-#: soil and gravity of the soft-soil rows
-SOFT_SOIL = "lunar-regolith"
-SOFT_SOIL_GRAVITY_M_S2 = 1.62
 
 #: yaw-rate commands of the tracking checks, rad/s (capped at the vehicle's limit)
 YAW_COMMANDS_RAD_S = (0.25, 0.5, 1.0, 2.0)
 #: headings of the tracking checks, degrees from the world x axis
 HEADINGS_DEG = (0.0, 22.5, 45.0)
-
-_FLAT_CELL_M = 0.1
-_STEP_CELL_M = 0.02
-
-
-@dataclass(frozen=True)
-class CheckResult:
-    """One figure of the vehicle check."""
-
-    name: str
-    """What was measured, e.g. ``yaw rate in place, heading 22.5 deg, command 1 rad/s``."""
-    measured: float
-    """The simulated figure, in ``unit``."""
-    expected: float
-    """What the model's own physics predicts (its grip, geometry and motor torque), in ``unit``."""
-    unit: str
-    """Unit of ``measured`` and ``expected``."""
-    ok: bool
-    """True when ``measured`` is within ``tolerance`` of ``expected``."""
-    tolerance: str = ""
-    """The pass rule, in words."""
-    note: str = ""
-    """Where the expectation comes from, and why the spec sheet's figure differs from it."""
-    sheet: float | None = None
-    """The spec sheet's figure for the same quantity, in ``unit`` (information only: the sheet
-    assumes its own surface and test, so the row is judged against ``expected``, which comes from
-    the model's own grip, geometry and motor torque)."""
-
-    def as_dict(self) -> dict:
-        return dataclasses.asdict(self)
-
-
-# ---------------------------------------------------------------------------- helpers
-def _set_gravity(world: TrialWorld, tilt_rad: float, about: str) -> None:
-    """Gravity turned by ``tilt_rad`` about the world x (``about="x"``, downhill toward -y) or y
-    axis (downhill toward -x): a flat world becomes a uniform slope of that angle."""
-    g = world.sim.gravity_m_s2
-    s, c = g * math.sin(tilt_rad), g * math.cos(tilt_rad)
-    vec = (0.0, -s, -c) if about == "x" else (-s, 0.0, -c)
-    world.set_gravity(*vec)
-
-
-def _yaw(world: TrialWorld) -> float:
-    _, q, _, _ = world.base_state()
-    r = world.rotation_matrix(q)
-    return math.atan2(r[3], r[0])
-
-
-def _run(world: TrialWorld, seconds: float, each: Callable[[], None] | None = None) -> None:
-    for _ in range(int(round(seconds * world.sim.physics_rate_hz))):
-        world.step()
-        if each is not None:
-            each()
-
-
-def _mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, seconds: float = 3.0,
-                   at: tuple[float, float] | None = None) -> float:
-    """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega),
-    started at rest at ``at`` (default: the middle of the map)."""
-    c = world.hm.width_m / 2.0
-    world.spawn(*(at or (c, c)), heading)
-    drive_twist(world, v, omega)
-    _run(world, seconds / 2.0)
-    yaws = []
-    _run(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
-    y = np.unwrap(yaws)
-    return float((y[-1] - y[0]) / ((len(y) - 1) / world.sim.physics_rate_hz))
-
-
-def _com_height(world: TrialWorld) -> float:
-    """Height of the whole vehicle's centre of mass above the ground (flat map, z = 0), metres."""
-    return world.centre_of_mass_m()[2] - world.hm.z_max_m
-
-
-def _left_load(world: TrialWorld) -> float:
-    """Summed normal force on the left wheels in the last step, N."""
-    return sum(world.wheel_loads_n()[: len(world.spec.left_wheel_joints)])
-
-
-def _ramp_tilt(world: TrialWorld, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
-               end_deg: float = 80.0) -> float:
-    """Tilt gravity about x from ``start_deg`` at ``rate_deg_s`` until ``stop()``; the angle, deg."""
-    n = int(round((end_deg - start_deg) / rate_deg_s * world.sim.physics_rate_hz))
-    for k in range(n):
-        angle = start_deg + rate_deg_s * k / world.sim.physics_rate_hz
-        _set_gravity(world, math.radians(angle), "x")
-        world.step()
-        if stop():
-            return angle
-    return end_deg
-
-
-def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> float:
-    """Largest value in [lo, hi] for which ``ok`` holds (``ok(lo)`` assumed), to ``tol``."""
-    if ok(hi):
-        return hi
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        if ok(mid):
-            lo = mid
-        else:
-            hi = mid
-    return lo
-
-
-def _ratio_row(name, measured, expected, unit, lo, hi, note="") -> CheckResult:
-    ok = expected > 0 and lo <= measured / expected <= hi
-    return CheckResult(name, measured, expected, unit, bool(ok), f"{lo:g}-{hi:g} x expected", note)
-
-
-def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
-    return CheckResult(name, measured, expected, unit, bool(abs(measured - expected) <= tol), f"within {tol:g} {unit}", note)
 
 
 # ---------------------------------------------------------------------------- the checks
@@ -323,27 +214,6 @@ def _stability(tip_deg: float, mu: float) -> CheckResult:
     return CheckResult("static stability: tip angle over slide angle", tip_deg, slide, "deg", tip_deg > slide,
                        "tip angle above atan(mu)",
                        f"rolls over at {tip_deg:.1f} deg, slides at atan(mu) = {slide:.1f} deg (mu = {mu:g})")
-
-
-def _climbs(world: TrialWorld, grade_deg: float) -> bool:
-    """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 10 s when its wheel
-    speed is ramped gently (0.5 m/s^2 at the tyre, to 0.5 m/s), as a driver would start on a hill."""
-    spec = world.spec
-    c = world.hm.width_m / 2.0
-    world.spawn(c - 3.0, c, 0.0)
-    _set_gravity(world, math.radians(grade_deg), "y")
-    x0 = world.base_state()[0][0]
-    rate = world.sim.physics_rate_hz
-    climbed = False
-    for k in range(int(round(10.0 * rate))):
-        v = min(0.5, 0.5 * k / rate, spec.max_speed_m_s)
-        drive_twist(world, v, 0.0)
-        world.step()
-        if world.base_state()[0][0] - x0 >= 1.0:
-            climbed = True
-            break
-    _set_gravity(world, 0.0, "y")
-    return climbed
 
 
 def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float, wheels_per_axle: int,
@@ -507,83 +377,4 @@ def check_vehicle(
     report(progress, 7, total)
     return rows
 
-
-def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
-                         n_wheels: int = 4) -> float:
-    """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
-    weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
-    from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
-
-    def margin(theta: float) -> float:
-        load = mass_kg * g * math.cos(theta) / n_wheels
-        h = static_sinkage(soil, radius_m, width_m, load, slip)
-        return n_wheels * float(wheel_forces(soil, radius_m, width_m, h, slip)[1]) - mass_kg * g * math.sin(theta)
-
-    lo, hi = 0.0, 0.5 * math.pi
-    if margin(lo) < 0.0:
-        return 0.0
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
-    return math.degrees(lo)
-
-
-def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
-    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
-    world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
-    rate = world.sim.physics_rate_hz
-    weight = world.geometry.mass_kg * world.sim.gravity_m_s2
-    drag, pulls = 0.0, []
-    n = int(round(seconds * rate))
-    for k in range(n):
-        drive_twist(world, min(0.3, 0.3 * k / rate), 0.0)
-        world.push_base(-drag, 0.0, 0.0)
-        world.step()
-        measured = world.wheel_slip()
-        if measured is not None and k > rate:
-            drag = drag + 0.5 * weight * (slip - measured) / rate  # integral feedback (a push if negative)
-        if k >= n - 2 * rate:
-            pulls.append(drag)
-    return sum(pulls) / len(pulls)
-
-
-def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
-    """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
-    from offroadbench.sim.tyre_laws.terramechanics import load_soil, static_sinkage, wheel_forces
-
-    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    if spec.wheel_width_m is None:
-        return []
-    g = SOFT_SOIL_GRAVITY_M_S2
-    soil = load_soil(SOFT_SOIL)
-    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
-                               settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
-    r, b = spec.wheel_radius_m, spec.wheel_width_m
-    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
-    with open_world(flat, spec, soft) as world:
-        c = flat.width_m / 2.0
-        world.spawn(c, c, 0.0)
-        mass = world.geometry.mass_kg
-        n = len(spec.wheel_joints)
-        load = mass * g / n
-        sink = world.wheel_penetration_m()
-        expected_sink = static_sinkage(soil, r, b, load)
-        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2)
-    h20 = static_sinkage(soil, r, b, load, 0.2)
-    expected_pull = n * float(wheel_forces(soil, r, b, h20, 0.2)[1])
-    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n)
-    mu = spec.wheel_friction * sim.terrain_friction
-    return [
-        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
-                   f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
-        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
-                 f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
-                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
-        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
-                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
-                    "within 10 % or 1 % of the weight",
-                    f"{where}; {n} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
-    ]
 

@@ -264,7 +264,7 @@ def _wm_surface_gemm(cfg: WMConfig, grid: GridConfig, phases: np.ndarray) -> np.
             left = np.concatenate([ey.real, -ey.imag], axis=1)
             right_t = np.ascontiguousarray(np.concatenate([ex.real, ex.imag], axis=1).T)
 
-            def block_product(rows: slice) -> None:
+            def block_product(rows: slice, left=left, right_t=right_t) -> None:
                 z[rows] -= left[rows] @ right_t
 
             list(pool.map(block_product, blocks))

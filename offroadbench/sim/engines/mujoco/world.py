@@ -33,6 +33,8 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   depend on the missions run before (bit-identical in any mission order).
 
 Only this module (and offroadbench.sim.engines.pybullet.world / contact for PyBullet) imports a physics engine.
+The model is built in ``mjcf.py`` (URDF -> MJCF) and the tyre forces applied in ``tyres.py``,
+as the two halves of :class:`MuJoCoWorld`.
 """
 
 from __future__ import annotations
@@ -40,21 +42,21 @@ from __future__ import annotations
 import logging
 import math
 import time
-import xml.etree.ElementTree as ET
 
 import mujoco
 import numpy as np
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.io.export.mujoco import mujoco_hfield_size
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.tyre_laws.coulomb import CoulombBristles, bristle_constants
 from offroadbench.sim.tyre_laws.soil_wheels import soil_setup
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import UrdfLink, max_height_near, read_urdf, settle, spawn_height_m
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
+from offroadbench.sim.engines.mujoco.tyres import MuJoCoTyres
 
 __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 
@@ -81,12 +83,8 @@ def _compiled_loop(choice: str):
 
 
 
-def _fmt(values) -> str:
-    return " ".join(repr(float(v)) for v in values)
-
-
 # ---------------------------------------------------------------------------- the world
-class MuJoCoWorld:
+class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     """One terrain and one vehicle in MuJoCo (offroadbench.sim.engine.TrialWorld). Use as a
     context manager."""
 
@@ -153,140 +151,6 @@ class MuJoCoWorld:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-    # ------------------------------------------------------------------ building
-    def _mjcf(self) -> str:
-        spec, sim, hm = self.spec, self.sim, self.hm
-        links, joints = read_urdf(spec.urdf)
-        children = {j.parent: [] for j in joints}
-        for j in joints:
-            children[j.parent].append(j)
-        child_links = {j.child for j in joints}
-        roots = [name for name in links if name not in child_links]
-        if len(roots) != 1:
-            raise InputError(f"URDF {spec.urdf}: expected one root link, found {roots}")
-        by_name = {j.name: j for j in joints}
-        missing = [n for n in spec.wheel_joints + spec.steer_joints + spec.differential_joints if n not in by_name]
-        if missing:
-            raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
-        coulomb = sim.tyre_model == "coulomb"
-        self._wheels_collide = sim.tyre_model != "terramechanics"  # the soil carries the wheels
-        total_mass = sum(link.mass for link in links.values())
-        share = total_mass / len(spec.wheel_joints)
-        tune = self.contact
-
-        root = ET.Element("mujoco", model=f"offroadbench-{spec.name}")
-        ET.SubElement(root, "compiler", angle="radian", eulerseq="XYZ", inertiafromgeom="false", autolimits="true")
-        option = ET.SubElement(root, "option", timestep=repr(self._dt_mj), ccd_iterations=str(tune.ccd_iterations), gravity=_fmt((0, 0, -sim.gravity_m_s2)),
-                      integrator="implicitfast", cone=tune.cone, iterations=str(sim.solver_iterations))
-        if not tune.refsafe:
-            ET.SubElement(option, "flag", refsafe="disable")
-        size = ET.SubElement(root, "size")
-        size.set("memory", f"{max(16, 4 * len(spec.wheel_joints))}M")
-        asset = ET.SubElement(root, "asset")
-        rx, ry, ez, base = mujoco_hfield_size(hm)
-        ET.SubElement(asset, "hfield", name="terrain", nrow=str(hm.rows), ncol=str(hm.cols), size=_fmt((rx, ry, ez, base)))
-        world = ET.SubElement(root, "worldbody")
-        ET.SubElement(world, "geom", name="terrain", type="hfield", hfield="terrain", pos=_fmt((rx, ry, hm.z_min_m)),
-                      friction=_fmt((sim.terrain_friction, 0.005, 0.0001)), group="0")
-
-        base_link = links[roots[0]]
-        shift = base_link.com  # the chassis body's frame sits at its centre of mass
-        body = ET.SubElement(world, "body", name="chassis", pos=_fmt((0, 0, hm.z_max_m + 10.0)))
-        ET.SubElement(body, "freejoint", name="root")
-        self._add_link(body, base_link, shift, is_wheel=False, coulomb=coulomb, share=share)
-        wheel_names = set(spec.wheel_joints)
-
-        def add_children(parent_el, link_name, offset):
-            for j in children.get(link_name, []):
-                link = links[j.child]
-                pos = tuple(p - o for p, o in zip(j.pos, offset))
-                el = ET.SubElement(parent_el, "body", name=j.child, pos=_fmt(pos), euler=_fmt(j.euler))
-                if j.kind in ("continuous", "revolute"):
-                    jel = ET.SubElement(el, "joint", name=j.name, type="hinge", axis=_fmt(j.axis), damping="0")
-                    if j.name in wheel_names and spec.wheel_spin_inertia_kg_m2 is not None:
-                        own = abs(j.axis[0]) * link.inertia[0] + abs(j.axis[1]) * link.inertia[1] + abs(j.axis[2]) * link.inertia[2]
-                        jel.set("armature", repr(max(0.0, spec.wheel_spin_inertia_kg_m2 - own)))
-                elif j.kind != "fixed":
-                    raise InputError(f"URDF {spec.urdf}: joint {j.name} of type {j.kind!r} is not supported")
-                self._add_link(el, link, (0.0, 0.0, 0.0), is_wheel=j.name in wheel_names, coulomb=coulomb, share=share)
-                add_children(el, j.child, (0.0, 0.0, 0.0))
-
-        add_children(body, roots[0], shift)
-        act = ET.SubElement(root, "actuator")
-        for name in spec.wheel_joints:
-            spin = spec.wheel_spin_inertia_kg_m2 or links[by_name[name].child].inertia[1]
-            # an undriven wheel keeps its (idle) actuator slot with no gain: it rolls freely
-            gain = tune.servo_gain * spin / self._dt_mj if spec.is_driven(name) else 0.0
-            ET.SubElement(act, "velocity", name=f"motor_{name}", joint=name, kv=repr(gain),
-                          forcerange=_fmt((-spec.wheel_torque_limit_nm, spec.wheel_torque_limit_nm)))
-        self._articulate(root, act, links, by_name)
-        if any(j.kind != "fixed" and j.name not in wheel_names for j in joints):
-            # links on steering or suspension joints are not all parent and child: keep MuJoCo from
-            # colliding the vehicle with itself (PyBullet loads URDFs without self-collision)
-            for g in root.iter("geom"):
-                if g.get("name") != "terrain" and g.get("contype") != "0":
-                    g.set("contype", "2")
-                    g.set("conaffinity", "1")
-        return ET.tostring(root, encoding="unicode")
-
-    def _articulate(self, root, act, links, by_name) -> None:
-        """Steering servos after the wheel motors (position actuators, stiff against the steered
-        link's inertia about the steering axis, limited to the spec's steering torque) and the
-        rockers' differential as a joint equality (angles opposite: the body pitches by the mean of
-        the rockers'), for steered and rocker-bogie vehicles."""
-        spec = self.spec
-        for name in spec.steer_joints:
-            link = links[by_name[name].child]
-            wheel = next(j for j in by_name.values() if j.parent == link.name)
-            inertia = link.inertia[2] + links[wheel.child].inertia[2] + links[wheel.child].mass * sum(
-                p * p for p in wheel.pos[:2])
-            kp = self.contact.servo_gain * max(inertia, 1e-6) / self._dt_mj**2
-            ET.SubElement(act, "position", name=f"steer_{name}", joint=name, kp=repr(kp),
-                          kv=repr(2.0 * math.sqrt(kp * max(inertia, 1e-6))),
-                          forcerange=_fmt((-spec.steer_torque_limit_nm, spec.steer_torque_limit_nm)))
-        if spec.differential_joints:
-            left, right = spec.differential_joints
-            eq = ET.SubElement(root, "equality")
-            ET.SubElement(eq, "joint", joint1=left, joint2=right, polycoef="0 -1 0 0 0")
-
-    def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
-        spec, sim, tune = self.spec, self.sim, self.contact
-        com = tuple(c - s for c, s in zip(link.com, shift))
-        if link.mass > 0:
-            ET.SubElement(el, "inertial", pos=_fmt(com), mass=repr(link.mass), diaginertia=_fmt(link.inertia))
-        for kind, size, pos, euler in link.shapes:
-            g = ET.SubElement(el, "geom", type=kind, size=_fmt(size), pos=_fmt(tuple(p - s for p, s in zip(pos, shift))),
-                              euler=_fmt(euler), group="1", priority="1",
-                              solimp=_fmt(tune.solimp if is_wheel else tune.chassis_solimp))
-            if is_wheel:
-                g.set("name", f"wheel_{link.name}")
-                if not self._wheels_collide:
-                    g.set("contype", "0")
-                    g.set("conaffinity", "0")
-                g.set("margin", repr(tune.wheel_margin_m))
-                g.set("gap", repr(tune.wheel_gap_m))
-                g.set("solref", _fmt(tune.wheel_solref or self._tyre_solref(share)))
-                if coulomb:
-                    g.set("condim", "1")
-                else:
-                    g.set("condim", "3")
-                    g.set("friction", _fmt((spec.wheel_friction * sim.terrain_friction, 0.005, 0.0001)))
-            else:
-                g.set("condim", str(tune.chassis_condim))
-                g.set("solref", _fmt(tune.chassis_solref))
-                g.set("friction", _fmt((spec.chassis_friction * sim.terrain_friction, 0.005, 0.0001)))
-
-    def _tyre_solref(self, share: float) -> tuple[float, float]:
-        """The wheels' solref (time constant, damping ratio) from the spec's tyre: the tyre's own
-        time constant sqrt(m / k) and damping ratio c / (2 sqrt(k m)) for a wheel's share m of the
-        mass, the time constant raised to MuJoCo's stable minimum of two steps."""
-        spec = self.spec
-        if spec.tyre_stiffness_n_m is None:
-            return (max(0.02, 2.0 * self._dt_mj), 1.0)
-        k, c = spec.tyre_stiffness_n_m, spec.tyre_damping_n_s_m
-        floor = 2.0 * self._dt_mj if self.contact.refsafe else 0.0
-        return (max(math.sqrt(share / k), floor), c / (2.0 * math.sqrt(k * share)))
 
     def _write_heights(self) -> None:
         hm = self.hm
@@ -450,186 +314,6 @@ class MuJoCoWorld:
             self._base_force = None
             if not self._forces:
                 d.xfrc_applied[self._chassis] = 0.0
-
-    def _step_compiled(self) -> None:
-        """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
-        sequence, the contacts read and the forces applied outside the interpreter."""
-        m, d = self.model, self.data
-        tc, f, ist = self._fast
-        each = self.contact.tyres_each_substep
-        last = self.substeps - 1
-        pushed = self._base_force
-        push = 14 * len(self._loads) + tc.F_PUSH_X
-        if pushed is not None:
-            f[push:push + 3] = pushed
-            f[push + 3] = 1.0
-        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
-        step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.APPLY, tc.READ
-        for k in range(self.substeps):
-            if each or k == 0:
-                step1(m, d)
-                apply(qvel, xmat, xipos, xfrc, f, ist)
-                step2(m, d)
-            else:
-                mujoco.mj_step(m, d)  # the tyre forces of this trial step held in xfrc_applied
-            if each or k == last:
-                con = d.contact
-                read(con.geom, con.dist, con.pos, con.frame, con.efc_address, d.efc_force, f, ist)
-        if pushed is not None:
-            self._base_force = None
-            f[push + 3] = 0.0
-
-    def _apply_tyres(self) -> None:
-        """The tyre forces (``coulomb``: of the wheels touched in the last step; ``terramechanics``:
-        of every wheel on the soil), as forces and torques about each wheel's centre of mass in
-        ``xfrc_applied`` (one write of all rows)."""
-        d, core = self.data, self._tyres
-        xfrc = self._xfrc
-        xfrc[:] = self._xfrc_zero
-        if self._base_force is not None:
-            k = 6 * self._chassis
-            xfrc[k:k + 3] = self._base_force
-        if self._soil is not None:
-            self._soil_forces(xfrc)
-        elif any(core.touch):
-            touch = core.touch
-            qvel = d.qvel.tolist()
-            r = d.xmat[self._chassis].tolist()
-            xipos = d.xipos.tolist()
-            v0, v1, v2 = qvel[0:3]
-            wb0, wb1, wb2 = qvel[3:6]
-            w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2
-            w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
-            w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
-            c0 = xipos[self._chassis]
-            for i, b in enumerate(self._wheel_bodies):
-                if not touch[i]:
-                    continue
-                c = xipos[b]
-                if self._articulated:  # the wheel body's own velocity (steering, rockers, bogies)
-                    vel = np.zeros(6)
-                    mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
-                    fx, fy, fz, px, py, pz = core.wheel_force(i, c, tuple(vel[3:].tolist()), tuple(vel[:3].tolist()))
-                    ox, oy, oz = px - c[0], py - c[1], pz - c[2]
-                    k = 6 * b
-                    xfrc[k:k + 6] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
-                    continue
-                rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
-                lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
-                a0, a1, a2 = self._axis_world(i, r)
-                s = qvel[self._wheel_qvel[i]]
-                fx, fy, fz, px, py, pz = core.wheel_force(i, c, lin, (w0 + a0 * s, w1 + a1 * s, w2 + a2 * s))
-                ox, oy, oz = px - c[0], py - c[1], pz - c[2]
-                k = 6 * b
-                xfrc[k:k + 6] = (fx, fy, fz, oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx)
-        d.xfrc_applied.flat[:] = xfrc
-
-    def _soil_forces(self, xfrc: list) -> None:
-        """The soil's force and torque on each wheel (offroadbench.sim.tyre_laws.soil_wheels) into
-        ``xfrc`` rows, from the wheels' poses and velocities now. The force acts at the wheel's centre
-        of mass, taken as its centre (both shipped vehicles' wheels have it on the axle)."""
-        d, soil = self.data, self._soil
-        qvel = d.qvel.tolist()
-        r = d.xmat[self._chassis].tolist()
-        xipos = d.xipos.tolist()
-        v0, v1, v2 = qvel[0:3]
-        wb0, wb1, wb2 = qvel[3:6]
-        w0 = r[0] * wb0 + r[1] * wb1 + r[2] * wb2
-        w1 = r[3] * wb0 + r[4] * wb1 + r[5] * wb2
-        w2 = r[6] * wb0 + r[7] * wb1 + r[8] * wb2
-        c0 = xipos[self._chassis]
-        soil.begin()
-        for i, b in enumerate(self._wheel_bodies):
-            c = xipos[b]
-            if self._articulated:  # the wheel body's own velocity and axle (steering, rockers, bogies)
-                vel = np.zeros(6)
-                mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, b, vel, 0)
-                axis = tuple(d.xaxis[self._wheel_jnt[i]].tolist())
-                out = soil.wheel_force(i, c, axis, tuple(vel[3:].tolist()), tuple(vel[:3].tolist()))
-                if out is not None:
-                    k = 6 * b
-                    xfrc[k:k + 6] = (*out[0], *out[1])
-                continue
-            rx, ry, rz = c[0] - c0[0], c[1] - c0[1], c[2] - c0[2]
-            lin = (v0 + w1 * rz - w2 * ry, v1 + w2 * rx - w0 * rz, v2 + w0 * ry - w1 * rx)
-            a0, a1, a2 = self._axis_world(i, r)
-            s = qvel[self._wheel_qvel[i]]
-            out = soil.wheel_force(i, c, (a0, a1, a2), lin, (w0 + a0 * s, w1 + a1 * s, w2 + a2 * s))
-            if out is not None:
-                k = 6 * b
-                xfrc[k:k + 6] = (*out[0], *out[1])
-
-    def _axis_world(self, i: int, r: list) -> tuple[float, float, float]:
-        a = self._wheel_axis[i]  # in the chassis frame (the wheels hang straight off it)
-        return (r[0] * a[0] + r[1] * a[1] + r[2] * a[2],
-                r[3] * a[0] + r[4] * a[1] + r[5] * a[2],
-                r[6] * a[0] + r[7] * a[1] + r[8] * a[2])
-
-    def _read_contacts(self) -> None:
-        """Each wheel's terrain contacts of the step just taken: normal loads, penetration, and the
-        tyre model's sums (normal force, force-weighted point and normal)."""
-        d = self.data
-        n = d.ncon
-        loads = self._loads
-        for i in range(len(loads)):
-            loads[i] = 0.0
-        self._penetration = 0.0
-        core = self._tyres
-        if core is not None:
-            core.clear()
-        if n == 0:
-            if core is not None:
-                core.release_untouched()
-            return
-        con = d.contact
-        geoms = con.geom[:n].tolist()
-        dists = con.dist[:n].tolist()
-        pos = con.pos[:n].tolist()
-        frames = con.frame[:n].tolist()
-        adr = con.efc_address[:n].tolist()
-        efc = d.efc_force
-        terrain, wheel_geom = self._terrain_geom, self._wheel_geom
-        coulomb = core is not None
-        acc = core.acc if coulomb else None
-        touch = core.touch if coulomb else None
-        force = np.zeros(6)
-        deepest = 0.0
-        for k in range(n):
-            g1, g2 = geoms[k]
-            if g1 == terrain:
-                slot, sign = wheel_geom.get(g2), 1.0
-            elif g2 == terrain:
-                slot, sign = wheel_geom.get(g1), -1.0
-            else:
-                continue
-            if slot is None:
-                continue
-            if -dists[k] > deepest:
-                deepest = -dists[k]
-            if adr[k] < 0:
-                continue
-            if coulomb:
-                fn = float(efc[adr[k]])
-            else:
-                mujoco.mj_contactForce(self.model, d, k, force)
-                fn = float(force[0])
-            if fn <= 0.0:
-                continue
-            loads[slot] += fn
-            if coulomb:
-                p, f = pos[k], frames[k]
-                b = 7 * slot
-                touch[slot] = True
-                acc[b] += fn
-                acc[b + 1] += fn * p[0]
-                acc[b + 2] += fn * p[1]
-                acc[b + 3] += fn * p[2]
-                acc[b + 4] += fn * sign * f[0]
-                acc[b + 5] += fn * sign * f[1]
-                acc[b + 6] += fn * sign * f[2]
-        self._penetration = deepest
-        if coulomb:
-            core.release_untouched()
 
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
         """(centre-of-mass position, quaternion xyzw, linear velocity, angular velocity), world frame."""

@@ -1,0 +1,101 @@
+"""The soft-soil rows of the vehicle check (offroadbench.sim.rigs.vehicle_check): the climb limit
+and the drawbar pull on a deformable soil (lunar regolith at lunar gravity)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from offroadbench.heightmap import Heightmap
+from offroadbench.sim.config import SimConfig
+from offroadbench.sim.engine import TrialWorld, open_world
+from offroadbench.sim.trial.steering import drive_twist
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.rigs.vehicle_measure import CheckResult, _FLAT_CELL_M, _abs_row, _bisect, _climbs, _ratio_row
+
+
+#: soil and gravity of the soft-soil rows
+SOFT_SOIL = "lunar-regolith"
+
+
+SOFT_SOIL_GRAVITY_M_S2 = 1.62
+
+
+def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
+                         n_wheels: int = 4) -> float:
+    """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
+    weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
+    from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
+
+    def margin(theta: float) -> float:
+        load = mass_kg * g * math.cos(theta) / n_wheels
+        h = static_sinkage(soil, radius_m, width_m, load, slip)
+        return n_wheels * float(wheel_forces(soil, radius_m, width_m, h, slip)[1]) - mass_kg * g * math.sin(theta)
+
+    lo, hi = 0.0, 0.5 * math.pi
+    if margin(lo) < 0.0:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
+    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
+    world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
+    rate = world.sim.physics_rate_hz
+    weight = world.geometry.mass_kg * world.sim.gravity_m_s2
+    drag, pulls = 0.0, []
+    n = int(round(seconds * rate))
+    for k in range(n):
+        drive_twist(world, min(0.3, 0.3 * k / rate), 0.0)
+        world.push_base(-drag, 0.0, 0.0)
+        world.step()
+        measured = world.wheel_slip()
+        if measured is not None and k > rate:
+            drag = drag + 0.5 * weight * (slip - measured) / rate  # integral feedback (a push if negative)
+        if k >= n - 2 * rate:
+            pulls.append(drag)
+    return sum(pulls) / len(pulls)
+
+
+def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
+    """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil, static_sinkage, wheel_forces
+
+    spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
+    if spec.wheel_width_m is None:
+        return []
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soil = load_soil(SOFT_SOIL)
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    r, b = spec.wheel_radius_m, spec.wheel_width_m
+    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
+    with open_world(flat, spec, soft) as world:
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        mass = world.geometry.mass_kg
+        n = len(spec.wheel_joints)
+        load = mass * g / n
+        sink = world.wheel_penetration_m()
+        expected_sink = static_sinkage(soil, r, b, load)
+        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        pull = _tow_pull(world, 0.2)
+    h20 = static_sinkage(soil, r, b, load, 0.2)
+    expected_pull = n * float(wheel_forces(soil, r, b, h20, 0.2)[1])
+    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n)
+    mu = spec.wheel_friction * sim.terrain_friction
+    return [
+        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
+                   f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
+        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+                 f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
+                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
+        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
+                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
+                    "within 10 % or 1 % of the weight",
+                    f"{where}; {n} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+    ]
