@@ -446,7 +446,10 @@ def test_text_numbers_are_exact_and_free_of_float_noise(tmp_path):
 
     z = np.add.outer(np.linspace(0.1, 0.3, 9), np.linspace(0.0, 0.7, 200))  # 9 x 200 at 0.05 m
     hm = Heightmap(z, 0.05)
-    assert 199 * 0.05 == 9.950000000000001
+    # the exporters' extent is the decimal one (span_m), not the float product with its noise
+    from offroadbench.io.export._common import half_span_m, span_m
+
+    assert span_m(200, 0.05) == 9.95 and half_span_m(200, 0.05) == 4.975 and span_m(9, 0.05) == 0.4
     export_heightmap(hm, "mujoco", tmp_path, name="m")
     export_heightmap(hm, "gazebo", tmp_path, name="g")
     export_heightmap(hm, "webots", tmp_path, name="w")
