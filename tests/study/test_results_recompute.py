@@ -150,6 +150,23 @@ def _pooled_success_effect(axis: str, treatment, control) -> Callable[[Path], li
     return compute
 
 
+_SETTINGS = [(28.0, 1.0), (22.0, 1.0), (16.5, 1.0), (28.0, 0.25), (22.0, 0.25), (16.5, 0.25)]
+"""The vehicle-sensitivity README's rows: (wheel torque N m, spin inertia kg m^2)."""
+
+
+def _vehicle_setting_successes(folder: Path) -> list[float]:
+    s = trial_table(folder).groupby(["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"])["success"].sum()
+    return [float(s.loc[k]) for k in _SETTINGS]
+
+
+def _torque_pitch_rate_drop(folder: Path) -> list[float]:
+    """Mean per-terrain fall of the median RMS pitch rate of successful trials, 28 -> 16.5 N m at 1 kg m^2."""
+    t = trial_table(folder)
+    ok = t[t["success"].astype(bool) & (t["wheel_spin_inertia_kg_m2"] == 1.0)]
+    med = ok.groupby(["wheel_torque_limit_nm", "terrain"])["rms_pitch_rate_deg_s"].median().unstack("wheel_torque_limit_nm")
+    return [float((med[28.0] - med[16.5]).mean())]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -179,6 +196,11 @@ SAMPLES = [
     Sample("majhor2023 terrain-level success changes", "majhor2023",
            rf"Per-terrain success falls by {_NUM} points \[{_NUM}, {_NUM}\] from 2.3 to 2.45 \({_NUM} terrains down,"
            rf"\s+{_NUM} up; Wilcoxon p = {_NUM}, Holm {_NUM}\)", _terrain_success_changes),
+    Sample("vehicle-sensitivity successes per setting", "vehicle-sensitivity",
+           r"\| torque N m / spin inertia kg m\^2 \|[^\n]*\n\|[-|]+\|\n"
+           + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
+    Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
+           rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
