@@ -174,6 +174,11 @@ SAMPLES = [
     Sample("majhor2023 terrain-level success changes", "majhor2023",
            rf"Per-terrain success falls by {_NUM} points \[{_NUM}, {_NUM}\] from 2.3 to 2.45 \({_NUM} terrains down,"
            rf"\s+{_NUM} up; Wilcoxon p = {_NUM}, Holm {_NUM}\)", _terrain_success_changes),
+    Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
+           rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
+    Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
+           rf"median RMS vertical acceleration, m/s² \| {_NUM} / {_NUM} / {_NUM} \|",
+           _metric_medians("rms_vertical_accel_m_s2")),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
