@@ -167,6 +167,16 @@ def _torque_pitch_rate_drop(folder: Path) -> list[float]:
     return [float((med[28.0] - med[16.5]).mean())]
 
 
+VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
+TERRAIN_KINDS = ("paper-d2.3", "paper-d2.45", "paper-d2.6", "lunar-mare")
+
+
+def _vehicle_successes(folder: Path) -> list[float]:
+    """Successes per vehicle and terrain kind, in the README table's order."""
+    s = trial_table(folder).groupby(["vehicle", "recipe"])["success"].sum()
+    return [float(s[(v, r)]) for v in VEHICLES for r in TERRAIN_KINDS]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -201,6 +211,18 @@ SAMPLES = [
            + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
     Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
            rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
+    Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
+           rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
+    Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
+           rf"median RMS vertical acceleration, m/s² \| {_NUM} / {_NUM} / {_NUM} \|",
+           _metric_medians("rms_vertical_accel_m_s2")),
+    Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
+           "".join(rf"\| {v} \| {r} \| {_NUM} / 16 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
+           _vehicle_successes),
+    Sample("vehicle-comparison jackal on the paper terrains", "vehicle-comparison",
+           rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
+           lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
+                      for v in ("jackal", "husky")]),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
