@@ -23,8 +23,21 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   ``state`` (float32, 10): goal x and y in the vehicle's heading frame (m; x forward, y left,
   horizontal), roll and pitch (rad, as in :mod:`offroadbench.navigation.metrics`), body roll, pitch and yaw
   rates (rad/s), and the base velocity in the body frame (forward, left, up; m/s);
-  ``height_patch`` (float32, n x n): terrain heights relative to the base, on a square grid centred
-  on the vehicle and aligned with its heading (see :func:`height_patch`).
+  ``height_patch`` (float32, n x n): terrain heights relative to the base (m), on a square grid
+  centred on the vehicle and aligned with its heading (see :func:`height_patch`). The goal distance
+  is the norm of (goal x, goal y) and its direction their angle (rad, CCW + from the heading).
+- **Sensor** (``perception=``, or ``settings.planner.perception``): ``"oracle"`` (default) observes the
+  true terrain and pose; ``"mast"`` (or a PerceptionConfig with ``sensor = "mast"``) observes through
+  the mast sensor of :mod:`offroadbench.navigation.sensor` exactly as a policy does in a study's
+  trials (:func:`offroadbench.sim.trial.runner.drive_mission`): the goal and the patch are in the
+  **believed** frame (odometry drift), the patch is read from the map the sensor has built so far,
+  and **unknown cells are NaN** there (occluded or out of range; never guessed flat), so the
+  observation is then not inside the Dict's Box (learners wrap it, e.g.
+  :func:`offroadbench.navigation.policies.ppo.features`). Attitude, rates and body velocity are the
+  IMU's (true) values. The sensor's stream is the mission's
+  (offroadbench.navigation.perception.perception_seed): an episode replays bit for bit.
+  ``info["believed_pose"]`` is ``{"x_m", "y_m", "yaw_rad"}`` (the truth under the oracle). The
+  reward and ``info``'s distance are measured on the true pose.
 - **The trial**: an episode is a trial of the trial runner, stepped through the same per-tick code
   (offroadbench.sim.trial.runner.TrialLoop): the same spawn, telemetry, failure rules (checked at
   the telemetry rate, 20 Hz), timeout and metrics. Driving a mission with the same actions through
@@ -87,8 +100,10 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
 from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig, height_patch, observation
+from offroadbench.navigation.perception import PerceptionConfig
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem
 from offroadbench.navigation.rules import FailureRules
+from offroadbench.navigation.sensor import make_sensing
 from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain, terrain_body
@@ -198,6 +213,7 @@ class TraverseEnv(gym.Env):
         settings: TrialSettings | None = None,
         planner: str | PlannerChoice | None = None,
         render_mode: str | None = None,
+        perception: PerceptionConfig | str | None = None,
     ) -> None:
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise InputError(f"render_mode {render_mode!r} is not supported; allowed: None, "
@@ -221,6 +237,8 @@ class TraverseEnv(gym.Env):
             )
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
+        self.perception = _perception(settings.planner.perception if perception is None else perception)
+        """What the agent observes through (None: the oracle; see the module docstring, Sensor)."""
         self.planner = planner
         self.render_mode = render_mode
         self.cfg = config
@@ -231,6 +249,7 @@ class TraverseEnv(gym.Env):
         self.hm = hm
         self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
         self._mission_cfg = dataclasses.replace(settings.missions, count=1)
+        self._sensing = None  # the episode's Oracle or MastSensor (offroadbench.navigation.sensor)
         self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim))
         spec = self._world.spec
         self.vehicle = spec
@@ -282,6 +301,7 @@ class TraverseEnv(gym.Env):
         # an agent drives: the trial's nominal length is the mission's (as for a policy in the runner)
         self._loop = loop = TrialLoop(world, m, length_m=m.length_m, controller=s.controller, rules=s.rules)
         loop.record(self._progress)  # the start; a rule firing here ends the first step
+        self._sensing = make_sensing(self.hm, self.perception, m)
         self._ended = False
         state = self._read_state()
         self._dist = state["dist"]
@@ -366,12 +386,16 @@ class TraverseEnv(gym.Env):
         pos, quat, lin, ang, roll, pitch, yaw, rates = self._loop.state
         v_body = body_velocity(world, quat, lin)
         dist = math.hypot(self._goal[0] - pos[0], self._goal[1] - pos[1])
+        belief = self._sensing.update(pos, yaw)  # once per control tick, as the trial runner does
         return {"pos": pos, "lin": lin, "roll": roll, "pitch": pitch, "yaw": yaw, "rates": rates,
-                "v_body": v_body, "dist": dist}
+                "v_body": v_body, "dist": dist, "belief": belief}
 
     def _observation(self, s: dict) -> dict[str, np.ndarray]:
-        return observation(self.hm, self.settings.observation, self._goal, s["pos"], s["roll"], s["pitch"], s["yaw"],
-                           s["rates"], s["v_body"], self._fill_m)
+        bx, by, byaw = s["belief"]
+        sensing = self._sensing
+        return observation(self.hm, self.settings.observation, self._goal, (bx, by, s["pos"][2]), s["roll"],
+                           s["pitch"], byaw, s["rates"], s["v_body"], self._fill_m,
+                           None if sensing.name == "oracle" else sensing.z)
 
     def _info(self, s: dict, reason: str) -> dict[str, Any]:
         return {
@@ -383,6 +407,7 @@ class TraverseEnv(gym.Env):
             "path_xy": None if self.path_xy is None else self.path_xy.copy(),
             "pose": {"x_m": float(s["pos"][0]), "y_m": float(s["pos"][1]), "z_m": float(s["pos"][2]),
                      "roll_rad": float(s["roll"]), "pitch_rad": float(s["pitch"]), "yaw_rad": float(s["yaw"])},
+            "believed_pose": dict(zip(("x_m", "y_m", "yaw_rad"), map(float, s["belief"]))),
         }
 
     def _record(self, s: dict, cmd_v: float) -> None:
@@ -416,6 +441,16 @@ class TraverseEnv(gym.Env):
                                    title=f"planner {self.planner.name}" if self.planner else "agent")
         self._view.draw({k: np.asarray(v) for k, v in self._track.items()}, failure_reason=self._end_reason)
         return self._view.to_rgb()
+
+
+def _perception(given: PerceptionConfig | str | None) -> PerceptionConfig | None:
+    """The env's sensing: None for the oracle, else a PerceptionConfig naming the ``mast`` sensor
+    (``"mast"`` takes its defaults)."""
+    if given is None or isinstance(given, PerceptionConfig):
+        return given if given is not None and given.sensor != "oracle" else None
+    if isinstance(given, str):
+        return _perception(PerceptionConfig(sensor=given))
+    raise InputError(f"TraverseEnv perception: expected 'oracle', 'mast' or a PerceptionConfig, got {given!r}")
 
 
 _CLASS_RGB = np.array([[0x1F, 0x5F, 0xBF], [0xF0, 0x8C, 0x1A], [0xF5, 0xE5, 0x2A]], dtype=np.uint8)  # plots.style

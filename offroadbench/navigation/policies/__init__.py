@@ -19,12 +19,14 @@ process with :func:`register_policy`, or from an installed package with an entry
 
 A stable-baselines3 model fits in a few lines: ``act = lambda obs: model.predict(obs, deterministic=True)[0]``.
 
-Built in, one module each: ``reactive`` (:mod:`.reactive`), ``mppi`` (:mod:`.mppi`).
+Built in, one module each: ``reactive`` (:mod:`.reactive`), ``mppi`` (:mod:`.mppi`), ``ppo``
+(:mod:`.ppo`: an MLP trained with PPO, shipped weights, numpy inference).
 """
 
 from offroadbench.navigation.drivers import POLICIES, Policy, PolicyContext, PolicySpec, make_policy, register_policy
 from offroadbench.navigation.policies.mppi import MppiConfig, MppiPolicy
+from offroadbench.navigation.policies.ppo import PpoConfig, PpoPolicy
 from offroadbench.navigation.policies.reactive import ReactiveConfig, ReactivePolicy
 
 __all__ = ["Policy", "PolicyContext", "PolicySpec", "POLICIES", "register_policy", "make_policy",
-           "ReactiveConfig", "ReactivePolicy", "MppiConfig", "MppiPolicy"]
+           "ReactiveConfig", "ReactivePolicy", "MppiConfig", "MppiPolicy", "PpoConfig", "PpoPolicy"]
