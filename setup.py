@@ -21,7 +21,7 @@ KEEP_OUT = {"experiments": ["results", "results.*"]}
 
 packages = find_packages(include=["offroadbench", "offroadbench.*"])
 package_dir = {"offroadbench": "offroadbench"}
-package_data = {"offroadbench": ["py.typed"]}
+package_data = {"offroadbench": ["py.typed"], "offroadbench.navigation.policies": ["data/*.npz"]}  # the ppo weights
 for folder, patterns in DATA.items():
     root = f"offroadbench.data.{folder}"
     subs = find_namespace_packages(where=folder, exclude=["__pycache__", *KEEP_OUT.get(folder, [])])

@@ -59,9 +59,12 @@ def terrain_pool(seed: int, count: int):
 
 
 class Curve:
-    """SB3 callback: a tqdm bar over the steps and one learning-curve row per finished episode."""
+    """SB3 callback: a tqdm bar over the steps and one learning-curve row per finished episode; with
+    ``max_s``, training stops at the first rollout that starts after ``max_s`` seconds, and
+    ``snapshot`` is the policy and observation statistics as they were at that rollout's start: the
+    same as a run with ``--steps`` = ``snapshot_steps`` (constant learning rate and clip range)."""
 
-    def __new__(cls, total: int):
+    def __new__(cls, total: int, max_s: float | None = None):
         from stable_baselines3.common.callbacks import BaseCallback
         from tqdm import tqdm
 
@@ -72,8 +75,22 @@ class Curve:
                 self.bar = tqdm(total=total, unit="step", desc="ppo", mininterval=5.0)
                 self._ret = 0.0
                 self._len = 0
+                self.t0 = time.time()
+                self.snapshot = None
+                self.snapshot_steps = 0
+                self.stopped = False
+
+            def _on_rollout_start(self) -> None:
+                import copy
+
+                venv = self.model.get_env()
+                self.snapshot = (copy.deepcopy(self.model.policy.state_dict()), copy.deepcopy(venv.obs_rms))
+                self.snapshot_steps = self.num_timesteps
+                self.stopped = max_s is not None and time.time() - self.t0 > max_s
 
             def _on_step(self) -> bool:
+                if self.stopped:
+                    return False
                 self.bar.update(1)
                 self._ret += float(self.locals["infos"][0].get("raw_reward", 0.0))
                 self._len += 1
@@ -125,17 +142,24 @@ def train(args) -> Path:
     venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
     model = PPO("MlpPolicy", venv, n_steps=2048, seed=args.seed, device="cpu", verbose=0,
                 policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
-    curve = Curve(args.steps)
-    t0 = time.time()
+    curve = Curve(args.steps, None if args.max_minutes is None else 60.0 * args.max_minutes)
+    t0, cpu0 = time.time(), time.process_time()
     model.learn(total_timesteps=args.steps, callback=curve)
-    wall = time.time() - t0
+    wall, cpu = time.time() - t0, time.process_time() - cpu0
+    steps = args.steps
+    obs_rms = venv.obs_rms
+    if curve.stopped:  # the state at the start of the rollout that was cut: a --steps run of that length
+        model.policy.load_state_dict(curve.snapshot[0])
+        obs_rms, steps = curve.snapshot[1], curve.snapshot_steps
+        curve.rows = [r for r in curve.rows if r["steps"] <= steps]
     obs_cfg = envs[0].settings.observation
     npz = out / "ppo_husky.npz"
-    export_sb3(model, npz, obs_rms=venv.obs_rms, action_scale=pool.action_scale, patch_cells=obs_cfg.patch_cells,
-               patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed), steps=str(args.steps),
+    export_sb3(model, npz, obs_rms=obs_rms, action_scale=pool.action_scale, patch_cells=obs_cfg.patch_cells,
+               patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed), steps=str(steps),
                trained_by="experiments/train_ppo.py")
     _write_curve(curve.rows, out)
-    meta = {"seed": args.seed, "steps": args.steps, "terrains": args.terrains, "presets": PRESETS,
+    meta = {"seed": args.seed, "steps": steps, "steps_asked": args.steps, "stopped_by_max_minutes": curve.stopped,
+            "cpu_s": round(cpu, 1), "terrains": args.terrains, "presets": PRESETS,
             "overrides": OVERRIDES, "mission_length_m": MISSION_M, "border_m": BORDER_M,
             "train_sensor": {"sensor": "mast", "sensor_range_m": TRAIN_SENSOR.sensor_range_m},
             "wall_s": round(wall, 1), "episodes": len(curve.rows), "python": sys.version.split()[0],
@@ -216,6 +240,9 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0, help="root seed of training and of the held-out missions")
     p.add_argument("--terrains", type=int, default=6, help="terrains in the training pool (default 6)")
     p.add_argument("--out", default="runs/ppo", help="output folder")
+    p.add_argument("--max-minutes", type=float, default=None,
+                   help="stop at the first rollout that starts after this wall time and keep the policy as it "
+                        "was then (training.json says the steps: rerun with --steps STEPS to reproduce)")
     p.add_argument("--ship", action="store_true", help="copy the trained npz into the package's data")
     p.add_argument("--evaluate", metavar="NPZ", default=None, help="only evaluate these weights")
     p.add_argument("--no-evaluate", action="store_true", help="train only")

@@ -313,7 +313,7 @@ def register(sub) -> None:
                    "sim.gravity_m_s2=1.62; any other key is a recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
     p.add_argument("--planner", default="straight",
-                   help="planner or policy (built-in: straight, astar, lattice, reactive, mppi; installed plug-ins too)")
+                   help="planner or policy (built-in: straight, astar, lattice, reactive, mppi, ppo; installed plug-ins too)")
     p.add_argument("--physics-rate-hz", type=positive_int, default=None, help="override SimConfig.physics_rate_hz")
     p.add_argument("--engine", default=None, help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     p.add_argument("--force", action="store_true",

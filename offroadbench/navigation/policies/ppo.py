@@ -38,7 +38,6 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from offroadbench.config import check_choice
 from offroadbench.errors import InputError
 from offroadbench.navigation.drivers import PolicyContext, register_policy
 from offroadbench.navigation.problem import PlanningProblem
@@ -187,7 +186,7 @@ class PpoConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.weights, str) or not self.weights:
-            check_choice(self, "weights", self.weights, ("shipped", "a path to an .npz"))
+            raise InputError(f"PpoConfig.weights = {self.weights!r}: expected 'shipped' or the path of an .npz")
 
 
 @register_policy("ppo", config=PpoConfig, needs=frozenset(),

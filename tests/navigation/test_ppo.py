@@ -1,0 +1,222 @@
+"""The ``ppo`` policy: its shipped weights load in a fresh process without torch and act
+deterministically; it drives through the trial pipeline (drive_mission, a study slice) and replays
+bit for bit; the env's ``mast`` observation marks unknown cells NaN exactly where the sensor's map
+does; the features never read unknown ground as flat; an SB3 model exports to the same numbers."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from offroadbench import resources
+from offroadbench.config import load_toml
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.navigation.drivers import PolicyContext
+from offroadbench.navigation.missions import Mission
+from offroadbench.navigation.observation import ObservationConfig, height_patch
+from offroadbench.navigation.planners import planner_from_table
+from offroadbench.navigation.policies import make_policy
+from offroadbench.navigation.policies.ppo import (
+    MlpWeights,
+    PpoConfig,
+    feature_size,
+    features,
+    load_weights,
+    save_weights,
+    shipped_weights,
+)
+
+CELL = 0.05
+
+
+def _obs(seed: int = 0, nan_cells: int = 0) -> dict:
+    rng = np.random.default_rng(seed)
+    patch = rng.normal(-0.3, 0.05, (16, 16))
+    patch.ravel()[:nan_cells] = np.nan
+    return {"state": np.array([4.0, -1.0, 0.05, -0.1, 0.0, 0.1, 0.2, 0.5, 0.0, 0.0], dtype=np.float32),
+            "height_patch": patch.astype(np.float32)}
+
+
+_CHILD = """
+import json, sys
+import numpy as np
+from offroadbench.navigation.drivers import PolicyContext
+from offroadbench.navigation.policies import make_policy
+from offroadbench.navigation.policies.ppo import PpoConfig
+obs = {k: np.array(v, dtype=np.float32) for k, v in json.loads(sys.stdin.read()).items()}
+p = make_policy("ppo", PpoConfig(), PolicyContext())
+print(json.dumps([p.act(obs), "torch" in sys.modules]))
+"""
+
+
+def test_shipped_weights_load_in_a_fresh_process_without_torch_and_act_deterministically():
+    assert shipped_weights().is_file()
+    w = load_weights(shipped_weights())
+    assert w.pi_w0.shape == (64, feature_size(16)) and w.mu_w.shape == (2, 64)
+    obs = _obs(nan_cells=5)
+    payload = json.dumps({k: np.where(np.isnan(v), None, v).tolist() for k, v in obs.items()}).replace("null", "NaN")
+    runs = [subprocess.run([sys.executable, "-c", _CHILD], input=payload, capture_output=True, text=True, check=True)
+            for _ in range(2)]
+    (a, torch_a), (b, _) = (json.loads(r.stdout) for r in runs)
+    assert a == b and not torch_a  # bit for bit across processes, numpy only
+    here = make_policy("ppo", PpoConfig(), PolicyContext()).act(obs)
+    assert list(here) == a
+    assert all(np.isfinite(a)) and abs(a[0]) <= w.action_scale[0] and abs(a[1]) <= w.action_scale[1]
+
+
+def test_features_count_unknown_cells_as_unknown_not_as_flat_ground():
+    obs = _obs()
+    f = features(obs)
+    assert f.shape == (feature_size(16),) and np.all(np.isfinite(f))
+    assert np.all(f[-64:] == 1.0)  # all known under the oracle
+    obs["height_patch"][:2, :2] = np.nan  # one whole 2 x 2 block unknown
+    g = features(obs)
+    assert np.all(np.isfinite(g)) and g[-64] == 0.0 and g[11] == 0.0  # known fraction 0, height 0
+    obs["height_patch"][0, 0] = 0.4  # three unknown, one known: the mean of the known one
+    h = features(obs)
+    assert h[-64] == 0.25 and h[11] == pytest.approx(0.4)
+    assert features({**obs, "state": np.array([0, 3.0, *np.zeros(8)])})[:3] == pytest.approx([0.0, 1.0, 0.3])
+
+
+def test_bad_weights_and_a_patch_it_was_not_trained_on_are_refused(tmp_path):
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not an npz")
+    with pytest.raises(InputError, match="cannot be read"):
+        load_weights(bad)
+    w = load_weights(shipped_weights())
+    short = tmp_path / "short.npz"
+    save_weights(short, MlpWeights(**{**w.__dict__, "obs_mean": w.obs_mean[:-1]}))
+    with pytest.raises(InputError, match="obs_mean"):
+        load_weights(short)
+    with pytest.raises(InputError, match="patch_cells = 16"):
+        make_policy("ppo", PpoConfig(), PolicyContext(observation=ObservationConfig(patch_cells=8)))
+
+
+def _rough(n: int = 161, seed: int = 1) -> Heightmap:
+    from scipy.ndimage import gaussian_filter
+
+    z = gaussian_filter(np.random.default_rng(seed).normal(0, 1, (n, n)), 6) * 2.0
+    return Heightmap(z - z.min(), CELL)
+
+
+def test_ppo_drives_a_mission_through_drive_mission_and_the_env_alike_and_replays_bit_for_bit():
+    from offroadbench.sim import World
+    from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
+    from offroadbench.sim.trial.runner import drive_mission
+
+    hm = _rough()
+    mission = Mission.between(0, (2.0, 2.5), (5.5, 5.0))
+    choice = planner_from_table({"name": "ppo", "sensor": "mast"})
+    with World(hm) as world:
+        a = drive_mission(world, mission, planner=choice, border_m=1.0)
+        b = drive_mission(world, mission, planner=choice, border_m=1.0)
+    assert a.result.failure_reason in ("", "stuck", "tipped", "timeout", "off_map", "entrapped")
+    for k in a.telemetry:
+        assert np.array_equal(a.telemetry[k], b.telemetry[k], equal_nan=True), k
+    assert a.belief is not None and a.belief.seen.any() and not a.belief.seen.all()
+    with TraverseEnv(hm, config=TraverseConfig(mission_length_m=4.0, border_m=1.0), perception="mast") as env:
+        obs, _ = env.reset(seed=0, options={"mission": mission})
+        policy = make_policy("ppo", PpoConfig(), PolicyContext())
+        xy = []
+        while True:
+            obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))
+            xy.append(tuple(env._state["pos"][:2]))
+            if term or trunc:
+                break
+    tel = a.telemetry
+    assert len(xy) == len(tel["x_m"]) - 1
+    assert np.array_equal(np.array(xy), np.column_stack([tel["x_m"], tel["y_m"]])[1:])
+    assert info["failure_reason"] == a.result.failure_reason
+
+
+def test_mast_observation_is_nan_exactly_where_the_sensor_map_is_unknown():
+    from offroadbench.navigation.sensor import MastSensor
+    from offroadbench.navigation.perception import PerceptionConfig, perception_seed
+    from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
+
+    z = np.zeros((161, 161))
+    x = np.arange(161) * CELL
+    z[:, (x > 2.4) & (x < 3.0)] = -1.0  # a trench 0.4 m ahead of the start: its floor hidden behind its rim
+    hm = Heightmap(z + 1.0, CELL)
+    mission = Mission.between(0, (2.0, 4.0), (6.0, 4.0))
+    cfg = TraverseConfig(mission_length_m=4.0, border_m=1.0)
+    with TraverseEnv(hm, config=cfg, perception="mast") as env:
+        obs, info = env.reset(seed=0, options={"mission": mission})
+        patch = obs["height_patch"]
+        assert np.all(np.isfinite(obs["state"]))
+        assert np.isnan(patch).any() and np.isfinite(patch).any()
+        # the sensor's own map, replayed from the mission's perception stream, read at the believed pose
+        sensor = MastSensor(hm, PerceptionConfig(sensor="mast"), np.random.default_rng(perception_seed(mission)),
+                            mission.start_xy_m, mission.heading_rad)
+        bx, by, byaw = sensor.update(np.array([info["pose"]["x_m"], info["pose"]["y_m"]]), info["pose"]["yaw_rad"])
+        assert (bx, by, byaw) == tuple(info["believed_pose"].values())
+        ref = height_patch(hm, bx, by, byaw, 16, 0.1, 0.0, sensor.z)
+        assert np.array_equal(np.isnan(patch), np.isnan(ref))
+        hidden = np.isnan(patch)
+        ahead = (np.arange(16) - 7.5) * 0.1  # body-frame x of the patch's columns, m
+        assert hidden[:, ahead > 0.5].any()  # the trench floor
+        rows, cols = np.nonzero(hidden[:, ahead < 0.3])  # before the rim: only the sensor's own foot cell
+        assert np.all(np.hypot(ahead[cols], ahead[rows]) < 0.1)
+    with TraverseEnv(hm, config=cfg) as env:  # the oracle stays the default
+        obs, info = env.reset(seed=0, options={"mission": mission})
+        assert np.all(np.isfinite(obs["height_patch"])) and env.perception is None
+        assert info["believed_pose"] == {k: info["pose"][k] for k in ("x_m", "y_m", "yaw_rad")}
+    with pytest.raises(InputError):
+        TraverseEnv(hm, config=cfg, perception="lidar")
+
+
+def test_ppo_drives_a_study_slice(tmp_path):
+    from offroadbench.study import load, run_study, study_from_dict
+    from offroadbench.study.spec import plan_cells
+
+    data = load_toml(resources.study_files()["smoke"])
+    data["study"].update(terrains_per_cell=1, missions_per_terrain=2)
+    data["grid"] = {"recipe.layers.base.D_high": [2.45], "planner.name": ["ppo"]}
+    data["recipe_overrides"] = {"grid.rows": 161, "grid.cols": 161}
+    data["missions"].update(length_m=4.0)
+    data["planner"] = {"sensor": "mast"}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path / "run", executor="inline")
+    df = load(tmp_path / "run")
+    assert len(df) == 2
+    assert set(df["planner"]) == {"ppo"}
+    assert df["failure_reason"].isin(["", "tipped", "stuck", "timeout", "off_map", "entrapped"]).all()
+
+
+@pytest.mark.skipif(importlib.util.find_spec("stable_baselines3") is None, reason="stable-baselines3 not installed")
+def test_an_sb3_model_exports_to_the_same_mean_actions(tmp_path):
+    import gymnasium as gym
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from offroadbench.navigation.policies.ppo import export_sb3
+
+    n = feature_size(16)
+
+    class Box(gym.Env):
+        observation_space = gym.spaces.Box(-np.inf, np.inf, (n,), np.float32)
+        action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+        def reset(self, *, seed=None, options=None):
+            super().reset(seed=seed)
+            return self.np_random.normal(size=n).astype(np.float32), {}
+
+        def step(self, a):
+            return self.np_random.normal(size=n).astype(np.float32), 0.0, False, False, {}
+
+    venv = VecNormalize(DummyVecEnv([Box]), norm_reward=False)
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=32, n_epochs=1, seed=0, device="cpu",
+                policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
+    model.learn(128)
+    w = export_sb3(model, tmp_path / "m.npz", obs_rms=venv.obs_rms, action_scale=(1.0, 2.0))
+    f = np.random.default_rng(1).normal(size=(5, n))
+    sb3, _ = model.predict(venv.normalize_obs(f.astype(np.float32)), deterministic=True)
+    assert w.mean_action(f) == pytest.approx(sb3, abs=1e-5)  # float32 torch against float64 numpy
+    assert load_weights(tmp_path / "m.npz").mean_action(f) == pytest.approx(w.mean_action(f), abs=0)
