@@ -76,7 +76,7 @@ def test_registry_and_the_planner_table():
     assert set(PLANNERS) >= {"straight", "astar", "lattice"}
     wp = plan_straight(_problem(_open(), (1.0, 2.0), (9.5, 3.25)))
     assert wp.shape == (2, 2) and np.array_equal(wp, [[1.0, 2.0], [9.5, 3.25]])
-    with pytest.raises(InputError, match=r"unknown planner or policy 'astra'; did you mean 'astar'.*policies: mppi, reactive"):
+    with pytest.raises(InputError, match=r"unknown planner or policy 'astra'; did you mean 'astar'.*policies: mppi, ppo, reactive"):
         planner_from_table({"name": "astra"})
     choice = planner_from_table({"name": "astar", "grid_m": 0.5})
     assert choice == PlannerChoice("astar", AStarConfig(grid_m=0.5), "planner") and choice.params["grid_m"] == 0.5
