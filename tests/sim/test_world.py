@@ -86,7 +86,13 @@ def test_urdf_has_real_masses_and_inertias():
             info = pb.getDynamicsInfo(body, j, physicsClientId=cid)
             assert info[0] == pytest.approx(2.637)
             assert info[2][0] == pytest.approx(0.02467, rel=1e-4)
-            assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)  # drive train added
+            assert info[2][1] == pytest.approx(0.04411, rel=1e-4)  # the tyre's own: the drive train is geared
+        # the drive train's inertia sits on grounded flywheels geared to the wheels (drivetrain.py)
+        assert world.geometry.wheel_spin_inertia_kg_m2 == pytest.approx((world.spec.wheel_spin_inertia_kg_m2,) * 4)
+    with World(Heightmap.flat(41, 41, CELL), sim=SimConfig(drive_train_reaction="link")) as world:
+        for j in world.wheel_joints:  # the old model: all of it on the wheel link
+            info = pb.getDynamicsInfo(world.vehicle_id, j, physicsClientId=world.client_id)
+            assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)
 
 
 def test_vehicle_geometry_is_the_urdf_measured_once():
