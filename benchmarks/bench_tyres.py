@@ -1,4 +1,4 @@
-"""Cost of the MuJoCo world's coulomb tyre loop per 60 Hz trial step: Python against compiled.
+"""Cost of the MuJoCo world's tyre loop (coulomb tyres or terramechanics soil) per 60 Hz trial step: Python against compiled.
 
 The loop is the work the world does around MuJoCo at each of a trial step's MuJoCo steps (2 at the
 default 60 Hz trial rate and ``ContactTuning.min_rate_hz = 120``): read the wheels' terrain contacts
@@ -10,9 +10,14 @@ attribute look-ups its call needs (``d.contact`` and its fields), as the world m
 It also times the whole trial step (``world.step``) both ways, over the mission's first
 ``calls / 10`` steps.
 
-    .venv/bin/python benchmarks/bench_tyres.py [--states 12] [--repeats 7] [--smoke]
+With ``--model terramechanics`` the loop is the soil's (offroadbench.sim.tyre_laws.soil_wheels on
+lunar regolith in lunar gravity, ``_soil_c`` compiled): the soil forces after each ``mj_step1``
+(the Python loop also reads the step's contacts, none of them a wheel's); ``--model both`` runs
+the two one after the other.
 
-``--smoke`` runs it in seconds on a small synthetic map (for CI: the script must not rot).
+    .venv/bin/python benchmarks/bench_tyres.py [--model coulomb|terramechanics|both] [--states 12] [--repeats 7] [--smoke]
+
+``--smoke`` runs both models in seconds on a small synthetic map (for CI: the script must not rot).
 """
 
 from __future__ import annotations
@@ -50,7 +55,21 @@ def _python_loop(world: MuJoCoWorld):
     return run
 
 
+def _compiled_soil_loop(world: MuJoCoWorld):
+    sc, f, ist, tab = world._fast_soil
+    d = world.data
+    apply = sc.APPLY
+    qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+
+    def run(n: int) -> None:
+        for _ in range(n):
+            apply(qvel, xmat, xipos, xfrc, f, ist, tab)
+    return run
+
+
 def _compiled_loop(world: MuJoCoWorld):
+    if world._fast_soil is not None:
+        return _compiled_soil_loop(world)
     tc, f, ist = world._fast
     d = world.data
     apply, read = tc.APPLY, tc.READ
@@ -79,13 +98,15 @@ def main() -> None:
     ap.add_argument("--states", type=int, default=12, help="MuJoCo states sampled along the mission")
     ap.add_argument("--repeats", type=int, default=7, help="rounds per state (the best is kept)")
     ap.add_argument("--calls", type=int, default=2000, help="loop calls per timing")
-    ap.add_argument("--smoke", action="store_true", help="a small synthetic map and few calls (seconds)")
+    ap.add_argument("--model", choices=("coulomb", "terramechanics", "both"), default="coulomb",
+                    help="the coulomb tyres' loop or the soil's (lunar regolith, lunar gravity)")
+    ap.add_argument("--smoke", action="store_true", help="a small synthetic map and few calls, both models (seconds)")
     args = ap.parse_args()
     if args.smoke:
         y, x = np.mgrid[0:81, 0:201] * 0.05
         hm = Heightmap(0.3 + 0.08 * np.sin(2.1 * x) * np.cos(1.7 * y), 0.05)
         start, goal = (2.0, 2.0), (9.0, 2.5)
-        args.states, args.repeats, args.calls = 2, 2, 200
+        args.states, args.repeats, args.calls, args.model = 2, 2, 200, "both"
     else:
         from bench_sim import _paper_terrain  # the paper terrain and missions (run as a script: benchmarks/ is on sys.path)
         from offroadbench.analysis.roughness import RoughnessConfig
@@ -93,8 +114,16 @@ def main() -> None:
 
         hm, missions = _paper_terrain(2.45, RoughnessConfig(border_m=5.0), MissionConfig(count=1, length_m=35.0, border_m=5.0), 1)
         start, goal = missions[0].start_xy_m, missions[0].goal_xy_m
-    worlds = {loop: MuJoCoWorld(hm, "husky", SimConfig(engine="mujoco"), ContactTuning(tyre_loop=loop))
-              for loop in ("python", "compiled")}
+    for model in ("coulomb", "terramechanics") if args.model == "both" else (args.model,):
+        measure(model, hm, start, goal, args)
+
+
+def measure(model: str, hm: Heightmap, start, goal, args) -> None:
+    """Time the ``model``'s loop both ways on ``hm`` along the drive from ``start`` towards ``goal``, and print."""
+    sim = SimConfig(engine="mujoco")
+    if model == "terramechanics":
+        sim = SimConfig(engine="mujoco", tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
+    worlds = {loop: MuJoCoWorld(hm, "husky", sim, ContactTuning(tyre_loop=loop)) for loop in ("python", "compiled")}
     runners = {"python": _python_loop(worlds["python"]), "compiled": _compiled_loop(worlds["compiled"])}
     states = _states(worlds["python"], start, goal, args.states)
     substeps = worlds["python"].substeps
@@ -130,7 +159,7 @@ def main() -> None:
     print(f"{platform.processor() or platform.machine()}, python {platform.python_version()}, mujoco {mujoco.__version__}; "
           f"{len(states)} states, contacts per MuJoCo step {min(ncon)}-{max(ncon)}; {substeps} MuJoCo steps per trial step")
     py, cc = statistics.median(per["python"]), statistics.median(per["compiled"])
-    print(f"tyre loop per trial step (median over states, best of {args.repeats}): python {1e6 * substeps * py:.1f} us, "
+    print(f"{model} loop per trial step (median over states, best of {args.repeats}): python {1e6 * substeps * py:.1f} us, "
           f"compiled {1e6 * substeps * cc:.1f} us: {py / cc:.1f}x")
     print(f"whole trial step (best of {args.repeats}): python {1e6 * step_best['python']:.1f} us, "
           f"compiled {1e6 * step_best['compiled']:.1f} us: {step_best['python'] / step_best['compiled']:.2f}x")
