@@ -140,3 +140,33 @@ def test_articulated_vehicles_keep_the_python_loop(model):
         assert w._articulated and w._fast is None and w._fast_soil is None
     with MuJoCoWorld(hm, "husky", sim, ContactTuning(tyre_loop="compiled")) as w:
         assert (w._fast is not None) == (model == "coulomb") and (w._fast_soil is not None) == (model != "coulomb")
+
+
+def test_the_compiled_soil_loop_gives_the_python_row_when_compiled_for_the_x86_64_baseline(tmp_path):
+    """Compiled for the x86-64 baseline (no AVX, no FMA: ``NUMBA_CPU_NAME=x86-64``, a fresh cache)
+    the soil loop gives the Python loop's row to the last bit, as on the host CPU: the result does
+    not depend on the CPU's SIMD."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np\n"
+        "from offroadbench.heightmap import Heightmap\n"
+        "from offroadbench.navigation.missions import Mission\n"
+        "from offroadbench.sim import SimConfig, run_mission\n"
+        "from offroadbench.sim.engines.mujoco.world import ContactTuning, MuJoCoWorld\n"
+        "y, x = np.mgrid[0:81, 0:201] * 0.05\n"
+        "hm = Heightmap(0.3 + 0.08 * np.sin(2.1 * x) * np.cos(1.7 * y) + 0.03 * np.sin(5.3 * y + 0.7 * x), 0.05)\n"
+        "sim = SimConfig(engine='mujoco', tyre_model='terramechanics', soil='lunar-regolith', gravity_m_s2=1.62)\n"
+        "with MuJoCoWorld(hm, 'husky', sim, ContactTuning(tyre_loop=LOOP)) as w:\n"
+        "    assert (w._fast_soil is not None) == (LOOP == 'compiled')\n"
+        "    r, _ = run_mission(w, Mission.between(0, (2, 2), (6, 2.5)))\n"
+        "print(repr(r))\n"
+    )
+    env = dict(os.environ, NUMBA_CPU_NAME="x86-64", NUMBA_CPU_FEATURES="", NUMBA_CACHE_DIR=str(tmp_path))
+    baseline = subprocess.run([sys.executable, "-c", code.replace("LOOP", "'compiled'")], capture_output=True,
+                              text=True, check=True, env=env).stdout
+    ns = {}
+    exec(code.replace("LOOP", "'python'").replace("print(repr(r))\n", ""), ns)
+    assert baseline == repr(ns["r"]) + "\n" and "success=True" in baseline
