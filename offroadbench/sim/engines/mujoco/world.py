@@ -21,7 +21,9 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction. The
   contact reading and the forces run compiled (offroadbench.sim.engines.mujoco._tyres_c, numba:
   the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
-  installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig).
+  installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
+  ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
+  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
