@@ -170,3 +170,22 @@ def test_the_compiled_soil_loop_gives_the_python_row_when_compiled_for_the_x86_6
     ns = {}
     exec(code.replace("LOOP", "'python'").replace("print(repr(r))\n", ""), ns)
     assert baseline == repr(ns["r"]) + "\n" and "success=True" in baseline
+
+
+def test_the_soil_loop_is_selectable_and_auto_falls_back_to_python_without_numba(monkeypatch):
+    import sys
+
+    from offroadbench.errors import InputError
+
+    hm = Heightmap.flat(41, 41, 0.05)
+    with MuJoCoWorld(hm, "husky", SOIL, ContactTuning(tyre_loop="python")) as w:
+        assert w._fast_soil is None and w._soil is not None
+    with MuJoCoWorld(hm, "husky", SOIL) as w:
+        assert w._fast_soil is not None and w._fast is None  # auto, numba installed
+    monkeypatch.setitem(sys.modules, "numba", None)  # import numba now raises ImportError
+    monkeypatch.delitem(sys.modules, "offroadbench.sim.engines.mujoco._soil_c", raising=False)
+    monkeypatch.delattr("offroadbench.sim.engines.mujoco._soil_c", raising=False)
+    with MuJoCoWorld(hm, "husky", SOIL) as w:
+        assert w._fast_soil is None and w._soil is not None
+    with pytest.raises(InputError, match=r"MuJoCoConfig.tyre_loop = 'compiled' needs numba"):
+        MuJoCoWorld(hm, "husky", SOIL, ContactTuning(tyre_loop="compiled"))
