@@ -20,6 +20,7 @@ Importing this module does not import pybullet; :func:`drive_terrain` does.
 from __future__ import annotations
 
 import dataclasses
+import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
@@ -27,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
 import numpy as np
 
 from offroadbench.analysis.roughness import ClassMaps, RoughnessConfig, classify_terrain
-from offroadbench.config import from_dict
+from offroadbench.config import from_dict, to_dict
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.drivers import PlannerChoice, planner_from_table
@@ -40,7 +41,7 @@ from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle, vehicle_fr
 if TYPE_CHECKING:
     from offroadbench.sim.trial.runner import TrialResult
 
-__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
+__all__ = ["TrialSettings", "SETTINGS_TABLES", "settings_part", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
            "terrain_body"]
 
 
@@ -104,6 +105,48 @@ class TrialSettings:
     def replace(self, **changes: Any) -> "TrialSettings":
         """A copy with some parts replaced (``dataclasses.replace``)."""
         return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every setting written out as JSON data (offroadbench.config.to_dict: nested configs as
+        tables, tuples as lists; the vehicle with its resolved URDF path; the planner as ``name``,
+        ``kind``, ``config`` and ``perception``). :meth:`from_dict` reads it back equal; a study
+        store keeps it per cell (``meta.cells[i].trial_settings``)."""
+        return to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], where: str = "settings") -> "TrialSettings":
+        """The settings :meth:`to_dict` wrote (no defaults filled in, no vehicle file read); a
+        part that does not build is an InputError naming it (``where`` prefixes the message)."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        if not isinstance(data, Mapping) or set(data) != set(names):
+            got = sorted(data) if isinstance(data, Mapping) else type(data).__name__
+            raise InputError(f"{where}: stored settings must have the parts {', '.join(names)}; got {got}")
+        return cls(**{name: settings_part(name, data[name], where) for name in names})
+
+
+def settings_part(name: str, data: Mapping[str, Any], where: str = "settings") -> Any:
+    """Part ``name`` of :class:`TrialSettings` from its :meth:`TrialSettings.to_dict` table (a
+    planner or policy through its registry entry's config class)."""
+    if not isinstance(data, Mapping):
+        raise InputError(f"{where} [{name}]: expected a table, got {data!r:.60}")
+    if name == "planner":
+        from offroadbench.navigation.drivers import PLANNERS, POLICIES
+        from offroadbench.navigation.perception import PerceptionConfig
+
+        data = dict(data)
+        unknown = sorted(set(data) - {"name", "kind", "config", "perception"})
+        if unknown:
+            raise InputError(f"{where} [planner]: unknown key(s) {', '.join(unknown)}")
+        name, kind = data.get("name", "straight"), data.get("kind", "planner")
+        entry = (POLICIES if kind == "policy" else PLANNERS).get(name)
+        perception = data.get("perception")
+        return PlannerChoice(name, from_dict(entry.config, dict(data.get("config") or {}), f"{where} [planner]"),
+                             kind, None if perception is None else from_dict(PerceptionConfig, dict(perception),
+                                                                              f"{where} [planner] perception"))
+    cls = typing.get_type_hints(TrialSettings).get(name)
+    if cls is None:
+        raise InputError(f"{where}: unknown settings part {name!r}")
+    return from_dict(cls, dict(data), f"{where} [{name}]")
 
 @dataclass(frozen=True, eq=False)
 class PreparedTerrain:
