@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from offroadbench.errors import InputError
-from offroadbench.sim.trial import pipeline
+from offroadbench.sim.trial import settings as settings_module
 from offroadbench.sim.trial.pipeline import TrialSettings
 from offroadbench.study import run_study, spec, study_from_dict
 from offroadbench.study.report import build_report
@@ -74,7 +74,7 @@ def _forget_settings(run_dir) -> None:
 def _count_builds(monkeypatch) -> dict:
     """Count every build of settings from tables (the study's tables, a vehicle file, a default)."""
     calls = {"n": 0}
-    for owner, name in ((spec, "build_section"), (pipeline, "load_vehicle")):
+    for owner, name in ((spec, "build_section"), (settings_module, "load_vehicle")):
         real = getattr(owner, name)
 
         def counted(*args, _real=real, **kwargs):

@@ -44,7 +44,7 @@ from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
 from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, _result
-from offroadbench.sim.trial.pipeline import TrialSettings
+from offroadbench.sim.trial.settings import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
            "run_mission", "settings_of", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
