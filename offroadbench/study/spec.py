@@ -201,7 +201,7 @@ class StudyConfig:
         """Table column of each grid key: its last part, or the full key if that is ambiguous."""
         lasts = [a.key.split(".", 1)[0] if a.key in _NAME_KEYS else a.key.rsplit(".", 1)[-1] for a in self.grid]
         out = {}
-        for axis, last in zip(self.grid, lasts):
+        for axis, last in zip(self.grid, lasts, strict=True):
             ok = lasts.count(last) == 1 and last not in RESERVED_COLUMNS
             out[axis.key] = last if ok else axis.key
         return out
@@ -209,7 +209,7 @@ class StudyConfig:
     def cell_values(self) -> list[dict[str, Any]]:
         """Grid values of every cell ({grid key: value}), first axis slowest."""
         keys = [a.key for a in self.grid]
-        return [dict(zip(keys, combo)) for combo in itertools.product(*(a.values for a in self.grid))]
+        return [dict(zip(keys, combo, strict=True)) for combo in itertools.product(*(a.values for a in self.grid))]
 
 
 def _check_axis(axis: GridAxis) -> None:

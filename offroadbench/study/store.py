@@ -341,7 +341,7 @@ class Store:
         or when it ran on this host and the run directory's lock names no live process."""
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
         names = [d[0] for d in cur.description]
-        out = [dict(zip(names, r)) for r in cur.fetchall()]
+        out = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
         for r in out:  # the fingerprint as a dict (None in sessions of schema-1 stores)
             r["platform"] = json.loads(r["platform"]) if r.get("platform") else None
         for i, r in enumerate(out):

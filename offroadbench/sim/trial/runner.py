@@ -234,7 +234,7 @@ class TrialLoop:
 
     def telemetry(self) -> dict[str, np.ndarray]:
         """The telemetry so far, TELEMETRY_COLUMNS."""
-        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows))}
+        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows, strict=True), strict=True)}
 
 
 def drive_mission(
@@ -434,7 +434,7 @@ def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.n
     if len(wp) > MAX_WAYPOINTS:
         raise PluginError(f"planner {planner.name!r} returned {len(wp)} waypoints; at most {MAX_WAYPOINTS} are allowed")
     straight = math.hypot(problem.goal_xy[0] - problem.start_xy[0], problem.goal_xy[1] - problem.start_xy[1])
-    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist()))
+    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist(), strict=True))
     if length > MAX_PATH_FACTOR * straight + MAX_PATH_EXTRA_M:
         raise PluginError(f"planner {planner.name!r} returned a path of {length:.1f} m for a {straight:.1f} m mission; "
                           f"at most {MAX_PATH_FACTOR:g} x + {MAX_PATH_EXTRA_M:g} m is allowed")
