@@ -181,4 +181,4 @@ def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:
     ``tile_cells = 0`` gives one tile."""
     n = 1 if tile_cells == 0 else max(1, -(-cells // tile_cells))
     edges = [round(i * cells / n) for i in range(n + 1)]
-    return list(zip(edges[:-1], edges[1:]))
+    return list(zip(edges[:-1], edges[1:], strict=True))

@@ -117,7 +117,7 @@ def test_a_spinning_wheel_digs_in(load_n):
     flat = dataclasses.replace(soil, n1=0.0)
     assert static_sinkage(flat, R, B, load_n, 0.6) < 1.1 * static_sinkage(flat, R, B, load_n, 0.0)
     if load_n > 100.0:
-        pull = [float(wheel_forces(soil, R, B, hh, s)[1]) for hh, s in zip(h, slips)]
+        pull = [float(wheel_forces(soil, R, B, hh, s)[1]) for hh, s in zip(h, slips, strict=True)]
         assert int(np.argmax(pull)) <= 6 and max(pull) > pull[-1] + 0.03 * load_n  # peak by slip 0.6
 
 

@@ -239,7 +239,7 @@ def climb_limit_deg(mass_kg: float, com_height_m: float, half_wheelbase_m: float
         shift = s * com_height_m / (2.0 * half_wheelbase_m)
         push = sum(min(mu * mass_kg * g * max(0.0, 0.5 * c + sign * shift),
                        wheels_per_axle * torque_nm / wheel_radius_m)
-                   for sign, on in zip((-1.0, 1.0), driven) if on)
+                   for sign, on in zip((-1.0, 1.0), driven, strict=True) if on)
         return push - mass_kg * g * s
 
     lo, hi = 0.0, 0.5 * math.pi
@@ -261,7 +261,7 @@ def _climb(world: TrialWorld, com_height_m: float) -> CheckResult:
     per_axle = len(spec.wheel_joints) // 2
     xs = [c[0] for c in world.geometry.wheel_centres_m]
     mid = 0.5 * (max(xs) + min(xs))
-    driven = tuple(any(spec.is_driven(n) and (x > mid) == front for n, x in zip(spec.wheel_joints, xs))
+    driven = tuple(any(spec.is_driven(n) and (x > mid) == front for n, x in zip(spec.wheel_joints, xs, strict=True))
                    for front in (True, False))
     expected = climb_limit_deg(world.geometry.mass_kg, com_height_m, half_base, per_axle, spec.wheel_radius_m,
                                spec.wheel_torque_limit_nm, mu, world.sim.gravity_m_s2, driven)

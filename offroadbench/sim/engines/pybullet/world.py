@@ -275,7 +275,7 @@ class World:
         """Steering-joint targets, rad (``spec.steer_joints`` order): position servos limited to the
         spec's steering torque and rate."""
         spec = self.spec
-        for j, a in zip(self.steer_joints, angles_rad):
+        for j, a in zip(self.steer_joints, angles_rad, strict=True):
             pb.setJointMotorControl2(self.vehicle_id if body is None else body, j, pb.POSITION_CONTROL,
                                      targetPosition=a, force=spec.steer_torque_limit_nm,
                                      maxVelocity=math.radians(spec.max_steer_rate_deg_s), physicsClientId=self._cid)
