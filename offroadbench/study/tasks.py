@@ -195,7 +195,7 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
         part = dataclasses.replace(prepared, missions=tuple(pending),
                                    mission_seeds=tuple(seeds[m.index] for m in pending))
         try:
-            for mission, item in zip(part.missions, trial_fn(part, settings)):
+            for mission, item in zip(part.missions, trial_fn(part, settings), strict=True):
                 k = mission.index
                 kept = None
                 if hasattr(item, "result"):  # a TrialRecord

@@ -218,16 +218,16 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             if g == self._terrain_geom:
                 continue
             glo, ghi = self._geom_box(g)
-            lo = [min(a, b) for a, b in zip(lo, glo)]
-            hi = [max(a, b) for a, b in zip(hi, ghi)]
+            lo = [min(a, b) for a, b in zip(lo, glo, strict=True)]
+            hi = [max(a, b) for a, b in zip(hi, ghi, strict=True)]
             if g in self._wheel_geom:
                 wheel_lo_z, wheel_front = min(wheel_lo_z, glo[2]), max(wheel_front, ghi[0])
             elif m.geom_bodyid[g] == self._chassis:
                 chassis_lo_z, chassis_front = min(chassis_lo_z, glo[2]), max(chassis_front, ghi[0])
         centres = [d.xipos[b].tolist() for b in self._wheel_bodies]
         spins = []
-        for b, j, axis in zip(self._wheel_bodies, self._wheel_qvel, self._wheel_axis):
-            own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist()))
+        for b, j, axis in zip(self._wheel_bodies, self._wheel_qvel, self._wheel_axis, strict=True):
+            own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist(), strict=True))
             spins.append(own + float(m.dof_armature[j]))
         return VehicleGeometry(
             mass_kg=self._mass_kg,
