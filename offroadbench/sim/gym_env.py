@@ -407,7 +407,7 @@ class TraverseEnv(gym.Env):
             "path_xy": None if self.path_xy is None else self.path_xy.copy(),
             "pose": {"x_m": float(s["pos"][0]), "y_m": float(s["pos"][1]), "z_m": float(s["pos"][2]),
                      "roll_rad": float(s["roll"]), "pitch_rad": float(s["pitch"]), "yaw_rad": float(s["yaw"])},
-            "believed_pose": dict(zip(("x_m", "y_m", "yaw_rad"), map(float, s["belief"]))),
+            "believed_pose": dict(zip(("x_m", "y_m", "yaw_rad"), map(float, s["belief"]), strict=True)),
         }
 
     def _record(self, s: dict, cmd_v: float) -> None:
@@ -472,7 +472,7 @@ def top_down_image(classes: np.ndarray, cell_m: float, pos, yaw: float, length_m
         img[r[ok], c[ok]] = colour
 
     if path_xy is not None and len(path_xy) > 1:
-        seg = [a + (b - a) * t for a, b in zip(path_xy[:-1], path_xy[1:])
+        seg = [a + (b - a) * t for a, b in zip(path_xy[:-1], path_xy[1:], strict=True)
                for t in np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / px) + 1))[:, None]]
         paint(np.vstack(seg).reshape(-1, 2), (255, 255, 255))
     gy, gx = np.mgrid[-2:3, -2:3]
