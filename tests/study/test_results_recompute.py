@@ -177,6 +177,26 @@ def _vehicle_successes(folder: Path) -> list[float]:
     return [float(s[(v, r)]) for v in VEHICLES for r in TERRAIN_KINDS]
 
 
+CRATER_DENSITIES = (0.0, 0.03, 0.1, 0.3)
+_CRATER_METRICS = ("traversal_time_s", "rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "max_abs_pitch_deg")
+
+
+def _crater_density_rows(folder: Path) -> list[float]:
+    """Per density: successes, then the medians of the successful trials' metrics (the README table's order)."""
+    t = trial_table(folder)
+    ok = t[t["success"].astype(bool)]
+    out: list[float] = []
+    for c in CRATER_DENSITIES:
+        out.append(float(t.loc[t["c"] == c, "success"].sum()))
+        out += [float(ok.loc[ok["c"] == c, m].median()) for m in _CRATER_METRICS]
+    return out
+
+
+def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
+    counts = trial_table(folder).query(where)["failure_reason"].value_counts()
+    return [float(counts.get(r, 0)) for r in reasons]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -188,6 +208,15 @@ SAMPLES = [
                       float((t["tyre_model"] == "terramechanics").sum())]),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
+    Sample("crater-density successes and medians per density", "crater-density",
+           "".join(rf"\| {c} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| {_NUM} \([\d.]+\) \| "
+                   rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
+           _crater_density_rows),
+    Sample("crater-density failures at c = 0.3", "crater-density",
+           rf"\| 0.3 \| \d+ \(\d+\) \| {_NUM} stuck, {_NUM} timeout, {_NUM} tipped \|",
+           lambda f: _failure_counts(f, "c == 0.3", ("stuck", "timeout", "tipped"))),
+    Sample("crater-density tip-overs at c = 0.3 now", "crater-density", rf"Tip-overs at c = 0.3 fell from \d+ to {_NUM}",
+           lambda f: _failure_counts(f, "c == 0.3", ("tipped",))),
     Sample("majhor2023 successful trials", "majhor2023",
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
