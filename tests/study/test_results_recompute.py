@@ -197,6 +197,32 @@ def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[
     return [float(counts.get(r, 0)) for r in reasons]
 
 
+LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
+"""The lunar-soil README table's rows: (tyre model, gravity m/s^2, surface age Ga)."""
+
+
+def _lunar_soil_rows(folder: Path) -> list[float]:
+    """Per row: successes and the successful trials' median traversal time; soil rows add the median mean
+    slip and the medians of the per-trial median and 95th-percentile sinkage (mm)."""
+    t = trial_table(folder)
+    out: list[float] = []
+    for m, g, a in LUNAR_SOIL_CELLS:
+        cell = t[(t["tyre_model"] == m) & (t["gravity_m_s2"] == g) & (t["age_ga"] == a)]
+        out += [float(cell["success"].sum()), float(cell.loc[cell["success"].astype(bool), "traversal_time_s"].median())]
+        if m == "terramechanics":
+            out += [float(cell["mean_slip"].median()), 1000 * float(cell["sinkage_median_m"].median()),
+                    1000 * float(cell["sinkage_p95_m"].median())]
+    return out
+
+
+def _soil_success_by_gravity(folder: Path) -> list[float]:
+    """Mean per-terrain success (%) on regolith, lunar then Earth gravity, each terrain over the three ages."""
+    t = trial_table(folder)
+    soil = t[t["tyre_model"] == "terramechanics"]
+    rate = soil.groupby(["gravity_m_s2", "terrain"])["success"].mean().mul(100).groupby("gravity_m_s2").mean()
+    return [float(rate[1.62]), float(rate[9.81])]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -208,6 +234,13 @@ SAMPLES = [
                       float((t["tyre_model"] == "terramechanics").sum())]),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
+    Sample("lunar-soil table rows", "lunar-soil",
+           "".join(rf"\| {m} \| {g} \| {a} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| "
+                   + (rf"{_NUM} \([\d.]+\) \| {_NUM} / {_NUM} \([\d./ ]+\) \|\n" if m == "terramechanics"
+                      else r"- \| [^|\n]+ \|\n")
+                   for m, g, a in LUNAR_SOIL_CELLS), _lunar_soil_rows),
+    Sample("lunar-soil success on regolith by gravity", "lunar-soil",
+           rf"more missions succeed \({_NUM} against {_NUM} %", _soil_success_by_gravity),
     Sample("crater-density successes and medians per density", "crater-density",
            "".join(rf"\| {c} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| {_NUM} \([\d.]+\) \| "
                    rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
