@@ -254,6 +254,10 @@ SAMPLES = [
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
            rf"median success rate per terrain \|[^|]*\| {_NUM} / {_NUM} / {_NUM} %", _median_rates),
+    Sample("majhor2023 failures per D", "majhor2023",
+           rf"\| failures \|[^|]*\| stuck {_NUM} / {_NUM} / {_NUM}, timeout {_NUM}, tipped {_NUM} \|",
+           lambda f: [*(float(n) for n in trial_table(f).query("failure_reason == 'stuck'").groupby("D_high").size()),
+                      *_failure_counts(f, "D_high > 0", ("timeout", "tipped"))]),
     Sample("majhor2023 pooled fall 2.45 -> 2.6", "majhor2023", rf"our pooled rate falls {_NUM} points", _pooled_fall),
     Sample("majhor2023 per-terrain correlation and counts", "majhor2023",
            rf"correlates at {_NUM}; going from 2.3 to 2.6,\s+{_NUM} terrains lose success, {_NUM} are unchanged "
