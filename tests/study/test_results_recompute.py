@@ -177,6 +177,52 @@ def _vehicle_successes(folder: Path) -> list[float]:
     return [float(s[(v, r)]) for v in VEHICLES for r in TERRAIN_KINDS]
 
 
+CRATER_DENSITIES = (0.0, 0.03, 0.1, 0.3)
+_CRATER_METRICS = ("traversal_time_s", "rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "max_abs_pitch_deg")
+
+
+def _crater_density_rows(folder: Path) -> list[float]:
+    """Per density: successes, then the medians of the successful trials' metrics (the README table's order)."""
+    t = trial_table(folder)
+    ok = t[t["success"].astype(bool)]
+    out: list[float] = []
+    for c in CRATER_DENSITIES:
+        out.append(float(t.loc[t["c"] == c, "success"].sum()))
+        out += [float(ok.loc[ok["c"] == c, m].median()) for m in _CRATER_METRICS]
+    return out
+
+
+def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
+    counts = trial_table(folder).query(where)["failure_reason"].value_counts()
+    return [float(counts.get(r, 0)) for r in reasons]
+
+
+LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
+"""The lunar-soil README table's rows: (tyre model, gravity m/s^2, surface age Ga)."""
+
+
+def _lunar_soil_rows(folder: Path) -> list[float]:
+    """Per row: successes and the successful trials' median traversal time; soil rows add the median mean
+    slip and the medians of the per-trial median and 95th-percentile sinkage (mm)."""
+    t = trial_table(folder)
+    out: list[float] = []
+    for m, g, a in LUNAR_SOIL_CELLS:
+        cell = t[(t["tyre_model"] == m) & (t["gravity_m_s2"] == g) & (t["age_ga"] == a)]
+        out += [float(cell["success"].sum()), float(cell.loc[cell["success"].astype(bool), "traversal_time_s"].median())]
+        if m == "terramechanics":
+            out += [float(cell["mean_slip"].median()), 1000 * float(cell["sinkage_median_m"].median()),
+                    1000 * float(cell["sinkage_p95_m"].median())]
+    return out
+
+
+def _soil_success_by_gravity(folder: Path) -> list[float]:
+    """Mean per-terrain success (%) on regolith, lunar then Earth gravity, each terrain over the three ages."""
+    t = trial_table(folder)
+    soil = t[t["tyre_model"] == "terramechanics"]
+    rate = soil.groupby(["gravity_m_s2", "terrain"])["success"].mean().mul(100).groupby("gravity_m_s2").mean()
+    return [float(rate[1.62]), float(rate[9.81])]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -188,10 +234,30 @@ SAMPLES = [
                       float((t["tyre_model"] == "terramechanics").sum())]),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
+    Sample("lunar-soil table rows", "lunar-soil",
+           "".join(rf"\| {m} \| {g} \| {a} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| "
+                   + (rf"{_NUM} \([\d.]+\) \| {_NUM} / {_NUM} \([\d./ ]+\) \|\n" if m == "terramechanics"
+                      else r"- \| [^|\n]+ \|\n")
+                   for m, g, a in LUNAR_SOIL_CELLS), _lunar_soil_rows),
+    Sample("lunar-soil success on regolith by gravity", "lunar-soil",
+           rf"more missions succeed \({_NUM} against {_NUM} %", _soil_success_by_gravity),
+    Sample("crater-density successes and medians per density", "crater-density",
+           "".join(rf"\| {c} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| {_NUM} \([\d.]+\) \| "
+                   rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
+           _crater_density_rows),
+    Sample("crater-density failures at c = 0.3", "crater-density",
+           rf"\| 0.3 \| \d+ \(\d+\) \| {_NUM} stuck, {_NUM} timeout, {_NUM} tipped \|",
+           lambda f: _failure_counts(f, "c == 0.3", ("stuck", "timeout", "tipped"))),
+    Sample("crater-density tip-overs at c = 0.3 now", "crater-density", rf"Tip-overs at c = 0.3 fell from \d+ to {_NUM}",
+           lambda f: _failure_counts(f, "c == 0.3", ("tipped",))),
     Sample("majhor2023 successful trials", "majhor2023",
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
            rf"median success rate per terrain \|[^|]*\| {_NUM} / {_NUM} / {_NUM} %", _median_rates),
+    Sample("majhor2023 failures per D", "majhor2023",
+           rf"\| failures \|[^|]*\| stuck {_NUM} / {_NUM} / {_NUM}, timeout {_NUM}, tipped {_NUM} \|",
+           lambda f: [*(float(n) for n in trial_table(f).query("failure_reason == 'stuck'").groupby("D_high").size()),
+                      *_failure_counts(f, "D_high > 0", ("timeout", "tipped"))]),
     Sample("majhor2023 pooled fall 2.45 -> 2.6", "majhor2023", rf"our pooled rate falls {_NUM} points", _pooled_fall),
     Sample("majhor2023 per-terrain correlation and counts", "majhor2023",
            rf"correlates at {_NUM}; going from 2.3 to 2.6,\s+{_NUM} terrains lose success, {_NUM} are unchanged "
