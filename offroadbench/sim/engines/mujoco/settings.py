@@ -55,8 +55,10 @@ class MuJoCoConfig:
     1 / (1 + gain) per step before the torque limit."""
     tyre_loop: str = "auto"
     """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.engines.mujoco._tyres_c,
-    the same forces to the last bit at about a tenth of the cost), ``python`` (the interpreted loop
-    over CoulombBristles) or ``auto`` (compiled when numba is installed, else python)."""
+    the same forces to the last bit at about a tenth of the cost, for vehicles whose wheels hang straight
+    off the chassis), ``python`` (the interpreted loop over CoulombBristles; also the one that follows
+    steering, rocker and bogie joints) or ``auto`` (compiled when numba is installed and the vehicle has
+    no joints but its wheels', else python)."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):

@@ -118,7 +118,12 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             bristle = (len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
                        self._dt_mj if contact.tyres_each_substep else self.dt_s, k, c)
             self._tyres = CoulombBristles(*bristle)
-            tc = _compiled_loop(contact.tyre_loop)
+            if not self._articulated:
+                tc = _compiled_loop(contact.tyre_loop)
+            elif contact.tyre_loop == "compiled":
+                # the compiled loop moves every wheel with the chassis (its axle fixed in the chassis frame)
+                raise InputError(f"MuJoCoConfig.tyre_loop = 'compiled': vehicle {self.spec.name!r} has steering or "
+                                 "suspension joints, which only the Python loop follows; use 'auto' or 'python'")
         if tc is not None:
             slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
             f, ist = tc.new_state(*bristle, self._wheel_bodies, self._wheel_qvel, self._wheel_axis, self._terrain_geom,
