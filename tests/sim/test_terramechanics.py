@@ -271,3 +271,57 @@ def test_soils_on_the_search_path_add_to_and_replace_the_shipped_ones(tmp_path, 
         bad = tmp_path / "bad.toml"
         bad.write_text("[other]\nx = 1\n")
         load_soil(bad)
+
+
+def test_a_towed_wheel_rolls_where_its_soil_torque_vanishes_and_resists():
+    """A wheel without a motor (a rear-wheel-drive car's front wheel) transmits no torque: its pull is
+    the force at the zero-torque slip, found here by scipy from the independent quadrature, and it is
+    negative (the wheel's motion resistance) and smaller in size than the load."""
+    from offroadbench.sim.rigs.soft_soil_check import towed_pull_n
+
+    soil, load_n = load_soil("lunar-regolith"), 26.3  # a quarter of the HUNTER 2.0 in lunar gravity
+
+    def at(s):
+        return _reference(soil, static_sinkage(soil, R, B, load_n, s), s)
+
+    s0 = optimize.brentq(lambda s: at(s)[2], -0.5, 0.5, xtol=1e-10)
+    pull = towed_pull_n(soil, R, B, load_n)
+    assert pull == pytest.approx(at(s0)[1], abs=QUAD_TOL * load_n)
+    assert -load_n < pull < 0.0
+
+
+def test_a_car_with_towed_front_wheels_climbs_less_soft_soil_than_all_wheel_drive():
+    """At the climb limit the two driven wheels' pull and the two towed wheels' resistance balance
+    the weight's component along the grade (soft_soil_check.soil_climb_limit_deg)."""
+    from offroadbench.sim.rigs.soft_soil_check import soil_climb_limit_deg, towed_pull_n
+
+    soil, mass, g, slip = load_soil("lunar-regolith"), 65.0, 1.62, 0.75
+    rwd = soil_climb_limit_deg(soil, R, B, mass, g, slip, 4, 2)
+    awd = soil_climb_limit_deg(soil, R, B, mass, g, slip, 4)
+    assert 0.0 < rwd < awd
+    theta = math.radians(rwd)
+    load = mass * g * math.cos(theta) / 4
+    pull = 2 * float(wheel_forces(soil, R, B, static_sinkage(soil, R, B, load, slip), slip)[1])
+    pull += 2 * towed_pull_n(soil, R, B, load)
+    assert pull == pytest.approx(mass * g * math.sin(theta), abs=1e-6 * mass * g)
+
+
+def test_the_hunter_settles_on_soft_soil_and_drives_on_its_rear_wheels(flat):
+    """HUNTER 2.0 (tyre width 0.14 m) under the terramechanics model: every wheel at the static sinkage
+    of its share of the weight, and it drives forward on its two rear motors."""
+    from offroadbench.sim import SimConfig, World
+    from offroadbench.sim.trial.steering import drive_twist
+
+    sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
+    with World(flat, "hunter", sim) as world:
+        spec = world.spec
+        assert spec.wheel_width_m == pytest.approx(0.14)
+        world.spawn(2.0, 4.0, 0.0)
+        share = world.geometry.mass_kg * 1.62 / len(spec.wheel_joints)
+        expected = static_sinkage(load_soil("lunar-regolith"), spec.wheel_radius_m, spec.wheel_width_m, share)
+        assert world.wheel_penetration_m() == pytest.approx(expected, rel=0.15)
+        x0 = world.base_state()[0][0]
+        for k in range(240):
+            drive_twist(world, min(0.5, 0.5 * k / 60), 0.0)
+            world.step()
+        assert world.base_state()[0][0] - x0 > 0.5  # 1.75 m of tyre travel; it slips (its drawbar pull at 20 % slip is negative)

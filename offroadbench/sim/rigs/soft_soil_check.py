@@ -1,5 +1,11 @@
 """The soft-soil rows of the vehicle check (offroadbench.sim.rigs.vehicle_check): the climb limit
-and the drawbar pull on a deformable soil (lunar regolith at lunar gravity)."""
+and the drawbar pull on a deformable soil (lunar regolith at lunar gravity).
+
+A wheel without a motor (a rear-wheel-drive car's front wheels) is towed: it rolls at the slip where
+its soil torque vanishes (Wong 2008, *Theory of Ground Vehicles*, 4th ed., ch. 2: a towed wheel's
+motion resistance; here the Wong-Reece torque of Ishigami et al. 2007, Eq. 7, set to zero), and its
+drawbar pull there, the negative of its motion resistance, is added to the driven wheels' pull.
+"""
 
 from __future__ import annotations
 
@@ -21,16 +27,39 @@ SOFT_SOIL = "lunar-regolith"
 SOFT_SOIL_GRAVITY_M_S2 = 1.62
 
 
-def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
-                         n_wheels: int = 4) -> float:
-    """Steepest grade on which ``n_wheels`` equally loaded wheels at ``slip`` pull the vehicle's
-    weight component, degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
+def towed_pull_n(soil, radius_m: float, width_m: float, load_n: float) -> float:
+    """Drawbar pull of a towed (undriven) wheel carrying ``load_n``, N (negative: its motion
+    resistance): the Wong-Reece pull at the slip in [-0.5, 0.5] where the wheel's soil torque is zero
+    (module docstring), each slip with the sinkage that carries the load."""
     from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
+
+    def forces(slip: float):
+        h = static_sinkage(soil, radius_m, width_m, load_n, slip)
+        return wheel_forces(soil, radius_m, width_m, h, slip)
+
+    lo, hi = -0.5, 0.5  # the torque rises with the slip: negative when skidding, positive when driving
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(forces(mid)[2]) < 0.0 else (lo, mid)
+    return float(forces(0.5 * (lo + hi))[1])
+
+
+def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
+                         n_wheels: int = 4, n_driven: int | None = None) -> float:
+    """Steepest grade on which ``n_wheels`` equally loaded wheels, ``n_driven`` of them (default all)
+    driven at ``slip`` and the rest towed (:func:`towed_pull_n`), pull the vehicle's weight component,
+    degrees (Wong-Reece drawbar pull at the sinkage carrying ``m g cos / n``)."""
+    from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
+
+    driven = n_wheels if n_driven is None else n_driven
 
     def margin(theta: float) -> float:
         load = mass_kg * g * math.cos(theta) / n_wheels
         h = static_sinkage(soil, radius_m, width_m, load, slip)
-        return n_wheels * float(wheel_forces(soil, radius_m, width_m, h, slip)[1]) - mass_kg * g * math.sin(theta)
+        pull = driven * float(wheel_forces(soil, radius_m, width_m, h, slip)[1])
+        if driven < n_wheels:
+            pull += (n_wheels - driven) * towed_pull_n(soil, radius_m, width_m, load)
+        return pull - mass_kg * g * math.sin(theta)
 
     lo, hi = 0.0, 0.5 * math.pi
     if margin(lo) < 0.0:
@@ -42,17 +71,28 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
 
 
 def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
-    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N."""
+    """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N. With undriven
+    wheels the slip fed back is the driven wheels' ``1 - v / (omega r)`` from the chassis's forward
+    speed ``v`` and their commanded tyre speed ``omega r`` (the engines' mean slip counts the towed
+    wheels too)."""
+    spec = world.spec
+    kinematic = not all(spec.is_driven(w) for w in spec.wheel_joints)
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
     rate = world.sim.physics_rate_hz
     weight = world.geometry.mass_kg * world.sim.gravity_m_s2
     drag, pulls = 0.0, []
     n = int(round(seconds * rate))
     for k in range(n):
-        drive_twist(world, min(0.3, 0.3 * k / rate), 0.0)
+        tyre_speed = min(0.3, 0.3 * k / rate)
+        drive_twist(world, tyre_speed, 0.0)
         world.push_base(-drag, 0.0, 0.0)
         world.step()
         measured = world.wheel_slip()
+        if kinematic and measured is not None:
+            pos, quat, lin, _ = world.base_state()
+            r = world.rotation_matrix(quat)
+            forward = r[0] * lin[0] + r[3] * lin[1] + r[6] * lin[2]
+            measured = 1.0 - forward / tyre_speed if tyre_speed > 0.0 else 0.0
         if measured is not None and k > rate:
             drag = drag + 0.5 * weight * (slip - measured) / rate  # integral feedback (a push if negative)
         if k >= n - 2 * rate:
@@ -79,14 +119,19 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         world.spawn(c, c, 0.0)
         mass = world.geometry.mass_kg
         n = len(spec.wheel_joints)
+        n_driven = sum(spec.is_driven(w) for w in spec.wheel_joints)
         load = mass * g / n
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
         grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
         pull = _tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
-    expected_pull = n * float(wheel_forces(soil, r, b, h20, 0.2)[1])
-    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n)
+    expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
+    towed = ""
+    if n_driven < n:
+        expected_pull += (n - n_driven) * towed_pull_n(soil, r, b, load)
+        towed = f" driven and {n - n_driven} towed"
+    limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n, n_driven)
     mu = spec.wheel_friction * sim.terrain_friction
     return [
         _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
@@ -97,5 +142,5 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
                     bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
                     "within 10 % or 1 % of the weight",
-                    f"{where}; {n} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+                    f"{where}; {n_driven}{towed} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
     ]
