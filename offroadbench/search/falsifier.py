@@ -12,15 +12,16 @@ trials and gives the same proposals again (tests/search/test_runner.py kills and
 * ``falsify`` with ``sampler = "cmaes"``: CMA-ES (Hansen 2016) of the ``cmaes`` package on the
   ranges scaled to [0, 1], its population one batch; the state is rebuilt by replaying every
   earlier generation's ask and tell (the package's generator is seeded, so the replay is exact).
-* ``falsify`` with ``local_step > 0`` (TPE): once a stream has a failure, each batch keeps
+* ``falsify`` with ``local_step > 0`` (TPE): once a stream has a failure (and has run its
+  ``startup_trials``), each batch keeps
   ``explore_slots`` proposals of the optimiser (fresh terrains) and fills the rest by a local
   pattern search (a compass search, Kolda et al. 2003, Sec. 3) around the failures found so far:
   a failure's parameters moved by ``local_step`` of a range along one parameter at a time, on the
-  failure's own terrain and mission seeds, the parameters whose moves kept failures so far first. The operational domain lets
-  the terrain and mission vary, so the falsifier may pick them (the nominal distribution only
-  weighs the P(failure) estimates, which never use the falsifier's trials). A neighbour closer
-  than ``distinct_distance`` to a point already tried on the same terrain is skipped, so with
-  ``local_step >= distinct_distance`` every neighbour that fails is a distinct failure.
+  failure's own terrain and mission seeds, the parameters whose moves kept failures so far first.
+  The operational domain lets the terrain and mission vary, so the falsifier may pick them (the
+  nominal distribution only weighs the P(failure) estimates, which never use the falsifier's
+  trials). A neighbour closer than ``distinct_distance`` to a point already tried on the same
+  terrain is skipped, so a neighbour that fails is distinct from every failure on its terrain.
 * ``random``: nominal draws (plain Monte Carlo).
 * ``ce-is``: cross-entropy stages, then importance sampling from the defensive mixture
   (offroadbench.search.estimators).

@@ -168,9 +168,9 @@ class SearchConfig:
     range (largest difference over the parameters)."""
     local_step: float = 0.0
     """Falsifier: step of the local pattern search around failures, in units of each range (0: off,
-    the optimiser alone). After ``startup_trials``, all but ``explore_slots`` proposals of a batch are
-    neighbours (one parameter moved by this step) of the lowest-margin trials so far, failures first,
-    on that trial's own terrain and mission (offroadbench.search.falsifier). At least ``distinct_distance``, so that a neighbour
+    the optimiser alone). Once the stream has a failure (and ``startup_trials`` are done), all but
+    ``explore_slots`` proposals of a batch are neighbours of its failures (one parameter moved by this
+    step) on the failure's own terrain and mission (offroadbench.search.falsifier). At least ``distinct_distance``, so that a neighbour
     that fails is a distinct failure; TPE only."""
     explore_slots: int = 2
     """Falsifier with ``local_step > 0``: proposals per batch still made by the optimiser on fresh terrains."""
