@@ -351,8 +351,8 @@ def paired(args) -> None:
     print(f"{'variant':12s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} {'rms_az ratio':>12s} "
           f"{'pen_med_mm':>10s}")
     for v in PAIRED:
-        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(base, res[v]))
-        both = [(a, b) for a, b in zip(base, res[v]) if a.success and b.success]
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(base, res[v], strict=True))
+        both = [(a, b) for a, b in zip(base, res[v], strict=True) if a.success and b.success]
         az = np.median([b.rms_vertical_accel_m_s2 / a.rms_vertical_accel_m_s2 for a, b in both]) if both else np.nan
         pen = np.median([1000 * r.max_penetration_m for r in res[v]])
         print(f"{v:12s} {wall['main'] / wall[v]:10.3f} {(wall['main'] / simt['main']) / (wall[v] / simt[v]):9.3f} "
@@ -413,8 +413,8 @@ def engines(args) -> None:
     print(f"{'variant':14s} {'build_s':>7s} {'trial-time':>10s} {'per-sim-s':>9s} {'success':>8s} {'flips':>5s} "
           f"{'rms_az':>7s} {'az ratio':>8s} {'pitch ratio':>11s} {'pen_med_mm':>10s}")
     for n in names:
-        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(res[ref], res[n]))
-        both = [(a, b) for a, b in zip(res[ref], res[n]) if a.success and b.success]
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(res[ref], res[n], strict=True))
+        both = [(a, b) for a, b in zip(res[ref], res[n], strict=True) if a.success and b.success]
         az = np.median([b.rms_vertical_accel_m_s2 / a.rms_vertical_accel_m_s2 for a, b in both]) if both else np.nan
         pr = np.median([b.rms_pitch_rate_deg_s / a.rms_pitch_rate_deg_s for a, b in both]) if both else np.nan
         ok = [r.rms_vertical_accel_m_s2 for r in res[n] if r.success]

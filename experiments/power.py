@@ -47,7 +47,7 @@ def load_pilot() -> pd.DataFrame:
 def per_terrain(pilot: pd.DataFrame, cell: tuple) -> pd.Series:
     """Success rate (percent) per terrain of one cell of the pilot."""
     t = pilot
-    for col, v in zip(COLS, cell):
+    for col, v in zip(COLS, cell, strict=True):
         t = t[np.isclose(t[col], v)] if isinstance(v, float) else t[t[col] == v]
     return 100.0 * (t.set_index("terrain")["successes"] / t.set_index("terrain")["missions"])
 

@@ -97,7 +97,7 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
         if len(args) == 2 and args[1] is Ellipsis:
             return tuple(_coerce(v, args[0], name) for v in value)
         if args and len(args) == len(value):
-            return tuple(_coerce(v, a, name) for a, v in zip(args, value))
+            return tuple(_coerce(v, a, name) for a, v in zip(args, value, strict=True))
         return tuple(value)
     if origin in (types.UnionType, typing.Union):
         for arg in typing.get_args(annotation):

@@ -73,7 +73,7 @@ def test_roughness_study_terrain_j_is_generate_with_the_shown_seed(tmp_path, mon
     recipe = apply_overrides(load_recipe("paper-d2.45"), SMALL)
     table = roughness.roughness_study(recipe, [2.3, 2.6], 2, seed=7, roughness=roughness.RoughnessConfig(border_m=0.5))
     assert list(table["terrain_seed"]) == [seeding.terrain_seed(7, j) for j in (0, 1)] * 2
-    for (seed, hm), row in zip(built, table.itertuples()):
+    for (seed, hm), row in zip(built, table.itertuples(), strict=True):
         assert seed == row.terrain_seed
         again = generate_terrain(apply_overrides(recipe, {"layers.base.D_high": row.D}), row.terrain_seed)
         assert np.array_equal(again.z, hm.z)  # bit for bit

@@ -69,7 +69,7 @@ def soil_check_json(rig, model, gravity_m_s2: float, published=()) -> str:
     rows = [{"slip": float(s), "sinkage_m": float(h), "model_sinkage_m": float(mh), "drawbar_pull_n": float(f),
              "model_drawbar_pull_n": float(mf), "torque_nm": float(t), "model_torque_nm": float(mt)}
             for s, h, mh, f, mf, t, mt in zip(rig.slip, rig.sinkage_m, model.sinkage_m, rig.drawbar_pull_n,
-                                              model.drawbar_pull_n, rig.torque_nm, model.torque_nm)]
+                                              model.drawbar_pull_n, rig.torque_nm, model.torque_nm, strict=True)]
     return json.dumps({"soil": rig.soil, "wheel_radius_m": rig.radius_m, "wheel_width_m": rig.width_m,
                        "load_n": rig.load_n, "gravity_m_s2": gravity_m_s2, "rows": rows,
                        "largest_difference_fraction": _worst(rig, model), "published": list(published)}, indent=1)

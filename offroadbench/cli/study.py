@@ -241,12 +241,12 @@ def cmd_export(args: argparse.Namespace) -> int:
     # all or nothing: both tables replace the old ones together (io.atomic.atomic_paths), so a
     # killed export never leaves a new trials table beside an old terrains table
     with created_dirs(out), atomic_paths(paths) as temps:
-        for (_, df), tmp in zip(tables, temps):
+        for (_, df), tmp in zip(tables, temps, strict=True):
             if args.format == "csv":
                 df.to_csv(tmp, index=False)
             else:
                 df.to_parquet(tmp, index=False)
-    for path, (_, df) in zip(paths, tables):
+    for path, (_, df) in zip(paths, tables, strict=True):
         print(f"{path} ({len(df)} rows)")
     return 0
 

@@ -204,10 +204,10 @@ def atomic_paths(paths: list[str | Path]) -> Iterator[list[Path]]:
         current = journal
         with atomic_path(journal) as jtmp:
             with open(jtmp, "w") as fh:
-                json.dump([[tmp.name, t.name] for tmp, t in zip(temps, targets)], fh)
+                json.dump([[tmp.name, t.name] for tmp, t in zip(temps, targets, strict=True)], fh)
                 fh.flush()
                 os.fsync(fh.fileno())
-        for tmp, t in zip(temps, targets):  # committed: from here on a kill is completed later
+        for tmp, t in zip(temps, targets, strict=True):  # committed: from here on a kill is completed later
             current = t
             os.replace(tmp, t)
         journal.unlink(missing_ok=True)

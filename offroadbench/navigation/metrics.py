@@ -147,12 +147,12 @@ def percentile(values, q: float) -> float:
 
 def mean_where(values, mask) -> float:
     """Mean of the finite ``values`` where ``mask`` holds (``math.fsum``); NaN when none."""
-    v = [x for x, m in zip(np.asarray(values, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist())
+    v = [x for x, m in zip(np.asarray(values, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist(), strict=True)
          if m and math.isfinite(x)]
     return math.fsum(v) / len(v) if v else float("nan")
 
 
 def sinkage_summary(sinkage_m, mask) -> tuple[float, float]:
     """(median, 95th percentile) of the sinkage samples where ``mask`` holds, m; NaN when none."""
-    v = [x for x, m in zip(np.asarray(sinkage_m, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist()) if m]
+    v = [x for x, m in zip(np.asarray(sinkage_m, dtype=float).tolist(), np.asarray(mask, dtype=bool).tolist(), strict=True) if m]
     return percentile(v, 50.0), percentile(v, 95.0)

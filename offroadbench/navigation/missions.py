@@ -20,11 +20,17 @@ from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["MissionConfig", "Mission", "sample_missions", "sample_mission"]
+__all__ = ["MissionConfig", "Mission", "NoMissionError", "sample_missions", "sample_mission"]
 
 #: candidates drawn per vectorised batch while sampling
 _BATCH = 256
 
+
+
+class NoMissionError(InputError):
+    """This terrain admits no mission under the rules (no start cell, or no goal found within the
+    tries): a property of the drawn terrain, not of the settings. ``drive`` reports it as bad input
+    (one line); a study stores the terrain's trials as faults (offroadbench.study.tasks.run_terrain)."""
 
 @dataclass(frozen=True, kw_only=True)
 class MissionConfig:
@@ -107,8 +113,9 @@ def sample_missions(
     inside = border_mask(hm.shape, cfg.border_m, cell)
     starts = np.flatnonzero(_class_mask(classes, cfg.start_classes) & inside)
     if starts.size == 0:
-        raise InputError(
-            f"no start cell: no {'/'.join(cfg.start_classes)} cell lies at least {cfg.border_m:g} m from the map edge"
+        raise NoMissionError(
+            f"no start cell: no {'/'.join(cfg.start_classes)} cell lies at least {cfg.border_m:g} m from the map edge "
+            "in the class map after its morphological closing"
         )
     goal_ok = _class_mask(classes, cfg.goal_classes) & inside
 
@@ -139,7 +146,7 @@ def sample_missions(
                     float(heading[j]),
                 )
         if found is None:
-            raise InputError(
+            raise NoMissionError(
                 f"could not place mission {index} after {cfg.max_tries} tries: no {'/'.join(cfg.goal_classes)} "
                 f"goal {cfg.length_m:g} m from a {'/'.join(cfg.start_classes)} start inside the {cfg.border_m:g} m border"
             )

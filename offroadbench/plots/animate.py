@@ -157,7 +157,7 @@ class TrialView:
         self._extent = extent
         self._strips = [fig.add_subplot(grid[i, 1]) for i in range(3)]
         labels = ("speed (m/s)", "angle (deg)", "vertical accel. (m/s^2)")
-        for sub, label in zip(self._strips, labels):
+        for sub, label in zip(self._strips, labels, strict=True):
             sub.set_ylabel(label, fontsize=8)
             sub.grid(alpha=0.3)
             sub.tick_params(labelsize=7)
@@ -224,7 +224,7 @@ class TrialView:
         t_max = max(self.t_max_s or 0.0, 1.03 * t_end, 1e-3)  # room for the failure line at the end
         self._strips[-1].set_xlim(0.0, t_max)
         groups = (("speed_m_s", "cmd_v_m_s"), ("pitch_deg", "roll_deg"), ("az_m_s2",))
-        for sub, keys in zip(self._strips, groups):
+        for sub, keys in zip(self._strips, groups, strict=True):
             vals = np.concatenate([s[k][np.isfinite(s[k])] for k in keys if k in s] or [np.zeros(1)])
             lo, hi = (float(vals.min()), float(vals.max())) if vals.size else (0.0, 1.0)
             if keys[0] == "speed_m_s":

@@ -33,7 +33,7 @@ def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapp
     lines = [f"{g}: {conditions_text(c)}" for g, c in (conditions or {}).items()]
     height = (6.0 if many else 3.6) + 0.16 * len(lines)
     fig, axes = new_figure(1, len(metrics), figsize=(5.0 * len(metrics), height))
-    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items()):
+    for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items(), strict=True):
         _bxp(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Soft soil: every trial (successful or not); slip and sinkage over the moving samples", fontsize=10)
     if lines:

@@ -69,10 +69,10 @@ def fig_class_areas(summary: pd.DataFrame):
     """Fig. 5: median area of each class per group (bars)."""
     fig, axes = new_figure(1, 3, figsize=(10, 3.4))
     x = np.arange(len(summary))
-    for ax, cls, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS):
+    for ax, cls, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS, strict=True):
         ax.bar(x, summary[f"median_area_{cls}_pct"], color=colour, edgecolor="black")
         n = summary["terrains"] if "terrains" in summary else [None] * len(summary)
-        ax.set_xticks(x, [short_label(g) + ("" if k is None else f"\nn={int(k)}") for g, k in zip(summary["group"], n)],
+        ax.set_xticks(x, [short_label(g) + ("" if k is None else f"\nn={int(k)}") for g, k in zip(summary["group"], n, strict=True)],
                       fontsize=8)
         ax.set_title(f"{cls} roughness", fontsize=10)
         ax.set_ylabel("median area (%)")
@@ -96,7 +96,7 @@ def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: M
     -> (title, unit) for the four panels."""
     many = max((len(b) for b in boxes.values()), default=0) > 4  # rotated labels need room
     fig, axes = new_figure(2, 2, figsize=(11, 10) if many else (9, 6.4))
-    for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items()):
+    for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items(), strict=True):
         _bxp(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Successful trials only", fontsize=10)
     return fig
@@ -111,7 +111,7 @@ def fig_missions(hm, classes: np.ndarray, closed: np.ndarray, border_m: float, t
     """
     fig, axes = new_figure(1, 3, figsize=(13, 5.0))
     titles = ("(a) roughness classes", "(b) closed, with the border", "(c) missions")
-    for ax, data, sub in zip(axes, (classes, closed, closed), titles):
+    for ax, data, sub in zip(axes, (classes, closed, closed), titles, strict=True):
         draw_classes(ax, data, hm.extent_m)
         ax.set_title(sub, fontsize=10)
         ax.set_xlabel("x (m)")
@@ -204,7 +204,9 @@ def fig_paths(hm, closed: np.ndarray, border_m: float, mission, drawn, *, title:
     draw_border(ax, hm.extent_m, border_m, edgecolor="white", linestyle="-", linewidth=1.0,
                 label=f"mission border ({border_m:g} m)")
     colours = ("white", "black", "magenta", "cyan", "lime", "red")
-    for (label, planned, driven, outcome), colour in zip(drawn, colours):
+    # strict=False: six colours, so the first six paths are drawn (a planner study has at most five arms);
+    # fewer paths leave colours unused
+    for (label, planned, driven, outcome), colour in zip(drawn, colours, strict=False):
         if planned is not None:
             ax.plot(planned[:, 0], planned[:, 1], color=colour, lw=1.2, ls="--")
         if driven is not None:

@@ -66,7 +66,7 @@ def draw_border(ax, extent_m, border_m: float, **style) -> None:
 def class_legend_handles(fractions: dict[str, float] | None = None) -> list[Patch]:
     """Legend patches for the three classes, optionally labelled with their area fractions."""
     handles = []
-    for name, colour in zip(CLASS_NAMES, CLASS_COLOURS):
+    for name, colour in zip(CLASS_NAMES, CLASS_COLOURS, strict=True):
         label = name if fractions is None else f"{name} {100 * fractions[name]:.1f} %"
         handles.append(Patch(facecolor=colour, edgecolor="k", label=label))
     return handles

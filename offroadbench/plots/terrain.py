@@ -58,7 +58,7 @@ def plot_roughness_study(summary: pd.DataFrame, paper_changes: dict[str, tuple[f
     """Bar charts of the median low / semi / high area per D (the paper's Fig. 5)."""
     fig, axes = new_figure(1, 3, figsize=(12, 4))
     labels = [f"{d:g}" for d in summary["D"]]
-    for ax, name, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS):
+    for ax, name, colour in zip(axes, CLASS_NAMES, CLASS_COLOURS, strict=True):
         vals = summary[f"median_{name}_pct"].to_numpy()
         bars = ax.bar(labels, vals, color=colour, edgecolor="k")
         ax.bar_label(bars, fmt="%.1f", fontsize=8)

@@ -71,7 +71,7 @@ def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telem
         ax.imshow(grey, origin="lower", extent=hm.extent_m, interpolation="nearest")
         for b in beliefs.values():
             ax.plot(b.trail_xy[:, 0], b.trail_xy[:, 1], color="royalblue", linewidth=1.2, linestyle="--", zorder=5)
-    for m, r in zip(missions, results):
+    for m, r in zip(missions, results, strict=True):
         (sx, sy), (gx, gy) = m.start_xy_m, m.goal_xy_m
         wp = (paths or {}).get(m.index)
         px, py = ([sx, gx], [sy, gy]) if wp is None else (wp[:, 0], wp[:, 1])

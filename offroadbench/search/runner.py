@@ -49,7 +49,7 @@ from offroadbench.search.objective import failure_margin
 from offroadbench.search.plan import SearchPlan, trial_cell
 from offroadbench.study.spec import CellPlan
 from offroadbench.study.store import RunLock, Store, remove_stale_temp_files
-from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFn
+from offroadbench.study.tasks import NO_MISSION_FAULT, TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn
 
 log = logging.getLogger(__name__)
 
@@ -307,10 +307,19 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
                 tasks.append(TerrainTask(cell=c, terrain=0, terrain_seed=tseed, missions=((0, mseed),),
                                          telemetry=plan.study.telemetry))
 
-        def handle(msg: TerrainBuilt | TrialDone) -> None:
+        def handle(msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
             nonlocal ran
             if isinstance(msg, TerrainBuilt):
                 store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
+                return
+            if isinstance(msg, TrialFaulted):
+                if msg.reason.startswith(NO_MISSION_FAULT):  # the proposal's terrain holds no mission
+                    log.info("cell %d: %s; stored as %s", msg.cell, msg.reason, NO_MISSION)
+                    store.add_trial(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed,
+                                    no_mission_row(msg.reason.removeprefix(NO_MISSION_FAULT)), run_id=run_id)
+                else:
+                    store.add_fault(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed,
+                                    msg.reason, run_id=run_id)
                 return
             files: list[str] = []
             if msg.kept is not None and not store.has_trial(msg.cell, msg.terrain, msg.mission):

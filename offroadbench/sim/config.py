@@ -69,6 +69,17 @@ class SimConfig:
     friction is 0 and the cone's rows for their contacts are wasted solver work (about 17 % of
     the solver's time; the chassis' contacts then get Bullet's friction pyramid), and keeps it on
     under the other tyre models. ``True`` / ``False`` force it (benchmarks/RESULTS.md, 'Cone friction')."""
+    drive_train_reaction: str | None = None
+    """What the chassis feels of the wheels' drive-train spin inertia on PyBullet
+    (offroadbench.sim.engines.pybullet.drivetrain): ``gear`` only the tyre's own inertia and the
+    ground's torque react on the chassis, as through a gearbox and as MuJoCo's joint armature
+    models it (the drive train's inertia sits on a grounded flywheel geared to the wheel); ``link``
+    the whole ``wheel_spin_inertia_kg_m2`` sits on the wheel link and reacts in full (the model
+    before 2026-11-26: it reared the Husky up 45 deg at launch in lunar gravity). None (default):
+    ``gear``, except under the ``bullet`` tyre model, whose heading-independent turning needs the
+    heavy wheel link in Bullet's own friction solve (offroadbench.sim.engines.pybullet.tyres: with
+    ``gear`` a turn in place reaches 0.62 of its command at heading 0). MuJoCo's armature is always
+    ``gear``."""
     engine: str = "pybullet"
     """Physics engine (offroadbench.sim.engine.ENGINES): ``pybullet`` (the paper's set-up, the
     default) or ``mujoco`` (offroadbench.sim.engines.mujoco.world; ``pip install 'offroadbench[mujoco]'``).
@@ -100,12 +111,24 @@ class SimConfig:
         check_range(self, "terrain_friction", self.terrain_friction, lo=0, lo_open=True)
         check_choice(self, "tyre_model", self.tyre_model, TYRE_MODELS)
         check_choice(self, "engine", self.engine, ENGINES.names())
+        if self.drive_train_reaction is not None:
+            check_choice(self, "drive_train_reaction", self.drive_train_reaction, ("gear", "link"))
+        if self.drive_train_reaction == "link" and self.engine != "pybullet":
+            raise InputError(f"SimConfig.drive_train_reaction = 'link' is a PyBullet model; engine {self.engine!r} "
+                             "always uses 'gear' (its joint armature)")
         models = engine_capabilities(self.engine).tyre_models  # the engine's own declaration
         if self.tyre_model not in models:
             raise InputError(f"SimConfig.tyre_model = {self.tyre_model!r} is not implemented on engine "
                              f"{self.engine!r}; allowed there: {', '.join(models)}")
         if self.cone_friction is not None and not isinstance(self.cone_friction, bool):
             raise InputError(f"SimConfig.cone_friction = {self.cone_friction!r}: allowed true, false or unset")
+
+    @property
+    def drive_train(self) -> str:
+        """The drive-train reaction model in force (:attr:`drive_train_reaction` resolved)."""
+        if self.drive_train_reaction is not None:
+            return self.drive_train_reaction
+        return "link" if self.tyre_model == "bullet" else "gear"
 
     def for_terrain(self, gravity_m_s2: float | None = None, soil: str | None = None) -> SimConfig:
         """This config with the terrain's gravity and soil where it leaves them open (None), and
@@ -158,4 +181,4 @@ def tile_spans(cells: int, tile_cells: int) -> list[tuple[int, int]]:
     ``tile_cells = 0`` gives one tile."""
     n = 1 if tile_cells == 0 else max(1, -(-cells // tile_cells))
     edges = [round(i * cells / n) for i in range(n + 1)]
-    return list(zip(edges[:-1], edges[1:]))
+    return list(zip(edges[:-1], edges[1:], strict=True))

@@ -280,7 +280,7 @@ class TraverseEnv(gym.Env):
         self._goal = np.asarray(m.goal_xy_m, dtype=float)
         s = self.settings
         # an agent drives: the trial's nominal length is the mission's (as for a policy in the runner)
-        self._loop = loop = TrialLoop(world, m, length_m=m.length_m, controller=s.controller, rules=s.rules)
+        self._loop = loop = TrialLoop(world, m, s, length_m=m.length_m)
         loop.record(self._progress)  # the start; a rule firing here ends the first step
         self._ended = False
         state = self._read_state()

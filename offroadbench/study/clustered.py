@@ -370,7 +370,7 @@ def isotonic_decreasing(y: Sequence[float], w: Sequence[float] | None = None) ->
     y = np.asarray(y, float)
     w = np.ones_like(y) if w is None else np.asarray(w, float)
     blocks: list[list[float]] = []  # [weighted mean, weight, count]
-    for v, wt in zip(y, w):
+    for v, wt in zip(y, w, strict=True):
         blocks.append([v, wt, 1])
         while len(blocks) > 1 and blocks[-2][0] < blocks[-1][0]:
             m2, w2, c2 = blocks.pop()

@@ -11,6 +11,7 @@ non-default planner, another gravity).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import pandas as pd
@@ -32,17 +33,26 @@ _SHOWN = (
 
 
 def _sections(meta: dict[str, Any], cell: int = 0) -> dict[str, Any]:
-    from offroadbench.study.spec import SECTIONS, build_section
+    """The cell's settings by part, as its trials ran: read from the store (CellPlan.from_meta; a
+    store made before they were kept rebuilds them from the tables there), the sim on the terrain."""
+    from offroadbench.study.spec import SECTIONS, CellPlan
 
-    info = meta["cells"][cell]
-    out = {}
-    for name in SECTIONS:
-        try:
-            out[name] = build_section(name, info["settings"].get(name, {}), where=f"cell {cell} [{name}]")
-        except Exception:  # noqa: BLE001  (a vehicle or plug-in of the run missing here: show the raw table)
-            out[name] = dict(info["settings"].get(name, {}))
-    out["sim"] = _on_terrain(out["sim"], info.get("recipe"))
+    plan = CellPlan.from_meta(meta, cell)
+    try:
+        settings = plan.trial_settings
+        out = {name: getattr(settings, name) for name in SECTIONS}
+    except Exception:  # noqa: BLE001  (a vehicle or plug-in of the run missing here: part by part)
+        out = {name: _part_or_table(plan, name) for name in SECTIONS}
+    out["sim"] = _on_terrain(out["sim"], plan.recipe_data)
     return out
+
+
+def _part_or_table(plan: Any, name: str) -> Any:
+    """One part of a cell's settings, or, where it does not build here, its raw table."""
+    try:
+        return plan.part(name)
+    except Exception:  # noqa: BLE001
+        return dict(plan.settings.get(name, {}))
 
 
 def _on_terrain(sim: Any, recipe: Any) -> Any:
@@ -73,10 +83,14 @@ def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
             "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity)}
 
 
+@functools.lru_cache(maxsize=None)
 def _default(name: str) -> Any:
-    from offroadbench.study.spec import build_section
+    """The package default of a settings part (TrialSettings' field default; sim, controller,
+    missions, rules), made once."""
+    from offroadbench.sim.trial.pipeline import TrialSettings
 
-    cfg = build_section(name, {}, where="defaults")
+    f = {f.name: f for f in dataclasses.fields(TrialSettings)}[name]
+    cfg = f.default if f.default is not dataclasses.MISSING else f.default_factory()
     return _on_terrain(cfg, None) if name == "sim" else cfg
 
 

@@ -232,7 +232,7 @@ def trial_table_html(trials: pd.DataFrame, replays: Sequence[ReplayMedia], run_d
     header = [*cols, "replay"]
     rows = []
     for rec in trials[cols].itertuples(index=False):
-        row = dict(zip(cols, rec))
+        row = dict(zip(cols, rec, strict=True))
         cells = [_cell_text(row[c]) for c in cols]
         key = (int(row.get("cell", -1)), int(row.get("terrain", -1)), int(row.get("mission", -1)))
         failed = "success" in row and not bool(row["success"])

@@ -152,7 +152,7 @@ def _platforms_section(run_dir: str | Path, meta: dict[str, Any]) -> tuple[list[
 def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
     succ = pd.DataFrame({
         "group": summary["group"], "terrains": summary["terrains"],
-        "successes / trials": [f"{s} / {t}" for s, t in zip(summary["successes"], summary["trials"])],
+        "successes / trials": [f"{s} / {t}" for s, t in zip(summary["successes"], summary["trials"], strict=True)],
         "median success rate (%)": summary["median_success_rate_pct"],
         "IQR (%)": summary["iqr_success_rate_pct"], "outliers": summary["outliers_success_rate_pct"],
     })
@@ -295,7 +295,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
             changes = stats.median_change_intervals(trials, terrains, changes, labels)
         for side in ("from", "to"):  # the sample size behind each median
             changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
-                                    for g, q in zip(changes[side], changes["quantity"])]
+                                    for g, q in zip(changes[side], changes["quantity"], strict=True)]
         tables["median_changes.csv"] = changes
         small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
         lines += ["## Changes of the medians between consecutive groups", "",

@@ -127,7 +127,7 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
            "interval (distinct resamples beside it), terrains up / down, Wilcoxon signed-rank and exact sign-flip p"
            if paired else "per-terrain values of independent groups: difference of means with a bootstrap interval, "
            "Mann-Whitney U p (in the p_wilcoxon column)")
-    shown = tab.assign(step=[f"{short_label(a, True)} → {short_label(b, True)}" for a, b in zip(tab["from"], tab["to"])])
+    shown = tab.assign(step=[f"{short_label(a, True)} → {short_label(b, True)}" for a, b in zip(tab["from"], tab["to"], strict=True)])
     shown = shown[["quantity", "step", *[c for c in tab.columns if c not in ("quantity", "from", "to")]]]
     text = (f"The terrain is the unit ({how}); `p_holm` is Holm's adjustment over every row of this table, "
             "`significant` = p_holm < 0.05. Success rate and areas in points, metrics as per-terrain medians "
@@ -150,7 +150,7 @@ def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: 
     tab = confirmatory_table(plan, meta, trials, terrains)
     rule = {"holm": "Holm's step-down adjustment", "bonferroni": "Bonferroni's adjustment"}[plan.multiplicity]
     shown = tab.assign(**{f"{100 * plan.confidence:g} % interval": [f"[{a:.3g}, {b:.3g}]" for a, b in
-                                                                   zip(tab["ci_low"], tab["ci_high"])]})
+                                                                   zip(tab["ci_low"], tab["ci_high"], strict=True)]})
     shown = shown[["comparison", "metric", "stratum", "terrains", "control_mean", "treatment_mean", "effect",
                    f"{100 * plan.confidence:g} % interval", "test", "p", "min_p", "p_adjusted", "reject"]]
     rejected = int(tab["reject"].sum())

@@ -97,7 +97,7 @@ def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: 
     how it changes with, e.g., the planner map's error or the band limit."""
     p = paired[paired[level] != "all"].copy()
     p["cell"] = [f"{d:+.0f} [{lo:+.0f}, {hi:+.0f}]{' *' if sig else ''}" for d, lo, hi, sig in
-                 zip(p["terrain_diff_pct"], p["terrain_ci95_low"], p["terrain_ci95_high"], p["significant"])]
+                 zip(p["terrain_diff_pct"], p["terrain_ci95_low"], p["terrain_ci95_high"], p["significant"], strict=True)]
     wide = p.pivot_table(index=[group, *strata], columns=level, values="cell", aggfunc="first").reset_index()
     wide.columns = [str(c) if c in (group, *strata) else f"{level} = {c}" for c in wide.columns]
     return ["### Advantage over the baseline per " + " and ".join(f"`{c}`" for c in strata), "",
@@ -181,7 +181,7 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
         for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
             name = f"planner_success_{i}.png" if strata else "planner_success.png"
             figures[name] = fig = fig_success_vs_level(part, group, level)
-            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,)))
+            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,), strict=True))
             if where:
                 fig.axes[0].set_title(f"Success per planner, {where} (95 % terrain bootstrap)", fontsize=10)
             figs.append(f"![success{': ' + where if where else ''}]({name})")
@@ -194,10 +194,10 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
         levels = sorted(trials[level].unique())
         bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
             stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
-            zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"])],
+            zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"], strict=True)],
             "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"],
             "logistic (comparison only)": [("–" if math.isnan(v) else f"{v:.3f}" + (" (extrapolated)" if e else ""))
-                                           for v, e in zip(bp["logistic_point"], bp["logistic_extrapolated"])],
+                                           for v, e in zip(bp["logistic_point"], bp["logistic_extrapolated"], strict=True)],
             "Fieller set": bp["fieller_set"], "logistic fit p": bp["logistic_gof_p"]})
         lines += ["### Success against " + level, "", *figs, "",
                   markdown_table(shown), "",

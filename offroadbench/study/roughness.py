@@ -50,7 +50,7 @@ def roughness_study(
     seeds = [terrain_seed(seed, j) for j in range(terrains)]
     rows = []
     total = len(dims) * terrains
-    for i, (d, rec) in enumerate(zip(dims, recipes)):
+    for i, (d, rec) in enumerate(zip(dims, recipes, strict=True)):
         for j, tseed in enumerate(seeds):
             hm = generate_terrain(rec, tseed)
             frac = class_fractions(classify(hm, roughness), hm.cell_size_m, roughness.border_m)

@@ -275,6 +275,7 @@ def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "",
                 "seed_key": p.key,
                 "recipe": dict(p.recipe_data),
                 "settings": {k: dict(v) for k, v in p.settings.items()},
+                "trial_settings": p.trial_settings.to_dict(),  # resolved; the report reads them (CellPlan.from_meta)
                 **({"missions_recipe": dict(p.missions_recipe_data)} if p.missions_recipe_data is not None else {}),
                 "files": driver_files(p.trial_settings.planner),  # e.g. a policy's model: path, size, SHA-256
             }

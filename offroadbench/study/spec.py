@@ -44,14 +44,17 @@ from __future__ import annotations
 
 import functools
 import itertools
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from offroadbench.config import check_int, config_id, load_toml, to_dict
 from offroadbench.errors import InputError
-from offroadbench.sim.trial.pipeline import SETTINGS_TABLES, TrialSettings
+from offroadbench.sim.trial.pipeline import SETTINGS_TABLES, TrialSettings, settings_part
 from offroadbench import seeding
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "SECTIONS",
@@ -198,7 +201,7 @@ class StudyConfig:
         """Table column of each grid key: its last part, or the full key if that is ambiguous."""
         lasts = [a.key.split(".", 1)[0] if a.key in _NAME_KEYS else a.key.rsplit(".", 1)[-1] for a in self.grid]
         out = {}
-        for axis, last in zip(self.grid, lasts):
+        for axis, last in zip(self.grid, lasts, strict=True):
             ok = lasts.count(last) == 1 and last not in RESERVED_COLUMNS
             out[axis.key] = last if ok else axis.key
         return out
@@ -206,7 +209,7 @@ class StudyConfig:
     def cell_values(self) -> list[dict[str, Any]]:
         """Grid values of every cell ({grid key: value}), first axis slowest."""
         keys = [a.key for a in self.grid]
-        return [dict(zip(keys, combo)) for combo in itertools.product(*(a.values for a in self.grid))]
+        return [dict(zip(keys, combo, strict=True)) for combo in itertools.product(*(a.values for a in self.grid))]
 
 
 def _check_axis(axis: GridAxis) -> None:
@@ -241,13 +244,19 @@ class CellPlan:
     missions_recipe_data: Mapping[str, Any] | None = None
     """The recipe (TOML dict) of the terrain its missions are drawn on, when that is another cell's
     (``[study] missions_from``); None: its own terrain."""
+    stored_settings: Mapping[str, Any] | None = field(default=None, compare=False, repr=False)
+    """The cell's TrialSettings as a run's store recorded them when the study was created
+    (:meth:`TrialSettings.to_dict`, ``meta.cells[i].trial_settings``; set by :meth:`from_meta`);
+    None: built from :attr:`settings` (a study file's plan, or a store made before they were kept)."""
 
     @classmethod
     def from_meta(cls, meta: Mapping[str, Any], index: int) -> "CellPlan":
-        """Cell ``index`` as a run directory's stored meta data holds it (``Store.meta()``)."""
+        """Cell ``index`` as a run directory's stored meta data holds it (``Store.meta()``), with the
+        settings the store recorded, where it did."""
         info = meta["cells"][index]
         return cls(index=index, values=info["values"], key=info["seed_key"], recipe_data=info["recipe"],
-                   settings=info["settings"], missions_recipe_data=info.get("missions_recipe"))
+                   settings=info["settings"], missions_recipe_data=info.get("missions_recipe"),
+                   stored_settings=info.get("trial_settings"))
 
     def missions_recipe(self):
         """The recipe whose terrain the cell's missions are drawn on (None: the cell's own)."""
@@ -264,8 +273,12 @@ class CellPlan:
 
     @functools.cached_property
     def trial_settings(self) -> TrialSettings:
-        """The cell's :class:`~offroadbench.sim.trial.pipeline.TrialSettings`, built once (``vehicle.toml``
-        read once) and kept with the plan."""
+        """The cell's :class:`~offroadbench.sim.trial.pipeline.TrialSettings`, made once and kept with
+        the plan: read from :attr:`stored_settings` where the store kept them, else built from the
+        tables (``vehicle.toml`` read once); :meth:`_stored` decides which."""
+        stored = self._stored()
+        if stored is not None:
+            return TrialSettings.from_dict(stored, where=f"cell {self.index} (stored settings)")
         return TrialSettings.from_tables(self.settings, where=f"cell {self.index}")
 
     def section(self, name: str):
@@ -273,6 +286,29 @@ class CellPlan:
         if name not in SECTIONS:
             raise InputError(f"cell {self.index}: unknown settings table {name!r}; known: {', '.join(SECTIONS)}")
         return getattr(self.trial_settings, name)
+
+    def part(self, name: str):
+        """One part of the settings alone, read or built as :attr:`trial_settings` would (for a
+        report that shows each part that still builds here, e.g. without a run's plug-in)."""
+        stored = self._stored()
+        if stored is not None:
+            return settings_part(name, stored.get(name), where=f"cell {self.index} (stored settings)")
+        return build_section(name, self.settings.get(name, {}), where=f"cell {self.index} [{name}]")
+
+    def _stored(self) -> Mapping[str, Any] | None:
+        """The stored settings to use, or None to build them from the tables: the one place a
+        report falls back to rebuilding. The tables serve a plan without stored settings, and one
+        whose recorded vehicle model file is not on this machine (a run directory copied from
+        elsewhere: a replay must load the URDF; the tables find the vehicle by name)."""
+        stored = self.stored_settings
+        if stored is None:
+            return None
+        urdf = (stored.get("vehicle") or {}).get("urdf")
+        if not (isinstance(urdf, str) and Path(urdf).is_file()):
+            log.info("cell %d: the stored vehicle model %s is not here; settings built from the study's tables",
+                     self.index, urdf)
+            return None
+        return stored
 
 
 def build_section(name: str, table: Mapping[str, Any], where: str):

@@ -3,8 +3,11 @@
 Tables (``study.sqlite``):
 
 * ``meta(key, value)``: the study config (JSON and the TOML text it came from), the study id,
-  the resolved grid cells (recipe data, settings, seed keys), the package version that created
-  the store.
+  the resolved grid cells (recipe data, settings tables, seed keys, and each cell's resolved
+  ``trial_settings``: offroadbench.sim.trial.pipeline.TrialSettings.to_dict, recorded when the
+  store is made, read by the report through ``CellPlan.from_meta``; a store made before they were
+  kept has none, and its cells' settings are built from the tables), the package version that
+  created the store.
 * ``terrains(cell, terrain, terrain_seed, stats)``: one row per built terrain; ``stats`` is JSON
   (class area fractions of Sec. 2.4, missions sampled, build time).
 * ``trials(cell, terrain, mission, terrain_seed, mission_seed, success, row, telemetry, run_id)``:
@@ -18,7 +21,9 @@ Tables (``study.sqlite``):
 Schema versions. 1: the tables above without ``trials.telemetry``, ``trials.run_id`` and
 ``runs.platform`` and ``runs.error``. 2: with them (``error``: the one-line reason a failed
 session stopped, e.g. a plug-in fault). A run (``Store(..., create=True)``) migrates a schema-1 store in
-place (three ``ALTER TABLE ... ADD COLUMN``, in one transaction); readers accept both.
+place (three ``ALTER TABLE ... ADD COLUMN``, in one transaction); readers accept both. The
+cells' ``trial_settings`` are a meta value, not a schema change: any schema-2 reader opens a store
+with or without them.
 
 Safety. Only the coordinating process writes, and only while it holds the run directory's lock
 (:class:`RunLock`: ``fcntl.flock`` on ``study.lock``, released by the kernel when the process
@@ -336,7 +341,7 @@ class Store:
         or when it ran on this host and the run directory's lock names no live process."""
         cur = self.con.execute("SELECT * FROM runs ORDER BY id")
         names = [d[0] for d in cur.description]
-        out = [dict(zip(names, r)) for r in cur.fetchall()]
+        out = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
         for r in out:  # the fingerprint as a dict (None in sessions of schema-1 stores)
             r["platform"] = json.loads(r["platform"]) if r.get("platform") else None
         for i, r in enumerate(out):

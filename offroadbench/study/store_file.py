@@ -138,7 +138,7 @@ def _check_existing(path: Path) -> None:
     except sqlite3.DatabaseError as exc:
         raise InputError(f"{path}: is corrupt or not a study store ({exc})") from None
     finally:
-        for q, was in zip(sides, existed):
+        for q, was in zip(sides, existed, strict=True):
             if not was:
                 q.unlink(missing_ok=True)
 

@@ -64,7 +64,7 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
 
 def first_level_below(levels: Sequence[float], rates: Sequence[float], threshold: float = 0.5) -> float:
     """The first studied level whose rate is below ``threshold`` (``+inf`` if none is); no interpolation."""
-    for x, y in zip(levels, rates):
+    for x, y in zip(levels, rates, strict=True):
         if y < threshold:
             return float(x)
     return math.inf
@@ -96,7 +96,7 @@ def success_by_level(trials: pd.DataFrame, group: str, level: str, by: Sequence[
         per = t.groupby("terrain")["success"].agg(["sum", "size"]).to_numpy(float)
         boot = cluster_bootstrap(per, lambda v: v[:, 0].sum() / v[:, 1].sum(), rng, n_boot)
         lo, hi = wilson_interval(k, n)
-        rows.append({**dict(zip(keys, vals)), "trials": n, "successes": k, "terrains": len(per),
+        rows.append({**dict(zip(keys, vals, strict=True)), "trials": n, "successes": k, "terrains": len(per),
                      "success_rate": k / n, "ci95_low": boot.low, "ci95_high": boot.high,
                      "wilson_low": lo, "wilson_high": hi})
     return pd.DataFrame(rows)
@@ -184,7 +184,7 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
         if not fit.slope < 0:
             lpoint = math.nan
         _, _, gof_p = logistic_fit_check(fit, x, y) if fit.converged else (math.nan, 0, math.nan)
-        rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,))), "breaking_point": point,
+        rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,), strict=True)), "breaking_point": point,
                      "ci95_low": float(lo), "ci95_high": float(hi),
                      "not_reached_share": float(np.mean(boot == math.inf)) if boot.size else math.nan,
                      "success_at_last": float(rates.iloc[-1]), "terrains": int(succ.shape[0]),
@@ -271,7 +271,7 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
         for sv, x, p in parts:
             n10 = int((p["a"] & ~p["b"]).sum())
             n01 = int((~p["a"] & p["b"]).sum())
-            rows.append({group: g, "versus": baseline, **dict(zip(by, sv)), level or "level": x, "pairs": len(p),
+            rows.append({group: g, "versus": baseline, **dict(zip(by, sv, strict=True)), level or "level": x, "pairs": len(p),
                          "both": int((p["a"] & p["b"]).sum()), "only this": n10, "only baseline": n01,
                          "neither": int((~p["a"] & ~p["b"]).sum()),
                          "success_diff_pct": 100.0 * (p["a"].mean() - p["b"].mean()),
@@ -311,7 +311,7 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
     for sv, tb in b.groupby(list(by), sort=True):
         sv = sv if isinstance(sv, tuple) else (sv,)
         ta = a
-        for col, v in zip(by, sv):
+        for col, v in zip(by, sv, strict=True):
             ta = ta[ta[col] == v]
         if ta.empty:
             continue
@@ -324,7 +324,7 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
         per = pair.groupby(level="terrain").agg(t=("success_t", "mean"), c=("success_c", "mean"))
         d = 100.0 * (per["t"] - per["c"]).to_numpy(float)
         boot = cluster_bootstrap(d, np.mean, rng, n_boot)
-        row = {**dict(zip(by, sv)), arm: f"{treatment} vs {control}", "terrains": d.size, "missions": len(pair),
+        row = {**dict(zip(by, sv, strict=True)), arm: f"{treatment} vs {control}", "terrains": d.size, "missions": len(pair),
                "same_missions": float(same), "success_control_pct": 100 * per["c"].mean(),
                "success_treatment_pct": 100 * per["t"].mean(), "diff_pct": boot.estimate, "ci95_low": boot.low,
                "ci95_high": boot.high, "p_sign_flip": sign_flip_test(d, rng=rng)}

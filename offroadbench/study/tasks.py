@@ -11,7 +11,9 @@ machine) runs it without reading the study file. :func:`run_terrain` yields mess
   ``failed``, failed trials only; ``all``);
 * :class:`TrialFaulted` for a trial that gave no outcome (:class:`offroadbench.errors.TrialFault`:
   the vehicle was thrown while settling; executors send it too for a trial past its limit): the
-  task goes on with its next mission in a new world.
+  task goes on with its next mission in a new world. A terrain on which no mission can be drawn
+  (:class:`offroadbench.navigation.missions.NoMissionError`) gives one for each of its missions and
+  no :class:`TerrainBuilt`.
 
 The trial function is a parameter (``trial_fn(prepared, settings) -> iterator of rows``, or of
 ``TrialRecord``s that carry telemetry, one per prepared mission in order), so tests and benchmarks
@@ -46,12 +48,16 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
 
 from offroadbench.errors import TrialFault
+from offroadbench.navigation.missions import NoMissionError
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
+__all__ = ["NO_MISSION_FAULT", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
            "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
+
+#: the start of a fault's reason when its terrain admits no mission (:func:`run_terrain`)
+NO_MISSION_FAULT = "no mission can be drawn on this terrain: "
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
 #: prepared mission, in order`` (see :func:`offroadbench.sim.trial.pipeline.drive_terrain`)
@@ -168,7 +174,16 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
     cell = task.cell
     settings = cell.trial_settings
     t0 = time.perf_counter()
-    prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    try:
+        prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    except NoMissionError as exc:
+        # the drawn terrain admits no mission (e.g. no low-roughness cell inside the border at high
+        # D): its trials are faults, excluded from every statistic and listed in the report, and the
+        # study goes on (the design: a terrain is never redrawn, so no seed is picked after the fact)
+        reason = NO_MISSION_FAULT + " ".join(str(exc).split())
+        for k, seed in task.missions:
+            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason)
+        return
     stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
     stats["build_s"] = time.perf_counter() - t0
     yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
@@ -180,7 +195,7 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
         part = dataclasses.replace(prepared, missions=tuple(pending),
                                    mission_seeds=tuple(seeds[m.index] for m in pending))
         try:
-            for mission, item in zip(part.missions, trial_fn(part, settings)):
+            for mission, item in zip(part.missions, trial_fn(part, settings), strict=True):
                 k = mission.index
                 kept = None
                 if hasattr(item, "result"):  # a TrialRecord

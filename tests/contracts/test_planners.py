@@ -30,7 +30,7 @@ def terrain():
 
 def _dense(points, step=0.02):
     out = [points[:1]]
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in zip(points[:-1], points[1:], strict=True):
         n = max(1, int(np.ceil(np.hypot(*(b - a)) / step)))
         out.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
     return np.vstack(out)

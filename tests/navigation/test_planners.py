@@ -61,7 +61,7 @@ def _open():
 
 def _dense(points: np.ndarray, step: float = 0.01) -> np.ndarray:
     out = [points[0]]
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in zip(points[:-1], points[1:], strict=True):
         n = max(1, int(math.ceil(np.hypot(*(b - a)) / step)))
         out.extend(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
     return np.array(out)
@@ -243,7 +243,7 @@ def test_astar_goes_round_a_semi_patch_but_crosses_a_semi_band():
     assert np.nanmin(grid.cost) == pytest.approx(1.0) and grid.cost.max() == pytest.approx(1.0 + AStarConfig().semi_cost)
 
     def path_cost(points):
-        return sum(grid.segment_cost(a, b) for a, b in zip(points[:-1], points[1:]))
+        return sum(grid.segment_cost(a, b) for a, b in zip(points[:-1], points[1:], strict=True))
 
     straight = plan_straight(problem)
     assert path_cost(straight) == pytest.approx(8.0 + 2.0 * 2.0, rel=0.05)

@@ -50,7 +50,7 @@ def test_reactive_policy_on_flat_ground_runs_the_missions_the_straight_line_runs
         line = [drive_mission(world, m).result for m in missions]
         pol = [drive_mission(world, m, planner=planner_from_table({"name": "reactive"}), classes=_classes(FLAT)).result
                for m in missions]
-    for a, b in zip(line, pol):
+    for a, b in zip(line, pol, strict=True):
         assert a.success and b.success
         assert (a.start_x_m, a.start_y_m, a.goal_x_m, a.goal_y_m) == (b.start_x_m, b.start_y_m, b.goal_x_m, b.goal_y_m)
         # both drive the start-goal line: similar path length, times within a second or so

@@ -46,7 +46,7 @@ def test_a_search_stores_every_trial_of_every_stream_and_finds_failures(referenc
     proposals, rows = _table(d)
     assert [p[0] for p in proposals] == [r[0] for r in rows] == list(range(72))
     by_method = {}
-    for (_, _, method, *_), (*_, row) in zip(proposals, rows):
+    for (_, _, method, *_), (*_, row) in zip(proposals, rows, strict=True):
         by_method.setdefault(method, []).append('"success": false' in row)
     # the falsifier concentrates on the failure region: more failures than nominal sampling
     assert sum(by_method["falsify"]) > 2 * max(sum(by_method["random"]), 1)

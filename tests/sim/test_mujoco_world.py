@@ -33,7 +33,7 @@ def test_terrain_sits_where_the_heightmap_says():
             assert world.ray_height(c * CELL, r * CELL) == pytest.approx(hm.z[r, c], abs=1e-6)
         rng = np.random.default_rng(0)
         x, y = rng.uniform(0.1, hm.width_m - 0.1, 100), rng.uniform(0.1, hm.height_m - 0.1, 100)
-        ray = np.array([world.ray_height(a, b) for a, b in zip(x, y)])
+        ray = np.array([world.ray_height(a, b) for a, b in zip(x, y, strict=True)])
         assert np.abs(ray - hm.height_at(x, y)).max() < 3e-3
         assert math.isnan(world.ray_height(-1.0, 2.0))
 

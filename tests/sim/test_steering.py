@@ -50,8 +50,8 @@ def test_corner_steering_turns_in_place_with_every_wheel_on_the_circle():
     assert min_turn_radius_m(spec, layout) == 0.0
     speeds, angles = steered_commands(0.0, 0.4, spec, layout)
     # steered corners: the wheel's rolling direction is perpendicular to its radius from the centre
-    steered = dict(zip(spec.steered_wheel_joints, angles))
-    for name, (x, y), s in zip(spec.wheel_joints, layout, speeds):
+    steered = dict(zip(spec.steered_wheel_joints, angles, strict=True))
+    for name, (x, y), s in zip(spec.wheel_joints, layout, speeds, strict=True):
         a = steered.get(name, 0.0)
         assert math.cos(a) * x + math.sin(a) * y == pytest.approx(0.0, abs=1e-12)
         assert abs(s) * spec.wheel_radius_m == pytest.approx(0.4 * math.hypot(x, y))

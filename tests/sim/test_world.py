@@ -30,7 +30,7 @@ def test_terrain_sits_where_the_heightmap_says():
         # between nodes: the triangulated surface is within a few mm of the bilinear lookup
         x = rng.uniform(0.1, hm.width_m - 0.1, 200)
         y = rng.uniform(0.1, hm.height_m - 0.1, 200)
-        ray = np.array([world.ray_height(a, b) for a, b in zip(x, y)])
+        ray = np.array([world.ray_height(a, b) for a, b in zip(x, y, strict=True)])
         assert np.abs(ray - hm.height_at(x, y)).max() < 3e-3
 
 
@@ -86,7 +86,13 @@ def test_urdf_has_real_masses_and_inertias():
             info = pb.getDynamicsInfo(body, j, physicsClientId=cid)
             assert info[0] == pytest.approx(2.637)
             assert info[2][0] == pytest.approx(0.02467, rel=1e-4)
-            assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)  # drive train added
+            assert info[2][1] == pytest.approx(0.04411, rel=1e-4)  # the tyre's own: the drive train is geared
+        # the drive train's inertia sits on grounded flywheels geared to the wheels (drivetrain.py)
+        assert world.geometry.wheel_spin_inertia_kg_m2 == pytest.approx((world.spec.wheel_spin_inertia_kg_m2,) * 4)
+    with World(Heightmap.flat(41, 41, CELL), sim=SimConfig(drive_train_reaction="link")) as world:
+        for j in world.wheel_joints:  # the old model: all of it on the wheel link
+            info = pb.getDynamicsInfo(world.vehicle_id, j, physicsClientId=world.client_id)
+            assert info[2][1] == pytest.approx(world.spec.wheel_spin_inertia_kg_m2, rel=1e-4)
 
 
 def test_vehicle_geometry_is_the_urdf_measured_once():
@@ -99,7 +105,7 @@ def test_vehicle_geometry_is_the_urdf_measured_once():
         assert isinstance(world, TrialWorld)
     assert geo.mass_kg == pytest.approx(46.034 + 4 * 2.637)
     assert geo.wheel_spin_inertia_kg_m2 == pytest.approx((1.0,) * 4)  # the drive train of vehicle.toml
-    for (x, y, z), (sx, sy) in zip(geo.wheel_centres_m, [(1, 1), (-1, 1), (1, -1), (-1, -1)]):
+    for (x, y, z), (sx, sy) in zip(geo.wheel_centres_m, [(1, 1), (-1, 1), (1, -1), (-1, -1)], strict=True):
         assert (x, y, z) == pytest.approx((sx * 0.256, sy * 0.2854, -0.0910 + 0.0618), abs=1e-9)
     assert geo.wheelbase_m == pytest.approx(0.512)
     # bounding boxes carry Bullet's 1 mm collision margin on the box
@@ -233,7 +239,7 @@ def test_tile_spans_cover_the_map_with_shared_edges(cells, tile):
 
     spans = tile_spans(cells, tile)
     assert spans[0][0] == 0 and spans[-1][1] == cells
-    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:]))  # neighbours share their edge sample
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:], strict=False))  # neighbours share their edge sample (pairs: one fewer)
     sizes = [b - a for a, b in spans]
     assert min(sizes) >= 1 and max(sizes) - min(sizes) <= 1  # near-equal
     if tile:

@@ -156,6 +156,31 @@ def test_a_thrown_vehicle_is_a_fault_not_an_outcome_and_the_terrain_goes_on(tmp_
     assert all("thrown 26 m" in f[5] for f in faults)
 
 
+def test_a_terrain_with_no_drawable_mission_is_faults_and_the_study_goes_on(tmp_path, monkeypatch):
+    """Issue 29: a drawn terrain with no start cell (rough everywhere inside the border) stops no
+    study: each of its missions is a fault naming why, the other terrains run, nothing is redrawn."""
+    from offroadbench.navigation.missions import NoMissionError
+    from offroadbench.study import tasks
+
+    real = tasks.prepare_cell
+
+    def no_start_on_cell_1(cell, terrain_seed, missions):
+        if cell.index == 1:
+            raise NoMissionError("no start cell: no low cell lies at least 5 m from the map edge in the class "
+                                 "map after its morphological closing")
+        return real(cell, terrain_seed, missions)
+
+    monkeypatch.setattr(tasks, "prepare_cell", no_start_on_cell_1)
+    study, cells = cells_of(small())
+    summary = run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    assert (summary.done, summary.faults) == (3, 3) and summary.complete
+    assert sorted(load(tmp_path)["cell"].unique()) == [0]
+    with Store(tmp_path) as store:
+        faults = store.fault_rows()
+    assert [(c, t, m) for c, t, m, *_ in faults] == [(1, 0, 0), (1, 0, 1), (1, 0, 2)]
+    assert all(f[5].startswith("no mission can be drawn on this terrain: no start cell") for f in faults)
+
+
 def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
     from offroadbench.study.report import build_report
 

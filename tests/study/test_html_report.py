@@ -96,7 +96,7 @@ def test_the_html_report_holds_every_figure_and_table_of_the_markdown(run):
     md_tables = re.findall(r"((?:^\|.*\|\n)+)", md, flags=re.M)
     sortable = [t for t in page.tables if "sortable" in t["class"] and "trials" not in t["class"]]
     assert len(sortable) == len(md_tables)
-    for text, tab in zip(md_tables, sortable):
+    for text, tab in zip(md_tables, sortable, strict=True):
         rows = text.strip().splitlines()
         header = [c.strip().replace("`", "") for c in rows[0].strip().strip("|").split("|")]
         assert [h.strip() for h in tab["header"]] == header

@@ -247,7 +247,7 @@ def test_readme_number_recomputes_from_the_committed_tables(sample: Sample):
     stated = hit.groups()
     computed = sample.compute(folder)
     assert len(computed) == len(stated)
-    for text, value in zip(stated, computed):
+    for text, value in zip(stated, computed, strict=True):
         half_unit = 0.5 * 10.0 ** -_decimals(text)
         assert abs(float(text) - value) <= half_unit + sample.tol + 1e-9, (
             f"{sample.name}: README says {text}, the tables give {value:.4g}")

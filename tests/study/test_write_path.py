@@ -30,7 +30,7 @@ KILL_AT = 3  # the third trial's write path is cut
 
 def records(prepared, settings):
     """fake_trials with telemetry: objects shaped like sim.runner.TrialRecord."""
-    for m, row in zip(prepared.missions, fake_trials(prepared, settings)):
+    for m, row in zip(prepared.missions, fake_trials(prepared, settings), strict=True):
         n = 5 + m.index
         t = np.arange(n) * 0.05
         tel = {"t_s": t, "x_m": m.start_xy_m[0] + t, "y_m": m.start_xy_m[1] + 0 * t}

@@ -104,7 +104,7 @@ def test_bad_config(kw, match):
 def test_layers_share_the_wm_settings_and_differ_by_m_d_g():
     cfg = MultifractalConfig(wm=dataclasses.replace(PAPER_WM, L=50.0, origin_offset_px=7.0), D_high=2.6)
     low, mid, high = layer_configs(cfg)
-    for c, m, d, g in zip((low, mid, high), cfg.M, (2.2, 2.45, 2.6), cfg.G):
+    for c, m, d, g in zip((low, mid, high), cfg.M, (2.2, 2.45, 2.6), cfg.G, strict=True):
         assert c == dataclasses.replace(cfg.wm, M=m, D=d, G=g)
 
 

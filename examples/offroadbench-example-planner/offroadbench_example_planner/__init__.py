@@ -36,7 +36,7 @@ def _crossed(problem: PlanningProblem, points: np.ndarray) -> tuple[int, int, fl
     cell = problem.hm.cell_size_m
     n_hi = n_semi = 0
     length = 0.0
-    for a, b in zip(points[:-1], points[1:]):
+    for a, b in zip(points[:-1], points[1:], strict=True):
         seg = float(np.hypot(*(b - a)))
         length += seg
         t = np.linspace(0.0, 1.0, max(2, int(seg / (0.5 * cell)) + 1))[:, None]

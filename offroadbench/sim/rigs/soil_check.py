@@ -60,7 +60,7 @@ def model_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float
         h = static_sinkage(soil, radius_m, width_m, load_n, s)
         _, fx, t = wheel_forces(soil, radius_m, width_m, h, s)
         out.append((h, float(fx), float(t)))
-    h, fx, t = (np.array(c) for c in zip(*out))
+    h, fx, t = (np.array(c) for c in zip(*out, strict=True))
     return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
 
 
@@ -101,5 +101,5 @@ def rig_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float, 
                         carriage_m_s=wheel_speed_m_s * (1.0 - s), wheel_rad_s=wheel_speed_m_s / radius_m,
                         dt_s=dt, steps=steps))
         report(progress, i + 1, len(slips))
-    h, fx, t = (np.array(c) for c in zip(*rows))
+    h, fx, t = (np.array(c) for c in zip(*rows, strict=True))
     return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)

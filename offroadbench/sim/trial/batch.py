@@ -92,7 +92,7 @@ class DriveRun:
         """One flat row per trial: the terrain and mission seeds, then ``TrialResult.as_row()``."""
         return [
             {"terrain_seed": self.terrain_seed, "mission_seed": mseed, **r.as_row()}
-            for r, mseed in zip(self.results, self.mission_seeds)
+            for r, mseed in zip(self.results, self.mission_seeds, strict=True)
         ]
 
 

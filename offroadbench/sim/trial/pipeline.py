@@ -19,91 +19,28 @@ Importing this module does not import pybullet; :func:`drive_terrain` does.
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 import numpy as np
 
-from offroadbench.analysis.roughness import ClassMaps, RoughnessConfig, classify_terrain
-from offroadbench.config import from_dict
+from offroadbench.analysis.roughness import ClassMaps, classify_terrain
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.navigation.drivers import PlannerChoice, planner_from_table
+from offroadbench.navigation.drivers import PlannerChoice
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_mission
-from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
-from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle, vehicle_from_table
+from offroadbench.sim.trial.settings import SETTINGS_TABLES, TrialSettings, settings_part  # noqa: F401  (re-exported)
+from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 if TYPE_CHECKING:
     from offroadbench.sim.trial.runner import TrialResult
 
-__all__ = ["TrialSettings", "SETTINGS_TABLES", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
+__all__ = ["TrialSettings", "SETTINGS_TABLES", "settings_part", "PreparedTerrain", "prepare_terrain", "drive_terrain", "run_missions",
            "terrain_body"]
 
-
-def _builder(cls: type):
-    def build(table: Mapping[str, Any], where: str):
-        return from_dict(cls, dict(table), where=where)
-
-    return build
-
-
-#: TOML table name -> fn(table, where) building that part of :class:`TrialSettings`
-SETTINGS_TABLES = {
-    "roughness": _builder(RoughnessConfig),
-    "missions": _builder(MissionConfig),
-    "vehicle": vehicle_from_table,
-    "controller": _builder(ControllerConfig),
-    "sim": _builder(SimConfig),
-    "rules": _builder(FailureRules),
-    "planner": planner_from_table,
-}
-
-
-def _default_vehicle() -> VehicleSpec:
-    return load_vehicle("husky")
-
-
-@dataclass(frozen=True, kw_only=True)
-class TrialSettings:
-    """Everything that decides how a terrain's missions are driven, except the terrain and seeds."""
-
-    vehicle: VehicleSpec = field(default_factory=_default_vehicle)
-    """The vehicle (``[vehicle]``: a name and VehicleSpec fields; default the Husky)."""
-    sim: SimConfig = SimConfig()
-    """Physics settings (``[sim]``)."""
-    controller: ControllerConfig = ControllerConfig()
-    """Path tracking and speed profile (``[controller]``)."""
-    rules: FailureRules = FailureRules()
-    """When a trial ends and why (``[rules]``)."""
-    missions: MissionConfig = MissionConfig()
-    """How missions are drawn (``[missions]``); ``count`` is not used here (the caller lists the missions)."""
-    roughness: RoughnessConfig = RoughnessConfig()
-    """Roughness classes and closing of the class map (``[roughness]``)."""
-    planner: PlannerChoice = PlannerChoice()
-    """The planner or policy that drives (``[planner]``; default ``straight``, the paper's)."""
-    observation: ObservationConfig = ObservationConfig()
-    """What a policy observes (the Gymnasium env's observation)."""
-
-    @classmethod
-    def from_tables(cls, tables: Mapping[str, Mapping[str, Any]], where: str = "settings") -> "TrialSettings":
-        """Settings from TOML tables by name (:data:`SETTINGS_TABLES`); a missing table takes its defaults.
-
-        Unknown tables and keys are InputErrors naming them (``where`` prefixes the message).
-        """
-        unknown = sorted(set(tables) - set(SETTINGS_TABLES))
-        if unknown:
-            raise InputError(f"{where}: unknown table(s) {', '.join(unknown)}; known: {', '.join(SETTINGS_TABLES)}")
-        built = {name: SETTINGS_TABLES[name](dict(tables.get(name, {})), f"{where} [{name}]")
-                 for name in SETTINGS_TABLES}
-        return cls(**built)
-
-    def replace(self, **changes: Any) -> "TrialSettings":
-        """A copy with some parts replaced (``dataclasses.replace``)."""
-        return dataclasses.replace(self, **changes)
 
 @dataclass(frozen=True, eq=False)
 class PreparedTerrain:

@@ -85,7 +85,7 @@ class TrialResult:
             return NotImplemented
         return all(
             a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
-            for a, b in zip(dataclasses.astuple(self), dataclasses.astuple(other))
+            for a, b in zip(dataclasses.astuple(self), dataclasses.astuple(other), strict=True)
         )
 
     __hash__ = None  # type: ignore[assignment]  # NaN-aware equality has no matching hash

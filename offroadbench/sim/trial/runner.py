@@ -25,13 +25,12 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from offroadbench.errors import InputError, PluginError
 from offroadbench.navigation import metrics
-from offroadbench.navigation.missions import Mission
+from offroadbench.navigation.missions import Mission, MissionConfig
 from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.observation import observation as observe
 from offroadbench.navigation.drivers import PlannerChoice, PolicyContext, make_policy, plan
@@ -45,9 +44,10 @@ from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
 from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, _result
+from offroadbench.sim.trial.settings import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
-           "run_mission", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
+           "run_mission", "settings_of", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
 
 
 def body_frame(world: TrialWorld, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
@@ -109,15 +109,17 @@ class TrialLoop:
     telemetry ticks on the way. Either returns True once the trial has ended: a rule fired
     (:attr:`reason`), or the timeout (``rules.timeout_factor`` times the nominal time ``length_m``
     over the cruise speed). ``progress_m`` maps the base position to a row's progress along the path.
+    ``settings`` (TrialSettings) give the controller and the failure rules, whole; the world holds
+    the vehicle and physics the trial runs with.
 
     The trial runner commands first and then records a control tick (the row carries the command
     chosen there); the env records on arriving at a tick (so the step that ends a trial says so)
     and its next :meth:`command` writes the new command into that tick's row: the rows are the same.
     """
 
-    def __init__(self, world: TrialWorld, mission: Mission, *, length_m: float, controller: ControllerConfig,
-                 rules: FailureRules, name: str = "agent", spawn_roll_rad: float = 0.0) -> None:
-        sim = world.sim
+    def __init__(self, world: TrialWorld, mission: Mission, settings: TrialSettings, *, length_m: float,
+                 name: str = "agent", spawn_roll_rad: float = 0.0) -> None:
+        sim, controller, rules = world.sim, settings.controller, settings.rules
         if sim.physics_rate_hz % controller.control_rate_hz:
             raise InputError(
                 f"ControllerConfig.control_rate_hz = {controller.control_rate_hz} must divide "
@@ -232,28 +234,30 @@ class TrialLoop:
 
     def telemetry(self) -> dict[str, np.ndarray]:
         """The telemetry so far, TELEMETRY_COLUMNS."""
-        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows))}
+        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows, strict=True), strict=True)}
 
 
 def drive_mission(
     world: TrialWorld,
     mission: Mission,
     *,
-    planner: PlannerChoice = PlannerChoice(),
+    settings: TrialSettings | None = None,
     classes: np.ndarray | None = None,
-    border_m: float = 0.0,
-    controller: ControllerConfig = ControllerConfig(),
-    rules: FailureRules = FailureRules(),
-    observation: ObservationConfig = ObservationConfig(),
     spawn_roll_rad: float = 0.0,
-    settings: Any = None,
+    planner: PlannerChoice | None = None,
+    border_m: float | None = None,
+    controller: ControllerConfig | None = None,
+    rules: FailureRules | None = None,
+    observation: ObservationConfig | None = None,
 ) -> TrialRecord:
     """Drive one mission in ``world`` with a planner (pure pursuit on its path) or a policy, through
     :class:`TrialLoop`.
 
     ``settings`` (offroadbench.sim.trial.pipeline.TrialSettings, as :func:`drive_terrain` passes
-    them whole) gives the planner, controller, rules, observation and the missions' border in place
-    of those keyword arguments (the world already holds its vehicle and physics).
+    them) give the planner, controller, failure rules, observation and the missions' border, whole
+    (the world already holds its vehicle and physics). Without them, ``planner``, ``controller``,
+    ``rules``, ``observation`` and ``border_m`` (each defaulting to its config's default; border
+    0 m) are made into one TrialSettings (:func:`settings_of`); giving both is an InputError.
 
     ``classes`` is the closed roughness-class map the planner sees (the study's; needed by a driver
     whose registry entry declares it, see offroadbench.navigation.drivers.NEEDS), ``border_m`` the
@@ -262,9 +266,15 @@ def drive_mission(
     ``spawn_roll_rad`` tilts the vehicle about its long axis at spawn (a test hook: 90 deg puts it
     on its side).
     """
-    if settings is not None:
-        planner, controller, rules = settings.planner, settings.controller, settings.rules
-        observation, border_m = settings.observation, settings.missions.border_m
+    pieces = {"planner": planner, "border_m": border_m, "controller": controller, "rules": rules,
+              "observation": observation}
+    if settings is None:
+        settings = settings_of(world, **pieces)
+    elif any(v is not None for v in pieces.values()):
+        given = ", ".join(k for k, v in pieces.items() if v is not None)
+        raise InputError(f"drive_mission: give {given} inside settings, not beside it")
+    planner, controller, observation = settings.planner, settings.controller, settings.observation
+    border_m = settings.missions.border_m
     sim = world.sim
     if sim.physics_rate_hz % controller.control_rate_hz:
         raise InputError(
@@ -302,15 +312,14 @@ def drive_mission(
         length = tracker.length_m
     else:
         length = mission.length_m
-    fill_m = hm.z_min_m - rules.fall_depth_m
+    fill_m = hm.z_min_m - settings.rules.fall_depth_m
 
     def progress_m(pos) -> float:
         if replanner is None and tracker is not None:
             return tracker.progress(np.array(pos[:2]))
         return mission.length_m - math.hypot(goal[0] - pos[0], goal[1] - pos[1])
 
-    loop = TrialLoop(world, mission, length_m=length, controller=controller, rules=rules, name=planner.name,
-                     spawn_roll_rad=spawn_roll_rad)
+    loop = TrialLoop(world, mission, settings, length_m=length, name=planner.name, spawn_roll_rad=spawn_roll_rad)
     while True:
         pos, quat, lin, ang, roll, pitch, yaw, rates = loop.state
         bx, by, byaw = sensing.update(pos, yaw)  # the believed pose (the true one for the oracle)
@@ -331,6 +340,17 @@ def drive_mission(
     path = replanner.trace if replanner is not None else waypoints
     belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.seen)
     return TrialRecord(loop.result(), loop.telemetry(), np.asarray(path, dtype=float), belief)
+
+
+def settings_of(world: TrialWorld, *, planner: PlannerChoice | None = None, border_m: float | None = None,
+                controller: ControllerConfig | None = None, rules: FailureRules | None = None,
+                observation: ObservationConfig | None = None) -> TrialSettings:
+    """The TrialSettings of ``world`` (its vehicle and physics) with these parts; a part left out
+    takes its config's default, the border 0 m."""
+    return TrialSettings(vehicle=world.spec, sim=world.sim, planner=planner or PlannerChoice(),
+                         controller=controller or ControllerConfig(), rules=rules or FailureRules(),
+                         observation=observation or ObservationConfig(),
+                         missions=MissionConfig(border_m=0.0 if border_m is None else border_m))
 
 
 def clamp_action(action: tuple[float, float], spec) -> tuple[float, float]:
@@ -414,7 +434,7 @@ def plan_within_limits(planner: PlannerChoice, problem: PlanningProblem) -> np.n
     if len(wp) > MAX_WAYPOINTS:
         raise PluginError(f"planner {planner.name!r} returned {len(wp)} waypoints; at most {MAX_WAYPOINTS} are allowed")
     straight = math.hypot(problem.goal_xy[0] - problem.start_xy[0], problem.goal_xy[1] - problem.start_xy[1])
-    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist()))
+    length = math.fsum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(wp[:-1].tolist(), wp[1:].tolist(), strict=True))
     if length > MAX_PATH_FACTOR * straight + MAX_PATH_EXTRA_M:
         raise PluginError(f"planner {planner.name!r} returned a path of {length:.1f} m for a {straight:.1f} m mission; "
                           f"at most {MAX_PATH_FACTOR:g} x + {MAX_PATH_EXTRA_M:g} m is allowed")

@@ -41,7 +41,7 @@ def reference_layout(spec: VehicleSpec, wheel_centres_m) -> tuple[tuple[float, f
     shifted so that x = 0 is the mean x of the unsteered wheels and y = 0 the middle of the track."""
     centres = [(float(c[0]), float(c[1])) for c in wheel_centres_m]
     steered = set(spec.steered_wheel_joints)
-    fixed = [c for name, c in zip(spec.wheel_joints, centres) if name not in steered] or centres
+    fixed = [c for name, c in zip(spec.wheel_joints, centres, strict=True) if name not in steered] or centres
     x0 = sum(c[0] for c in fixed) / len(fixed)
     y0 = 0.5 * (max(c[1] for c in centres) + min(c[1] for c in centres))
     return tuple((x - x0, y - y0) for x, y in centres)
@@ -55,7 +55,7 @@ def _rigid_turn(v_m_s: float, omega_rad_s: float, spec: VehicleSpec,
     limit = math.radians(spec.max_steer_angle_deg)
     speeds = [0.0] * len(layout)
     angles = [0.0] * len(spec.steer_joints)
-    for k, (name, (x, y)) in enumerate(zip(spec.wheel_joints, layout)):
+    for k, (name, (x, y)) in enumerate(zip(spec.wheel_joints, layout, strict=True)):
         vx, vy = v_m_s - omega_rad_s * y, omega_rad_s * x
         i = steer_of.get(name)
         if i is None:
@@ -106,7 +106,7 @@ def min_turn_radius_m(spec: VehicleSpec, layout) -> float:
         return 0.0
     steered = set(spec.steered_wheel_joints)
     limit = math.radians(spec.max_steer_angle_deg)
-    pts = [p for name, p in zip(spec.wheel_joints, layout) if name in steered]
+    pts = [p for name, p in zip(spec.wheel_joints, layout, strict=True) if name in steered]
     if all(math.atan2(abs(x), abs(y)) <= limit + 1e-9 for x, y in pts):
         return 0.0  # every steered wheel can point along a circle about the reference point
     reach = max(abs(x) for x, _ in pts)

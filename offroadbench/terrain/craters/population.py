@@ -191,7 +191,7 @@ def sample_diameters_inversion(cfg: PopulationConfig, area_m2: float, rng: np.ra
         return np.sort(_inverse_cumulative(cfg, n_lo + (n_hi - n_lo) * rng.random(n)))[::-1]
     edges = size_bins(cfg)
     out = []
-    for lo, hi in zip(edges[:-1][::-1], edges[1:][::-1]):
+    for lo, hi in zip(edges[:-1][::-1], edges[1:][::-1], strict=True):
         mean = area_m2 * cfg.c * (lo ** (-cfg.k) - hi ** (-cfg.k))
         n = int(rng.poisson(mean))
         out.append(inverse_cdf_diameters(rng.random(n), lo, hi, cfg.k))

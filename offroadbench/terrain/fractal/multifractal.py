@@ -87,7 +87,7 @@ class MultifractalConfig:
 
     def describe(self, grid: GridConfig) -> str:
         """The evaluated terms of each W-M layer on ``grid``, on one line."""
-        return "; ".join(f"{name}: {c.describe(grid)}" for name, c in zip(LAYER_NAMES, layer_configs(self)))
+        return "; ".join(f"{name}: {c.describe(grid)}" for name, c in zip(LAYER_NAMES, layer_configs(self), strict=True))
 
 
 def layer_configs(cfg: MultifractalConfig) -> tuple[WMConfig, WMConfig, WMConfig]:
@@ -107,7 +107,7 @@ def multifractal_layers(cfg: MultifractalConfig, grid: GridConfig, rng: np.rando
     """The three filtered, normalised W-M layers (low, mid, high). One child RNG per layer."""
     children = rng.spawn(3)
     out = []
-    for wcfg, child in zip(layer_configs(cfg), children):
+    for wcfg, child in zip(layer_configs(cfg), children, strict=True):
         z = gaussian_smooth(wm_surface(wcfg, grid, draw_phases(wcfg, grid, child)), wcfg.smoothing_sigma_px)
         out.append(normalise_layer(z))
     return out

@@ -65,7 +65,7 @@ class MjcfBuilder:
         def add_children(parent_el, link_name, offset):
             for j in children.get(link_name, []):
                 link = links[j.child]
-                pos = tuple(p - o for p, o in zip(j.pos, offset))
+                pos = tuple(p - o for p, o in zip(j.pos, offset, strict=True))
                 el = ET.SubElement(parent_el, "body", name=j.child, pos=_fmt(pos), euler=_fmt(j.euler))
                 if j.kind in ("continuous", "revolute"):
                     jel = ET.SubElement(el, "joint", name=j.name, type="hinge", axis=_fmt(j.axis), damping="0")
@@ -117,11 +117,11 @@ class MjcfBuilder:
 
     def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
         spec, sim, tune = self.spec, self.sim, self.contact
-        com = tuple(c - s for c, s in zip(link.com, shift))
+        com = tuple(c - s for c, s in zip(link.com, shift, strict=True))
         if link.mass > 0:
             ET.SubElement(el, "inertial", pos=_fmt(com), mass=repr(link.mass), diaginertia=_fmt(link.inertia))
         for kind, size, pos, euler in link.shapes:
-            g = ET.SubElement(el, "geom", type=kind, size=_fmt(size), pos=_fmt(tuple(p - s for p, s in zip(pos, shift))),
+            g = ET.SubElement(el, "geom", type=kind, size=_fmt(size), pos=_fmt(tuple(p - s for p, s in zip(pos, shift, strict=True))),
                               euler=_fmt(euler), group="1", priority="1",
                               solimp=_fmt(tune.solimp if is_wheel else tune.chassis_solimp))
             if is_wheel:

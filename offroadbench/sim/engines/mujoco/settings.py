@@ -54,9 +54,11 @@ class MuJoCoConfig:
     """Wheel servo gain ``kv`` in units of (spin inertia / dt): the velocity error shrinks by
     1 / (1 + gain) per step before the torque limit."""
     tyre_loop: str = "auto"
-    """Where the ``coulomb`` tyre loop runs: ``compiled`` (numba: offroadbench.sim.engines.mujoco._tyres_c,
-    the same forces to the last bit at about a tenth of the cost), ``python`` (the interpreted loop
-    over CoulombBristles) or ``auto`` (compiled when numba is installed, else python)."""
+    """Where the tyre loop runs (the ``coulomb`` tyres and the ``terramechanics`` soil): ``compiled``
+    (numba: offroadbench.sim.engines.mujoco._tyres_c and ``_soil_c``, the same forces to the last
+    bit at a fraction of the cost), ``python`` (the interpreted loop over CoulombBristles or
+    SoilWheels) or ``auto`` (compiled when numba is installed, else python). Vehicles with
+    articulated wheels (steering, rockers, bogies) always use the Python loop."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):

@@ -85,4 +85,4 @@ def run_rig(core: SoilWheels, *, radius_m: float, load_kg: float, gravity_m_s2: 
             pull = -float(d.actuator_force[0])
             torque = float(d.actuator_force[1])
             acc.append((sink, pull, torque))
-    return tuple(sum(c) / len(c) for c in zip(*acc))
+    return tuple(sum(c) / len(c) for c in zip(*acc, strict=True))

@@ -1,6 +1,6 @@
 """The tyre and soil forces of the MuJoCo world: its contacts read after ``mj_step1``, the project's
 tyre model (CoulombBristles) and soil model applied as ``xfrc_applied``, in Python or through the
-compiled loop (offroadbench.sim.engines.mujoco._tyres_c)."""
+compiled loops (offroadbench.sim.engines.mujoco._tyres_c, ``_soil_c``)."""
 
 from __future__ import annotations
 
@@ -35,6 +35,32 @@ class MuJoCoTyres:
             if each or k == last:
                 con = d.contact
                 read(con.geom, con.dist, con.pos, con.frame, con.efc_address, d.efc_force, f, ist)
+        if pushed is not None:
+            self._base_force = None
+            f[push + 3] = 0.0
+
+    def _step_soil_compiled(self) -> None:
+        """:meth:`step` with the compiled soil loop (offroadbench.sim.engines.mujoco._soil_c): the same
+        sequence, the soil forces applied outside the interpreter. No contact is read: the wheels
+        do not collide under the soil model (their loads stay zero, as the Python loop reads them),
+        and the soil's sinkage and slip come from the loop's state."""
+        m, d = self.model, self.data
+        sc, f, ist, tab = self._fast_soil
+        each = self.contact.tyres_each_substep
+        pushed = self._base_force
+        push = 8 * len(self._loads) + sc.F_PUSH_X
+        if pushed is not None:
+            f[push:push + 3] = pushed
+            f[push + 3] = 1.0
+        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        step1, step2, apply = mujoco.mj_step1, mujoco.mj_step2, sc.APPLY
+        for k in range(self.substeps):
+            if each or k == 0:
+                step1(m, d)
+                apply(qvel, xmat, xipos, xfrc, f, ist, tab)
+                step2(m, d)
+            else:
+                mujoco.mj_step(m, d)  # the soil forces of this trial step held in xfrc_applied
         if pushed is not None:
             self._base_force = None
             f[push + 3] = 0.0

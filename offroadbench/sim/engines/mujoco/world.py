@@ -21,7 +21,9 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   (``ContactTuning.min_rate_hz``). Under ``bullet`` the wheels keep MuJoCo's friction. The
   contact reading and the forces run compiled (offroadbench.sim.engines.mujoco._tyres_c, numba:
   the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
-  installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig).
+  installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
+  ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
+  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
@@ -39,6 +41,7 @@ as the two halves of :class:`MuJoCoWorld`.
 
 from __future__ import annotations
 
+import importlib
 import logging
 import math
 import time
@@ -63,13 +66,13 @@ __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 log = logging.getLogger(__name__)
 
 
-def _compiled_loop(choice: str):
-    """offroadbench.sim.engines.mujoco._tyres_c for ``[sim.mujoco] tyre_loop = choice``, or None for the
-    Python loop (``auto`` without numba)."""
+def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
+    """offroadbench.sim.engines.mujoco._tyres_c (coulomb) or ``_soil_c`` (terramechanics) for
+    ``[sim.mujoco] tyre_loop = choice``, or None for the Python loop (``auto`` without numba)."""
     if choice == "python":
         return None
     try:
-        from offroadbench.sim.engines.mujoco import _tyres_c
+        module = importlib.import_module(f"offroadbench.sim.engines.mujoco.{kernels}")
     except ImportError:
         if choice == "compiled":
             raise InputError("MuJoCoConfig.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
@@ -79,7 +82,7 @@ def _compiled_loop(choice: str):
             raise InputError(f"MuJoCoConfig.tyre_loop = 'compiled': numba cannot build the loop ({exc})") from None
         log.warning("the compiled tyre loop is unavailable (%s); using the Python loop", exc)
         return None
-    return _tyres_c
+    return module
 
 
 
@@ -118,7 +121,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             bristle = (len(self._wheel_bodies), self.spec.wheel_friction * sim.terrain_friction,
                        self._dt_mj if contact.tyres_each_substep else self.dt_s, k, c)
             self._tyres = CoulombBristles(*bristle)
-            tc = _compiled_loop(contact.tyre_loop)
+            tc = self._loop_kernels(contact.tyre_loop, "_tyres_c")
         if tc is not None:
             slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
             f, ist = tc.new_state(*bristle, self._wheel_bodies, self._wheel_qvel, self._wheel_axis, self._terrain_geom,
@@ -127,12 +130,20 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
         self._soil = None
+        self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
             # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
             n = len(self._wheel_bodies)
             setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
+            sc = self._loop_kernels(contact.tyre_loop, "_soil_c")
+            if sc is not None:
+                f, ist, tab = sc.new_state(self._soil, hm, self._wheel_bodies, self._wheel_qvel, self._wheel_axis,
+                                           self._chassis)
+                d = self.data
+                sc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied)
+                self._fast_soil = (sc, f, ist, tab)
         self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
@@ -140,6 +151,17 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._xfrc_zero = [0.0] * (6 * self.model.nbody)
         self._base_force = None  # push_base's force for the next step
         self.geometry = self._measure_geometry()
+
+    def _loop_kernels(self, choice: str, kernels: str):
+        """The compiled loop's module (``_tyres_c`` or ``_soil_c``) for ``[sim.mujoco] tyre_loop =
+        choice``, or None for the Python loop: also for a vehicle whose wheels move with more than the
+        chassis (steering, rockers, bogies): the kernels take each wheel's velocity from the chassis'
+        rigid motion and its spin, the Python loop from MuJoCo (``mj_objectVelocity``)."""
+        module = _compiled_loop(choice, kernels)
+        if module is not None and self._articulated:
+            log.info("vehicle %r has articulated wheels: the Python tyre loop", self.spec.name)
+            return None
+        return module
 
     # ------------------------------------------------------------------ lifetime
     def close(self) -> None:
@@ -196,16 +218,16 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             if g == self._terrain_geom:
                 continue
             glo, ghi = self._geom_box(g)
-            lo = [min(a, b) for a, b in zip(lo, glo)]
-            hi = [max(a, b) for a, b in zip(hi, ghi)]
+            lo = [min(a, b) for a, b in zip(lo, glo, strict=True)]
+            hi = [max(a, b) for a, b in zip(hi, ghi, strict=True)]
             if g in self._wheel_geom:
                 wheel_lo_z, wheel_front = min(wheel_lo_z, glo[2]), max(wheel_front, ghi[0])
             elif m.geom_bodyid[g] == self._chassis:
                 chassis_lo_z, chassis_front = min(chassis_lo_z, glo[2]), max(chassis_front, ghi[0])
         centres = [d.xipos[b].tolist() for b in self._wheel_bodies]
         spins = []
-        for b, j, axis in zip(self._wheel_bodies, self._wheel_qvel, self._wheel_axis):
-            own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist()))
+        for b, j, axis in zip(self._wheel_bodies, self._wheel_qvel, self._wheel_axis, strict=True):
+            own = sum(abs(a) * i for a, i in zip(axis, m.body_inertia[b].tolist(), strict=True))
             spins.append(own + float(m.dof_armature[j]))
         return VehicleGeometry(
             mass_kg=self._mass_kg,
@@ -265,6 +287,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             self._fast[0].reset_state(self._fast[1], self._fast[2], len(self._loads))
         if self._soil is not None:
             self._soil.reset()
+        if self._fast_soil is not None:
+            self._fast_soil[0].reset_state(self._fast_soil[1], self._fast_soil[2], len(self._loads))
         settle(self)
 
     def max_height_near(self, x_m: float, y_m: float, radius_m: float) -> float:
@@ -293,6 +317,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         ``xfrc_applied``, ``mj_step2``, then the contacts."""
         if self._fast is not None:
             self._step_compiled()
+            return
+        if self._fast_soil is not None:
+            self._step_soil_compiled()
             return
         m, d = self.model, self.data
         each = self.contact.tyres_each_substep
@@ -339,6 +366,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         ``terramechanics`` tyre model, the deepest soil sinkage."""
         if self._fast is not None:
             return self._fast[0].penetration(self._fast[1], len(self._loads))
+        if self._fast_soil is not None:
+            return self._fast_soil[0].penetration(self._fast_soil[1], self._fast_soil[2], len(self._loads))
         if self._soil is not None:
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
@@ -346,6 +375,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the soil."""
+        if self._fast_soil is not None:
+            return self._fast_soil[0].slip(self._fast_soil[1], self._fast_soil[2], len(self._loads))
         if self._soil is None or not self._soil.last:
             return None
         slips = [v[1] for v in self._soil.last.values()]

@@ -41,7 +41,7 @@ class SoilTyres:
                                  physicsClientId=cid)
         core.begin()
         last = {}
-        for i, (link, st) in enumerate(zip(self._wheels, states)):
+        for i, (link, st) in enumerate(zip(self._wheels, states, strict=True)):
             qx, qy, qz, qw = st[5]
             # the wheel's axle: the link frame's y axis in the world
             axle = (2.0 * (qx * qy - qw * qz), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz + qw * qx))

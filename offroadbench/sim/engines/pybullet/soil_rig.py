@@ -70,4 +70,4 @@ def run_rig(core: SoilWheels, *, radius_m: float, load_kg: float, gravity_m_s2: 
                 acc.append((sink, pull, torque))
     finally:
         pb.disconnect(physicsClientId=cid)
-    return tuple(sum(c) / len(c) for c in zip(*acc))
+    return tuple(sum(c) / len(c) for c in zip(*acc, strict=True))

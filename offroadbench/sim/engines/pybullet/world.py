@@ -76,6 +76,7 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
+from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
@@ -99,6 +100,7 @@ class World:
         self.spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
         self.dt_s = 1.0 / sim.physics_rate_hz
         self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
+        self._flywheels = None  # the loaded vehicle's drive-train flywheels (drivetrain.attach_flywheels)
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -221,13 +223,19 @@ class World:
         if spec.tyre_stiffness_n_m is not None:
             tyre = {"contactStiffness": spec.tyre_stiffness_n_m, "contactDamping": spec.tyre_damping_n_s_m}
         coulomb = self.sim.tyre_model in ("coulomb", "terramechanics")
+        gear = self.sim.drive_train == "gear"
+        excess = []  # per wheel, the drive train's inertia beyond the tyre's own, kg m^2
         for j in self.wheel_joints:
             pb.changeDynamics(body, j, lateralFriction=0.0 if coulomb else spec.wheel_friction, **tyre,
                               physicsClientId=cid)
-            if spec.wheel_spin_inertia_kg_m2 is not None:
-                ixx, _, izz = pb.getDynamicsInfo(body, j, physicsClientId=cid)[2]
-                pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spec.wheel_spin_inertia_kg_m2, izz],
-                                  physicsClientId=cid)
+            ixx, iyy, izz = pb.getDynamicsInfo(body, j, physicsClientId=cid)[2]
+            spin = iyy if spec.wheel_spin_inertia_kg_m2 is None else spec.wheel_spin_inertia_kg_m2
+            excess.append(max(0.0, spin - iyy) if gear else 0.0)
+            if not gear and spec.wheel_spin_inertia_kg_m2 is not None:  # all of it on the wheel link
+                pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spin, izz], physicsClientId=cid)
+        self._excess_kg_m2 = tuple(excess)
+        self._flywheels = attach_flywheels(cid, body, self.wheel_joints, excess,
+                                           (0.0, 0.0, self.hm.z_min_m - 50.0))
         self._articulate(body, names)
         if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
             n_links = pb.getNumJoints(body, physicsClientId=cid)
@@ -267,7 +275,7 @@ class World:
         """Steering-joint targets, rad (``spec.steer_joints`` order): position servos limited to the
         spec's steering torque and rate."""
         spec = self.spec
-        for j, a in zip(self.steer_joints, angles_rad):
+        for j, a in zip(self.steer_joints, angles_rad, strict=True):
             pb.setJointMotorControl2(self.vehicle_id if body is None else body, j, pb.POSITION_CONTROL,
                                      targetPosition=a, force=spec.steer_torque_limit_nm,
                                      maxVelocity=math.radians(spec.max_steer_rate_deg_s), physicsClientId=self._cid)
@@ -295,8 +303,8 @@ class World:
         centres = [pb.getLinkState(body, j, physicsClientId=cid)[0] for j in self.wheel_joints]
         return VehicleGeometry(
             mass_kg=self._mass_kg,
-            wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1]
-                                           for j in self.wheel_joints),
+            wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1] + x
+                                           for j, x in zip(self.wheel_joints, self._excess_kg_m2, strict=True)),
             wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
             length_m=float(hi[0] - lo[0]),
             width_m=float(hi[1] - lo[1]),
@@ -321,6 +329,7 @@ class World:
         what ran before does not matter.
         """
         cid = self._cid
+        self._flywheels.remove()  # their gear constraints hold the old vehicle's joints
         pb.removeBody(self.vehicle_id, physicsClientId=cid)
         self.vehicle_id = body = self._load_vehicle()
         orn = pb.getQuaternionFromEuler([roll_rad, 0.0, heading_rad])
