@@ -21,7 +21,11 @@ with their range, and P(failure) by plain Monte Carlo from the random streams (a
 finished search of the same domain (the committed study's Monte Carlo reference, the group of
 ``--planner``): nominal draws are independent, so ``--permutations`` random orders of that pool are
 draws of what a random stream needs to its k-th distinct failure (without replacement from a finite
-pool: a pool several times the trials needed keeps this close). The falsifier runs for every
+pool: a pool several times the trials needed keeps this close; with few failures in the pool it
+pushes the k-th toward the pool's end). Two model baselines beside it: the negative binomial at the
+pool's P(failure) (trials to the k-th failure, distinctness ignored: a bound in random sampling's
+favour) and simulated random streams (nominal parameter draws failing with that probability
+independently of the parameters, distinctness counted). The falsifier runs for every
 ``--seeds`` (``--with-run`` adds the run's own falsifier stream of that planner as one more seed).
 Prints the falsifier's median and range over seeds, the random baseline's median and 10-90 % range
 over orders, and their ratio.
@@ -90,6 +94,11 @@ def ratio_mode(args, base: Path) -> None:
     nb = {name: k_trials(args.k, q) for name, q in (("p", est.p), ("low", est.low), ("high", est.high))}
     print(f"random, negative binomial at the pool's P(failure): trials to the {args.k}-th failure, median "
           f"{nb['p']:g} ({nb['high']:g}-{nb['low']:g} at the interval's ends)", flush=True)
+    model = {name: model_trials(cfg, args.k, q, args.permutations, rng) for name, q in
+             (("p", est.p), ("low", est.low), ("high", est.high))}
+    print(f"random, simulated nominal draws failing with the pool's P(failure) independently of the parameters: "
+          f"trials to {args.k} distinct failures, median {model['p']:g} ({model['high']:g}-{model['low']:g} at the "
+          "interval's ends)", flush=True)
     print(f"random ({args.planner}, {len(pool)} stored nominal trials, {est.failures} failures, P = {est.p:.4f}, "
           f"95 % CI {est.low:.4f}-{est.high:.4f}): trials to {args.k} distinct failures over {args.permutations} orders: "
           f"median {np.median(rand):g}, 10-90 % {np.quantile(rand, 0.1):g}-{np.quantile(rand, 0.9):g}, "
@@ -111,10 +120,30 @@ def ratio_mode(args, base: Path) -> None:
               "terrain(s)", flush=True)
     fals = np.array(fals)
     print(f"falsify ({args.planner}): trials to {args.k} distinct failures over {len(fals)} seeds: {_spread(fals)}")
-    for name, r in (("random orders of the pool", np.median(rand)), ("negative binomial", nb["p"])):
-        print(f"ratio, {name} / falsify median: {r / np.median(fals):.1f}x (over the falsifier's range: "
-              f"{r / fals.max():.1f}x-{r / fals.min():.1f}x; the negative binomial at the P interval's ends: "
-              f"{nb['high'] / np.median(fals):.1f}x-{nb['low'] / np.median(fals):.1f}x)")
+    f_med = np.median(fals)
+    print(f"ratio, random orders of the pool / falsify median: {np.median(rand) / f_med:.1f}x (over the falsifier's "
+          f"range: {np.median(rand) / fals.max():.1f}x-{np.median(rand) / fals.min():.1f}x)")
+    for name, r in (("negative binomial", nb), ("simulated nominal draws", model)):
+        print(f"ratio, {name} / falsify median: {r['p'] / f_med:.1f}x (over the falsifier's range: "
+              f"{r['p'] / fals.max():.1f}x-{r['p'] / fals.min():.1f}x; at the P interval's ends: "
+              f"{r['high'] / f_med:.1f}x-{r['low'] / f_med:.1f}x)")
+
+
+def model_trials(cfg, k: int, p: float, runs: int, rng: np.random.Generator) -> float:
+    """Median trials to k distinct failures of simulated random streams: nominal parameter draws
+    (the search's nominal, through its standard-normal map), each failing with probability p
+    independently of its parameters (the study's rule of distinctness applied)."""
+    if not 0 < p < 1:
+        return float("inf")
+    n = int(50 * k / p)
+    out = []
+    for _ in range(runs):
+        failed = rng.random(n) < p
+        x = cfg.from_z(rng.standard_normal((int(failed.sum()), cfg.dim)))
+        counts = distinct_failures(cfg.unit(x), np.ones(len(x), bool), cfg.distinct_distance)
+        hit = np.nonzero(counts >= k)[0]
+        out.append(np.nonzero(failed)[0][hit[0]] + 1 if len(hit) else np.inf)
+    return float(np.median(out))
 
 
 def k_trials(k: int, p: float) -> float:
