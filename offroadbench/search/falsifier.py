@@ -12,6 +12,16 @@ trials and gives the same proposals again (tests/search/test_runner.py kills and
 * ``falsify`` with ``sampler = "cmaes"``: CMA-ES (Hansen 2016) of the ``cmaes`` package on the
   ranges scaled to [0, 1], its population one batch; the state is rebuilt by replaying every
   earlier generation's ask and tell (the package's generator is seeded, so the replay is exact).
+* ``falsify`` with ``local_step > 0`` (TPE): once a stream has a failure (and has run its
+  ``startup_trials``), each batch keeps
+  ``explore_slots`` proposals of the optimiser (fresh terrains) and fills the rest by a local
+  pattern search (a compass search, Kolda et al. 2003, Sec. 3) around the failures found so far:
+  a failure's parameters moved by ``local_step`` of a range along one parameter at a time, on the
+  failure's own terrain and mission seeds, the parameters whose moves kept failures so far first.
+  The operational domain lets the terrain and mission vary, so the falsifier may pick them (the
+  nominal distribution only weighs the P(failure) estimates, which never use the falsifier's
+  trials). A neighbour closer than ``distinct_distance`` to a point already tried on the same
+  terrain is skipped, so a neighbour that fails is distinct from every failure on its terrain.
 * ``random``: nominal draws (plain Monte Carlo).
 * ``ce-is``: cross-entropy stages, then importance sampling from the defensive mixture
   (offroadbench.search.estimators).
@@ -46,6 +56,8 @@ class Batch:
     """Their standard-normal coordinates (n, d)."""
     margin: np.ndarray
     """The failure margin of each trial (n,); negative = failed."""
+    seeds: tuple[tuple[int, int] | None, ...] = ()
+    """(terrain seed, mission seed) each trial drove (None where not known: a trial without a row)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,6 +72,9 @@ class Proposal:
     log_w: np.ndarray
     """log(nominal density / proposal density) of each point, in z (n,): 0 for nominal draws, NaN
     for the falsifier (its points come from no stated density)."""
+    seeds: tuple[tuple[int, int] | None, ...] = ()
+    """(terrain seed, mission seed) a point must drive (the falsifier's local search re-drives a
+    failure's terrain), None (or a short tuple) where the stream's own nuisance draw applies."""
 
 
 def stream_seed(root_seed: int, group: int, method: str) -> int:
@@ -116,8 +131,81 @@ def propose(method: str, stage: str, n: int, cfg: SearchConfig, seed: int, batch
         return Proposal(stage, cfg.from_z(z), z, prop.log_weight(z))
     if stage != "falsify":
         raise ValueError(f"unknown stage {stage!r}")
-    x = _tpe(cfg, seed, batch, history, n) if cfg.sampler == "tpe" else _cma(cfg, seed, history, n)
-    return Proposal(stage, x, cfg.to_z(x), np.full(n, np.nan))
+    local = _local_moves(cfg, history, n - min(cfg.explore_slots, n)) if cfg.local_step > 0 else []
+    n_opt = n - len(local)
+    x_opt = np.zeros((0, d))
+    if n_opt:
+        x_opt = _tpe(cfg, seed, batch, history, n_opt) if cfg.sampler == "tpe" else _cma(cfg, seed, history, n_opt)
+    x = x_opt
+    if local:
+        x = np.vstack([x_opt, _from_unit(cfg, np.array([u for u, _ in local]))])
+    seeds = tuple([None] * n_opt + [s for _, s in local])
+    return Proposal(stage, x, cfg.to_z(x), np.full(n, np.nan), seeds)
+
+
+def _from_unit(cfg: SearchConfig, u: np.ndarray) -> np.ndarray:
+    lo = np.array([p.low for p in cfg.params])
+    hi = np.array([p.high for p in cfg.params])
+    return np.clip(lo + np.asarray(u, dtype=float) * (hi - lo), lo, hi)
+
+
+def _move_axis(u: np.ndarray, earlier: list[int], xs: list[np.ndarray]) -> tuple[int, int] | None:
+    """(axis, parent index) of a compass move: the first earlier point on the same terrain that
+    differs from ``u`` in exactly one parameter (None if there is none)."""
+    for k in earlier:
+        diff = np.abs(u - xs[k]) > 1e-9
+        if int(diff.sum()) == 1:
+            return int(np.argmax(diff)), k
+    return None
+
+
+def _local_moves(cfg: SearchConfig, history: list[Batch], slots: int) -> list[tuple[np.ndarray, tuple[int, int]]]:
+    """Up to ``slots`` compass moves around the stream's failures (module docstring): (point in
+    range units, (terrain seed, mission seed)) each. A move along parameter j is ranked by how
+    often moves along j from a failure failed too so far ((kept + 1) / (moves + 2): a parameter
+    that changes the terrain, such as its roughness, loses the failure; one that does not, keeps
+    it), then by its failure's margin (deepest first), parameter order and + before -."""
+    if slots <= 0:
+        return []
+    xs: list[np.ndarray] = []
+    ms: list[float] = []
+    seeds: list = []
+    for b in history:
+        if len(b.seeds) != len(b.margin):
+            continue
+        xs.extend(np.asarray(u, dtype=float) for u in cfg.unit(b.x))
+        ms.extend(float(m) for m in b.margin)
+        seeds.extend(None if s is None else tuple(s) for s in b.seeds)
+    on_terrain: dict[tuple[int, int], list[int]] = {}
+    moves, kept = np.zeros(cfg.dim), np.zeros(cfg.dim)
+    for i, s in enumerate(seeds):
+        if s is None:
+            continue
+        earlier = on_terrain.setdefault(s, [])
+        move = _move_axis(xs[i], earlier, xs) if earlier else None
+        if move is not None and np.isfinite(ms[move[1]]) and ms[move[1]] < 0 and np.isfinite(ms[i]):
+            moves[move[0]] += 1
+            kept[move[0]] += ms[i] < 0
+        earlier.append(i)
+    keep_rate = (kept + 1) / (moves + 2)
+    parents = [i for i, m in enumerate(ms) if np.isfinite(m) and m < 0 and seeds[i] is not None]
+    candidates = []
+    for i in parents:
+        for j in range(cfg.dim):
+            for sign in (1.0, -1.0):
+                candidates.append((-keep_rate[j], ms[i], i, j, -sign))
+    candidates.sort()
+    out: list[tuple[np.ndarray, tuple[int, int]]] = []
+    for _, _, i, j, neg_sign in candidates:
+        u = xs[i].copy()
+        u[j] = min(max(u[j] - neg_sign * cfg.local_step, 0.0), 1.0)
+        near = on_terrain[seeds[i]]
+        if all(np.max(np.abs(u - xs[t])) >= cfg.distinct_distance for t in near) and \
+                all(np.max(np.abs(u - v)) >= cfg.distinct_distance for v, s in out if s == seeds[i]):
+            out.append((u, seeds[i]))
+            if len(out) == slots:
+                break
+    return out
 
 
 def _tpe(cfg: SearchConfig, seed: int, batch: int, history: list[Batch], n: int) -> np.ndarray:

@@ -102,6 +102,7 @@ def stream_summary(df: pd.DataFrame, cfg: SearchConfig) -> pd.DataFrame:
         rows.append({"group": grp, "method": method, "trials": len(s), "failures": int(s["failed"].sum()),
                      "no mission": int((s["failure_reason"] == NO_MISSION).sum()),
                      "distinct failures": int(counts[-1]) if len(counts) else 0,
+                     "terrains failed": int(s.loc[s["failed"], "terrain_seed"].nunique()),
                      f"trials to {FIRST_K} distinct failures": first_failures(cfg, s),
                      "lowest margin": float(s["margin"].min()) if len(s) else np.nan})
     return pd.DataFrame(rows)
@@ -130,14 +131,25 @@ def _group_label(plan: SearchPlan, grp: int) -> str:
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "all"
 
 
+def mc_trials_ratio(mc: Estimate, est: Estimate) -> float:
+    """How many times fewer trials ``est`` spent than plain Monte Carlo needs for ``est``'s relative
+    error at the Monte Carlo estimate ``mc.p``: (1 - p) / (p r^2) / trials (NaN without both)."""
+    if not (mc.p > 0 and math.isfinite(est.rel_error) and est.rel_error > 0 and est.trials):
+        return float("nan")
+    return (1 - mc.p) / (mc.p * est.rel_error ** 2) / est.trials
+
+
 def _estimate_rows(plan: SearchPlan, ests: dict[tuple[int, str], Estimate]) -> pd.DataFrame:
     rows = []
     for (grp, method), e in sorted(ests.items()):
         rel = e.rel_error if math.isfinite(e.rel_error) else 0.1
+        mc = ests.get((grp, "mc"))
         rows.append({"group": _group_label(plan, grp), "estimator": method, "trials": e.trials, "failures": e.failures,
                      "P(failure)": e.p, "relative error": e.rel_error, f"{e.level:.0%} low": e.low,
                      f"{e.level:.0%} high": e.high,
-                     "trials for 10 % rel. error": trials_for_rel_error(e, 0.1) if rel else np.nan})
+                     "trials for 10 % rel. error": trials_for_rel_error(e, 0.1) if rel else np.nan,
+                     "MC trials for this rel. error / trials": mc_trials_ratio(mc, e) if mc is not None else np.nan,
+                     "covers MC": (e.low <= mc.p <= e.high) if mc is not None and e is not mc else None})
     return pd.DataFrame(rows)
 
 
@@ -173,8 +185,11 @@ def build_search_report(run_dir: str | Path):
         f"- methods: {', '.join(cfg.methods)}; falsifier `{cfg.sampler}`; batch {cfg.batch_size}; "
         f"{len(done)} of {len(df)} proposed trials finished",
         f"- terrain and mission: {'fixed' if cfg.fix_terrain else 'random'} terrain, "
-        f"{'fixed' if cfg.fix_mission else 'random'} mission (study seeds, root {plan.study.root_seed})",
-        f"- distinct failures: at least {cfg.distinct_distance:g} of a range apart in some parameter",
+        f"{'fixed' if cfg.fix_mission else 'random'} mission (study seeds, root {plan.study.root_seed})"
+        + (f"; the falsifier's local search (step {cfg.local_step:g} of a range) re-drives the terrains of its "
+           f"failures, {cfg.explore_slots} of every {cfg.batch_size} proposals on fresh terrains" if cfg.local_step else ""),
+        f"- distinct failures: at least {cfg.distinct_distance:g} of a range apart in some parameter "
+        "(`terrains failed`: how many different terrains the failures lie on)",
         "",
         "## Failures found against trials spent",
         "",
@@ -186,7 +201,10 @@ def build_search_report(run_dir: str | Path):
         "",
         ("Plain Monte Carlo from the `random` stream (Clopper-Pearson interval); cross-entropy importance "
          "sampling from the `ce-is` stream (its adaptive stages counted in `trials`; normal interval of the "
-         "defensive-mixture estimate). `trials for 10 % rel. error` extrapolates each estimator's variance."),
+         "defensive-mixture estimate). `trials for 10 % rel. error` extrapolates each estimator's variance; "
+         "`MC trials for this rel. error / trials`: plain Monte Carlo's trials for the estimator's relative error "
+         "at the Monte Carlo estimate, over the trials the estimator spent; `covers MC`: whether its interval holds "
+         "the Monte Carlo estimate."),
         "",
         markdown_table(est_table) if len(est_table) else "(no `random` or `ce-is` trials)",
         "",

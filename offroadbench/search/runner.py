@@ -102,7 +102,7 @@ def search_meta(plan: SearchPlan, budget: int, source_text: str, version: str) -
         "groups": [_cell_meta(g) for g in plan.groups],
         "columns": _columns(plan),
         "cells": [],
-        "n_trials": budget * len(plan.groups) * len(plan.search.methods),
+        "n_trials": len(plan.groups) * sum(plan.search.method_budget(m, budget) for m in plan.search.methods),
         "version": version,
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     }
@@ -176,7 +176,9 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
             break
         x = np.array([e["x"] for e in entries], dtype=float)
         m = np.array([margin_of(plan, group, plan.search.values(e["x"]), e["row"]) for e in entries])
-        done.append(Batch(entries[0]["stage"], x, np.array([e["z"] for e in entries], dtype=float), m))
+        seeds = tuple(None if e["terrain_seed"] is None else (int(e["terrain_seed"]), int(e["mission_seed"]))
+                      for e in entries)
+        done.append(Batch(entries[0]["stage"], x, np.array([e["z"] for e in entries], dtype=float), m, seeds))
     return done, ordered
 
 
@@ -186,6 +188,15 @@ def _nuisance(plan: SearchPlan, group: CellPlan, k: int) -> tuple[int, int]:
     j = 0 if cfg.fix_terrain else k
     m = k if (cfg.fix_terrain and not cfg.fix_mission) else 0
     return seeding.terrain_seed(root, j, cell=group.key), seeding.mission_seed(root, j, m, cell=group.key)
+
+
+def _same_seeds(seeds: tuple, entries: list[dict[str, Any]]) -> bool:
+    """Whether the stored trials of a re-proposed batch drove the seeds the proposal names (where it names them)."""
+    for i, e in enumerate(entries):
+        chosen = seeds[i] if i < len(seeds) else None
+        if chosen is not None and e["row"] is not None and (int(e["terrain_seed"]), int(e["mission_seed"])) != chosen:
+            return False
+    return True
 
 
 def _json_list(a: np.ndarray) -> str:
@@ -225,7 +236,7 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
         lock.release()
         raise
     ran = 0
-    total = budget * len(plan.groups) * len(cfg.methods)
+    total = len(plan.groups) * sum(cfg.method_budget(m, budget) for m in cfg.methods)
     try:
         store.con.executescript(SEARCH_TABLE)
         meta = store.meta()
@@ -239,7 +250,8 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
         try:
             for gi, group in enumerate(plan.groups):
                 for method in cfg.methods:
-                    ran += _run_stream(plan, store, run_dir, gi, group, method, budget, ex, trial_fn, run_id,
+                    ran += _run_stream(plan, store, run_dir, gi, group, method, cfg.method_budget(method, budget), ex,
+                                       trial_fn, run_id,
                                        lambda: report(progress, store.counts()[0], total))
             status = "finished"
         except KeyboardInterrupt:
@@ -273,7 +285,7 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
             stage, n = entries[0]["stage"], len(entries)
             prop = propose(method, stage, n, cfg, seed, b, history)
             old = np.array([e["x"] for e in entries], dtype=float)
-            if not np.array_equal(old, prop.x):
+            if not np.array_equal(old, prop.x) or not _same_seeds(prop.seeds, entries):
                 raise StudyError(f"{run_dir}: the stored batch {b} of {method} in group {gi} differs from what this "
                                  "code proposes (another offroadbench version?); use another --out directory")
             cells = [trial_cell(plan, group, e["cell"], np.asarray(e["x"])) for e in entries]
@@ -290,7 +302,8 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
         tasks = []
         for i, (e, c) in enumerate(zip(entries, cells)):
             if e["row"] is None:
-                tseed, mseed = _nuisance(plan, group, k0 + i)
+                chosen = prop.seeds[i] if i < len(prop.seeds) else None
+                tseed, mseed = _nuisance(plan, group, k0 + i) if chosen is None else chosen
                 tasks.append(TerrainTask(cell=c, terrain=0, terrain_seed=tseed, missions=((0, mseed),),
                                          telemetry=plan.study.telemetry))
 

@@ -146,6 +146,9 @@ class SearchConfig:
     (nominal sampling: plain Monte Carlo) and ``ce-is`` (cross-entropy importance sampling)."""
     budget: int = 200
     """Trials per method and grid cell (``search run --budget`` overrides it)."""
+    mc_budget: int | None = None
+    """Trials of the ``random`` stream (plain Monte Carlo) per grid cell, if not ``budget``: a large
+    one is the Monte Carlo reference the other methods are measured against."""
     batch_size: int = 8
     """Trials proposed together (ask/tell); a batch runs in parallel on the executor."""
     sampler: str = "tpe"
@@ -163,6 +166,14 @@ class SearchConfig:
     distinct_distance: float = 0.1
     """Two failures are distinct when their parameters differ by at least this, in units of each
     range (largest difference over the parameters)."""
+    local_step: float = 0.0
+    """Falsifier: step of the local pattern search around failures, in units of each range (0: off,
+    the optimiser alone). Once the stream has a failure (and ``startup_trials`` are done), all but
+    ``explore_slots`` proposals of a batch are neighbours of its failures (one parameter moved by this
+    step) on the failure's own terrain and mission (offroadbench.search.falsifier). At least ``distinct_distance``, so that a neighbour
+    that fails is a distinct failure; TPE only."""
+    explore_slots: int = 2
+    """Falsifier with ``local_step > 0``: proposals per batch still made by the optimiser on fresh terrains."""
     ce_stage_size: int = 50
     """Cross-entropy: trials per adaptive stage."""
     ce_quantile: float = 0.1
@@ -192,6 +203,8 @@ class SearchConfig:
         if len(set(self.methods)) != len(self.methods):
             raise InputError(f"SearchConfig.methods = {list(self.methods)} names a method twice")
         check_int(self, "budget", self.budget, lo=1)
+        if self.mc_budget is not None:
+            check_int(self, "mc_budget", self.mc_budget, lo=1)
         check_int(self, "batch_size", self.batch_size, lo=1, hi=10_000)
         check_choice(self, "sampler", self.sampler, SAMPLERS)
         if self.sampler == "cmaes" and len(self.params) < 2 and "falsify" in self.methods:
@@ -202,6 +215,13 @@ class SearchConfig:
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"SearchConfig.{name} = {getattr(self, name)!r}; must be true or false")
         check_range(self, "distinct_distance", self.distinct_distance, lo=0, hi=1, lo_open=True)
+        check_range(self, "local_step", self.local_step, lo=0, hi=1)
+        if 0 < self.local_step < self.distinct_distance:
+            raise InputError(f"SearchConfig.local_step = {self.local_step!r}; must be 0 (off) or at least "
+                             f"distinct_distance = {self.distinct_distance!r}")
+        if self.local_step > 0 and self.sampler != "tpe":
+            raise InputError(f"SearchConfig.local_step = {self.local_step!r} needs sampler = 'tpe' (got {self.sampler!r})")
+        check_int(self, "explore_slots", self.explore_slots, lo=0)
         check_int(self, "ce_stage_size", self.ce_stage_size, lo=10)
         check_range(self, "ce_quantile", self.ce_quantile, lo=0, hi=0.5, lo_open=True)
         check_int(self, "ce_max_stages", self.ce_max_stages, lo=1, hi=50)
@@ -216,6 +236,13 @@ class SearchConfig:
     @property
     def dim(self) -> int:
         return len(self.params)
+
+    def method_budget(self, method: str, budget: int | None = None) -> int:
+        """Trials of ``method`` per grid cell: ``mc_budget`` for ``random`` where set, else ``budget``
+        (default the table's)."""
+        if method == "random" and self.mc_budget is not None:
+            return self.mc_budget
+        return self.budget if budget is None else budget
 
     def from_z(self, z: np.ndarray) -> np.ndarray:
         """Parameter values (n, d) of standard-normal coordinates ``z`` (n, d)."""
@@ -269,7 +296,7 @@ def search_from_dict(table: Mapping[str, Any], where: str = "[search]") -> Searc
         if not isinstance(data["methods"], list):
             raise InputError(f"{where}: methods must be a list, e.g. [\"falsify\", \"random\"]")
         data["methods"] = tuple(data["methods"])
-    for k in ("distinct_distance", "ce_quantile", "ce_defensive", "ce_min_sd", "level"):
+    for k in ("distinct_distance", "local_step", "ce_quantile", "ce_defensive", "ce_min_sd", "level"):
         if k in data and _is_number(data[k]):
             data[k] = float(data[k])
     try:

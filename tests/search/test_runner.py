@@ -176,3 +176,41 @@ def test_proposals_whose_terrain_holds_no_mission_are_stored_apart_and_the_searc
     assert none.any() and (df.loc[none, "missions.length_m"] > 6.0).all()  # near the diagonal: no goal found
     assert not df.loc[none, "failed"].any() and df.loc[none, "margin"].isna().all()
     assert (df.loc[~none, "missions.length_m"] <= 7.1).all()
+
+
+def _local_search_data() -> dict:
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["falsify"], local_step=0.12, explore_slots=1)
+    return data
+
+
+def test_the_local_search_redrives_failing_terrains_one_parameter_step_away(tmp_path):
+    plan = search_from_data(_local_search_data())
+    run_search(plan, tmp_path, executor="inline", trial_fn=stand_in_trials)
+    from offroadbench.search.report import search_table
+
+    df, _ = search_table(tmp_path)
+    unit = plan.search.unit(df[list(plan.search.keys)].to_numpy(dtype=float))
+    redriven = 0
+    for i in range(len(df)):
+        earlier = [j for j in range(i) if df["terrain_seed"][j] == df["terrain_seed"][i]
+                   and df["mission_seed"][j] == df["mission_seed"][i]]
+        if not earlier:
+            continue
+        redriven += 1
+        assert any(df["failed"][j] for j in earlier)  # only a failure's terrain is driven again
+        steps = [np.abs(unit[i] - unit[j]) for j in earlier if df["failed"][j]]
+        # one parameter moved by the step (less where the range ends), the others kept
+        assert any(((s > 1e-9).sum() == 1) and 0 < s.max() <= 0.12 + 1e-9 for s in steps)
+        assert min(np.abs(unit[i] - unit[j]).max() for j in earlier) >= 0.1 - 1e-9
+    assert redriven >= 8
+
+
+def test_a_local_search_resumes_with_identical_proposals(tmp_path):
+    plan = search_from_data(_local_search_data())
+    whole, part = tmp_path / "whole", tmp_path / "part"
+    run_search(plan, whole, executor="inline", trial_fn=stand_in_trials)
+    run_search(plan, part, budget=12, executor="inline", trial_fn=stand_in_trials)
+    summary = run_search(plan, part, executor="inline", trial_fn=stand_in_trials)
+    assert summary.ran == 12
+    assert _table(part) == _table(whole)

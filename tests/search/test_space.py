@@ -89,3 +89,13 @@ def test_cli_errors_are_one_line_with_exit_2(tmp_path, capsys):
     assert err.count("\n") == 1 and "no [search] table" in err
     assert main(["search", "report", str(tmp_path)]) == 2
     assert "not a search run directory" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("extra, words", [({"local_step": 0.05}, "at least distinct_distance"),
+                                          ({"local_step": 0.2, "sampler": "cmaes"}, "needs sampler = 'tpe'"),
+                                          ({"mc_budget": 0}, "mc_budget")])
+def test_local_search_and_mc_budget_settings_are_checked(extra, words):
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(extra)
+    with pytest.raises(InputError, match=words):
+        search_from_data(data)
