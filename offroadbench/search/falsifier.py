@@ -231,7 +231,7 @@ def _tpe_ask(cfg: SearchConfig, seed: int, batch: int, history: list[Batch], n: 
                                              constant_liar=True)
         study = optuna.create_study(direction="minimize", sampler=sampler)
         done = [optuna.trial.create_trial(params=cfg.values(xi), distributions=dists, value=float(mi))
-                for b in history for xi, mi in zip(b.x, b.margin) if np.isfinite(mi)]  # no-mission draws: not told
+                for b in history for xi, mi in zip(b.x, b.margin, strict=True) if np.isfinite(mi)]  # no-mission draws: not told
         if done:
             study.add_trials(done)
         out = []

@@ -21,7 +21,7 @@ def fig_failures_vs_trials(df: pd.DataFrame, cfg: SearchConfig, labels: Mapping[
     """Distinct failures found against trials spent, one panel per grid cell, one line per method."""
     groups = sorted(df["group"].unique())
     fig, axes = new_figure(1, len(groups), figsize=(4.2 * len(groups), 3.4), squeeze=False)
-    for ax, grp in zip(axes[0], groups):
+    for ax, grp in zip(axes[0], groups, strict=True):
         g = df[(df["group"] == grp) & df["done"]]
         for method, s in g.groupby("method"):
             x = cfg.unit(s[list(cfg.keys)].to_numpy(dtype=float))
@@ -46,7 +46,7 @@ def fig_pairwise(df: pd.DataFrame, cfg: SearchConfig, title: str = ""):
     rows = (n + cols - 1) // cols
     fig, axes = new_figure(rows, cols, figsize=(4.0 * cols, 3.6 * rows), squeeze=False)
     flat = list(axes.ravel())
-    for ax, (i, j) in zip(flat, pairs):
+    for ax, (i, j) in zip(flat, pairs, strict=False):  # the grid may hold more axes than pairs
         for failed, colour, marker, label in ((False, "tab:blue", ".", "passed"), (True, "tab:red", "x", "failed")):
             s = df[df["failed"] == failed]
             y = s["margin"] if j is None else s[keys[j]]

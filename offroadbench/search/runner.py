@@ -83,7 +83,7 @@ class SearchSummary:
 def _columns(plan: SearchPlan) -> dict[str, str]:
     keys = [a.key for a in plan.study.grid] + list(plan.search.keys)
     lasts = [k.split(".", 1)[0] if k in ("planner.name", "vehicle.name") else k.rsplit(".", 1)[-1] for k in keys]
-    return {k: (last if lasts.count(last) == 1 else k) for k, last in zip(keys, lasts)}
+    return {k: (last if lasts.count(last) == 1 else k) for k, last in zip(keys, lasts, strict=True)}
 
 
 def _cell_meta(c: CellPlan) -> dict[str, Any]:
@@ -300,7 +300,7 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
             _store_batch(store, gi, method, b, prop, cells)
         k0 = sum(len(h.margin) for h in history)
         tasks = []
-        for i, (e, c) in enumerate(zip(entries, cells)):
+        for i, (e, c) in enumerate(zip(entries, cells, strict=True)):
             if e["row"] is None:
                 chosen = prop.seeds[i] if i < len(prop.seeds) else None
                 tseed, mseed = _nuisance(plan, group, k0 + i) if chosen is None else chosen

@@ -261,7 +261,7 @@ class SearchConfig:
 
     def values(self, x: np.ndarray) -> dict[str, float]:
         """{key: value} of one point (a row of ``x``), as plain floats."""
-        return {k: float(v) for k, v in zip(self.keys, np.asarray(x, dtype=float).ravel())}
+        return {k: float(v) for k, v in zip(self.keys, np.asarray(x, dtype=float).ravel(), strict=True)}
 
 
 _PARAM_KEYS = tuple(f.name for f in dataclasses.fields(SearchParam))
