@@ -98,22 +98,57 @@ def _planner_successes(folder: Path) -> list[float]:
     return [float(v) for v in table[["straight", "astar", "lattice"]].to_numpy().ravel()]
 
 
-def _paper_surface(folder: Path) -> pd.DataFrame:
-    """The planner-stress trials on the paper's (aliased) W-M surface with the true planner map."""
+def _paired_effect(folder: Path, level: float, treatment: dict, control: dict, where: dict) -> float:
+    """Mean per-terrain success difference (points) between two cells of one level, over the terrains
+    with trials in both (a terrain whose missions are all faults drops out of the pair)."""
     t = trial_table(folder)
-    return t[(~t["band_limited"].astype(bool)) & (t["map_noise_m"] == 0)]
+    t = t[t["D_high"] == level]
+    for col, v in where.items():
+        t = t[t[col] == v]
+
+    def rate(sel: dict) -> pd.Series:
+        part = t
+        for col, v in sel.items():
+            part = part[part[col] == v]
+        return part.groupby("terrain")["success"].mean().mul(100)
+
+    d = (rate(treatment) - rate(control)).dropna()
+    return float(d.mean())
 
 
-def _durkalski_astar(folder: Path) -> list[float]:
-    from offroadbench.study.clustered import durkalski_mcnemar
-
-    t = _paper_surface(folder)
+def _planner_stress_confirmatory(folder: Path) -> list[float]:
+    """The plan's six effects in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
+    aliased surface with the true map; the line on the band-limited against the aliased surface."""
     out = []
-    for level in (2.9, 2.95, 2.99):
-        s = t[t["D_high"] == level].groupby(["terrain", "planner"])["success"].agg(["sum", "size"]).unstack("planner")
-        d = s[("sum", "astar")] - s[("sum", "straight")]
-        out.append(durkalski_mcnemar(d.clip(lower=0), (-d).clip(lower=0), s[("size", "astar")])[1])
+    for planner in ("astar", "lattice"):
+        for level in (2.95, 2.99):
+            out.append(_paired_effect(folder, level, {"planner": planner}, {"planner": "straight"},
+                                      {"band_limited": False, "map_noise_m": 0.0}))
+    for level in (2.95, 2.99):
+        out.append(_paired_effect(folder, level, {"band_limited": True}, {"band_limited": False},
+                                  {"planner": "straight", "map_noise_m": 0.0}))
     return out
+
+
+def _shared_missions(folder: Path) -> list[float]:
+    """Band-limited trials whose start and goal equal those of the aliased trial of the same planner,
+    level, map, terrain and mission."""
+    t = trial_table(folder)
+    keys = ["planner", "D_high", "map_noise_m", "terrain", "mission"]
+    ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]
+    a = t[~t["band_limited"].astype(bool)].set_index(keys)[ends]
+    b = t[t["band_limited"].astype(bool)].set_index(keys)[ends]
+    pair = pd.merge(a, b, how="inner", left_index=True, right_index=True, suffixes=("", "_b"))
+    same = np.all([np.isclose(pair[c], pair[f"{c}_b"]) for c in ends], axis=0)
+    return [float(same.sum())] if len(pair) == len(b) else [float("nan")]
+
+
+def _above_nyquist_share(folder: Path) -> list[float]:
+    """Mean per-terrain share (%) of the aliased surface's variance that its band-limited twin does not
+    explain, per D_high (terrains.csv)."""
+    ter = pd.read_csv(folder / "terrains.csv")
+    per = ter[ter["band_limited"].astype(bool)].groupby(["D_high", "terrain"])["twin_unexplained_var"].first()
+    return list(per.groupby("D_high").mean().mul(100))
 
 
 def _straight_breaking_point(folder: Path) -> list[float]:
@@ -122,7 +157,9 @@ def _straight_breaking_point(folder: Path) -> list[float]:
     # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
     bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "map_noise_m"])
     row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["map_noise_m"] == 0)].iloc[0]
-    return [float(row[c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
+    # the README says the interval's low end lies below the first level ("below already at 2.9")
+    assert row["ci95_low"] == -np.inf
+    return [float(row["breaking_point"]), float(row["ci95_high"])]
 
 
 def _terrain_success_changes(folder: Path) -> list[float]:
@@ -289,13 +326,25 @@ SAMPLES = [
            rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
-    Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
-           rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
+    Sample("planner-stress confirmatory effects", "planner-stress",
+           "".join(rf"\| {name} \| {level} \| \d+ \| [\d.]+ -> [\d.]+ \| \*\*\+{_NUM} \[[\d., ]+\]\*\* \|[^\n]*\n"
+                   for name, level in [("astar against the line", 2.95), ("astar against the line", 2.99),
+                                       ("lattice against the line", 2.95), ("lattice against the line", 2.99),
+                                       ("the line, band-limited against aliased surface", 2.95),
+                                       ("the line, band-limited against aliased surface", 2.99)]),
+           _planner_stress_confirmatory),
+    Sample("planner-stress faults", "planner-stress", rf"{_NUM} faults, no outcome",
+           lambda f: [float(len(pd.read_csv(f / "faults.csv")))]),
+    Sample("planner-stress shared missions", "planner-stress",
+           rf"all\s+{_NUM} band-limited trials have the start and goal of their aliased twin", _shared_missions),
+    Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
+           "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
     Sample("planner-stress straight-line breaking point", "planner-stress",
-           rf"`straight` on the paper's surface at D_high = {_NUM}\s+\[{_NUM}, {_NUM}\]", _straight_breaking_point),
+           rf"`straight`, paper's surface: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
+           _straight_breaking_point),
     Sample("planner-stress successes per planner and cell", "planner-stress",
-           r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|\n\|[-|]+\|\n"
-           + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for _ in range(12)),
+           r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|[^\n]*\n\|[-|]+\|\n"
+           + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|[^\n]*\n" for _ in range(12)),
            _planner_successes),
 ]
 
