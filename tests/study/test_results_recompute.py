@@ -260,10 +260,42 @@ def _soil_success_by_gravity(folder: Path) -> list[float]:
     return [float(rate[1.62]), float(rate[9.81])]
 
 
+def _one_engine_only(folder: Path) -> list[float]:
+    """Paired missions (same D, terrain and mission) that succeed on MuJoCo only, then on PyBullet only."""
+    w = trial_table(folder).pivot_table(index=["D_high", "terrain", "mission"], columns="engine", values="success",
+                                        aggfunc="first").astype(bool)
+    return [float((w["mujoco"] & ~w["pybullet"]).sum()), float((w["pybullet"] & ~w["mujoco"]).sum())]
+
+
+def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
+    """Engine trials equal (outcome, simulated time, RMS vertical acceleration) to the trial of the same D,
+    terrain and mission seed in the paper study on that engine: PyBullet, then MuJoCo."""
+    t = trial_table(folder)
+    out = []
+    for engine, study in (("pybullet", "majhor2023"), ("mujoco", "majhor2023-mujoco")):
+        keys = ["D_high", "terrain_seed", "mission_seed"]
+        j = pd.merge(t[t["engine"] == engine], trial_table(RESULTS / study), on=keys, suffixes=("", "_paper"))
+        same = ((j["success"] == j["success_paper"]) & np.isclose(j["sim_time_s"], j["sim_time_s_paper"])
+                & np.isclose(j["rms_vertical_accel_m_s2"].fillna(-1), j["rms_vertical_accel_m_s2_paper"].fillna(-1)))
+        out.append(float(same.sum()))
+    return out
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
-    Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
+    Sample("engines success by engine", "engines",
+           rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \*\*\+{_NUM} \[",
            _pooled_success_effect("engine", "mujoco", "pybullet")),
+    Sample("engines successes per engine and D_high", "engines",
+           rf"successful trials \(of 100\) \| {_NUM} / {_NUM} / {_NUM} \([^)]*\) \| {_NUM} / {_NUM} / {_NUM} \(",
+           lambda f: [float(v) for v in trial_table(f).groupby(["engine", "D_high"])["success"].sum()
+                      .loc[["pybullet", "mujoco"]]]),
+    Sample("engines missions succeeding on one engine only", "engines",
+           rf"{_NUM} of the 300 paired missions succeed only on MuJoCo and {_NUM} only on PyBullet",
+           _one_engine_only),
+    Sample("engines trials equal the paper studies' trials", "engines",
+           rf"the {_NUM}\s+PyBullet trials are rows of the \[majhor2023\][^\n]*\n[^\n]*\n{_NUM} MuJoCo trials rows",
+           _engines_trials_in_paper_studies),
     Sample("lunar-soil regolith against rigid ground", "lunar-soil", rf"missions succeed {_NUM} points",
            lambda f: [-_pooled_success_effect("tyre_model", "terramechanics", "coulomb")(f)[0]]),
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
