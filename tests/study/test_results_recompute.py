@@ -98,22 +98,57 @@ def _planner_successes(folder: Path) -> list[float]:
     return [float(v) for v in table[["straight", "astar", "lattice"]].to_numpy().ravel()]
 
 
-def _paper_surface(folder: Path) -> pd.DataFrame:
-    """The planner-stress trials on the paper's (aliased) W-M surface with the true planner map."""
+def _paired_effect(folder: Path, level: float, treatment: dict, control: dict, where: dict) -> float:
+    """Mean per-terrain success difference (points) between two cells of one level, over the terrains
+    with trials in both (a terrain whose missions are all faults drops out of the pair)."""
     t = trial_table(folder)
-    return t[(~t["band_limited"].astype(bool)) & (t["map_noise_m"] == 0)]
+    t = t[t["D_high"] == level]
+    for col, v in where.items():
+        t = t[t[col] == v]
+
+    def rate(sel: dict) -> pd.Series:
+        part = t
+        for col, v in sel.items():
+            part = part[part[col] == v]
+        return part.groupby("terrain")["success"].mean().mul(100)
+
+    d = (rate(treatment) - rate(control)).dropna()
+    return float(d.mean())
 
 
-def _durkalski_astar(folder: Path) -> list[float]:
-    from offroadbench.study.clustered import durkalski_mcnemar
-
-    t = _paper_surface(folder)
+def _planner_stress_confirmatory(folder: Path) -> list[float]:
+    """The plan's six effects in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
+    aliased surface with the true map; the line on the band-limited against the aliased surface."""
     out = []
-    for level in (2.9, 2.95, 2.99):
-        s = t[t["D_high"] == level].groupby(["terrain", "planner"])["success"].agg(["sum", "size"]).unstack("planner")
-        d = s[("sum", "astar")] - s[("sum", "straight")]
-        out.append(durkalski_mcnemar(d.clip(lower=0), (-d).clip(lower=0), s[("size", "astar")])[1])
+    for planner in ("astar", "lattice"):
+        for level in (2.95, 2.99):
+            out.append(_paired_effect(folder, level, {"planner": planner}, {"planner": "straight"},
+                                      {"band_limited": False, "map_noise_m": 0.0}))
+    for level in (2.95, 2.99):
+        out.append(_paired_effect(folder, level, {"band_limited": True}, {"band_limited": False},
+                                  {"planner": "straight", "map_noise_m": 0.0}))
     return out
+
+
+def _shared_missions(folder: Path) -> list[float]:
+    """Band-limited trials whose start and goal equal those of the aliased trial of the same planner,
+    level, map, terrain and mission."""
+    t = trial_table(folder)
+    keys = ["planner", "D_high", "map_noise_m", "terrain", "mission"]
+    ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]
+    a = t[~t["band_limited"].astype(bool)].set_index(keys)[ends]
+    b = t[t["band_limited"].astype(bool)].set_index(keys)[ends]
+    pair = pd.merge(a, b, how="inner", left_index=True, right_index=True, suffixes=("", "_b"))
+    same = np.all([np.isclose(pair[c], pair[f"{c}_b"]) for c in ends], axis=0)
+    return [float(same.sum())] if len(pair) == len(b) else [float("nan")]
+
+
+def _above_nyquist_share(folder: Path) -> list[float]:
+    """Mean per-terrain share (%) of the aliased surface's variance that its band-limited twin does not
+    explain, per D_high (terrains.csv)."""
+    ter = pd.read_csv(folder / "terrains.csv")
+    per = ter[ter["band_limited"].astype(bool)].groupby(["D_high", "terrain"])["twin_unexplained_var"].first()
+    return list(per.groupby("D_high").mean().mul(100))
 
 
 def _straight_breaking_point(folder: Path) -> list[float]:
@@ -122,7 +157,9 @@ def _straight_breaking_point(folder: Path) -> list[float]:
     # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
     bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "map_noise_m"])
     row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["map_noise_m"] == 0)].iloc[0]
-    return [float(row[c]) for c in ("breaking_point", "ci95_low", "ci95_high")]
+    # the README says the interval's low end lies below the first level ("below already at 2.9")
+    assert row["ci95_low"] == -np.inf
+    return [float(row["breaking_point"]), float(row["ci95_high"])]
 
 
 def _terrain_success_changes(folder: Path) -> list[float]:
@@ -223,10 +260,42 @@ def _soil_success_by_gravity(folder: Path) -> list[float]:
     return [float(rate[1.62]), float(rate[9.81])]
 
 
+def _one_engine_only(folder: Path) -> list[float]:
+    """Paired missions (same D, terrain and mission) that succeed on MuJoCo only, then on PyBullet only."""
+    w = trial_table(folder).pivot_table(index=["D_high", "terrain", "mission"], columns="engine", values="success",
+                                        aggfunc="first").astype(bool)
+    return [float((w["mujoco"] & ~w["pybullet"]).sum()), float((w["pybullet"] & ~w["mujoco"]).sum())]
+
+
+def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
+    """Engine trials equal (outcome, simulated time, RMS vertical acceleration) to the trial of the same D,
+    terrain and mission seed in the paper study on that engine: PyBullet, then MuJoCo."""
+    t = trial_table(folder)
+    out = []
+    for engine, study in (("pybullet", "majhor2023"), ("mujoco", "majhor2023-mujoco")):
+        keys = ["D_high", "terrain_seed", "mission_seed"]
+        j = pd.merge(t[t["engine"] == engine], trial_table(RESULTS / study), on=keys, suffixes=("", "_paper"))
+        same = ((j["success"] == j["success_paper"]) & np.isclose(j["sim_time_s"], j["sim_time_s_paper"])
+                & np.isclose(j["rms_vertical_accel_m_s2"].fillna(-1), j["rms_vertical_accel_m_s2_paper"].fillna(-1)))
+        out.append(float(same.sum()))
+    return out
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
-    Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
+    Sample("engines success by engine", "engines",
+           rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \*\*\+{_NUM} \[",
            _pooled_success_effect("engine", "mujoco", "pybullet")),
+    Sample("engines successes per engine and D_high", "engines",
+           rf"successful trials \(of 100\) \| {_NUM} / {_NUM} / {_NUM} \([^)]*\) \| {_NUM} / {_NUM} / {_NUM} \(",
+           lambda f: [float(v) for v in trial_table(f).groupby(["engine", "D_high"])["success"].sum()
+                      .loc[["pybullet", "mujoco"]]]),
+    Sample("engines missions succeeding on one engine only", "engines",
+           rf"{_NUM} of the 300 paired missions succeed only on MuJoCo and {_NUM} only on PyBullet",
+           _one_engine_only),
+    Sample("engines trials equal the paper studies' trials", "engines",
+           rf"the {_NUM}\s+PyBullet trials are rows of the \[majhor2023\][^\n]*\n[^\n]*\n{_NUM} MuJoCo trials rows",
+           _engines_trials_in_paper_studies),
     Sample("lunar-soil regolith against rigid ground", "lunar-soil", rf"missions succeed {_NUM} points",
            lambda f: [-_pooled_success_effect("tyre_model", "terramechanics", "coulomb")(f)[0]]),
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
@@ -289,13 +358,25 @@ SAMPLES = [
            rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
-    Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
-           rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
+    Sample("planner-stress confirmatory effects", "planner-stress",
+           "".join(rf"\| {name} \| {level} \| \d+ \| [\d.]+ -> [\d.]+ \| \*\*\+{_NUM} \[[\d., ]+\]\*\* \|[^\n]*\n"
+                   for name, level in [("astar against the line", 2.95), ("astar against the line", 2.99),
+                                       ("lattice against the line", 2.95), ("lattice against the line", 2.99),
+                                       ("the line, band-limited against aliased surface", 2.95),
+                                       ("the line, band-limited against aliased surface", 2.99)]),
+           _planner_stress_confirmatory),
+    Sample("planner-stress faults", "planner-stress", rf"{_NUM} faults, no outcome",
+           lambda f: [float(len(pd.read_csv(f / "faults.csv")))]),
+    Sample("planner-stress shared missions", "planner-stress",
+           rf"all\s+{_NUM} band-limited trials have the start and goal of their aliased twin", _shared_missions),
+    Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
+           "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
     Sample("planner-stress straight-line breaking point", "planner-stress",
-           rf"`straight` on the paper's surface at D_high = {_NUM}\s+\[{_NUM}, {_NUM}\]", _straight_breaking_point),
+           rf"`straight`, paper's surface: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
+           _straight_breaking_point),
     Sample("planner-stress successes per planner and cell", "planner-stress",
-           r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|\n\|[-|]+\|\n"
-           + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for _ in range(12)),
+           r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|[^\n]*\n\|[-|]+\|\n"
+           + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|[^\n]*\n" for _ in range(12)),
            _planner_successes),
 ]
 
