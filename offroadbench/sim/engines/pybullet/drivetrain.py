@@ -57,12 +57,18 @@ class Flywheels:
 
 
 def attach_flywheels(cid: int, vehicle: int, wheels: list[int], excess_kg_m2: list[float],
-                     anchor_m: tuple[float, float, float]) -> Flywheels:
+                     anchor_m: tuple[float, float, float], driven: list[bool] | None = None) -> Flywheels:
     """One grounded flywheel of inertia ``excess_kg_m2[i]`` (kg m^2) geared 1:1 to each wheel joint
     ``wheels[i]`` of ``vehicle`` whose excess is positive; ``anchor_m`` is where the flywheels'
-    fixed bases sit (world frame, m; anywhere out of the vehicle's way: they collide with nothing)."""
+    fixed bases sit (world frame, m; anywhere out of the vehicle's way: they collide with nothing).
+
+    ``driven[i]`` False marks a wheel without a motor (a car's towed front wheels): its flywheel is
+    not a drive train but the numerical inertia the explicit tyre forces need (vehicles/hunter), so
+    it is spared Bullet's default velocity damping (about ``I w (0.04 + 0.04 |w|)``), which no motor
+    makes up there and which would brake the free wheel (README, "Known limitations")."""
     bodies, constraints = [], []
-    for joint, excess in zip(wheels, excess_kg_m2, strict=True):
+    driven = [True] * len(wheels) if driven is None else driven
+    for joint, excess, motor in zip(wheels, excess_kg_m2, driven, strict=True):
         if excess <= 0.0:
             continue
         axis = tuple(pb.getJointInfo(vehicle, joint, physicsClientId=cid)[13])
@@ -74,6 +80,8 @@ def attach_flywheels(cid: int, vehicle: int, wheels: list[int], excess_kg_m2: li
             linkJointTypes=[pb.JOINT_REVOLUTE], linkJointAxis=[list(axis)], physicsClientId=cid)
         pb.changeDynamics(fly, 0, localInertiaDiagonal=[excess, excess, excess], physicsClientId=cid)
         pb.setJointMotorControl2(fly, 0, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)  # free
+        if not motor:  # a separate call: with localInertiaDiagonal in the same one it stopped every vehicle
+            pb.changeDynamics(fly, -1, linearDamping=0.0, angularDamping=0.0, physicsClientId=cid)
         gear = pb.createConstraint(vehicle, joint, fly, 0, pb.JOINT_GEAR, list(axis), [0.0, 0.0, 0.0],
                                    [0.0, 0.0, 0.0], physicsClientId=cid)
         # Bullet's gear row holds q_dot_a + ratio * q_dot_b = 0: ratio -1 gives equal joint speeds

@@ -235,7 +235,8 @@ class World:
                 pb.changeDynamics(body, j, localInertiaDiagonal=[ixx, spin, izz], physicsClientId=cid)
         self._excess_kg_m2 = tuple(excess)
         self._flywheels = attach_flywheels(cid, body, self.wheel_joints, excess,
-                                           (0.0, 0.0, self.hm.z_min_m - 50.0))
+                                           (0.0, 0.0, self.hm.z_min_m - 50.0),
+                                           [spec.is_driven(n) for n in spec.wheel_joints])
         self._articulate(body, names)
         if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
             n_links = pb.getNumJoints(body, physicsClientId=cid)
