@@ -182,9 +182,11 @@ def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> lis
     df = pd.DataFrame(rows, columns=["cell", "terrain", "mission", "terrain_seed", "mission_seed", "reason", "session"])
     tables["faults.csv"] = df
     return ["## Faults", "",
-            f"{len(df)} trial(s) gave no outcome (past the per-trial limit, or the vehicle thrown while settling). "
+            f"{len(df)} trial(s) gave no outcome (past the per-trial limit, the vehicle thrown while settling, or "
+            "a drawn terrain on which no mission can be drawn under the mission rules: then every mission of that "
+            "terrain, and the terrain drops out of the paired comparisons of its cells). "
             "They are not trials of the study: every statistic above and below leaves them out. "
-            "`study run --retry-faults` runs them again.", "",
+            "`study run --retry-faults` runs them again (a terrain without missions stays one).", "",
             markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
 
 

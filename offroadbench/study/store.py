@@ -358,7 +358,7 @@ class Store:
     def add_fault(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, reason: str,
                   run_id: int | None = None) -> bool:
         """Store a trial that could not give an outcome (it ran past its limit, the vehicle was
-        thrown while settling): not a trial row, so no statistic sees it. Returns False if the
+        thrown while settling, its terrain admits no mission): not a trial row, so no statistic sees it. Returns False if the
         trial is already stored (as a trial or a fault)."""
         if self.has_trial(cell, terrain, mission):
             return False
