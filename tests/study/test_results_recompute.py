@@ -223,6 +223,26 @@ def _soil_success_by_gravity(folder: Path) -> list[float]:
     return [float(rate[1.62]), float(rate[9.81])]
 
 
+def _sign_flip_plan(trials: pd.DataFrame, axis: str, pairs: list[tuple], which: int) -> list[float]:
+    """A plan of pooled per-terrain success comparisons (treatment, control) along ``axis``, every
+    other column pooled (each terrain's rate over the rest), exact sign-flip tests, Holm over the
+    pairs: comparison ``which``'s effect, p and Holm p, recomputed from the trial table."""
+    from offroadbench.study.clustered import holm, sign_flip_test
+
+    rate = trials.groupby([axis, "terrain"])["success"].mean().mul(100).unstack(axis)
+    diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in pairs]
+    p = [sign_flip_test(d) for d in diffs]
+    return [float(diffs[which].mean()), p[which], float(holm(p)[which])]
+
+
+def _vehicle_comparison_plan(folder: Path) -> list[float]:
+    """The Jackal's planned comparison: effect, interval (confirmatory.csv), p and Holm p."""
+    pairs = [(v, "husky") for v in ("jackal", "talon", "hunter", "sojourner")]
+    effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, 0)
+    ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc["jackal against the husky"]
+    return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -289,6 +309,9 @@ SAMPLES = [
            rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
+    Sample("vehicle-comparison jackal against the husky (plan)", "vehicle-comparison",
+           rf"\| jackal \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+           _vehicle_comparison_plan),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
