@@ -243,6 +243,34 @@ def _vehicle_comparison_plan(folder: Path) -> list[float]:
     return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
 
 
+PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
+
+
+def _vehicle_planner_successes(folder: Path) -> list[float]:
+    """Successes per vehicle and planner, oracle then mast, in the README table's order."""
+    s = trial_table(folder).groupby(["vehicle", "planner", "sensor"])["success"].sum()
+    return [float(s[(v, p, arm)]) for v in ("husky", "jackal") for p in PLANNERS for arm in ("oracle", "mast")]
+
+
+def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
+    """The vehicle-planner plan (each terrain's success over both vehicles; exact sign-flip tests, Holm
+    over the 4): comparison ``which``'s arms' means, effect, interval (confirmatory.csv), p and Holm p."""
+    arms = [(("mppi", "mast"), ("straight", "mast")), (("astar", "mast"), ("straight", "mast")),
+            (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
+
+    def compute(folder: Path) -> list[float]:
+        from offroadbench.study.clustered import holm, sign_flip_test
+
+        rate = trial_table(folder).groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+        diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in arms]
+        p = [sign_flip_test(d) for d in diffs]
+        t, c = arms[which]
+        ci = pd.read_csv(folder / "confirmatory.csv").iloc[which]
+        return [float(rate[t].mean()), float(rate[c].mean()), float(diffs[which].mean()), float(ci["ci_low"]),
+                float(ci["ci_high"]), p[which], float(holm(p)[which])]
+    return compute
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines", rf"MuJoCo succeeds on {_NUM} points",
@@ -317,6 +345,18 @@ SAMPLES = [
     Sample("vehicle-comparison jackal against the husky (plan)", "vehicle-comparison",
            rf"\| jackal \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
            _vehicle_comparison_plan),
+    Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
+           "".join(rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
+                   for v in ("husky", "jackal") for p in PLANNERS), _vehicle_planner_successes),
+    Sample("vehicle-planner plan: mppi against the line through the sensor", "vehicle-planner",
+           rf"\| mppi against the line, through the sensor \| {_NUM} / {_NUM} \| \*\*\+{_NUM} \[{_NUM}, {_NUM}\]\*\* "
+           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(0)),
+    Sample("vehicle-planner plan: the sensor's cost to astar", "vehicle-planner",
+           rf"\| the sensor's cost to astar \(mast against oracle\) \| {_NUM} / {_NUM} \| \*\*{_NUM} "
+           rf"\[{_NUM}, {_NUM}\]\*\* \| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(2)),
+    Sample("vehicle-planner plan: ppo against the line through the sensor", "vehicle-planner",
+           rf"\| ppo against the line, through the sensor \| {_NUM} / {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] "
+           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(3)),
     Sample("planner-stress Durkalski p of astar at 2.9 / 2.95 / 2.99", "planner-stress",
            rf"cluster-adjusted McNemar gives {_NUM} / {_NUM} / {_NUM}", _durkalski_astar),
     Sample("planner-stress straight-line breaking point", "planner-stress",
