@@ -167,6 +167,24 @@ def _torque_pitch_rate_drop(folder: Path) -> list[float]:
     return [float((med[28.0] - med[16.5]).mean())]
 
 
+def _vehicle_sensitivity_pitch_plan(folder: Path) -> list[float]:
+    """The plan's 16.5 N m / 1.0 kg m^2 pitch-rate test: effect, interval (confirmatory.csv), p and Holm p
+    over the plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials),
+    recomputed from the trial table."""
+    from offroadbench.study.clustered import holm, sign_flip_test
+
+    t = trial_table(folder)
+    key = ["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]
+    rate = t.groupby([*key, "terrain"])["success"].mean().mul(100)
+    pitch = t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()
+    shipped = (28.0, 1.0)
+    diffs = [(rate[k] - rate[shipped]).to_numpy(float) for k in _SETTINGS[1:]]
+    diffs += [(pitch[k] - pitch[shipped]).to_numpy(float) for k in ((16.5, 1.0), (28.0, 0.25))]
+    p = [sign_flip_test(d) for d in diffs]
+    ci = pd.read_csv(folder / "confirmatory.csv").iloc[5]
+    return [float(diffs[5].mean()), float(ci["ci_low"]), float(ci["ci_high"]), p[5], float(holm(p)[5])]
+
+
 VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
 TERRAIN_KINDS = ("paper-d2.3", "paper-d2.45", "paper-d2.6", "lunar-mare")
 
@@ -325,6 +343,9 @@ SAMPLES = [
            + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
     Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
            rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
+    Sample("vehicle-sensitivity plan: pitch rate at 16.5 N m", "vehicle-sensitivity",
+           rf"\| 16.5 / 1.0 \| RMS pitch rate, deg/s \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+           _vehicle_sensitivity_pitch_plan),
     Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
            rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
