@@ -204,6 +204,24 @@ def _torque_pitch_rate_drop(folder: Path) -> list[float]:
     return [float((med[28.0] - med[16.5]).mean())]
 
 
+def _vehicle_sensitivity_pitch_plan(folder: Path) -> list[float]:
+    """The plan's 16.5 N m / 1.0 kg m^2 pitch-rate test: effect, interval (confirmatory.csv), p and Holm p
+    over the plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials),
+    recomputed from the trial table."""
+    from offroadbench.study.clustered import holm, sign_flip_test
+
+    t = trial_table(folder)
+    key = ["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]
+    rate = t.groupby([*key, "terrain"])["success"].mean().mul(100)
+    pitch = t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()
+    shipped = (28.0, 1.0)
+    diffs = [(rate[k] - rate[shipped]).to_numpy(float) for k in _SETTINGS[1:]]
+    diffs += [(pitch[k] - pitch[shipped]).to_numpy(float) for k in ((16.5, 1.0), (28.0, 0.25))]
+    p = [sign_flip_test(d) for d in diffs]
+    ci = pd.read_csv(folder / "confirmatory.csv").iloc[5]
+    return [float(diffs[5].mean()), float(ci["ci_low"]), float(ci["ci_high"]), p[5], float(holm(p)[5])]
+
+
 VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
 TERRAIN_KINDS = ("paper-d2.3", "paper-d2.45", "paper-d2.6", "lunar-mare")
 
@@ -281,6 +299,54 @@ def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
     return out
 
 
+def _sign_flip_plan(trials: pd.DataFrame, axis: str, pairs: list[tuple], which: int) -> list[float]:
+    """A plan of pooled per-terrain success comparisons (treatment, control) along ``axis``, every
+    other column pooled (each terrain's rate over the rest), exact sign-flip tests, Holm over the
+    pairs: comparison ``which``'s effect, p and Holm p, recomputed from the trial table."""
+    from offroadbench.study.clustered import holm, sign_flip_test
+
+    rate = trials.groupby([axis, "terrain"])["success"].mean().mul(100).unstack(axis)
+    diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in pairs]
+    p = [sign_flip_test(d) for d in diffs]
+    return [float(diffs[which].mean()), p[which], float(holm(p)[which])]
+
+
+def _vehicle_comparison_plan(folder: Path) -> list[float]:
+    """The Jackal's planned comparison: effect, interval (confirmatory.csv), p and Holm p."""
+    pairs = [(v, "husky") for v in ("jackal", "talon", "hunter", "sojourner")]
+    effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, 0)
+    ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc["jackal against the husky"]
+    return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+
+
+PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
+
+
+def _vehicle_planner_successes(folder: Path) -> list[float]:
+    """Successes per vehicle and planner, oracle then mast, in the README table's order."""
+    s = trial_table(folder).groupby(["vehicle", "planner", "sensor"])["success"].sum()
+    return [float(s[(v, p, arm)]) for v in ("husky", "jackal") for p in PLANNERS for arm in ("oracle", "mast")]
+
+
+def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
+    """The vehicle-planner plan (each terrain's success over both vehicles; exact sign-flip tests, Holm
+    over the 4): comparison ``which``'s arms' means, effect, interval (confirmatory.csv), p and Holm p."""
+    arms = [(("mppi", "mast"), ("straight", "mast")), (("astar", "mast"), ("straight", "mast")),
+            (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
+
+    def compute(folder: Path) -> list[float]:
+        from offroadbench.study.clustered import holm, sign_flip_test
+
+        rate = trial_table(folder).groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+        diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in arms]
+        p = [sign_flip_test(d) for d in diffs]
+        t, c = arms[which]
+        ci = pd.read_csv(folder / "confirmatory.csv").iloc[which]
+        return [float(rate[t].mean()), float(rate[c].mean()), float(diffs[which].mean()), float(ci["ci_low"]),
+                float(ci["ci_high"]), p[which], float(holm(p)[which])]
+    return compute
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 SAMPLES = [
     Sample("engines success by engine", "engines",
@@ -346,11 +412,19 @@ SAMPLES = [
            + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
     Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
            rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
+    Sample("vehicle-sensitivity plan: pitch rate at 16.5 N m", "vehicle-sensitivity",
+           rf"\| 16.5 / 1.0 \| RMS pitch rate, deg/s \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+           _vehicle_sensitivity_pitch_plan),
     Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
            rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
            rf"median RMS vertical acceleration, m/s² \| {_NUM} / {_NUM} / {_NUM} \|",
            _metric_medians("rms_vertical_accel_m_s2")),
+    Sample("majhor2023-mujoco quotes PyBullet's successes and vertical acceleration", "majhor2023-mujoco",
+           rf"\(886\) \| {_NUM} / {_NUM} / {_NUM} \({_NUM};[^\n]*\n[^\n]*\n"
+           rf"\| median RMS vertical acceleration, m/s² \|[^|]*\|[^|]*\| {_NUM} / {_NUM} / {_NUM} \|",
+           lambda f: [*_successes(f.parent / "majhor2023"), sum(_successes(f.parent / "majhor2023")),
+                      *_metric_medians("rms_vertical_accel_m_s2")(f.parent / "majhor2023")]),
     Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
            "".join(rf"\| {v} \| {r} \| {_NUM} / 16 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
            _vehicle_successes),
@@ -371,6 +445,21 @@ SAMPLES = [
            rf"all\s+{_NUM} band-limited trials have the start and goal of their aliased twin", _shared_missions),
     Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
            "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
+    Sample("vehicle-comparison jackal against the husky (plan)", "vehicle-comparison",
+           rf"\| jackal \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+           _vehicle_comparison_plan),
+    Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
+           "".join(rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
+                   for v in ("husky", "jackal") for p in PLANNERS), _vehicle_planner_successes),
+    Sample("vehicle-planner plan: mppi against the line through the sensor", "vehicle-planner",
+           rf"\| mppi against the line, through the sensor \| {_NUM} / {_NUM} \| \*\*\+{_NUM} \[{_NUM}, {_NUM}\]\*\* "
+           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(0)),
+    Sample("vehicle-planner plan: the sensor's cost to astar", "vehicle-planner",
+           rf"\| the sensor's cost to astar \(mast against oracle\) \| {_NUM} / {_NUM} \| \*\*{_NUM} "
+           rf"\[{_NUM}, {_NUM}\]\*\* \| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(2)),
+    Sample("vehicle-planner plan: ppo against the line through the sensor", "vehicle-planner",
+           rf"\| ppo against the line, through the sensor \| {_NUM} / {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] "
+           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(3)),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),
