@@ -195,7 +195,9 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
         part = dataclasses.replace(prepared, missions=tuple(pending),
                                    mission_seeds=tuple(seeds[m.index] for m in pending))
         try:
-            for mission, item in zip(part.missions, trial_fn(part, settings), strict=True):
+            # not strict: a trial function may stop early (a stand-in that only builds terrains); the
+            # missions it did not drive stay pending
+            for mission, item in zip(part.missions, trial_fn(part, settings), strict=False):
                 k = mission.index
                 kept = None
                 if hasattr(item, "result"):  # a TrialRecord
