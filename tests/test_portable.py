@@ -58,6 +58,38 @@ length_m = 6.0
 border_m = 1.0
 """
 
+#: a soft-soil slice: the terramechanics tyre model's tables (sin, cos, exp, acos, pow and the
+#: quadrature nodes) on lunar regolith in lunar gravity, and its per-step soil contact; 2 terrains x 2
+#: missions = 4 trials on 12.8 m maps
+SOIL_SLICE = """
+[study]
+name = "portable-soil"
+recipe = "lunar-mare"
+root_seed = 7
+terrains_per_cell = 2
+missions_per_terrain = 2
+
+[grid]
+"sim.tyre_model" = ["terramechanics"]
+
+[recipe_overrides]
+"grid.rows" = 257
+"grid.cols" = 257
+"layers.base.relief_m" = 0.6
+"layers.craters.population.d_max_m" = 3.0
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 5.0
+border_m = 1.0
+
+[sim]
+soil = "lunar-regolith"
+gravity_m_s2 = 1.62
+"""
+
 #: run in a subprocess (or in-process): drive the slice's tasks with the missions in a given order
 DRIVER = textwrap.dedent('''
     import hashlib, json, sys
@@ -133,6 +165,22 @@ def test_terrain_and_trials_are_identical_on_a_baseline_cpu_in_reversed_order(na
     assert set(other["rows"]) == set(out["rows"])
     differ = [k for k in out["rows"] if other["rows"][k] != out["rows"][k]]
     assert not differ, f"{len(differ)} of {len(out['rows'])} trial rows differ, e.g. {differ[:3]}"
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_soft_soil_trials_are_identical_on_a_baseline_cpu(tmp_path, engine):
+    """The terramechanics tyre model's tables and soil contact (MuJoCo's compiled soil loop too): every
+    number of every row of a soft-soil slice, natively and with numpy/OpenBLAS/glibc switched down
+    (``terramechanics`` module docstring, "Portability")."""
+    if engine == "mujoco":
+        pytest.importorskip("mujoco")
+    (tmp_path / "slice.toml").write_text(SOIL_SLICE + f'engine = "{engine}"\n')
+    out = _run_driver(tmp_path, "forward", {})
+    other = _run_driver(tmp_path, "reversed", BASELINE_ENV)
+    assert len(out["rows"]) == 4 and set(other["rows"]) == set(out["rows"])
+    assert len({r["traversal_time_s"] for r in out["rows"].values()}) >= 2  # real trials, not one repeated row
+    differ = [k for k in out["rows"] if other["rows"][k] != out["rows"][k]]
+    assert not differ, f"{len(differ)} of {len(out['rows'])} soft-soil rows differ, e.g. {differ[:3]}"
 
 
 def test_a_subset_of_missions_in_another_order_gives_the_same_rows(native):

@@ -45,6 +45,14 @@ the deflection of a series spring ``k_series`` (the tyre, capped for the stabili
 60 Hz step): ``delta = h + F_z(h, s) / k_series``, solved for ``h`` when the tables are built, so a
 very stiff soil (heavy clay: tens of micrometres under a small robot) stays stable.
 
+Portability. The tables are computed bit for bit alike on every x86-64 CPU: numpy picks its
+``sin``/``cos``/``exp``/``arccos``/``power`` loops by the CPU it runs on (AVX-512, AVX2 and SSE
+loops round differently in the last bit) and ``leggauss`` takes its nodes from LAPACK, so the
+elementary functions here go through Python's ``math`` (the C library, as every per-step number
+does), the quadrature nodes come from a Newton iteration in plain floats (:func:`gauss_legendre`)
+and the quadrature sums run node by node in a fixed order (:func:`_quadrature`). numpy's
+elementwise ``+ - * /``, ``sqrt``, ``abs`` and comparisons are exactly rounded on every CPU and stay.
+
 Validity. Bekker's moduli are fitted to plate tests at 1 g. Tests of wheels under reduced gravity
 (parabolic flights; Kobayashi et al. 2010, Wong 2012) found that a wheel in lunar gravity sinks and
 slips more than the same wheel loaded to the same weight in 1 g: the soil's own weight, which
@@ -61,6 +69,8 @@ from pathlib import Path
 
 import numpy as np
 
+from functools import lru_cache
+
 from offroadbench import resources
 from offroadbench.bounds import check_bounds
 from offroadbench.config import check_range, from_dict, load_toml
@@ -74,6 +84,7 @@ __all__ = [
     "SoilTables",
     "build_tables",
     "entry_angle",
+    "gauss_legendre",
     "lateral_force",
     "list_soils",
     "load_soil",
@@ -209,10 +220,67 @@ def published_slip_sinkage() -> list[SlipSinkageBand]:
     return out
 
 
+# ---------------------------------------------------------------------------- portable elementary functions
+def _elementwise(fn, nargs: int):
+    """``fn`` of Python's ``math`` applied element by element, returning float arrays (module docstring,
+    "Portability": numpy's own transcendental loops depend on the CPU's SIMD level)."""
+    ufunc = np.frompyfunc(fn, nargs, 1)
+
+    def apply(*args):
+        return np.asarray(ufunc(*(np.asarray(a, dtype=float) for a in args)), dtype=float)
+
+    return apply
+
+
+_sin = _elementwise(math.sin, 1)
+_cos = _elementwise(math.cos, 1)
+_exp = _elementwise(math.exp, 1)
+_acos = _elementwise(math.acos, 1)
+_pow = _elementwise(math.pow, 2)
+
+
+@lru_cache(maxsize=8)
+def gauss_legendre(order: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Gauss-Legendre nodes (ascending) and weights on [-1, 1] for ``order`` points, in plain floats.
+
+    Newton's iteration on ``P_n`` from the three-term recurrence ``k P_k = (2k - 1) x P_{k-1} - (k - 1) P_{k-2}``
+    started at Tricomi's estimate ``cos(pi (i - 1/4) / (n + 1/2))``, the weights ``2 / ((1 - x^2) P_n'(x)^2)``
+    (Abramowitz & Stegun 1964, Eq. 25.4.29); the same bits on every CPU (module docstring).
+    """
+    nodes, weights = [], []
+    for i in range(1, order + 1):
+        x = math.cos(math.pi * (i - 0.25) / (order + 0.5))
+        for _ in range(100):
+            p0, p1 = 1.0, x
+            for k in range(2, order + 1):
+                p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
+            dp = order * (x * p1 - p0) / (x * x - 1.0)
+            step = p1 / dp
+            x -= step
+            if abs(step) <= 1e-16:
+                break
+        p0, p1 = 1.0, x
+        for k in range(2, order + 1):
+            p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
+        dp = order * (x * p1 - p0) / (x * x - 1.0)
+        nodes.append(x)
+        weights.append(2.0 / ((1.0 - x * x) * dp * dp))
+    return tuple(nodes[::-1]), tuple(weights[::-1])
+
+
+def _quadrature(weights, values):
+    """``sum_k weights[..., k] values[..., k]`` over the last axis, node by node in a fixed order."""
+    weights, values = np.broadcast_arrays(weights, values)
+    total = np.zeros(values.shape[:-1])
+    for k in range(values.shape[-1]):
+        total = total + weights[..., k] * values[..., k]
+    return total
+
+
 # ---------------------------------------------------------------------------- the model
 def entry_angle(radius_m, sinkage_m):
     """theta_1 = acos(1 - h / r), rad (0 for h <= 0)."""
-    return np.arccos(np.clip(1.0 - np.asarray(sinkage_m, dtype=float) / radius_m, -1.0, 1.0))
+    return _acos(np.clip(1.0 - np.asarray(sinkage_m, dtype=float) / radius_m, -1.0, 1.0))
 
 
 def max_stress_angle(soil: SoilParams, theta1, slip):
@@ -227,9 +295,9 @@ def normal_stress(soil: SoilParams, radius_m: float, width_m: float, theta, thet
     front = theta >= theta_m
     with np.errstate(divide="ignore", invalid="ignore"):
         equiv = np.where(front, theta, theta1 - theta / np.where(theta_m > 0, theta_m, 1.0) * (theta1 - theta_m))
-    base = np.clip(np.cos(equiv) - np.cos(theta1), 0.0, None)
+    base = np.clip(_cos(equiv) - _cos(theta1), 0.0, None)
     n = soil.exponent(slip)
-    sigma = soil.modulus(width_m) * radius_m**n * base**n
+    sigma = soil.modulus(width_m) * _pow(radius_m, n) * _pow(base, n)
     return np.where((theta >= 0) & (theta <= theta1), sigma, 0.0)
 
 
@@ -237,7 +305,7 @@ def shear_displacement(radius_m: float, theta, theta1, slip):
     """j(theta), m: driven (s >= 0, Wong & Reece 1967, Eq. 7) or skidding (s < 0) form (module docstring)."""
     slip = np.asarray(slip, dtype=float)
     d_angle = theta1 - np.asarray(theta, dtype=float)
-    d_sin = np.sin(theta1) - np.sin(theta)
+    d_sin = _sin(theta1) - _sin(theta)
     driven = radius_m * (d_angle - (1.0 - slip) * d_sin)
     skid = radius_m * ((1.0 + slip) * d_angle - d_sin)
     return np.where(slip >= 0.0, driven, skid)
@@ -246,7 +314,7 @@ def shear_displacement(radius_m: float, theta, theta1, slip):
 def _nodes(theta1, theta_m, order: int):
     """Gauss-Legendre nodes and weights on [0, theta_m] and [theta_m, theta_1] (the stress has a
     kink at theta_m): arrays of shape (..., 2 * order)."""
-    x, w = np.polynomial.legendre.leggauss(order)
+    x, w = (np.array(a) for a in gauss_legendre(order))
     theta1 = np.asarray(theta1, dtype=float)[..., None]
     theta_m = np.asarray(theta_m, dtype=float)[..., None]
     lo_half, hi_half = theta_m / 2.0, (theta1 - theta_m) / 2.0
@@ -266,11 +334,12 @@ def wheel_forces(soil: SoilParams, radius_m: float, width_m: float, sinkage_m, s
     sigma = normal_stress(soil, radius_m, width_m, th, t1, tm, ss)
     j = shear_displacement(radius_m, th, t1, ss)
     tau = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_angle_deg))) * np.sign(j) * (
-        1.0 - np.exp(-np.abs(j) / soil.shear_modulus_m))
+        1.0 - _exp(-np.abs(j) / soil.shear_modulus_m))
     rb = radius_m * width_m
-    fz = rb * np.sum(w * (tau * np.sin(th) + sigma * np.cos(th)), axis=-1)
-    fx = rb * np.sum(w * (tau * np.cos(th) - sigma * np.sin(th)), axis=-1)
-    torque = radius_m * rb * np.sum(w * tau, axis=-1)
+    sin_th, cos_th = _sin(th), _cos(th)
+    fz = rb * _quadrature(w, tau * sin_th + sigma * cos_th)
+    fx = rb * _quadrature(w, tau * cos_th - sigma * sin_th)
+    torque = radius_m * rb * _quadrature(w, tau)
     return fz, fx, torque
 
 
@@ -284,9 +353,9 @@ def lateral_force(soil: SoilParams, radius_m: float, width_m: float, sinkage_m, 
     th, w = _nodes(theta1, theta_m, order)
     sigma = normal_stress(soil, radius_m, width_m, th, theta1[..., None], theta_m[..., None], s[..., None])
     jy = radius_m * np.where(np.isinf(lam), 1.0, lam)[..., None] * (theta1[..., None] - th)
-    develop = np.where(np.isinf(lam)[..., None], 1.0, 1.0 - np.exp(-jy / soil.lateral_shear_modulus_m))
+    develop = np.where(np.isinf(lam)[..., None], 1.0, 1.0 - _exp(-jy / soil.lateral_shear_modulus_m))
     tau_y = (soil.cohesion_pa + sigma * math.tan(math.radians(soil.friction_angle_deg))) * develop
-    return radius_m * width_m * np.sum(w * tau_y, axis=-1)
+    return radius_m * width_m * _quadrature(w, tau_y)
 
 
 # ---------------------------------------------------------------------------- tables
@@ -360,9 +429,11 @@ class SoilTables:
         return total
 
 
+@lru_cache(maxsize=32)
 def build_tables(soil: SoilParams, radius_m: float, width_m: float, k_series_n_m: float, *,
                  n_delta: int = 48, n_slip: int = 41, n_lat: int = 13, n_fine: int = 160) -> SoilTables:
-    """Evaluate the wheel's forces on the table grid (see :class:`SoilTables`) with numpy, once.
+    """Evaluate the wheel's forces on the table grid (see :class:`SoilTables`), once per process for
+    each (soil, wheel, spring) (about 1.6 s; the tables are read-only).
 
     The soil's sinkage ``h`` at each penetration ``delta`` solves ``delta = h + F_z(h, s) / k_series``
     (interpolated on ``n_fine`` sinkages up to ``MAX_SINKAGE_FRACTION * r``).
@@ -374,13 +445,15 @@ def build_tables(soil: SoilParams, radius_m: float, width_m: float, k_series_n_m
         raise InputError(f"soil {soil.name!r}: k_c / b + k_phi = {soil.modulus(width_m):g} <= 0 for a "
                          f"{width_m:g} m wide wheel")
     h_max = MAX_SINKAGE_FRACTION * radius_m
-    h_fine = h_max * np.linspace(0.0, 1.0, n_fine) ** 2
+    u_fine = np.linspace(0.0, 1.0, n_fine)
+    h_fine = h_max * (u_fine * u_fine)
     slips = np.linspace(-1.0, 1.0, n_slip)
     fz_f, _, _ = wheel_forces(soil, radius_m, width_m, h_fine[:, None], slips[None, :])
     fz_f = np.maximum(fz_f, 0.0)
     delta_f = np.maximum.accumulate(h_fine[:, None] + fz_f / k_series_n_m, axis=0)  # (fine, slip)
     delta_max = float(delta_f[-1].min())
-    deltas = delta_max * (np.arange(n_delta + 1) / n_delta) ** 2
+    u_delta = np.arange(n_delta + 1) / n_delta
+    deltas = delta_max * (u_delta * u_delta)
     sink = np.empty((n_delta + 1, n_slip))
     for j in range(n_slip):
         sink[:, j] = np.interp(deltas, delta_f[:, j], h_fine)
