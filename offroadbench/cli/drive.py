@@ -99,25 +99,22 @@ def drive_record(run, label: str = "", options: dict | None = None) -> dict:
     """What ``drive --out`` keeps beside trials.csv (``settings.json``): the command's options, the terrain
     and seeds, every setting the missions were driven with (the TrialSettings, the terrain's gravity
     and soil filled in), the platform (offroadbench.study.fingerprint) and the code version."""
-    import dataclasses
-
     from offroadbench.study.fingerprint import platform_fingerprint
     from offroadbench.study.runner import code_version
 
-    settings = {f.name: _plain(getattr(run.settings, f.name)) for f in dataclasses.fields(run.settings)}
     return {
         "options": _plain(options or {}),
         "terrain": label,
         "terrain_seed": run.terrain_seed,
         "mission_seeds": list(run.mission_seeds),
-        "settings": settings,
+        "settings": run.settings.to_dict(),  # what a study store keeps per cell; TrialSettings.from_dict reads it
         "platform": platform_fingerprint(),
         "code_version": code_version(),
     }
 
 
 def _plain(value):
-    """A config as JSON data (nested dataclasses as tables, tuples as lists, paths as strings)."""
+    """The command's options as JSON data (tuples as lists, paths as strings)."""
     import dataclasses
 
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

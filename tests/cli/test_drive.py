@@ -103,6 +103,10 @@ def test_drive_out_keeps_its_settings_platform_and_code_version(tmp_path):
     assert s["vehicle"]["name"] == "husky" and s["planner"]["name"] == "straight"
     assert rec["mission_seeds"] == list(pd.read_csv(out / "trials.csv")["mission_seed"])
     assert rec["platform"]["arch"] and rec["code_version"].startswith("0.")
+    from offroadbench.sim.trial.settings import TrialSettings
+
+    back = TrialSettings.from_dict(rec["settings"])  # the settings a study store keeps, read back whole
+    assert back.sim.gravity_m_s2 == 1.62 and back.sim.engine == "mujoco" and back.to_dict() == s
 
 
 def test_the_footprint_is_measured_by_the_trials_engine(monkeypatch):
