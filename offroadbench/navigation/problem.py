@@ -17,8 +17,16 @@ from offroadbench.config import check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["VehicleEnvelope", "PlanningProblem"]
+__all__ = ["VehicleEnvelope", "PlanningProblem", "PlannerRefusal"]
 
+
+
+class PlannerRefusal(InputError):
+    """A planner or policy cannot drive this vehicle (e.g. A*'s turns on the spot for an Ackermann
+    car): a property of the (planner, vehicle) pair, not of the terrain. ``drive`` reports it as bad
+    input (one line); a study stores the pair's trials as faults, so a cartesian grid of vehicles and
+    planners runs to the end and its report shows the pair as refused
+    (offroadbench.study.tasks.run_terrain)."""
 
 @dataclass(frozen=True, kw_only=True)
 class VehicleEnvelope:

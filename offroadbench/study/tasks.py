@@ -49,15 +49,18 @@ from typing import Any, Callable, Iterator, Mapping
 
 from offroadbench.errors import TrialFault
 from offroadbench.navigation.missions import NoMissionError
+from offroadbench.navigation.problem import PlannerRefusal
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec import CellPlan
 
-__all__ = ["NO_MISSION_FAULT", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
+__all__ = ["NO_MISSION_FAULT", "REFUSED_FAULT", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
            "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
 #: the start of a fault's reason when its terrain admits no mission (:func:`run_terrain`)
 NO_MISSION_FAULT = "no mission can be drawn on this terrain: "
+#: the reason of a trial whose planner or policy refuses the cell's vehicle (PlannerRefusal)
+REFUSED_FAULT = "the planner refuses this vehicle: "
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
 #: prepared mission, in order`` (see :func:`offroadbench.sim.trial.pipeline.drive_terrain`)
@@ -214,6 +217,13 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
         except TrialFault as exc:
             k = pending.pop(0).index
             yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seeds[k], " ".join(str(exc).split()))
+        except PlannerRefusal as exc:
+            # the (planner, vehicle) pair cannot be driven (a cartesian grid of both may hold such
+            # pairs): every pending trial is a fault naming the refusal, and the study goes on
+            reason = REFUSED_FAULT + " ".join(str(exc).split())
+            for mission in pending:
+                yield TrialFaulted(cell.index, task.terrain, mission.index, task.terrain_seed, seeds[mission.index], reason)
+            return
 
 
 def collect_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> list[TerrainBuilt | TrialDone]:

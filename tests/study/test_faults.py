@@ -181,6 +181,28 @@ def test_a_terrain_with_no_drawable_mission_is_faults_and_the_study_goes_on(tmp_
     assert all(f[5].startswith("no mission can be drawn on this terrain: no start cell") for f in faults)
 
 
+def test_a_planner_that_refuses_the_vehicle_is_faults_and_the_grid_goes_on(tmp_path):
+    """A cartesian grid of vehicles and planners holds pairs that cannot be driven (A* turns on the spot;
+    the HUNTER, an Ackermann car, cannot): those trials are faults naming the refusal, the other cells
+    run, and ``drive`` with the same pair still answers with one line (InputError)."""
+    from offroadbench.navigation.problem import PlannerRefusal
+    from offroadbench.study.tasks import REFUSED_FAULT
+
+    data = small(grid={"vehicle.name": ["hunter"], "planner.name": ["straight", "astar"]})
+    data["study"].update(missions_per_terrain=1)
+    data["recipe_overrides"] = {"grid.rows": 161, "grid.cols": 161}
+    data["missions"] = {"length_m": 3.0, "border_m": 1.5}
+    data["roughness"] = {"border_m": 1.5}
+    study, cells = cells_of(data)
+    summary = run_study(study, cells, tmp_path, executor="inline")
+    assert (summary.done, summary.faults) == (1, 1) and summary.complete
+    assert list(load(tmp_path)["planner"]) == ["straight"]
+    with Store(tmp_path) as store:
+        faults = store.fault_rows()
+    assert len(faults) == 1 and faults[0][5].startswith(REFUSED_FAULT + "planner 'astar' plans paths that may turn")
+    assert issubclass(PlannerRefusal, InputError)
+
+
 def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
     from offroadbench.study.report import build_report
 

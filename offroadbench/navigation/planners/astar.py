@@ -10,10 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from offroadbench.config import check_range
-from offroadbench.errors import InputError
 from offroadbench.navigation.costmap import MOVES, CostConfig, CostGrid, cost_grid, no_path
 from offroadbench.navigation.drivers import register_planner
-from offroadbench.navigation.problem import PlanningProblem
+from offroadbench.navigation.problem import PlannerRefusal, PlanningProblem
 
 __all__ = ["AStarConfig", "plan_astar"]
 
@@ -110,7 +109,7 @@ def plan_astar(problem: PlanningProblem, cfg: AStarConfig = AStarConfig()) -> np
     ``VehicleEnvelope.min_turn_radius_m`` > 0) is refused.
     """
     if problem.vehicle is not None and problem.vehicle.min_turn_radius_m > 0.0:
-        raise InputError(f"planner 'astar' plans paths that may turn on the spot; this vehicle turns no tighter than "
+        raise PlannerRefusal(f"planner 'astar' plans paths that may turn on the spot; this vehicle turns no tighter than "
                          f"{problem.vehicle.min_turn_radius_m:.2f} m: use planner 'lattice' (arcs of bounded curvature)")
     for relaxed in (False, True):
         grid = cost_grid(problem, cfg, relaxed)
