@@ -143,6 +143,9 @@ def _patch_planes(z: np.ndarray, cell_m: float, radius_m: float, f: int, shape: 
     a = np.einsum("rcij,ij->rc", win, w * xx) / float((w * xx * xx).sum())
     b = np.einsum("rcij,ij->rc", win, w * yy) / float((w * yy * yy).sum())
     c = np.einsum("rcij,ij->rc", win, w) / float(w.sum())
+    compiled = _compiled_planes()
+    if compiled is not None:  # the same numbers, 10-20x faster (offroadbench.navigation._planes_c)
+        return np.hypot(a, b), compiled.plane_residuals(zp, k, xx, yy, a, b, c, f, c0)
     residual = np.empty(shape)
     rows = max(1, 2**22 // max(1, shape[1] * k.size))  # row blocks of ~32 MB of residuals
     for r0 in range(0, shape[0], rows):
@@ -150,6 +153,21 @@ def _patch_planes(z: np.ndarray, cell_m: float, radius_m: float, f: int, shape: 
         res = win[sl] - (a[sl, :, None, None] * xx + b[sl, :, None, None] * yy + c[sl, :, None, None])
         residual[sl] = np.abs(np.where(k, res, 0.0)).max(axis=(2, 3))
     return np.hypot(a, b), residual
+
+
+#: whether _patch_planes may use the compiled residual pass (tests switch it off to compare)
+USE_COMPILED_PLANES = True
+
+
+def _compiled_planes():
+    """offroadbench.navigation._planes_c, or None (numba missing or unable to compile: the numpy pass)."""
+    if not USE_COMPILED_PLANES:
+        return None
+    try:
+        from offroadbench.navigation import _planes_c
+    except (ImportError, RuntimeError):
+        return None
+    return _planes_c
 
 
 #: footprint hazards per terrain: a study plans every mission of a terrain on the same map, and the
