@@ -26,7 +26,9 @@ TOML::
 Each comparison expands into one test per stratum: every cell whose grid values match
 ``treatment`` (and ``where``) against the cell with the same values except ``control``'s. Axes in
 ``pool`` are not strata: each terrain's value is the mean of its per-terrain values over the pooled
-cells (for the success rate with equal missions per cell: its success over all of them). The
+cells (for the success rate with equal missions per cell: its success over all of them); a pair of
+pooled cells where one side has no value at all (all its trials faults, e.g. a planner that refuses
+one of the pooled vehicles) is left out of both sides, so both means pool the same cells. The
 unit is the terrain (the missions of a terrain are not independent). Per terrain j the metric's
 value in each cell (the success rate of its missions, Eq. 5 of Majhor & Bos 2023; a class area; a
 traversal metric's median over its successful trials; a soil metric's median over all its trials)
@@ -307,7 +309,11 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
         if comp.metric not in cache:
             cache[comp.metric] = terrain_metric(trials, terrains, comp.metric)
         vals = cache[comp.metric]
-        a, b = _pooled(vals, ti), _pooled(vals, ci)
+        # a pooled pair of cells with no value on one side (every trial a fault: a planner that refuses
+        # a vehicle) is left out of both sides, so both means pool the same vehicles, levels, ...
+        have = set(vals.index.get_level_values(0)) if len(vals) else set()
+        kept = [(t, c) for t, c in zip(ti, ci, strict=True) if t in have and c in have] if len(ti) > 1 else list(zip(ti, ci, strict=True))
+        a, b = _pooled(vals, [t for t, _ in kept]), _pooled(vals, [c for _, c in kept])
         pooled = f"; pooled over {', '.join(columns.get(k, k) for k in comp.pool)}" if comp.pool else ""
         row: dict[str, Any] = {"comparison": comp.name, "metric": comp.metric,
                                "treatment": _label(comp.treatment, columns), "control": _label(comp.control, columns),

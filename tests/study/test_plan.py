@@ -85,6 +85,18 @@ def test_confirmatory_numbers_are_the_planned_tests():
     assert list(bonf["p_adjusted"]) == pytest.approx(list(np.minimum(1, 2 * bonf["p"])))
 
 
+def test_a_pooled_cell_without_trials_leaves_its_pair_out_of_both_sides():
+    """A planner that refuses a vehicle leaves its cell without trials (faults only): the pooled
+    comparison drops that cell's pair on both sides, so treatment and control pool the same levels."""
+    rates = [[5, 6, 7, 8, 5, 6], [4, 4, 4, 4, 4, 4], [7, 8, 9, 9, 6, 8], [4, 5, 4, 5, 4, 5]]
+    meta, trials = _meta_and_trials(rates)
+    trials = trials[trials["cell"] != 3]  # mujoco at D_high 2.6: every trial a fault
+    plan = plan_from_dict({"comparisons": [_comp(name="pooled", pool=["recipe.layers.base.D_high"])], "n_boot": 200})
+    row = confirmatory_table(plan, meta, trials, None).iloc[0]
+    d = 10.0 * (np.array(rates[2]) - np.array(rates[0]))  # D_high 2.3 only, both sides
+    assert row["effect"] == pytest.approx(d.mean()) and row["control_mean"] == pytest.approx(10.0 * np.mean(rates[0]))
+
+
 def test_min_p_and_simulated_power_of_the_sign_flip_test():
     assert min_p("sign_flip", 10) == pytest.approx(2 / 1024)
     assert min_p("permutation", 3, 3) == pytest.approx(2 / 20)
