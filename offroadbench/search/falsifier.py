@@ -17,7 +17,8 @@ trials and gives the same proposals again (tests/search/test_runner.py kills and
   ``explore_slots`` proposals of the optimiser (fresh terrains) and fills the rest by a local
   pattern search (a compass search, Kolda et al. 2003, Sec. 3) around the failures found so far:
   a failure's parameters moved by ``local_step`` of a range along one parameter at a time, on the
-  failure's own terrain and mission seeds, the parameters whose moves kept failures so far first.
+  failure's own terrain and mission seeds (``local_terrain = "fresh"``: on the stream's next fresh
+  terrain, like the optimiser's proposals), the parameters whose moves kept failures so far first.
   The operational domain lets the terrain and mission vary, so the falsifier may pick them (the
   nominal distribution only weighs the P(failure) estimates, which never use the falsifier's
   trials). A neighbour closer than ``distinct_distance`` to a point already tried on the same
@@ -112,7 +113,8 @@ def _ranked_last(margin: np.ndarray) -> np.ndarray:
 
 def _ce_state(cfg: SearchConfig, history: list[Batch]) -> tuple[GaussianProposal, bool]:
     stages = [(b.z, _ranked_last(b.margin)) for b in history if b.stage == "ce-stage"]
-    return ce_adapt(stages, cfg.dim, quantile=cfg.ce_quantile, min_sd=cfg.ce_min_sd, max_stages=cfg.ce_max_stages)
+    return ce_adapt(stages, cfg.dim, quantile=cfg.ce_quantile, min_sd=cfg.ce_min_sd, max_stages=cfg.ce_max_stages,
+                    initial_sd=cfg.ce_initial_sd, min_failures=cfg.ce_min_failures)
 
 
 def propose(method: str, stage: str, n: int, cfg: SearchConfig, seed: int, batch: int, history: list[Batch]) -> Proposal:
@@ -195,14 +197,15 @@ def _local_moves(cfg: SearchConfig, history: list[Batch], slots: int) -> list[tu
             for sign in (1.0, -1.0):
                 candidates.append((-keep_rate[j], ms[i], i, j, -sign))
     candidates.sort()
-    out: list[tuple[np.ndarray, tuple[int, int]]] = []
+    fresh = cfg.local_terrain == "fresh"
+    out: list[tuple[np.ndarray, tuple[int, int] | None]] = []
     for _, _, i, j, neg_sign in candidates:
         u = xs[i].copy()
         u[j] = min(max(u[j] - neg_sign * cfg.local_step, 0.0), 1.0)
-        near = on_terrain[seeds[i]]
+        near = range(len(xs)) if fresh else on_terrain[seeds[i]]
         if all(np.max(np.abs(u - xs[t])) >= cfg.distinct_distance for t in near) and \
-                all(np.max(np.abs(u - v)) >= cfg.distinct_distance for v, s in out if s == seeds[i]):
-            out.append((u, seeds[i]))
+                all(np.max(np.abs(u - v)) >= cfg.distinct_distance for v, s in out if fresh or s == seeds[i]):
+            out.append((u, None if fresh else seeds[i]))
             if len(out) == slots:
                 break
     return out

@@ -186,8 +186,12 @@ def build_search_report(run_dir: str | Path):
         f"{len(done)} of {len(df)} proposed trials finished",
         f"- terrain and mission: {'fixed' if cfg.fix_terrain else 'random'} terrain, "
         f"{'fixed' if cfg.fix_mission else 'random'} mission (study seeds, root {plan.study.root_seed})"
-        + (f"; the falsifier's local search (step {cfg.local_step:g} of a range) re-drives the terrains of its "
-           f"failures, {cfg.explore_slots} of every {cfg.batch_size} proposals on fresh terrains" if cfg.local_step else ""),
+        + ((f"; the falsifier's local search (step {cfg.local_step:g} of a range) re-drives the terrains of its "
+            f"failures, {cfg.explore_slots} of every {cfg.batch_size} proposals on fresh terrains"
+            if cfg.local_terrain == "same" else
+            f"; the falsifier's local search moves its failures by {cfg.local_step:g} of a range, "
+            f"{cfg.batch_size - cfg.explore_slots} of every {cfg.batch_size} proposals, every proposal on a fresh terrain")
+           if cfg.local_step else ""),
         f"- distinct failures: at least {cfg.distinct_distance:g} of a range apart in some parameter "
         "(`terrains failed`: how many different terrains the failures lie on)",
         "",

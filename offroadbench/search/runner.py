@@ -182,9 +182,17 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
     return done, ordered
 
 
-def _nuisance(plan: SearchPlan, group: CellPlan, k: int) -> tuple[int, int]:
-    """(terrain seed, mission seed) of trial k of a stream (study seed rules; see SearchConfig.fix_*)."""
+#: first terrain index of the ``ce-is`` stream's own nuisance draws: its terrains and missions are
+#: not those of the ``random`` stream (trial k of which drives terrain k), so that the Monte Carlo
+#: reference and the importance-sampling estimate are independent and one can check the other
+CE_TERRAIN_OFFSET = 1 << 20
+
+
+def _nuisance(plan: SearchPlan, group: CellPlan, k: int, method: str = "random") -> tuple[int, int]:
+    """(terrain seed, mission seed) of trial k of a stream (study seed rules; see SearchConfig.fix_*;
+    the ``ce-is`` stream's terrains start at :data:`CE_TERRAIN_OFFSET`)."""
     cfg, root = plan.search, plan.study.root_seed
+    k = k + (CE_TERRAIN_OFFSET if method == "ce-is" else 0)
     j = 0 if cfg.fix_terrain else k
     m = k if (cfg.fix_terrain and not cfg.fix_mission) else 0
     return seeding.terrain_seed(root, j, cell=group.key), seeding.mission_seed(root, j, m, cell=group.key)
@@ -303,7 +311,7 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
         for i, (e, c) in enumerate(zip(entries, cells, strict=True)):
             if e["row"] is None:
                 chosen = prop.seeds[i] if i < len(prop.seeds) else None
-                tseed, mseed = _nuisance(plan, group, k0 + i) if chosen is None else chosen
+                tseed, mseed = _nuisance(plan, group, k0 + i, method) if chosen is None else chosen
                 tasks.append(TerrainTask(cell=c, terrain=0, terrain_seed=tseed, missions=((0, mseed),),
                                          telemetry=plan.study.telemetry))
 

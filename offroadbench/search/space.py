@@ -51,6 +51,8 @@ METHODS = ("falsify", "random", "ce-is")
 SAMPLERS = ("tpe", "cmaes")
 #: nominal distributions of a parameter on its range
 NOMINALS = ("uniform", "normal")
+#: where the falsifier's local moves drive: the failure's own terrain, or a fresh one
+LOCAL_TERRAINS = ("same", "fresh")
 #: what the falsifier minimises (offroadbench.search.objective)
 OBJECTIVES = ("margin",)
 #: settings tables whose fields a parameter may name (one level deep, numbers only)
@@ -172,6 +174,12 @@ class SearchConfig:
     ``explore_slots`` proposals of a batch are neighbours of its failures (one parameter moved by this
     step) on the failure's own terrain and mission (offroadbench.search.falsifier). At least ``distinct_distance``, so that a neighbour
     that fails is a distinct failure; TPE only."""
+    local_terrain: str = "same"
+    """Falsifier with ``local_step > 0``: where a local move drives: ``same`` (the failure's own
+    terrain and mission: a move that fails shows a parameter that does not change the failure) or
+    ``fresh`` (the stream's next nuisance draw, as the optimiser's proposals: a move that fails is a
+    failure of the parameters, not of one terrain). With ``fresh`` a move is skipped when it is
+    closer than ``distinct_distance`` to any point tried, on any terrain."""
     explore_slots: int = 2
     """Falsifier with ``local_step > 0``: proposals per batch still made by the optimiser on fresh terrains."""
     ce_stage_size: int = 50
@@ -182,6 +190,19 @@ class SearchConfig:
     """Cross-entropy: adaptive stages at most before the final importance-sampling stage."""
     ce_defensive: float = 0.1
     """Cross-entropy: weight of the nominal density in the final defensive mixture (Hesterberg 1995); bounds every weight by 1/this."""
+    ce_initial_sd: float = 1.0
+    """Cross-entropy: standard deviation of the first adaptive stage's proposal N(0, sd^2 I), in
+    standard-normal units (1: the nominal; 2 puts about a sixth of the draws beyond 2 nominal sd in
+    each tail, where a failure region the margin does not point to can be found; its weights are
+    at most sd^d)."""
+    ce_min_failures: int = 0
+    """Cross-entropy: once this many of the adaptive draws so far failed, the level is 0 outright
+    and the proposal is fitted to the failures alone (0: off, the rho-quantile rule only). Where the
+    margin of a passing trial says little about how near it came to failing, the rho-quantile's
+    passing elites would pull the proposal back to the nominal's centre (their likelihood ratios
+    are the largest); a few failures are a better guide."""
+    ce_budget: int | None = None
+    """Trials of the ``ce-is`` stream per grid cell (adaptive stages included), if not ``budget``."""
     ce_min_sd: float = 1.0
     """Cross-entropy: smallest proposal standard deviation, in standard-normal units (1: never narrower
     than the nominal, so the likelihood ratio stays bounded on a half-space failure region and the
@@ -222,11 +243,16 @@ class SearchConfig:
         if self.local_step > 0 and self.sampler != "tpe":
             raise InputError(f"SearchConfig.local_step = {self.local_step!r} needs sampler = 'tpe' (got {self.sampler!r})")
         check_int(self, "explore_slots", self.explore_slots, lo=0)
+        check_choice(self, "local_terrain", self.local_terrain, LOCAL_TERRAINS)
         check_int(self, "ce_stage_size", self.ce_stage_size, lo=10)
         check_range(self, "ce_quantile", self.ce_quantile, lo=0, hi=0.5, lo_open=True)
         check_int(self, "ce_max_stages", self.ce_max_stages, lo=1, hi=50)
         check_range(self, "ce_defensive", self.ce_defensive, lo=0, hi=1, lo_open=True, hi_open=True)
         check_range(self, "ce_min_sd", self.ce_min_sd, lo=0, lo_open=True)
+        check_range(self, "ce_initial_sd", self.ce_initial_sd, lo=0.5, hi=4)
+        check_int(self, "ce_min_failures", self.ce_min_failures, lo=0)
+        if self.ce_budget is not None:
+            check_int(self, "ce_budget", self.ce_budget, lo=1)
         check_range(self, "level", self.level, lo=0, hi=1, lo_open=True, hi_open=True)
 
     @property
@@ -238,10 +264,12 @@ class SearchConfig:
         return len(self.params)
 
     def method_budget(self, method: str, budget: int | None = None) -> int:
-        """Trials of ``method`` per grid cell: ``mc_budget`` for ``random`` where set, else ``budget``
-        (default the table's)."""
+        """Trials of ``method`` per grid cell: ``mc_budget`` for ``random`` and ``ce_budget`` for
+        ``ce-is`` where set, else ``budget`` (default the table's)."""
         if method == "random" and self.mc_budget is not None:
             return self.mc_budget
+        if method == "ce-is" and self.ce_budget is not None:
+            return self.ce_budget
         return self.budget if budget is None else budget
 
     def from_z(self, z: np.ndarray) -> np.ndarray:
@@ -296,7 +324,7 @@ def search_from_dict(table: Mapping[str, Any], where: str = "[search]") -> Searc
         if not isinstance(data["methods"], list):
             raise InputError(f"{where}: methods must be a list, e.g. [\"falsify\", \"random\"]")
         data["methods"] = tuple(data["methods"])
-    for k in ("distinct_distance", "local_step", "ce_quantile", "ce_defensive", "ce_min_sd", "level"):
+    for k in ("distinct_distance", "local_step", "ce_quantile", "ce_defensive", "ce_min_sd", "ce_initial_sd", "level"):
         if k in data and _is_number(data[k]):
             data[k] = float(data[k])
     try:

@@ -36,3 +36,14 @@ def test_a_parameter_whose_moves_kept_failures_is_moved_first():
     firsts = [np.round(u, 9).tolist() for u, _ in moves]
     # D_high moves first (kept 1 of 1 against 0 of 2), from the deepest failure, + before -
     assert firsts == [[0.5, 0.3], [0.5, 0.9]]
+
+
+def test_fresh_terrain_moves_leave_the_terrain_to_the_stream_and_stay_distinct_from_every_point():
+    cfg = search_from_dict({**TABLE, "local_terrain": "fresh"})
+    # a failure at (0.5, 0.5) on terrain (3, 4); a point tried on another terrain sits where its + speed move would go
+    history = [Batch("falsify", np.array([[0.5, 2.5], [0.7, 2.5]]), np.zeros((2, 2)), np.array([-0.5, 0.3]),
+                     ((3, 4), (5, 6)))]
+    moves = _local_moves(cfg, history, 10)
+    assert all(s is None for _, s in moves)  # the runner draws the stream's next terrain for them
+    got = sorted(tuple(np.round(u, 9)) for u, _ in moves)
+    assert got == sorted([(0.3, 0.5), (0.5, 0.7), (0.5, 0.3)])  # (0.7, 0.5) was tried, on another terrain

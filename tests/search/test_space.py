@@ -93,9 +93,20 @@ def test_cli_errors_are_one_line_with_exit_2(tmp_path, capsys):
 
 @pytest.mark.parametrize("extra, words", [({"local_step": 0.05}, "at least distinct_distance"),
                                           ({"local_step": 0.2, "sampler": "cmaes"}, "needs sampler = 'tpe'"),
-                                          ({"mc_budget": 0}, "mc_budget")])
+                                          ({"mc_budget": 0}, "mc_budget"),
+                                          ({"ce_budget": 0}, "ce_budget"),
+                                          ({"ce_initial_sd": 0.2}, "ce_initial_sd = 0.2 is out of range"),
+                                          ({"ce_min_failures": -1}, "ce_min_failures"),
+                                          ({"local_terrain": "other"}, "local_terrain = 'other' is not known")])
 def test_local_search_and_mc_budget_settings_are_checked(extra, words):
     data = copy.deepcopy(SEARCH)
     data["search"].update(extra)
     with pytest.raises(InputError, match=words):
         search_from_data(data)
+
+
+def test_each_method_has_its_budget():
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(budget=10, mc_budget=30, ce_budget=20)
+    cfg = search_from_data(data).search
+    assert [cfg.method_budget(m) for m in ("falsify", "random", "ce-is")] == [10, 30, 20]

@@ -347,8 +347,49 @@ def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
     return compute
 
 
+def _failure_search_estimates(planner: str, group: int):
+    """The failure search's P(failure) row of one planner, from the committed search.toml and
+    trials.csv (offroadbench.search.report): Monte Carlo p, failures, trials, interval, relative
+    error; then importance sampling's p, failures, final draws, interval, relative error and the
+    trial ratio."""
+    def compute(folder: Path) -> list[float]:
+        from offroadbench.search import load_search
+        from offroadbench.search.report import estimates, mc_trials_ratio
+
+        cfg = load_search(folder / "search.toml").search
+        df = pd.read_csv(folder / "trials.csv")
+        ests = estimates(df, cfg)
+        mc, ce = ests[(group, "mc")], ests[(group, "ce-is")]
+        return [mc.p, float(mc.failures), float(mc.n), mc.low, mc.high, mc.rel_error,
+                ce.p, float(ce.failures), float(ce.n), ce.low, ce.high, ce.rel_error, mc_trials_ratio(mc, ce)]
+    return compute
+
+
+def _failure_search_first_k(folder: Path) -> list[float]:
+    """The falsifier's trials to its 10th distinct failure and its failures' terrains, per planner."""
+    from offroadbench.search import load_search
+    from offroadbench.search.report import first_failures
+
+    cfg = load_search(folder / "search.toml").search
+    df = pd.read_csv(folder / "trials.csv")
+    out = []
+    for grp in (0, 1):
+        s = df[(df["group"] == grp) & (df["method"] == "falsify")]
+        out += [first_failures(cfg, s), float(s.loc[s["failed"], "terrain_seed"].nunique())]
+    return out
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
+_FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
+           rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
 SAMPLES = [
+    Sample("failure-search P(failure), A*", "failure-search", rf"\| A\* \| {_FS_ROW}",
+           _failure_search_estimates("astar", 0)),
+    Sample("failure-search P(failure), straight", "failure-search", rf"\| straight \| {_FS_ROW}",
+           _failure_search_estimates("straight", 1)),
+    Sample("failure-search falsifier's 10th distinct failure", "failure-search",
+           rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
+           rf"\(on {_NUM}\)", _failure_search_first_k),
     Sample("engines success by engine", "engines",
            rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \*\*\+{_NUM} \[",
            _pooled_success_effect("engine", "mujoco", "pybullet")),
