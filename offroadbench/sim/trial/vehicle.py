@@ -79,6 +79,11 @@ class VehicleSpec:
     driven_wheel_joints: tuple[str, ...] = ()
     """The wheel joints with a motor (empty: all of them); the others roll freely (a rear-wheel-drive car's
     front wheels)."""
+    belt_drive: bool = False
+    """A tracked vehicle whose tracks are rows of road wheels (``skid`` steering): each side's wheels turn
+    as one belt, at one speed, so the side's motor torque (``wheel_torque_limit_nm`` x the side's wheel
+    count: the sprocket's) goes through whichever of its wheels bear on the ground, not a fixed share per
+    wheel (False: every wheel is its own drive)."""
     steering: str = "skid"
     """How the vehicle steers: ``skid``, ``ackermann`` or ``rocker_bogie`` (see the class docstring)."""
     steer_joints: tuple[str, ...] = ()
@@ -141,6 +146,9 @@ class VehicleSpec:
         check_bounds(self, f"vehicle {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
     def _check_steering(self) -> None:
+        if self.belt_drive and (self.steering != "skid" or self.driven_wheel_joints):
+            raise InputError(f"vehicle {self.name!r}: belt_drive = true needs steering = 'skid' and every wheel "
+                             f"driven (no driven_wheel_joints), got steering = {self.steering!r}")
         if self.steering == "skid":
             if self.steer_joints or self.differential_joints:
                 raise InputError(f"vehicle {self.name!r}: steering = 'skid' takes no steer_joints or differential_joints")

@@ -99,7 +99,8 @@ class MjcfBuilder:
         """Steering servos after the wheel motors (position actuators, stiff against the steered
         link's inertia about the steering axis, limited to the spec's steering torque) and the
         rockers' differential as a joint equality (angles opposite: the body pitches by the mean of
-        the rockers'), for steered and rocker-bogie vehicles."""
+        the rockers'), for steered and rocker-bogie vehicles; a tracked vehicle's belts
+        (``belt_drive``) as joint equalities (each side's wheels at one angle)."""
         spec = self.spec
         for name in spec.steer_joints:
             link = links[by_name[name].child]
@@ -114,6 +115,15 @@ class MjcfBuilder:
             left, right = spec.differential_joints
             eq = ET.SubElement(root, "equality")
             ET.SubElement(eq, "joint", joint1=left, joint2=right, polycoef="0 -1 0 0 0")
+        if spec.belt_drive:
+            # each side's road wheels turn as one belt: each wheel's angle equals the side's first wheel's
+            # (offroadbench.sim.engines.pybullet.drivetrain.couple_belts: the same model on PyBullet), as
+            # stiff as MuJoCo keeps stable (a time constant of two steps)
+            eq = ET.SubElement(root, "equality")
+            for side in (spec.left_wheel_joints, spec.right_wheel_joints):
+                for name in side[1:]:
+                    ET.SubElement(eq, "joint", joint1=name, joint2=side[0], polycoef="0 1 0 0 0",
+                                  solref=_fmt((2.0 * self._dt_mj, 1.0)))
 
     def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
         spec, sim, tune = self.spec, self.sim, self.contact

@@ -25,13 +25,18 @@ on the chassis, and the chassis' own rotation does not drive the flywheel. Measu
 (benchmarks/RESULTS.md, 'Drive-train reaction'): on a free test body the chassis takes the tyre's
 share of the motor torque to within 6 %; the Husky's launch pitch in lunar gravity falls from
 45.0 deg to under 1 deg.
+
+A tracked vehicle's belt (``VehicleSpec.belt_drive``, :func:`couple_belts`) is built the same way:
+each side's road wheels tied by ``JOINT_GEAR`` constraints of ratio -1 (equal joint speeds), so the
+side turns as one belt and the motors' summed torque reaches the ground through whichever wheels
+bear on it.
 """
 
 from __future__ import annotations
 
 import pybullet as pb
 
-__all__ = ["Flywheels", "attach_flywheels"]
+__all__ = ["Flywheels", "attach_flywheels", "couple_belts"]
 
 _FLYWHEEL_MASS_KG = 1.0
 """Mass of each flywheel link (on its axis: it carries no torque from gravity), kg."""
@@ -89,3 +94,27 @@ def attach_flywheels(cid: int, vehicle: int, wheels: list[int], excess_kg_m2: li
         bodies.append(fly)
         constraints.append(gear)
     return Flywheels(cid, bodies, constraints)
+
+
+def couple_belts(cid: int, vehicle: int, sides: list[list[int]]) -> list[int]:
+    """Tie each side's wheel joints (``sides``: lists of joint indices of ``vehicle``) into one belt:
+    a ``JOINT_GEAR`` constraint of ratio -1 (equal joint speeds) between each wheel and the next.
+    Returns the constraints (remove them before the vehicle).
+
+    A track's belt wraps the sprocket and every road wheel of its side, so they turn at one speed
+    (the belt's, over the wheels' common radius) and the sprocket's torque reaches the ground through
+    the road wheels that bear on it, in proportion to what their contacts take, not in fixed shares:
+    a side resting on one road wheel still pushes with the whole sprocket torque (up to that wheel's
+    grip). The wheels' own motors (all at one speed command, each limited to
+    ``wheel_torque_limit_nm``) then act together as the side's motor of n times that torque. The
+    constraint holds speeds, not angles (``erp`` 0, as the flywheels' gear): the belt may creep, its
+    road wheels' angles drift apart, which changes nothing for spheres."""
+    constraints = []
+    for joints in sides:
+        for a, b in zip(joints[:-1], joints[1:], strict=True):
+            axis = tuple(pb.getJointInfo(vehicle, a, physicsClientId=cid)[13])
+            gear = pb.createConstraint(vehicle, a, vehicle, b, pb.JOINT_GEAR, list(axis), [0.0, 0.0, 0.0],
+                                       [0.0, 0.0, 0.0], physicsClientId=cid)
+            pb.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_MAX_FORCE, erp=0.0, physicsClientId=cid)
+            constraints.append(gear)
+    return constraints

@@ -76,7 +76,7 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
-from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels
+from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels, couple_belts
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
@@ -101,6 +101,7 @@ class World:
         self.dt_s = 1.0 / sim.physics_rate_hz
         self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
         self._flywheels = None  # the loaded vehicle's drive-train flywheels (drivetrain.attach_flywheels)
+        self._belts: list[int] = []  # the loaded vehicle's belt constraints (drivetrain.couple_belts)
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -238,6 +239,8 @@ class World:
                                            (0.0, 0.0, self.hm.z_min_m - 50.0),
                                            [spec.is_driven(n) for n in spec.wheel_joints])
         self._articulate(body, names)
+        if spec.belt_drive:
+            self._belts = couple_belts(cid, body, [self.left_joints, self.right_joints])
         if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
             n_links = pb.getNumJoints(body, physicsClientId=cid)
             self._mass_kg = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
@@ -331,6 +334,9 @@ class World:
         """
         cid = self._cid
         self._flywheels.remove()  # their gear constraints hold the old vehicle's joints
+        for c in self._belts:  # as do the belts'
+            pb.removeConstraint(c, physicsClientId=cid)
+        self._belts = []
         pb.removeBody(self.vehicle_id, physicsClientId=cid)
         self.vehicle_id = body = self._load_vehicle()
         orn = pb.getQuaternionFromEuler([roll_rad, 0.0, heading_rad])
