@@ -72,6 +72,8 @@ class UrdfJoint:
     pos: tuple[float, float, float]
     euler: tuple[float, float, float]
     axis: tuple[float, float, float]
+    limits: tuple[float, float] | None = None
+    """(lower, upper) of the joint's ``<limit>`` (rad or m), None without one."""
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]:
@@ -118,12 +120,16 @@ def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
         for el in root.findall("joint"):
             origin = el.find("origin")
             axis = el.find("axis")
+            limit = el.find("limit")
+            bounds = None
+            if limit is not None and limit.get("lower") is not None and limit.get("upper") is not None:
+                bounds = (float(limit.get("lower")), float(limit.get("upper")))
             joints.append(UrdfJoint(el.get("name"), el.get("type"), el.find("parent").get("link"),
                                  el.find("child").get("link"),
                                  _floats(origin.get("xyz") if origin is not None else None, 3),
                                  _floats(origin.get("rpy") if origin is not None else None, 3),
                                  _floats(axis.get("xyz") if axis is not None else None, 3) if axis is not None
-                                 else (1.0, 0.0, 0.0)))
+                                 else (1.0, 0.0, 0.0), bounds))
     except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError) as exc:
         raise InputError(f"URDF {path}: cannot read it ({exc})") from None
     return links, joints

@@ -209,10 +209,11 @@ class World:
         missing = [n for n in spec.wheel_joints if n not in names]
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
-        extra = [n for n in spec.steer_joints + spec.differential_joints if n not in names]
+        extra = [n for n in spec.steer_joints + spec.differential_joints + spec.suspension_joints if n not in names]
         if extra:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(extra)}")
         self.steer_joints = [names[n] for n in spec.steer_joints]
+        self.suspension_joints = [names[n] for n in spec.suspension_joints]
         self.left_joints = [names[n] for n in spec.left_wheel_joints]
         self.right_joints = [names[n] for n in spec.right_wheel_joints]
         self.wheel_joints = self.left_joints + self.right_joints
@@ -267,6 +268,8 @@ class World:
         for j in names.values():
             if j not in driven and pb.getJointInfo(body, j, physicsClientId=cid)[2] == pb.JOINT_REVOLUTE:
                 pb.setJointMotorControl2(body, j, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
+        for j in self.suspension_joints:  # their springs act through step(): the default motor off
+            pb.setJointMotorControl2(body, j, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
         if self.steer_joints:
             self.command_steering([0.0] * len(self.steer_joints), body)
         if spec.differential_joints:
@@ -371,10 +374,25 @@ class World:
         )
 
     def step(self) -> None:
-        """One physics step (with the Coulomb tyre forces first, if that model is on)."""
+        """One physics step (with the suspension's spring and damper forces and the Coulomb tyre forces
+        first, if the vehicle has them and that model is on)."""
+        if self.suspension_joints:
+            self._spring_forces()
         if self._tyres is not None:
             self._tyres.apply()
         pb.stepSimulation(physicsClientId=self._cid)
+
+    def _spring_forces(self) -> None:
+        """Each suspension joint's spring and damper (VehicleSpec.suspension_*) for the next step, from its
+        present position q and speed (explicit): the wheel pushed down with ``preload + k q + c q_dot``
+        (offroadbench.sim.engines.mujoco.mjcf builds the same spring as the slide joints' stiffness,
+        springref and damping); the travel is the URDF's joint limits, which Bullet holds."""
+        spec, cid, body = self.spec, self._cid, self.vehicle_id
+        k, c, p = spec.suspension_stiffness_n_m, spec.suspension_damping_n_s_m, spec.suspension_preload_n
+        states = pb.getJointStates(body, self.suspension_joints, physicsClientId=cid)
+        forces = [-(p + k * q + c * v) for q, v, _, _ in states]
+        pb.setJointMotorControlArray(body, self.suspension_joints, pb.TORQUE_CONTROL, forces=forces,
+                                     physicsClientId=cid)
 
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
         """(position, quaternion xyzw, linear velocity, angular velocity), world frame."""
