@@ -82,6 +82,7 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
+from offroadbench.sim.engines.base import read_urdf, unsprung_kg
 from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.rigs.vehicle_measure import (CheckResult, _FLAT_CELL_M, _STEP_CELL_M, _abs_row, _bisect, _climbs,
@@ -90,7 +91,7 @@ from offroadbench.sim.rigs.vehicle_measure import (CheckResult, _FLAT_CELL_M, _S
 from offroadbench.sim.rigs.soft_soil_check import (SOFT_SOIL, SOFT_SOIL_GRAVITY_M_S2, soft_soil_checks,
                                                    soil_climb_limit_deg)
 
-__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "track_step_bound_m", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
+__all__ = ["CheckResult", "check_vehicle", "climb_limit_deg", "step_bound_m", "track_step_bound_m", "sprung_tip_angle_deg", "YAW_COMMANDS_RAD_S", "HEADINGS_DEG",
            "soft_soil_checks", "soil_climb_limit_deg", "SOFT_SOIL", "SOFT_SOIL_GRAVITY_M_S2"]
 
 
@@ -175,18 +176,98 @@ def _stopping(world: TrialWorld) -> CheckResult:
                       f"{decel:.2f} m/s^2, m_eff = m + sum(I_spin) / r^2 = {m_eff:.1f} kg")
 
 
+#: how long the vehicle rests on the tilt table at the ramp's first angle before the ramp starts, s
+TILT_SETTLE_S = 2.0
+
+
+def _tilt_and_settle(world: TrialWorld, start_deg: float) -> None:
+    """Tilt the table to ``start_deg`` at once and let the vehicle come to rest there for
+    :data:`TILT_SETTLE_S` before the slow ramp: a sprung vehicle rolls on its springs when the table
+    jumps to the first angle and overshoots (a damping ratio of 0.3 overshoots by 37 %), which
+    unloaded the uphill wheels of the HUNTER at once and read as a tip or a slide at the first angle."""
+    _set_gravity(world, math.radians(start_deg), "x")
+    _run(world, TILT_SETTLE_S)
+
+
+#: how long the uphill wheels must stay off the tilt table to count as lifted, s (a sprung wheel hanging on
+#: its droop stop chattered off the ground for single steps on PyBullet 4 deg before the tip)
+TIP_LIFT_S = 0.25
+
+
+def sprung_tip_angle_deg(mass_kg: float, unsprung_kg: float, com_height_m: float, wheel_radius_m: float,
+                         track_m: float, stiffness_n_m: float, preload_n: float, droop_m: float, bump_m: float,
+                         g: float = 9.81) -> float:
+    """Tilt-table tip angle of a vehicle whose wheels ride vertical struts (VehicleSpec.suspension_*), deg.
+
+    Derived here (quasi-static, in the roll plane, the struts at the wheel centres, ``unsprung_kg`` per
+    wheel, two wheels a side seen as one): at the tip the uphill wheels carry nothing, so their struts
+    hang at full extension ``q_u = max(-droop, -preload / k)``; the downhill struts carry the sprung mass
+    and the hanging uphill wheels, ``F = (m_s + 2 m_u) g cos(theta + phi) / 2`` each (the load along the
+    rolled body's z axis), so they compress to ``q_d = min(bump, (F - preload) / k)`` and the body rolls
+    downhill by ``phi = atan((q_d - q_u) / track)``. The sprung centre of mass, ``d`` above the strut
+    line, moves with the roll toward the downhill wheels; the vehicle tips when the whole centre of mass
+    is over their contact line: ``tan(theta) = Y / Z`` (its distance from that line along the table and
+    its height), solved by fixed-point iteration. Rigid struts (``k`` -> infinity) give the geometric
+    ``atan((track / 2) / h)``.
+    """
+    n = 4.0
+    m_s = mass_kg - n * unsprung_kg
+    d = (mass_kg * com_height_m - n * unsprung_kg * wheel_radius_m) / m_s - wheel_radius_m
+    q_u = max(-droop_m, -preload_n / stiffness_n_m)
+    theta = math.atan2(track_m / 2.0, com_height_m)
+    for _ in range(200):
+        phi, q_d = 0.0, 0.0
+        for _ in range(50):
+            load = (m_s + 2.0 * unsprung_kg) * g * math.cos(theta + phi) / 2.0
+            q_d = min(bump_m, (load - preload_n) / stiffness_n_m)
+            phi = math.atan2(q_d - q_u, track_m)
+        s, c = math.sin(phi), math.cos(phi)
+        sprung_y = q_d * s + track_m / 2.0 * c - d * s
+        sprung_z = wheel_radius_m - q_d * c + track_m / 2.0 * s + d * c
+        uphill_y = q_d * s + track_m * c - q_u * s
+        y = (m_s * sprung_y + 2.0 * unsprung_kg * uphill_y) / mass_kg
+        z = (m_s * sprung_z + n * unsprung_kg * wheel_radius_m) / mass_kg
+        theta = math.atan2(y, z)
+    return math.degrees(theta)
+
+
+def _suspension(spec: VehicleSpec) -> tuple[float, float, float]:
+    """(unsprung mass per wheel kg, droop m, bump m) of a sprung vehicle, from its URDF: the mean mass
+    below each suspension joint, the joints' limits (the smallest travel of any)."""
+    struts = [j for j in read_urdf(spec.urdf)[1] if j.name in spec.suspension_joints]
+    return (unsprung_kg(spec.urdf, spec.suspension_joints), min(-j.limits[0] for j in struts),
+            min(j.limits[1] for j in struts))
+
+
 def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckResult, float, float]:
     grippy = dataclasses.replace(sim, terrain_friction=max(sim.terrain_friction, 5.0 / spec.wheel_friction))
     with open_world(hm, spec, grippy) as world:
         c = hm.width_m / 2.0
         world.spawn(c, c, 0.0)
         h = _com_height(world)
+        note = f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground"
         expected = math.degrees(math.atan2(spec.track_m / 2.0, h))
-        # downhill toward -y: the right side; the left (uphill) wheels unload at the tip angle
-        angle = _ramp_tilt(world, 1.0, lambda: _left_load(world) <= 0.0, start_deg=expected - 15.0)
+        if spec.suspension_joints:
+            unsprung, droop, bump = _suspension(spec)
+            rigid = expected
+            expected = sprung_tip_angle_deg(world.geometry.mass_kg, unsprung, h, spec.wheel_radius_m, spec.track_m,
+                                            spec.suspension_stiffness_n_m, spec.suspension_preload_n, droop, bump,
+                                            world.sim.gravity_m_s2)
+            note = (f"sprung_tip_angle_deg: the body rolls on its springs toward the downhill wheels (rigid: "
+                    f"{rigid:.1f} deg), centre of mass h = {h:.3f} m above ground")
+        # downhill toward -y: the right side; the left (uphill) wheels unload at the tip angle and stay off
+        start = expected - 15.0
+        _tilt_and_settle(world, start)
+        run, need = [0], int(round(TIP_LIFT_S * world.sim.physics_rate_hz))
+
+        def lifted() -> bool:
+            run[0] = run[0] + 1 if _left_load(world) <= 0.0 else 0
+            return run[0] >= need
+
+        angle = _ramp_tilt(world, 1.0, lifted, start_deg=start) - (need - 1) / world.sim.physics_rate_hz
     row = _abs_row("static tip angle (tilt table)", angle, expected, "deg", 2.0,
-                   f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground; "
-                   "grippy table so the vehicle cannot slide")
+                   f"{note}; grippy table so the vehicle cannot slide; tip: the uphill wheels off the table for "
+                   f"{TIP_LIFT_S:g} s")
     return row, expected, h
 
 
@@ -197,12 +278,14 @@ def _side_slope(world: TrialWorld, tip_deg: float) -> CheckResult:
     expected = min(slide, tip_deg)
     c = world.hm.width_m / 2.0
     world.spawn(c, c, 0.0)
+    start = max(0.0, min(20.0, expected - 10.0))
+    _tilt_and_settle(world, start)
     y0 = world.base_state()[0][1]
 
     def moved() -> bool:
         return abs(world.base_state()[0][1] - y0) > 0.02 or _left_load(world) <= 0.0
 
-    angle = _ramp_tilt(world, 1.0, moved, start_deg=max(0.0, min(20.0, expected - 10.0)))
+    angle = _ramp_tilt(world, 1.0, moved, start_deg=start)
     _set_gravity(world, 0.0, "x")
     note = f"slides at atan(mu) = {slide:.1f} deg (mu = {mu:g}) or tips at {tip_deg:.1f} deg"
     rated = spec.rated_side_slope_deg

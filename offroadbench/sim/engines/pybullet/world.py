@@ -80,7 +80,7 @@ from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels, coupl
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.engines.pybullet.heap import _empty_heights, _lean_heap
 
@@ -112,6 +112,7 @@ class World:
             self._terrain_set = frozenset(self.terrain_bodies)
             log.info("heightfield %dx%d built in %.2f s (%d tiles)", hm.rows, hm.cols, time.perf_counter() - t0,
                      len(self.terrain_bodies))
+            self._spring_rest_m = suspension_rest_m(self.spec, self.sim.gravity_m_s2)
             self.vehicle_id = self._load_vehicle()
             self.geometry = self._measure_geometry()
         except BaseException:
@@ -347,6 +348,8 @@ class World:
         pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
         for j in self.wheel_joints:
             pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
+        for j in self.suspension_joints:  # the struts at rest in this gravity
+            pb.resetJointState(body, j, self._spring_rest_m, 0.0, physicsClientId=cid)
         aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
         reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1])
         z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, self._bottom_offset(),
