@@ -97,23 +97,27 @@ def attach_flywheels(cid: int, vehicle: int, wheels: list[int], excess_kg_m2: li
 
 
 def couple_belts(cid: int, vehicle: int, sides: list[list[int]]) -> list[int]:
-    """Tie each side's wheel joints (``sides``: lists of joint indices of ``vehicle``) into one belt:
-    a ``JOINT_GEAR`` constraint of ratio -1 (equal joint speeds) between each wheel and the next.
-    Returns the constraints (remove them before the vehicle).
+    """Tie each side's wheel joints (``sides``: lists of joint indices of ``vehicle``, the first the
+    sprocket's) into one belt: a ``JOINT_GEAR`` constraint of ratio -1 (equal joint speeds) between the
+    first wheel and each other. Returns the constraints (remove them before the vehicle).
 
-    A track's belt wraps the sprocket and every road wheel of its side, so they turn at one speed
-    (the belt's, over the wheels' common radius) and the sprocket's torque reaches the ground through
-    the road wheels that bear on it, in proportion to what their contacts take, not in fixed shares:
-    a side resting on one road wheel still pushes with the whole sprocket torque (up to that wheel's
-    grip). The wheels' own motors (all at one speed command, each limited to
-    ``wheel_torque_limit_nm``) then act together as the side's motor of n times that torque. The
-    constraint holds speeds, not angles (``erp`` 0, as the flywheels' gear): the belt may creep, its
-    road wheels' angles drift apart, which changes nothing for spheres."""
+    A track's belt wraps the sprocket and every road wheel of its side, so they turn at one speed (the
+    belt's, over the wheels' common radius) and the sprocket's torque reaches the ground through the
+    road wheels that bear on it, not in fixed shares: a side resting on one road wheel still pushes
+    with the whole sprocket torque (up to that wheel's grip). Each wheel is geared to the first
+    directly. The gears alone did not hold a side at one speed against Bullet's per-wheel velocity
+    motors (a side stalled against a step turned its loaded wheels 18 % slower than its airborne ones:
+    the solver's iterations do not settle motors and gears together), so the World also gives the
+    wheels' motors the side's torque in proportion to their loads (World._share_belt_torque); then
+    the wheels of a stalled side turn within 1 % of one speed. The constraints hold speeds, not angles
+    (``erp`` 0, as the flywheels' gear): the road wheels' angles may drift apart, which changes
+    nothing for spheres."""
     constraints = []
     for joints in sides:
-        for a, b in zip(joints[:-1], joints[1:], strict=True):
-            axis = tuple(pb.getJointInfo(vehicle, a, physicsClientId=cid)[13])
-            gear = pb.createConstraint(vehicle, a, vehicle, b, pb.JOINT_GEAR, list(axis), [0.0, 0.0, 0.0],
+        drive = joints[0]
+        axis = tuple(pb.getJointInfo(vehicle, drive, physicsClientId=cid)[13])
+        for wheel in joints[1:]:
+            gear = pb.createConstraint(vehicle, drive, vehicle, wheel, pb.JOINT_GEAR, list(axis), [0.0, 0.0, 0.0],
                                        [0.0, 0.0, 0.0], physicsClientId=cid)
             pb.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_MAX_FORCE, erp=0.0, physicsClientId=cid)
             constraints.append(gear)

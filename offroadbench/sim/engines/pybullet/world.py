@@ -102,6 +102,7 @@ class World:
         self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
         self._flywheels = None  # the loaded vehicle's drive-train flywheels (drivetrain.attach_flywheels)
         self._belts: list[int] = []  # the loaded vehicle's belt constraints (drivetrain.couple_belts)
+        self._belt_targets = [0.0] * len(self.spec.wheel_joints)  # a belt vehicle's wheel speed commands, rad/s
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -290,6 +291,8 @@ class World:
 
     def command_wheel_speeds(self, speeds_rad_s) -> None:
         """One velocity command per wheel (``spec.wheel_joints`` order), rad/s, torque-limited."""
+        if self.spec.belt_drive:
+            self._belt_targets = list(speeds_rad_s)
         pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
                                      targetVelocities=list(speeds_rad_s),
                                      forces=self._wheel_forces,
@@ -367,6 +370,8 @@ class World:
     def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:
         """Velocity commands for the left and right wheels, torque-limited by the vehicle spec."""
         n_l, n_r = len(self.left_joints), len(self.right_joints)
+        if self.spec.belt_drive:
+            self._belt_targets = [left_rad_s] * n_l + [right_rad_s] * n_r  # step() shares the sides' torque
         pb.setJointMotorControlArray(
             self.vehicle_id,
             self.wheel_joints,
@@ -381,9 +386,28 @@ class World:
         first, if the vehicle has them and that model is on)."""
         if self.suspension_joints:
             self._spring_forces()
+        if self._belts:
+            self._share_belt_torque()
         if self._tyres is not None:
             self._tyres.apply()
         pb.stepSimulation(physicsClientId=self._cid)
+
+    def _share_belt_torque(self) -> None:
+        """A belt's side torque (``n wheel_torque_limit_nm``, its sprocket's) shared by the side's wheels in
+        proportion to their normal loads in the last step (evenly when the side is in the air), each wheel's
+        motor at the side's speed command (drivetrain.couple_belts: the gears alone did not hold the wheels
+        of a side at one speed against Bullet's per-wheel motors)."""
+        loads = self.wheel_loads_n()
+        forces, k = [], 0
+        for side in (self.left_joints, self.right_joints):
+            n = len(side)
+            total_nm = n * self.spec.wheel_torque_limit_nm
+            side_load = sum(loads[k:k + n])
+            forces += ([total_nm * load / side_load for load in loads[k:k + n]] if side_load > 0.0
+                       else [total_nm / n] * n)
+            k += n
+        pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
+                                     targetVelocities=self._belt_targets, forces=forces, physicsClientId=self._cid)
 
     def _spring_forces(self) -> None:
         """Each suspension joint's spring and damper (VehicleSpec.suspension_*) for the next step, from its
