@@ -116,7 +116,7 @@ def test_a_hunter_strut_travel_follows_its_spring_rate_under_static_load(engine)
 @pytest.mark.parametrize("engine", ENGINES)
 def test_in_lunar_gravity_the_struts_rest_on_their_droop_stops(engine):
     spec = load_vehicle("hunter")
-    assert suspension_rest_m(spec, 1.62) == -0.05  # (12.25 kg * 1.62 - 120.2 N) / k = -0.052 m: the stop
+    assert suspension_rest_m(spec, 1.62) == -0.05  # (12.25 kg * 1.62 - 120.17 N) / k = -0.052 m: the stop
     assert suspension_rest_m(spec, 9.81) == pytest.approx(0.0, abs=1e-4)
     with open_world(Heightmap.flat(81, 81, 0.1), spec, SimConfig(engine=engine, gravity_m_s2=1.62)) as w:
         w.spawn(4.0, 4.0, 0.0)
@@ -135,7 +135,7 @@ def test_suspension_fields_come_together():
 
 def test_the_sprung_tip_angle_is_the_geometric_one_on_stiff_springs_and_lower_on_soft():
     args = dict(mass_kg=65.0, unsprung_kg=4.0, com_height_m=0.2, wheel_radius_m=0.165, track_m=0.605,
-                preload_n=120.2, droop_m=0.05, bump_m=0.05)
+                preload_n=120.17, droop_m=0.05, bump_m=0.05)
     rigid = math.degrees(math.atan2(0.3025, 0.2))
     assert sprung_tip_angle_deg(stiffness_n_m=1e9, **args) == pytest.approx(rigid, abs=1e-3)
     # the HUNTER's springs: its body rolls about 6 deg toward the downhill wheels before the tip

@@ -82,12 +82,12 @@ from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
-from offroadbench.sim.engines.base import read_urdf, unsprung_kg
 from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.rigs.vehicle_measure import (CheckResult, _FLAT_CELL_M, _STEP_CELL_M, _abs_row, _bisect, _climbs,
                                                    _com_height, _left_load, _mean_yaw_rate, _ramp_tilt, _ratio_row,
                                                    _run, _set_gravity)
+from offroadbench.sim.rigs.vehicle_bounds import sprung_tip_angle_deg, suspension_of, track_step_bound_m
 from offroadbench.sim.rigs.soft_soil_check import (SOFT_SOIL, SOFT_SOIL_GRAVITY_M_S2, soft_soil_checks,
                                                    soil_climb_limit_deg)
 
@@ -194,51 +194,6 @@ def _tilt_and_settle(world: TrialWorld, start_deg: float) -> None:
 TIP_LIFT_S = 0.25
 
 
-def sprung_tip_angle_deg(mass_kg: float, unsprung_kg: float, com_height_m: float, wheel_radius_m: float,
-                         track_m: float, stiffness_n_m: float, preload_n: float, droop_m: float, bump_m: float,
-                         g: float = 9.81) -> float:
-    """Tilt-table tip angle of a vehicle whose wheels ride vertical struts (VehicleSpec.suspension_*), deg.
-
-    Derived here (quasi-static, in the roll plane, the struts at the wheel centres, ``unsprung_kg`` per
-    wheel, two wheels a side seen as one): at the tip the uphill wheels carry nothing, so their struts
-    hang at full extension ``q_u = max(-droop, -preload / k)``; the downhill struts carry the sprung mass
-    and the hanging uphill wheels, ``F = (m_s + 2 m_u) g cos(theta + phi) / 2`` each (the load along the
-    rolled body's z axis), so they compress to ``q_d = min(bump, (F - preload) / k)`` and the body rolls
-    downhill by ``phi = atan((q_d - q_u) / track)``. The sprung centre of mass, ``d`` above the strut
-    line, moves with the roll toward the downhill wheels; the vehicle tips when the whole centre of mass
-    is over their contact line: ``tan(theta) = Y / Z`` (its distance from that line along the table and
-    its height), solved by fixed-point iteration. Rigid struts (``k`` -> infinity) give the geometric
-    ``atan((track / 2) / h)``.
-    """
-    n = 4.0
-    m_s = mass_kg - n * unsprung_kg
-    d = (mass_kg * com_height_m - n * unsprung_kg * wheel_radius_m) / m_s - wheel_radius_m
-    q_u = max(-droop_m, -preload_n / stiffness_n_m)
-    theta = math.atan2(track_m / 2.0, com_height_m)
-    for _ in range(200):
-        phi, q_d = 0.0, 0.0
-        for _ in range(50):
-            load = (m_s + 2.0 * unsprung_kg) * g * math.cos(theta + phi) / 2.0
-            q_d = min(bump_m, (load - preload_n) / stiffness_n_m)
-            phi = math.atan2(q_d - q_u, track_m)
-        s, c = math.sin(phi), math.cos(phi)
-        sprung_y = q_d * s + track_m / 2.0 * c - d * s
-        sprung_z = wheel_radius_m - q_d * c + track_m / 2.0 * s + d * c
-        uphill_y = q_d * s + track_m * c - q_u * s
-        y = (m_s * sprung_y + 2.0 * unsprung_kg * uphill_y) / mass_kg
-        z = (m_s * sprung_z + n * unsprung_kg * wheel_radius_m) / mass_kg
-        theta = math.atan2(y, z)
-    return math.degrees(theta)
-
-
-def _suspension(spec: VehicleSpec) -> tuple[float, float, float]:
-    """(unsprung mass per wheel kg, droop m, bump m) of a sprung vehicle, from its URDF: the mean mass
-    below each suspension joint, the joints' limits (the smallest travel of any)."""
-    struts = [j for j in read_urdf(spec.urdf)[1] if j.name in spec.suspension_joints]
-    return (unsprung_kg(spec.urdf, spec.suspension_joints), min(-j.limits[0] for j in struts),
-            min(j.limits[1] for j in struts))
-
-
 def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckResult, float, float]:
     grippy = dataclasses.replace(sim, terrain_friction=max(sim.terrain_friction, 5.0 / spec.wheel_friction))
     with open_world(hm, spec, grippy) as world:
@@ -248,7 +203,7 @@ def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckR
         note = f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground"
         expected = math.degrees(math.atan2(spec.track_m / 2.0, h))
         if spec.suspension_joints:
-            unsprung, droop, bump = _suspension(spec)
+            unsprung, droop, bump = suspension_of(spec)
             rigid = expected
             expected = sprung_tip_angle_deg(world.geometry.mass_kg, unsprung, h, spec.wheel_radius_m, spec.track_m,
                                             spec.suspension_stiffness_n_m, spec.suspension_preload_n, droop, bump,
@@ -416,41 +371,6 @@ def step_bound_m(wheel_radius_m: float, belly_m: float, wheelbase_m: float, over
 #: the approach speed of a belt-driven track's step row, m/s: its kinetic energy lifts the centre of
 #: mass by v^2 / (2 g) = 0.5 mm, so the climb is the quasi-static one :func:`track_step_bound_m` bounds
 TRACK_STEP_SPEED_M_S = 0.1
-
-
-def track_step_bound_m(wheel_radius_m: float, mu: float, lift_share: float, face_run_m: float,
-                       torque_ratio: float = math.inf) -> float:
-    """Highest step a belt-driven track of equal road wheels climbs quasi-statically, metres.
-
-    The track's front is its front road wheel (no raised idler: ``vehicles/talon``), so a step face met
-    below that wheel's centre is climbed by geometry, as by the front idler of a track whose front run
-    rises to it: the contact's normal lifts the track (the approach-angle rule of tracked vehicles: a
-    step up to the front idler's centre height). A higher face is met at the wheel's front, and only
-    the belt's friction on the face lifts it (derived here, quasi-static, the hull rigid): the hull
-    pivots on its rear road wheel, so the front must carry ``lift_share`` s of the weight W (the centre
-    of mass's distance from the rear wheel over the wheelbase), and the rear wheel pushes the front
-    into the face with at most its grip ``mu (1 - s) W``. A face inclined ``phi`` from the vertical
-    (a step across a heightfield is a ramp ``face_run_m`` long: one cell) presses the wheel with
-    ``N`` at ``phi`` above the horizontal; the belt, driven forward, rubs up the face with ``mu N``:
-
-        lift  N (sin phi + mu cos phi) = s W,     push  N (cos phi - mu sin phi) <= mu (1 - s) W,
-
-    that is ``tan(phi + atan mu) >= s / (mu (1 - s))``. The step is climbed while ``phi = atan(run / h)``
-    is at least that angle, and while the belts' torque carries the front wheel's rub and the rear's
-    push, ``(mu N + push) / W <= torque_ratio`` (the tracks' summed sprocket torque over ``r W``). A
-    vertical face (``run`` 0) with ``s / (mu (1 - s)) > mu`` is climbed only to the wheel's centre,
-    ``r``. With ``mu`` = 0.8, ``s`` = 1/2 and a 2 cm run: ``phi`` >= 12.7 deg, ``h`` <= 0.089 m.
-    """
-
-    def climbs(h: float) -> bool:
-        if h <= wheel_radius_m:
-            return True
-        phi = math.atan2(face_run_m, h)
-        n = lift_share / (math.sin(phi) + mu * math.cos(phi))  # N / W
-        push = n * (math.cos(phi) - mu * math.sin(phi))
-        return push <= mu * (1.0 - lift_share) and mu * n + max(0.0, push) <= torque_ratio
-
-    return _bisect(climbs, wheel_radius_m, 20.0 * wheel_radius_m, 1e-5)
 
 
 def _track_step(world_geometry, spec: VehicleSpec, sim: SimConfig) -> tuple[float, str]:

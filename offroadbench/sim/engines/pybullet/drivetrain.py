@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import pybullet as pb
 
-__all__ = ["Flywheels", "attach_flywheels", "couple_belts"]
+__all__ = ["Flywheels", "apply_springs", "attach_flywheels", "belt_motor_forces", "couple_belts"]
 
 _FLYWHEEL_MASS_KG = 1.0
 """Mass of each flywheel link (on its axis: it carries no torque from gravity), kg."""
@@ -122,3 +122,27 @@ def couple_belts(cid: int, vehicle: int, sides: list[list[int]]) -> list[int]:
             pb.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_MAX_FORCE, erp=0.0, physicsClientId=cid)
             constraints.append(gear)
     return constraints
+
+
+def belt_motor_forces(loads_n, side_sizes: tuple[int, int], wheel_torque_nm: float) -> list[float]:
+    """Each wheel motor's torque limit on a belt (left wheels, then right), N m: the side's torque
+    ``n wheel_torque_nm`` (its sprocket's) in proportion to the wheels' normal loads ``loads_n`` (N, the
+    last step's), evenly when the side is in the air (World._share_belt_torque, couple_belts)."""
+    forces, k = [], 0
+    for n in side_sizes:
+        total_nm, side = n * wheel_torque_nm, list(loads_n[k:k + n])
+        load = sum(side)
+        forces += [total_nm * w / load for w in side] if load > 0.0 else [total_nm / n] * n
+        k += n
+    return forces
+
+
+def apply_springs(cid: int, vehicle: int, joints: list[int], stiffness_n_m: float, damping_n_s_m: float,
+                  preload_n: float) -> None:
+    """Each suspension joint's spring and damper (VehicleSpec.suspension_*) for the next step, from its
+    present position ``q`` and speed (explicit): the wheel pushed down with ``preload + k q + c q_dot``
+    (offroadbench.sim.engines.mujoco.mjcf builds the same spring as slide joints' stiffness, springref
+    and damping); the travel is the URDF's joint limits, which Bullet holds."""
+    states = pb.getJointStates(vehicle, joints, physicsClientId=cid)
+    forces = [-(preload_n + stiffness_n_m * q + damping_n_s_m * v) for q, v, _, _ in states]
+    pb.setJointMotorControlArray(vehicle, joints, pb.TORQUE_CONTROL, forces=forces, physicsClientId=cid)

@@ -76,7 +76,7 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
-from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels, couple_belts
+from offroadbench.sim.engines.pybullet.drivetrain import apply_springs, attach_flywheels, belt_motor_forces, couple_belts
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
@@ -393,33 +393,17 @@ class World:
         pb.stepSimulation(physicsClientId=self._cid)
 
     def _share_belt_torque(self) -> None:
-        """A belt's side torque (``n wheel_torque_limit_nm``, its sprocket's) shared by the side's wheels in
-        proportion to their normal loads in the last step (evenly when the side is in the air), each wheel's
-        motor at the side's speed command (drivetrain.couple_belts: the gears alone did not hold the wheels
-        of a side at one speed against Bullet's per-wheel motors)."""
-        loads = self.wheel_loads_n()
-        forces, k = [], 0
-        for side in (self.left_joints, self.right_joints):
-            n = len(side)
-            total_nm = n * self.spec.wheel_torque_limit_nm
-            side_load = sum(loads[k:k + n])
-            forces += ([total_nm * load / side_load for load in loads[k:k + n]] if side_load > 0.0
-                       else [total_nm / n] * n)
-            k += n
+        """The belts' side torque shared by their wheels' loads of the last step (drivetrain.belt_motor_forces)."""
+        forces = belt_motor_forces(self.wheel_loads_n(), (len(self.left_joints), len(self.right_joints)),
+                                   self.spec.wheel_torque_limit_nm)
         pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
                                      targetVelocities=self._belt_targets, forces=forces, physicsClientId=self._cid)
 
     def _spring_forces(self) -> None:
-        """Each suspension joint's spring and damper (VehicleSpec.suspension_*) for the next step, from its
-        present position q and speed (explicit): the wheel pushed down with ``preload + k q + c q_dot``
-        (offroadbench.sim.engines.mujoco.mjcf builds the same spring as the slide joints' stiffness,
-        springref and damping); the travel is the URDF's joint limits, which Bullet holds."""
-        spec, cid, body = self.spec, self._cid, self.vehicle_id
-        k, c, p = spec.suspension_stiffness_n_m, spec.suspension_damping_n_s_m, spec.suspension_preload_n
-        states = pb.getJointStates(body, self.suspension_joints, physicsClientId=cid)
-        forces = [-(p + k * q + c * v) for q, v, _, _ in states]
-        pb.setJointMotorControlArray(body, self.suspension_joints, pb.TORQUE_CONTROL, forces=forces,
-                                     physicsClientId=cid)
+        """The suspension's spring and damper forces for the next step (drivetrain.apply_springs)."""
+        spec = self.spec
+        apply_springs(self._cid, self.vehicle_id, self.suspension_joints, spec.suspension_stiffness_n_m,
+                      spec.suspension_damping_n_s_m, spec.suspension_preload_n)
 
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
         """(position, quaternion xyzw, linear velocity, angular velocity), world frame."""
