@@ -38,6 +38,16 @@ def test_the_track_step_bound_follows_its_force_balance():
     assert track_step_bound_m(r, mu, s, run, torque_ratio=0.1) == r
 
 
+def test_a_belt_side_torque_goes_to_the_wheels_that_bear():
+    from offroadbench.sim.engines.pybullet.drivetrain import belt_motor_forces
+
+    # left side on its rear and front road wheels, right side in the air: the left's 12 N m by load, the right's evenly
+    forces = belt_motor_forces([90.0, 0.0, 0.0, 0.0, 30.0] + [0.0] * 5, (5, 5), 2.4)
+    assert forces[:5] == pytest.approx([9.0, 0.0, 0.0, 0.0, 3.0])
+    assert forces[5:] == pytest.approx([2.4] * 5)
+    assert sum(forces[:5]) == pytest.approx(12.0)
+
+
 def _wheel_speeds(world, engine):
     if engine == "pybullet":
         import pybullet as pb

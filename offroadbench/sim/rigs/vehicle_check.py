@@ -31,14 +31,17 @@ contact model and skid-steer drive the trials use:
   axis; the same thing for a rigid vehicle on flat ground) tilts slowly, with a grippy surface
   so the vehicle cannot slide, until the uphill wheels leave the ground. Expected: the
   geometric ``atan((track / 2) / h)`` with ``h`` the height of the whole vehicle's centre of mass
-  above the ground, measured on the settled vehicle; pass: within 2 deg.
+  above the ground, measured on the settled vehicle (a vehicle on sprung struts, ``suspension_*``:
+  :func:`~offroadbench.sim.rigs.vehicle_bounds.sprung_tip_angle_deg`, its body rolling on its springs);
+  pass: within 2 deg. The table jumps to 15 deg below that and the vehicle rests there 2 s before the
+  slow ramp; the tip counts once the uphill wheels have stayed off the table for 0.25 s.
 - **steepest slope climbed from rest** (gravity turned about the lateral axis): bisection on the
   grade at which the vehicle, started at rest, gains 1 m uphill. Expected: the quasi-static limit
   of :func:`climb_limit_deg` (load transfer to the rear axle, each axle limited by its grip or its
   motors' torque, and at most the pitch-over angle); pass: within 4 deg. The spec sheet's grade
   stands beside it.
-- **side slope held** (gravity turned about the long axis, the vehicle's own friction): the
-  tilt at which the parked vehicle starts to slide or tip, against ``min(atan(mu), tip angle)``
+- **side slope held** (gravity turned about the long axis, the vehicle's own friction, resting 2 s
+  at the first angle as on the tilt table): the tilt at which the parked vehicle starts to slide or tip, against ``min(atan(mu), tip angle)``
   (within 2 deg); the spec sheet's side slope beside it.
 - **static stability**: the tilt-table tip angle must exceed the slide angle ``atan(mu)``: at rest
   on a side slope the vehicle slides before it rolls over (a centre of mass raised 0.5 m on the
@@ -50,7 +53,8 @@ contact model and skid-steer drive the trials use:
   0.1 m/s, against the quasi-static climb of :func:`track_step_bound_m` (its front road wheel by
   geometry to its centre, above by the belt's friction on the face); pass: 0.6-1.05x. At cruise speed
   its kinetic energy adds to that (the TALON climbed 0.13 m on PyBullet, 0.11 m on MuJoCo at 1 m/s,
-  0.09 and 0.08 m at 0.1 m/s), which a quasi-static bound does not hold.
+  0.09 and 0.08 m at 0.1 m/s), which a quasi-static bound does not hold
+  (:func:`~offroadbench.sim.rigs.vehicle_bounds.track_step_bound_m`).
 
 **Soft soil** (:func:`soft_soil_checks`, the ``terramechanics`` tyre model on lunar regolith in
 lunar gravity, offroadbench.sim.tyre_laws.terramechanics):

@@ -393,8 +393,13 @@ class World:
         pb.stepSimulation(physicsClientId=self._cid)
 
     def _share_belt_torque(self) -> None:
-        """The belts' side torque shared by their wheels' loads of the last step (drivetrain.belt_motor_forces)."""
-        forces = belt_motor_forces(self.wheel_loads_n(), (len(self.left_joints), len(self.right_joints)),
+        """The belts' side torque shared by their wheels' loads of the last step (drivetrain.belt_motor_forces);
+        on soft soil, where Bullet's wheel contacts are off, evenly by the wheels in the soil."""
+        if self.sim.tyre_model == "terramechanics":
+            loads = tuple(1.0 if j in self._tyres.last else 0.0 for j in self.wheel_joints)
+        else:
+            loads = self.wheel_loads_n()
+        forces = belt_motor_forces(loads, (len(self.left_joints), len(self.right_joints)),
                                    self.spec.wheel_torque_limit_nm)
         pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
                                      targetVelocities=self._belt_targets, forces=forces, physicsClientId=self._cid)
