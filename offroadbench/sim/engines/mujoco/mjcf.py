@@ -31,7 +31,8 @@ class MjcfBuilder:
         if len(roots) != 1:
             raise InputError(f"URDF {spec.urdf}: expected one root link, found {roots}")
         by_name = {j.name: j for j in joints}
-        missing = [n for n in spec.wheel_joints + spec.steer_joints + spec.differential_joints if n not in by_name]
+        missing = [n for n in spec.wheel_joints + spec.steer_joints + spec.differential_joints + spec.suspension_joints
+                   if n not in by_name]
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
         coulomb = sim.tyre_model == "coulomb"
@@ -72,6 +73,8 @@ class MjcfBuilder:
                     if j.name in wheel_names and spec.wheel_spin_inertia_kg_m2 is not None:
                         own = abs(j.axis[0]) * link.inertia[0] + abs(j.axis[1]) * link.inertia[1] + abs(j.axis[2]) * link.inertia[2]
                         jel.set("armature", repr(max(0.0, spec.wheel_spin_inertia_kg_m2 - own)))
+                elif j.kind == "prismatic" and j.name in spec.suspension_joints:
+                    self._suspension_joint(el, j)
                 elif j.kind != "fixed":
                     raise InputError(f"URDF {spec.urdf}: joint {j.name} of type {j.kind!r} is not supported")
                 self._add_link(el, link, (0.0, 0.0, 0.0), is_wheel=j.name in wheel_names, coulomb=coulomb, share=share)
@@ -99,7 +102,8 @@ class MjcfBuilder:
         """Steering servos after the wheel motors (position actuators, stiff against the steered
         link's inertia about the steering axis, limited to the spec's steering torque) and the
         rockers' differential as a joint equality (angles opposite: the body pitches by the mean of
-        the rockers'), for steered and rocker-bogie vehicles."""
+        the rockers'), for steered and rocker-bogie vehicles; a tracked vehicle's belts
+        (``belt_drive``) as joint equalities (each side's wheels at one angle)."""
         spec = self.spec
         for name in spec.steer_joints:
             link = links[by_name[name].child]
@@ -114,6 +118,28 @@ class MjcfBuilder:
             left, right = spec.differential_joints
             eq = ET.SubElement(root, "equality")
             ET.SubElement(eq, "joint", joint1=left, joint2=right, polycoef="0 -1 0 0 0")
+        if spec.belt_drive:
+            # each side's road wheels turn as one belt: each wheel's angle equals the side's first wheel's
+            # (offroadbench.sim.engines.pybullet.drivetrain.couple_belts: the same model on PyBullet), as
+            # stiff as MuJoCo keeps stable (a time constant of two steps)
+            eq = ET.SubElement(root, "equality")
+            for side in (spec.left_wheel_joints, spec.right_wheel_joints):
+                for name in side[1:]:
+                    ET.SubElement(eq, "joint", joint1=name, joint2=side[0], polycoef="0 1 0 0 0",
+                                  solref=_fmt((2.0 * self._dt_mj, 1.0)))
+
+    def _suspension_joint(self, el, joint) -> None:
+        """A suspension strut (VehicleSpec.suspension_*): a slide joint whose spring pushes the wheel down
+        with ``preload + k q`` (MuJoCo's passive spring ``-k (q - springref)`` with ``springref = -preload / k``)
+        and whose damper adds ``c q_dot``, its travel the URDF's limits (the PyBullet world applies the same
+        forces explicitly: offroadbench.sim.engines.pybullet.world.World._spring_forces)."""
+        spec = self.spec
+        if joint.limits is None:
+            raise InputError(f"URDF {spec.urdf}: suspension joint {joint.name} needs a <limit> (its travel)")
+        k = spec.suspension_stiffness_n_m
+        ET.SubElement(el, "joint", name=joint.name, type="slide", axis=_fmt(joint.axis), stiffness=repr(k),
+                      springref=repr(-spec.suspension_preload_n / k), damping=repr(spec.suspension_damping_n_s_m),
+                      range=_fmt(joint.limits), limited="true")
 
     def _add_link(self, el, link: UrdfLink, shift, *, is_wheel: bool, coulomb: bool, share: float) -> None:
         spec, sim, tune = self.spec, self.sim, self.contact

@@ -55,7 +55,7 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.tyre_laws.coulomb import CoulombBristles, bristle_constants
 from offroadbench.sim.tyre_laws.soil_wheels import soil_setup
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
@@ -197,6 +197,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
                 if m.geom_bodyid[g] == b:
                     self._wheel_geom[g] = i
         self._n_left = len(self.spec.left_wheel_joints)
+        self._strut_qpos = [int(m.jnt_qposadr[mujoco.mj_name2id(m, obj.mjOBJ_JOINT, n)]) for n in self.spec.suspension_joints]
+        self._spring_rest_m = suspension_rest_m(self.spec, self.sim.gravity_m_s2)
         # a wheel on a steering or suspension joint does not move with the chassis alone
         self._articulated = m.njnt > 1 + len(self._wheel_bodies)  # joints beyond the free joint and the wheels
 
@@ -265,6 +267,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         quat = (ch * cr, ch * sr, sh * sr, sh * cr)  # w x y z of yaw(heading) * roll
         d.qpos[0:3] = (x_m, y_m, self.hm.z_max_m + 10.0)
         d.qpos[3:7] = quat
+        for adr in self._strut_qpos:  # a sprung vehicle's struts at rest in this gravity
+            d.qpos[adr] = self._spring_rest_m
         mujoco.mj_kinematics(m, d)
         lows, reach = [], 0.0
         base = d.xipos[self._chassis].tolist()

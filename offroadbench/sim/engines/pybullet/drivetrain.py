@@ -25,13 +25,18 @@ on the chassis, and the chassis' own rotation does not drive the flywheel. Measu
 (benchmarks/RESULTS.md, 'Drive-train reaction'): on a free test body the chassis takes the tyre's
 share of the motor torque to within 6 %; the Husky's launch pitch in lunar gravity falls from
 45.0 deg to under 1 deg.
+
+A tracked vehicle's belt (``VehicleSpec.belt_drive``, :func:`couple_belts`) is built the same way:
+each side's road wheels tied by ``JOINT_GEAR`` constraints of ratio -1 (equal joint speeds), so the
+side turns as one belt and the motors' summed torque reaches the ground through whichever wheels
+bear on it.
 """
 
 from __future__ import annotations
 
 import pybullet as pb
 
-__all__ = ["Flywheels", "attach_flywheels"]
+__all__ = ["Flywheels", "apply_springs", "attach_flywheels", "belt_motor_forces", "couple_belts"]
 
 _FLYWHEEL_MASS_KG = 1.0
 """Mass of each flywheel link (on its axis: it carries no torque from gravity), kg."""
@@ -89,3 +94,55 @@ def attach_flywheels(cid: int, vehicle: int, wheels: list[int], excess_kg_m2: li
         bodies.append(fly)
         constraints.append(gear)
     return Flywheels(cid, bodies, constraints)
+
+
+def couple_belts(cid: int, vehicle: int, sides: list[list[int]]) -> list[int]:
+    """Tie each side's wheel joints (``sides``: lists of joint indices of ``vehicle``, the first the
+    sprocket's) into one belt: a ``JOINT_GEAR`` constraint of ratio -1 (equal joint speeds) between the
+    first wheel and each other. Returns the constraints (remove them before the vehicle).
+
+    A track's belt wraps the sprocket and every road wheel of its side, so they turn at one speed (the
+    belt's, over the wheels' common radius) and the sprocket's torque reaches the ground through the
+    road wheels that bear on it, not in fixed shares: a side resting on one road wheel still pushes
+    with the whole sprocket torque (up to that wheel's grip). Each wheel is geared to the first
+    directly. The gears alone did not hold a side at one speed against Bullet's per-wheel velocity
+    motors (a side stalled against a step turned its loaded wheels 18 % slower than its airborne ones:
+    the solver's iterations do not settle motors and gears together), so the World also gives the
+    wheels' motors the side's torque in proportion to their loads (World._share_belt_torque); then
+    the wheels of a stalled side turn within 1 % of one speed. The constraints hold speeds, not angles
+    (``erp`` 0, as the flywheels' gear): the road wheels' angles may drift apart, which changes
+    nothing for spheres."""
+    constraints = []
+    for joints in sides:
+        drive = joints[0]
+        axis = tuple(pb.getJointInfo(vehicle, drive, physicsClientId=cid)[13])
+        for wheel in joints[1:]:
+            gear = pb.createConstraint(vehicle, drive, vehicle, wheel, pb.JOINT_GEAR, list(axis), [0.0, 0.0, 0.0],
+                                       [0.0, 0.0, 0.0], physicsClientId=cid)
+            pb.changeConstraint(gear, gearRatio=-1.0, maxForce=_GEAR_MAX_FORCE, erp=0.0, physicsClientId=cid)
+            constraints.append(gear)
+    return constraints
+
+
+def belt_motor_forces(loads_n, side_sizes: tuple[int, int], wheel_torque_nm: float) -> list[float]:
+    """Each wheel motor's torque limit on a belt (left wheels, then right), N m: the side's torque
+    ``n wheel_torque_nm`` (its sprocket's) in proportion to the wheels' normal loads ``loads_n`` (N, the
+    last step's), evenly when the side is in the air (World._share_belt_torque, couple_belts)."""
+    forces, k = [], 0
+    for n in side_sizes:
+        total_nm, side = n * wheel_torque_nm, list(loads_n[k:k + n])
+        load = sum(side)
+        forces += [total_nm * w / load for w in side] if load > 0.0 else [total_nm / n] * n
+        k += n
+    return forces
+
+
+def apply_springs(cid: int, vehicle: int, joints: list[int], stiffness_n_m: float, damping_n_s_m: float,
+                  preload_n: float) -> None:
+    """Each suspension joint's spring and damper (VehicleSpec.suspension_*) for the next step, from its
+    present position ``q`` and speed (explicit): the wheel pushed down with ``preload + k q + c q_dot``
+    (offroadbench.sim.engines.mujoco.mjcf builds the same spring as slide joints' stiffness, springref
+    and damping); the travel is the URDF's joint limits, which Bullet holds."""
+    states = pb.getJointStates(vehicle, joints, physicsClientId=cid)
+    forces = [-(preload_n + stiffness_n_m * q + damping_n_s_m * v) for q, v, _, _ in states]
+    pb.setJointMotorControlArray(vehicle, joints, pb.TORQUE_CONTROL, forces=forces, physicsClientId=cid)

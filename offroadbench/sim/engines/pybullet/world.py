@@ -76,11 +76,11 @@ import pybullet as pb
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig, tile_spans
-from offroadbench.sim.engines.pybullet.drivetrain import attach_flywheels
+from offroadbench.sim.engines.pybullet.drivetrain import apply_springs, attach_flywheels, belt_motor_forces, couple_belts
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
-from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m
+from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.engines.pybullet.heap import _empty_heights, _lean_heap
 
@@ -101,6 +101,8 @@ class World:
         self.dt_s = 1.0 / sim.physics_rate_hz
         self._mass_kg: float | None = None  # the vehicle's summed link masses, kg (at its first load)
         self._flywheels = None  # the loaded vehicle's drive-train flywheels (drivetrain.attach_flywheels)
+        self._belts: list[int] = []  # the loaded vehicle's belt constraints (drivetrain.couple_belts)
+        self._belt_targets = [0.0] * len(self.spec.wheel_joints)  # a belt vehicle's wheel speed commands, rad/s
         self._cid = pb.connect(pb.DIRECT)
         if self._cid < 0:  # pragma: no cover - only when the physics server cannot start
             raise RuntimeError("could not start a PyBullet DIRECT client")
@@ -111,6 +113,7 @@ class World:
             self._terrain_set = frozenset(self.terrain_bodies)
             log.info("heightfield %dx%d built in %.2f s (%d tiles)", hm.rows, hm.cols, time.perf_counter() - t0,
                      len(self.terrain_bodies))
+            self._spring_rest_m = suspension_rest_m(self.spec, self.sim.gravity_m_s2)
             self.vehicle_id = self._load_vehicle()
             self.geometry = self._measure_geometry()
         except BaseException:
@@ -208,10 +211,11 @@ class World:
         missing = [n for n in spec.wheel_joints if n not in names]
         if missing:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(missing)}")
-        extra = [n for n in spec.steer_joints + spec.differential_joints if n not in names]
+        extra = [n for n in spec.steer_joints + spec.differential_joints + spec.suspension_joints if n not in names]
         if extra:
             raise InputError(f"vehicle {spec.name!r}: URDF {spec.urdf} has no joint(s) {', '.join(extra)}")
         self.steer_joints = [names[n] for n in spec.steer_joints]
+        self.suspension_joints = [names[n] for n in spec.suspension_joints]
         self.left_joints = [names[n] for n in spec.left_wheel_joints]
         self.right_joints = [names[n] for n in spec.right_wheel_joints]
         self.wheel_joints = self.left_joints + self.right_joints
@@ -238,6 +242,8 @@ class World:
                                            (0.0, 0.0, self.hm.z_min_m - 50.0),
                                            [spec.is_driven(n) for n in spec.wheel_joints])
         self._articulate(body, names)
+        if spec.belt_drive:
+            self._belts = couple_belts(cid, body, [self.left_joints, self.right_joints])
         if self._mass_kg is None:  # summed once: every load of the vehicle has the same links
             n_links = pb.getNumJoints(body, physicsClientId=cid)
             self._mass_kg = sum(pb.getDynamicsInfo(body, link, physicsClientId=cid)[0] for link in range(-1, n_links))
@@ -264,6 +270,8 @@ class World:
         for j in names.values():
             if j not in driven and pb.getJointInfo(body, j, physicsClientId=cid)[2] == pb.JOINT_REVOLUTE:
                 pb.setJointMotorControl2(body, j, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
+        for j in self.suspension_joints:  # their springs act through step(): the default motor off
+            pb.setJointMotorControl2(body, j, pb.VELOCITY_CONTROL, force=0.0, physicsClientId=cid)
         if self.steer_joints:
             self.command_steering([0.0] * len(self.steer_joints), body)
         if spec.differential_joints:
@@ -283,6 +291,8 @@ class World:
 
     def command_wheel_speeds(self, speeds_rad_s) -> None:
         """One velocity command per wheel (``spec.wheel_joints`` order), rad/s, torque-limited."""
+        if self.spec.belt_drive:
+            self._belt_targets = list(speeds_rad_s)
         pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
                                      targetVelocities=list(speeds_rad_s),
                                      forces=self._wheel_forces,
@@ -331,6 +341,9 @@ class World:
         """
         cid = self._cid
         self._flywheels.remove()  # their gear constraints hold the old vehicle's joints
+        for c in self._belts:  # as do the belts'
+            pb.removeConstraint(c, physicsClientId=cid)
+        self._belts = []
         pb.removeBody(self.vehicle_id, physicsClientId=cid)
         self.vehicle_id = body = self._load_vehicle()
         orn = pb.getQuaternionFromEuler([roll_rad, 0.0, heading_rad])
@@ -338,6 +351,8 @@ class World:
         pb.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
         for j in self.wheel_joints:
             pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
+        for j in self.suspension_joints:  # the struts at rest in this gravity
+            pb.resetJointState(body, j, self._spring_rest_m, 0.0, physicsClientId=cid)
         aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
         reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1])
         z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, self._bottom_offset(),
@@ -355,6 +370,8 @@ class World:
     def command_wheels(self, left_rad_s: float, right_rad_s: float) -> None:
         """Velocity commands for the left and right wheels, torque-limited by the vehicle spec."""
         n_l, n_r = len(self.left_joints), len(self.right_joints)
+        if self.spec.belt_drive:
+            self._belt_targets = [left_rad_s] * n_l + [right_rad_s] * n_r  # step() shares the sides' torque
         pb.setJointMotorControlArray(
             self.vehicle_id,
             self.wheel_joints,
@@ -365,10 +382,33 @@ class World:
         )
 
     def step(self) -> None:
-        """One physics step (with the Coulomb tyre forces first, if that model is on)."""
+        """One physics step (with the suspension's spring and damper forces and the Coulomb tyre forces
+        first, if the vehicle has them and that model is on)."""
+        if self.suspension_joints:
+            self._spring_forces()
+        if self._belts:
+            self._share_belt_torque()
         if self._tyres is not None:
             self._tyres.apply()
         pb.stepSimulation(physicsClientId=self._cid)
+
+    def _share_belt_torque(self) -> None:
+        """The belts' side torque shared by their wheels' loads of the last step (drivetrain.belt_motor_forces);
+        on soft soil, where Bullet's wheel contacts are off, evenly by the wheels in the soil."""
+        if self.sim.tyre_model == "terramechanics":
+            loads = tuple(1.0 if j in self._tyres.last else 0.0 for j in self.wheel_joints)
+        else:
+            loads = self.wheel_loads_n()
+        forces = belt_motor_forces(loads, (len(self.left_joints), len(self.right_joints)),
+                                   self.spec.wheel_torque_limit_nm)
+        pb.setJointMotorControlArray(self.vehicle_id, self.wheel_joints, pb.VELOCITY_CONTROL,
+                                     targetVelocities=self._belt_targets, forces=forces, physicsClientId=self._cid)
+
+    def _spring_forces(self) -> None:
+        """The suspension's spring and damper forces for the next step (drivetrain.apply_springs)."""
+        spec = self.spec
+        apply_springs(self._cid, self.vehicle_id, self.suspension_joints, spec.suspension_stiffness_n_m,
+                      spec.suspension_damping_n_s_m, spec.suspension_preload_n)
 
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
         """(position, quaternion xyzw, linear velocity, angular velocity), world frame."""
