@@ -64,7 +64,7 @@ class Curve:
     ``snapshot`` is the policy and observation statistics as they were at that rollout's start: the
     same as a run with ``--steps`` = ``snapshot_steps`` (constant learning rate and clip range)."""
 
-    def __new__(cls, total: int, max_s: float | None = None):
+    def __new__(cls, total: int, max_s: float | None = None, checkpoints=(), save=None):
         from stable_baselines3.common.callbacks import BaseCallback
         from tqdm import tqdm
 
@@ -79,11 +79,15 @@ class Curve:
                 self.snapshot = None
                 self.snapshot_steps = 0
                 self.stopped = False
+                self.pending = sorted(checkpoints)
 
             def _on_rollout_start(self) -> None:
                 import copy
 
                 venv = self.model.get_env()
+                while self.pending and self.num_timesteps >= self.pending[0]:
+                    # the policy a --steps run of pending[0] steps ends with (it also finishes its rollout)
+                    save(self.model, venv.obs_rms, self.num_timesteps, self.pending.pop(0))
                 self.snapshot = (copy.deepcopy(self.model.policy.state_dict()), copy.deepcopy(venv.obs_rms))
                 self.snapshot_steps = self.num_timesteps
                 self.stopped = max_s is not None and time.time() - self.t0 > max_s
@@ -142,7 +146,15 @@ def train(args) -> Path:
     venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
     model = PPO("MlpPolicy", venv, n_steps=2048, seed=args.seed, device="cpu", verbose=0,
                 policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
-    curve = Curve(args.steps, None if args.max_minutes is None else 60.0 * args.max_minutes)
+    obs_cfg = envs[0].settings.observation
+
+    def save(model_, obs_rms_, steps_, asked):
+        export_sb3(model_, out / f"ppo_husky_{asked}.npz", obs_rms=obs_rms_, action_scale=pool.action_scale,
+                   patch_cells=obs_cfg.patch_cells, patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed),
+                   steps=str(steps_), trained_by="experiments/train_ppo.py")
+
+    curve = Curve(args.steps, None if args.max_minutes is None else 60.0 * args.max_minutes,
+                  checkpoints=args.checkpoints, save=save)
     t0, cpu0 = time.time(), time.process_time()
     model.learn(total_timesteps=args.steps, callback=curve)
     wall, cpu = time.time() - t0, time.process_time() - cpu0
@@ -152,7 +164,6 @@ def train(args) -> Path:
         model.policy.load_state_dict(curve.snapshot[0])
         obs_rms, steps = curve.snapshot[1], curve.snapshot_steps
         curve.rows = [r for r in curve.rows if r["steps"] <= steps]
-    obs_cfg = envs[0].settings.observation
     npz = out / "ppo_husky.npz"
     export_sb3(model, npz, obs_rms=obs_rms, action_scale=pool.action_scale, patch_cells=obs_cfg.patch_cells,
                patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed), steps=str(steps),
@@ -243,6 +254,8 @@ def main(argv=None) -> int:
     p.add_argument("--max-minutes", type=float, default=None,
                    help="stop at the first rollout that starts after this wall time and keep the policy as it "
                         "was then (training.json says the steps: rerun with --steps STEPS to reproduce)")
+    p.add_argument("--checkpoints", type=int, nargs="*", default=[], metavar="STEPS",
+                   help="also write ppo_husky_STEPS.npz: the policy a --steps STEPS run of the same seed ends with")
     p.add_argument("--ship", action="store_true", help="copy the trained npz into the package's data")
     p.add_argument("--evaluate", metavar="NPZ", default=None, help="only evaluate these weights")
     p.add_argument("--no-evaluate", action="store_true", help="train only")
