@@ -112,9 +112,13 @@ class Curve:
         return _Curve()
 
 
-def _raw_reward_env(pool):
-    """The pool, with the unnormalised reward in info (for the curve) and the terrain index kept."""
+def _raw_reward_env(pool, time_penalty_per_s: float = 0.0):
+    """The pool, with the env's unnormalised reward in info (for the curve) and the terrain index kept;
+    the reward trained on is the env's less ``time_penalty_per_s`` per simulated second (one control
+    tick per step)."""
     import gymnasium as gym
+
+    tick_s = 1.0 / pool.current.settings.controller.control_rate_hz
 
     class RawReward(gym.Wrapper):
         def reset(self, **kw):
@@ -125,7 +129,7 @@ def _raw_reward_env(pool):
         def step(self, action):
             obs, r, term, trunc, info = self.env.step(action)
             info["raw_reward"], info["terrain_index"] = r, self._terrain
-            return obs, r, term, trunc, info
+            return obs, r - time_penalty_per_s * tick_s, term, trunc, info
 
     return RawReward(pool)
 
@@ -143,7 +147,7 @@ def train(args) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     envs = terrain_pool(args.seed, args.terrains)
     pool = TerrainPool(envs)
-    venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
+    venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool, args.time_penalty)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
     model = PPO("MlpPolicy", venv, n_steps=2048, seed=args.seed, device="cpu", verbose=0,
                 policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
     obs_cfg = envs[0].settings.observation
@@ -172,7 +176,7 @@ def train(args) -> Path:
     meta = {"seed": args.seed, "steps": steps, "steps_asked": args.steps, "stopped_by_max_minutes": curve.stopped,
             "cpu_s": round(cpu, 1), "terrains": args.terrains, "presets": PRESETS,
             "overrides": OVERRIDES, "mission_length_m": MISSION_M, "border_m": BORDER_M,
-            "train_sensor": {"sensor": "mast", "sensor_range_m": TRAIN_SENSOR.sensor_range_m},
+            "time_penalty_per_s": args.time_penalty, "train_sensor": {"sensor": "mast", "sensor_range_m": TRAIN_SENSOR.sensor_range_m},
             "wall_s": round(wall, 1), "episodes": len(curve.rows), "python": sys.version.split()[0],
             "stable_baselines3": stable_baselines3.__version__, "torch": torch.__version__,
             "numpy": np.__version__, "machine": platform.processor() or platform.machine(),
@@ -250,6 +254,8 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=150_000, help="env steps of training (default 150000)")
     p.add_argument("--seed", type=int, default=0, help="root seed of training and of the held-out missions")
     p.add_argument("--terrains", type=int, default=6, help="terrains in the training pool (default 6)")
+    p.add_argument("--time-penalty", type=float, default=0.0, metavar="PER_S",
+                   help="reward subtracted per simulated second of an episode (default 0: the env's reward)")
     p.add_argument("--out", default="runs/ppo", help="output folder")
     p.add_argument("--max-minutes", type=float, default=None,
                    help="stop at the first rollout that starts after this wall time and keep the policy as it "
