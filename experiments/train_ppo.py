@@ -21,7 +21,8 @@ pipeline (offroadbench.sim.trial.pipeline.drive_terrain) by ``ppo`` through the 
 
 Writes to ``--out``: ``learning_curve.csv`` (one row per episode: env steps at its end, return,
 length, success, failure reason, terrain), ``learning_curve.png``, ``ppo_husky.npz`` and
-``training.json`` (arguments, SB3/torch versions, wall time, machine). ``--ship`` copies the npz to
+``training.json`` (arguments, SB3/torch versions, wall time, machine), ``ppo_sb3.zip`` (the SB3
+model of the same policy; not shipped) and, with ``--checkpoints``, ``ppo_husky_STEPS.npz``. ``--ship`` copies the npz to
 ``offroadbench/navigation/policies/data/``. The same seed and step count give the same weights on
 the same machine (SB3's seeding of torch, numpy and the env; one torch thread).
 """
@@ -172,6 +173,7 @@ def train(args) -> Path:
     export_sb3(model, npz, obs_rms=obs_rms, action_scale=pool.action_scale, patch_cells=obs_cfg.patch_cells,
                patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed), steps=str(steps),
                trained_by="experiments/train_ppo.py")
+    model.save(out / "ppo_sb3.zip")  # the same policy for SB3 (torch), to check the npz's mean actions against
     _write_curve(curve.rows, out)
     meta = {"seed": args.seed, "steps": steps, "steps_asked": args.steps, "stopped_by_max_minutes": curve.stopped,
             "cpu_s": round(cpu, 1), "terrains": args.terrains, "presets": PRESETS,
