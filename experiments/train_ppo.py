@@ -218,8 +218,12 @@ def _write_curve(rows: list[dict], out: Path) -> None:
     fig.savefig(out / "learning_curve.png", dpi=110)
 
 
-def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain: int = 4):
-    """Held-out missions (module docstring): one row per trial, and the success counts per arm."""
+ARMS = ("straight/oracle", "straight/mast", "ppo/oracle", "ppo/mast")
+
+
+def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain: int = 4, arms=ARMS):
+    """Held-out missions (module docstring): one row per trial, and the success counts per arm
+    (``arms``: a subset of :data:`ARMS`)."""
     import pandas as pd
 
     from offroadbench.navigation.planners import planner_from_table
@@ -227,9 +231,10 @@ def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain
     from offroadbench.navigation.missions import MissionConfig
     from offroadbench.terrain.recipe import load_terrain
 
-    arms = {"straight/oracle": {"name": "straight"}, "straight/mast": {"name": "straight", "sensor": "mast"},
-            "ppo/oracle": {"name": "ppo", "weights": str(weights)},
-            "ppo/mast": {"name": "ppo", "weights": str(weights), "sensor": "mast"}}
+    tables = {"straight/oracle": {"name": "straight"}, "straight/mast": {"name": "straight", "sensor": "mast"},
+              "ppo/oracle": {"name": "ppo", "weights": str(weights)},
+              "ppo/mast": {"name": "ppo", "weights": str(weights), "sensor": "mast"}}
+    arms = {a: tables[a] for a in arms}
     rows = []
     base = TrialSettings(missions=MissionConfig(length_m=MISSION_M, border_m=BORDER_M))
     for j in range(terrains):
@@ -266,12 +271,13 @@ def main(argv=None) -> int:
                    help="also write ppo_husky_STEPS.npz: the policy a --steps STEPS run of the same seed ends with")
     p.add_argument("--ship", action="store_true", help="copy the trained npz into the package's data")
     p.add_argument("--evaluate", metavar="NPZ", default=None, help="only evaluate these weights")
+    p.add_argument("--arms", nargs="+", choices=ARMS, default=list(ARMS), help="the evaluation's arms (default all)")
     p.add_argument("--no-evaluate", action="store_true", help="train only")
     args = p.parse_args(argv)
     weights = Path(args.evaluate) if args.evaluate else train(args)
     if args.evaluate or not args.no_evaluate:
         t0 = time.time()
-        table = evaluate(weights, args.seed, Path(args.out))
+        table = evaluate(weights, args.seed, Path(args.out), arms=args.arms)
         print(table.to_string())
         print(f"evaluation: {time.time() - t0:.0f} s")
     return 0
