@@ -1,7 +1,7 @@
 """Train the ``ppo`` policy with stable-baselines3 and export it to the numpy ``.npz`` the plug-in ships.
 
     pip install -e ".[rl]"
-    nice -n 10 python experiments/train_ppo.py --steps 150000 --seed 0 --out runs/ppo --ship
+    nice -n 10 python experiments/train_ppo.py --steps 313344 --seed 0 --out runs/ppo --ship   # the shipped weights
     python experiments/train_ppo.py --evaluate runs/ppo/ppo_husky.npz --out runs/ppo
 
 Training distribution (``terrain_pool``): the paper's multifractal presets paper-d2.3, paper-d2.45 and
