@@ -1,7 +1,7 @@
 """Train the ``ppo`` policy with stable-baselines3 and export it to the numpy ``.npz`` the plug-in ships.
 
     pip install -e ".[rl]"
-    nice -n 10 python experiments/train_ppo.py --steps 150000 --seed 0 --out runs/ppo --ship
+    nice -n 10 python experiments/train_ppo.py --steps 313344 --seed 0 --out runs/ppo --ship   # the shipped weights
     python experiments/train_ppo.py --evaluate runs/ppo/ppo_husky.npz --out runs/ppo
 
 Training distribution (``terrain_pool``): the paper's multifractal presets paper-d2.3, paper-d2.45 and
@@ -21,7 +21,8 @@ pipeline (offroadbench.sim.trial.pipeline.drive_terrain) by ``ppo`` through the 
 
 Writes to ``--out``: ``learning_curve.csv`` (one row per episode: env steps at its end, return,
 length, success, failure reason, terrain), ``learning_curve.png``, ``ppo_husky.npz`` and
-``training.json`` (arguments, SB3/torch versions, wall time, machine). ``--ship`` copies the npz to
+``training.json`` (arguments, SB3/torch versions, wall time, machine), ``ppo_sb3.zip`` (the SB3
+model of the same policy; not shipped) and, with ``--checkpoints``, ``ppo_husky_STEPS.npz``. ``--ship`` copies the npz to
 ``offroadbench/navigation/policies/data/``. The same seed and step count give the same weights on
 the same machine (SB3's seeding of torch, numpy and the env; one torch thread).
 """
@@ -64,7 +65,7 @@ class Curve:
     ``snapshot`` is the policy and observation statistics as they were at that rollout's start: the
     same as a run with ``--steps`` = ``snapshot_steps`` (constant learning rate and clip range)."""
 
-    def __new__(cls, total: int, max_s: float | None = None):
+    def __new__(cls, total: int, max_s: float | None = None, checkpoints=(), save=None):
         from stable_baselines3.common.callbacks import BaseCallback
         from tqdm import tqdm
 
@@ -79,11 +80,15 @@ class Curve:
                 self.snapshot = None
                 self.snapshot_steps = 0
                 self.stopped = False
+                self.pending = sorted(checkpoints)
 
             def _on_rollout_start(self) -> None:
                 import copy
 
                 venv = self.model.get_env()
+                while self.pending and self.num_timesteps >= self.pending[0]:
+                    # the policy a --steps run of pending[0] steps ends with (it also finishes its rollout)
+                    save(self.model, venv.obs_rms, self.num_timesteps, self.pending.pop(0))
                 self.snapshot = (copy.deepcopy(self.model.policy.state_dict()), copy.deepcopy(venv.obs_rms))
                 self.snapshot_steps = self.num_timesteps
                 self.stopped = max_s is not None and time.time() - self.t0 > max_s
@@ -108,9 +113,13 @@ class Curve:
         return _Curve()
 
 
-def _raw_reward_env(pool):
-    """The pool, with the unnormalised reward in info (for the curve) and the terrain index kept."""
+def _raw_reward_env(pool, time_penalty_per_s: float = 0.0):
+    """The pool, with the env's unnormalised reward in info (for the curve) and the terrain index kept;
+    the reward trained on is the env's less ``time_penalty_per_s`` per simulated second (one control
+    tick per step)."""
     import gymnasium as gym
+
+    tick_s = 1.0 / pool.current.settings.controller.control_rate_hz
 
     class RawReward(gym.Wrapper):
         def reset(self, **kw):
@@ -121,7 +130,7 @@ def _raw_reward_env(pool):
         def step(self, action):
             obs, r, term, trunc, info = self.env.step(action)
             info["raw_reward"], info["terrain_index"] = r, self._terrain
-            return obs, r, term, trunc, info
+            return obs, r - time_penalty_per_s * tick_s, term, trunc, info
 
     return RawReward(pool)
 
@@ -139,10 +148,18 @@ def train(args) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     envs = terrain_pool(args.seed, args.terrains)
     pool = TerrainPool(envs)
-    venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
+    venv = VecNormalize(DummyVecEnv([lambda: _raw_reward_env(pool, args.time_penalty)]), norm_obs=True, norm_reward=True, clip_obs=10.0)
     model = PPO("MlpPolicy", venv, n_steps=2048, seed=args.seed, device="cpu", verbose=0,
                 policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
-    curve = Curve(args.steps, None if args.max_minutes is None else 60.0 * args.max_minutes)
+    obs_cfg = envs[0].settings.observation
+
+    def save(model_, obs_rms_, steps_, asked):
+        export_sb3(model_, out / f"ppo_husky_{asked}.npz", obs_rms=obs_rms_, action_scale=pool.action_scale,
+                   patch_cells=obs_cfg.patch_cells, patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed),
+                   steps=str(steps_), trained_by="experiments/train_ppo.py")
+
+    curve = Curve(args.steps, None if args.max_minutes is None else 60.0 * args.max_minutes,
+                  checkpoints=args.checkpoints, save=save)
     t0, cpu0 = time.time(), time.process_time()
     model.learn(total_timesteps=args.steps, callback=curve)
     wall, cpu = time.time() - t0, time.process_time() - cpu0
@@ -152,16 +169,16 @@ def train(args) -> Path:
         model.policy.load_state_dict(curve.snapshot[0])
         obs_rms, steps = curve.snapshot[1], curve.snapshot_steps
         curve.rows = [r for r in curve.rows if r["steps"] <= steps]
-    obs_cfg = envs[0].settings.observation
     npz = out / "ppo_husky.npz"
     export_sb3(model, npz, obs_rms=obs_rms, action_scale=pool.action_scale, patch_cells=obs_cfg.patch_cells,
                patch_spacing_m=obs_cfg.patch_spacing_m, seed=str(args.seed), steps=str(steps),
                trained_by="experiments/train_ppo.py")
+    model.save(out / "ppo_sb3.zip")  # the same policy for SB3 (torch), to check the npz's mean actions against
     _write_curve(curve.rows, out)
     meta = {"seed": args.seed, "steps": steps, "steps_asked": args.steps, "stopped_by_max_minutes": curve.stopped,
             "cpu_s": round(cpu, 1), "terrains": args.terrains, "presets": PRESETS,
             "overrides": OVERRIDES, "mission_length_m": MISSION_M, "border_m": BORDER_M,
-            "train_sensor": {"sensor": "mast", "sensor_range_m": TRAIN_SENSOR.sensor_range_m},
+            "time_penalty_per_s": args.time_penalty, "train_sensor": {"sensor": "mast", "sensor_range_m": TRAIN_SENSOR.sensor_range_m},
             "wall_s": round(wall, 1), "episodes": len(curve.rows), "python": sys.version.split()[0],
             "stable_baselines3": stable_baselines3.__version__, "torch": torch.__version__,
             "numpy": np.__version__, "machine": platform.processor() or platform.machine(),
@@ -201,8 +218,12 @@ def _write_curve(rows: list[dict], out: Path) -> None:
     fig.savefig(out / "learning_curve.png", dpi=110)
 
 
-def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain: int = 4):
-    """Held-out missions (module docstring): one row per trial, and the success counts per arm."""
+ARMS = ("straight/oracle", "straight/mast", "ppo/oracle", "ppo/mast")
+
+
+def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain: int = 4, arms=ARMS):
+    """Held-out missions (module docstring): one row per trial, and the success counts per arm
+    (``arms``: a subset of :data:`ARMS`)."""
     import pandas as pd
 
     from offroadbench.navigation.planners import planner_from_table
@@ -210,9 +231,10 @@ def evaluate(weights: Path, seed: int, out: Path, terrains: int = 5, per_terrain
     from offroadbench.navigation.missions import MissionConfig
     from offroadbench.terrain.recipe import load_terrain
 
-    arms = {"straight/oracle": {"name": "straight"}, "straight/mast": {"name": "straight", "sensor": "mast"},
-            "ppo/oracle": {"name": "ppo", "weights": str(weights)},
-            "ppo/mast": {"name": "ppo", "weights": str(weights), "sensor": "mast"}}
+    tables = {"straight/oracle": {"name": "straight"}, "straight/mast": {"name": "straight", "sensor": "mast"},
+              "ppo/oracle": {"name": "ppo", "weights": str(weights)},
+              "ppo/mast": {"name": "ppo", "weights": str(weights), "sensor": "mast"}}
+    arms = {a: tables[a] for a in arms}
     rows = []
     base = TrialSettings(missions=MissionConfig(length_m=MISSION_M, border_m=BORDER_M))
     for j in range(terrains):
@@ -239,18 +261,23 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=150_000, help="env steps of training (default 150000)")
     p.add_argument("--seed", type=int, default=0, help="root seed of training and of the held-out missions")
     p.add_argument("--terrains", type=int, default=6, help="terrains in the training pool (default 6)")
+    p.add_argument("--time-penalty", type=float, default=0.0, metavar="PER_S",
+                   help="reward subtracted per simulated second of an episode (default 0: the env's reward)")
     p.add_argument("--out", default="runs/ppo", help="output folder")
     p.add_argument("--max-minutes", type=float, default=None,
                    help="stop at the first rollout that starts after this wall time and keep the policy as it "
                         "was then (training.json says the steps: rerun with --steps STEPS to reproduce)")
+    p.add_argument("--checkpoints", type=int, nargs="*", default=[], metavar="STEPS",
+                   help="also write ppo_husky_STEPS.npz: the policy a --steps STEPS run of the same seed ends with")
     p.add_argument("--ship", action="store_true", help="copy the trained npz into the package's data")
     p.add_argument("--evaluate", metavar="NPZ", default=None, help="only evaluate these weights")
+    p.add_argument("--arms", nargs="+", choices=ARMS, default=list(ARMS), help="the evaluation's arms (default all)")
     p.add_argument("--no-evaluate", action="store_true", help="train only")
     args = p.parse_args(argv)
     weights = Path(args.evaluate) if args.evaluate else train(args)
     if args.evaluate or not args.no_evaluate:
         t0 = time.time()
-        table = evaluate(weights, args.seed, Path(args.out))
+        table = evaluate(weights, args.seed, Path(args.out), arms=args.arms)
         print(table.to_string())
         print(f"evaluation: {time.time() - t0:.0f} s")
     return 0

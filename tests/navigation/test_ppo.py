@@ -220,3 +220,35 @@ def test_an_sb3_model_exports_to_the_same_mean_actions(tmp_path):
     sb3, _ = model.predict(venv.normalize_obs(f.astype(np.float32)), deterministic=True)
     assert w.mean_action(f) == pytest.approx(sb3, abs=1e-5)  # float32 torch against float64 numpy
     assert load_weights(tmp_path / "m.npz").mean_action(f) == pytest.approx(w.mean_action(f), abs=0)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("stable_baselines3") is None, reason="stable-baselines3 not installed")
+def test_the_shipped_weights_loaded_into_sb3_give_the_numpy_mean_actions():
+    """The other direction of the export: the shipped arrays put into an SB3 MlpPolicy (torch) and its
+    VecNormalize act as the numpy inference does, on features of real and partly unknown patches."""
+    import gymnasium as gym
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    w = load_weights(shipped_weights())
+    n = feature_size(w.patch_cells)
+
+    class Box(gym.Env):
+        observation_space = gym.spaces.Box(-np.inf, np.inf, (n,), np.float32)
+        action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+    venv = VecNormalize(DummyVecEnv([Box]), norm_reward=False, clip_obs=10.0)
+    venv.obs_rms.mean, venv.obs_rms.var = w.obs_mean.copy(), w.obs_var.copy()
+    model = PPO("MlpPolicy", venv, device="cpu",
+                policy_kwargs={"net_arch": {"pi": [64, 64], "vf": [64, 64]}, "activation_fn": torch.nn.Tanh})
+    sd = model.policy.state_dict()
+    for key, name in (("mlp_extractor.policy_net.0.weight", "pi_w0"), ("mlp_extractor.policy_net.0.bias", "pi_b0"),
+                      ("mlp_extractor.policy_net.2.weight", "pi_w1"), ("mlp_extractor.policy_net.2.bias", "pi_b1"),
+                      ("action_net.weight", "mu_w"), ("action_net.bias", "mu_b"), ("log_std", "log_std")):
+        sd[key] = torch.as_tensor(getattr(w, name), dtype=torch.float32)
+    model.policy.load_state_dict(sd)
+    f = np.array([features(_obs(seed, nan_cells=seed * 20)) for seed in range(8)])
+    sb3, _ = model.predict(venv.normalize_obs(f.astype(np.float32)), deterministic=True)
+    assert w.mean_action(f) == pytest.approx(sb3, abs=1e-5)  # float32 torch against float64 numpy
+    assert np.ptp(sb3, axis=0).max() > 1e-3  # the observations differ enough to move the action
