@@ -311,12 +311,34 @@ def _sign_flip_plan(trials: pd.DataFrame, axis: str, pairs: list[tuple], which: 
     return [float(diffs[which].mean()), p[which], float(holm(p)[which])]
 
 
-def _vehicle_comparison_plan(folder: Path) -> list[float]:
-    """The Jackal's planned comparison: effect, interval (confirmatory.csv), p and Holm p."""
-    pairs = [(v, "husky") for v in ("jackal", "talon", "hunter", "sojourner")]
-    effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, 0)
-    ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc["jackal against the husky"]
-    return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+COMPARED_VEHICLES = (("jackal", "jackal"), ("talon", "talon (tracked)"), ("hunter", "hunter (Ackermann)"),
+                     ("sojourner", "sojourner (rocker-bogie)"))
+"""The vehicle-comparison plan's treatments against the Husky: (vehicle, its README and confirmatory.csv label)."""
+
+
+def _vehicle_comparison_plan(which: int) -> Callable[[Path], list[float]]:
+    """The vehicle-comparison plan's comparison ``which``: effect, interval (confirmatory.csv), p and Holm p."""
+    def compute(folder: Path) -> list[float]:
+        pairs = [(v, "husky") for v, _ in COMPARED_VEHICLES]
+        effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, which)
+        label = COMPARED_VEHICLES[which][1]
+        ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc[f"{label} against the husky"]
+        return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+
+    return compute
+
+
+def _vehicle_ride_medians(vehicle: str) -> Callable[[Path], list[float]]:
+    """One vehicle's README rows: per terrain kind, the medians of the successful trials' RMS vertical
+    acceleration, pitch rate and roll rate."""
+    metrics = ("rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
+
+    def compute(folder: Path) -> list[float]:
+        t = trial_table(folder)
+        ok = t[(t["vehicle"] == vehicle) & t["success"].astype(bool)]
+        return [float(ok.loc[ok["recipe"] == r, m].median()) for r in TERRAIN_KINDS for m in metrics]
+
+    return compute
 
 
 PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
@@ -486,9 +508,22 @@ SAMPLES = [
            rf"all\s+{_NUM} band-limited trials have the start and goal of their aliased twin", _shared_missions),
     Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
            "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
-    Sample("vehicle-comparison jackal against the husky (plan)", "vehicle-comparison",
-           rf"\| jackal \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
-           _vehicle_comparison_plan),
+    *(Sample(f"vehicle-comparison {v} against the husky (plan)", "vehicle-comparison",
+             rf"\| {re.escape(label)} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+             _vehicle_comparison_plan(i)) for i, (v, label) in enumerate(COMPARED_VEHICLES)),
+    Sample("vehicle-comparison totals per vehicle", "vehicle-comparison",
+           rf"Totals of 64: sojourner {_NUM}, husky {_NUM}, hunter {_NUM}, talon {_NUM}, jackal {_NUM}",
+           lambda f: [float(trial_table(f).groupby("vehicle")["success"].sum()[v])
+                      for v in ("sojourner", "husky", "hunter", "talon", "jackal")]),
+    Sample("vehicle-comparison stuck on the paper terrains", "vehicle-comparison",
+           rf"are `stuck` \(talon {_NUM}, hunter {_NUM}, husky {_NUM}, jackal {_NUM}, sojourner {_NUM};",
+           lambda f: [float(trial_table(f).query("recipe != 'lunar-mare' and failure_reason == 'stuck'")
+                            .groupby("vehicle").size().get(v, 0))
+                      for v in ("talon", "hunter", "husky", "jackal", "sojourner")]),
+    *(Sample(f"vehicle-comparison {v} ride per terrain", "vehicle-comparison",
+             "".join(rf"\| {v} \| {r} \| \d+ / 16 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
+                     rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
+             _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
     Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
            "".join(rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
                    for v in ("husky", "jackal") for p in PLANNERS), _vehicle_planner_successes),
