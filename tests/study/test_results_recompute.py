@@ -344,29 +344,60 @@ def _vehicle_ride_medians(vehicle: str) -> Callable[[Path], list[float]]:
 PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
 
 
+VEHICLE_PLANNER_VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
+
+
 def _vehicle_planner_successes(folder: Path) -> list[float]:
-    """Successes per vehicle and planner, oracle then mast, in the README table's order."""
+    """Successes per vehicle and planner, oracle then mast, in the README table's order (the refused
+    HUNTER x astar pair left out: the README shows it as refused)."""
     s = trial_table(folder).groupby(["vehicle", "planner", "sensor"])["success"].sum()
-    return [float(s[(v, p, arm)]) for v in ("husky", "jackal") for p in PLANNERS for arm in ("oracle", "mast")]
+    return [float(s[(v, p, arm)]) for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS
+            if (v, p) != ("hunter", "astar") for arm in ("oracle", "mast")]
 
 
 def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
-    """The vehicle-planner plan (each terrain's success over both vehicles; exact sign-flip tests, Holm
-    over the 4): comparison ``which``'s arms' means, effect, interval (confirmatory.csv), p and Holm p."""
+    """The vehicle-planner plan (each terrain's success, the mean over the vehicles, over the four that
+    A* drives for A*'s two tests; exact sign-flip tests, Holm over the 4): comparison ``which``'s arms'
+    means, effect, interval (confirmatory.csv), p and Holm p."""
     arms = [(("mppi", "mast"), ("straight", "mast")), (("astar", "mast"), ("straight", "mast")),
             (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
 
     def compute(folder: Path) -> list[float]:
         from offroadbench.study.clustered import holm, sign_flip_test
 
-        rate = trial_table(folder).groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
-        diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in arms]
+        t = trial_table(folder)
+        rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+        rate_astar = (t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"]
+                      .mean().mul(100))
+        rates = [rate_all, rate_astar, rate_astar, rate_all]
+        diffs = [(r[a] - r[c]).to_numpy(float) for r, (a, c) in zip(rates, arms, strict=True)]
         p = [sign_flip_test(d) for d in diffs]
-        t, c = arms[which]
+        t_arm, c_arm = arms[which]
+        rate = rates[which]
         ci = pd.read_csv(folder / "confirmatory.csv").iloc[which]
-        return [float(rate[t].mean()), float(rate[c].mean()), float(diffs[which].mean()), float(ci["ci_low"]),
-                float(ci["ci_high"]), p[which], float(holm(p)[which])]
+        return [float(rate[t_arm].mean()), float(rate[c_arm].mean()), float(diffs[which].mean()),
+                float(ci["ci_low"]), float(ci["ci_high"]), p[which], float(holm(p)[which])]
     return compute
+
+
+def _vehicle_planner_pooled(folder: Path) -> list[float]:
+    """The README's pooled table: per planner, successes and the per-terrain rate over the vehicles
+    (the trials with an outcome) with its terrain-bootstrap interval (2000 draws, a generator seeded 0
+    per entry), oracle then mast, then the mast - oracle difference with its interval."""
+    from offroadbench.study.clustered import cluster_bootstrap
+
+    t = trial_table(folder)
+    rate = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+    out: list[float] = []
+    for p in PLANNERS:
+        for arm in ("oracle", "mast"):
+            b = cluster_bootstrap(rate[(p, arm)].to_numpy(float), np.mean, np.random.default_rng(0))
+            out += [float(t.loc[(t["planner"] == p) & (t["sensor"] == arm), "success"].sum()),
+                    b.estimate, b.low, b.high]
+        d = (rate[(p, "mast")] - rate[(p, "oracle")]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, np.random.default_rng(0))
+        out += [b.estimate, b.low, b.high]
+    return out
 
 
 def _failure_search_estimates(planner: str, group: int):
@@ -525,17 +556,31 @@ SAMPLES = [
                      rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
              _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
     Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
-           "".join(rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
-                   for v in ("husky", "jackal") for p in PLANNERS), _vehicle_planner_successes),
-    Sample("vehicle-planner plan: mppi against the line through the sensor", "vehicle-planner",
-           rf"\| mppi against the line, through the sensor \| {_NUM} / {_NUM} \| \*\*\+{_NUM} \[{_NUM}, {_NUM}\]\*\* "
-           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(0)),
-    Sample("vehicle-planner plan: the sensor's cost to astar", "vehicle-planner",
-           rf"\| the sensor's cost to astar \(mast against oracle\) \| {_NUM} / {_NUM} \| \*\*{_NUM} "
-           rf"\[{_NUM}, {_NUM}\]\*\* \| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(2)),
-    Sample("vehicle-planner plan: ppo against the line through the sensor", "vehicle-planner",
-           rf"\| ppo against the line, through the sensor \| {_NUM} / {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] "
-           rf"\| {_NUM} \| {_NUM} \|", _vehicle_planner_plan(3)),
+           "".join(r"\| hunter \| astar \| refused \|[^\n]*\n" if (v, p) == ("hunter", "astar")
+                   else rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
+                   for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS), _vehicle_planner_successes),
+    Sample("vehicle-planner refused pair", "vehicle-planner",
+           r"\| hunter \| astar \| refused \| refused \| refused \| refused \| refused \((\d+) faults / (\d+) faults\) \|",
+           lambda f: [float(n) for n in pd.read_csv(f / "faults.csv")
+                      .query("reason.str.startswith('the planner refuses this vehicle')").groupby("cell").size()]),
+    *(Sample(f"vehicle-planner plan: {name}", "vehicle-planner",
+             rf"\| {re.escape(name)} \| {_NUM} / {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+             _vehicle_planner_plan(i))
+      for i, name in enumerate(["mppi against the line, through the sensor",
+                                "astar against the line, through the sensor",
+                                "the sensor's cost to astar (mast against oracle)",
+                                "ppo against the line, through the sensor"])),
+    Sample("vehicle-planner pooled per planner and sensor", "vehicle-planner",
+           "".join(rf"\| {p} \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] "
+                   rf"\| \+?{_NUM} \[\+?{_NUM}, \+?{_NUM}\] \|\n" for p in PLANNERS), _vehicle_planner_pooled),
+    Sample("vehicle-planner totals", "vehicle-planner",
+           rf"Totals: {_NUM} of the {_NUM} trials with an outcome succeed \(Husky {_NUM} of 96, Sojourner {_NUM} of 96, "
+           rf"TALON {_NUM}\s+of 96, Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, "
+           rf"{_NUM} `tipped`",
+           lambda f: (lambda t: [float(t["success"].sum()), float(len(t))]
+                      + [float(t.groupby("vehicle")["success"].sum()[v])
+                         for v in ("husky", "sojourner", "talon", "jackal", "hunter")]
+                      + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(trial_table(f))),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),
