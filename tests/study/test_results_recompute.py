@@ -93,9 +93,11 @@ def _metric_medians(metric: str) -> Callable[[Path], list[float]]:
 
 
 def _planner_successes(folder: Path) -> list[float]:
+    """planner-stress: successes per surface, level, sensor and planner, in the README table's order."""
     t = trial_table(folder)
-    table = t.groupby(["band_limited", "map_noise_m", "D_high", "planner"])["success"].sum().unstack("planner")
-    return [float(v) for v in table[["straight", "astar", "lattice"]].to_numpy().ravel()]
+    s = t.groupby(["band_limited", "D_high", "sensor", "planner"])["success"].sum()
+    return [float(s[(b, d, arm, p)]) for b in (False, True) for d in (2.9, 2.95, 2.99)
+            for arm in ("mast", "oracle") for p in ("straight", "astar", "lattice")]
 
 
 def _paired_effect(folder: Path, level: float, treatment: dict, control: dict, where: dict) -> float:
@@ -116,25 +118,37 @@ def _paired_effect(folder: Path, level: float, treatment: dict, control: dict, w
     return float(d.mean())
 
 
-def _planner_stress_confirmatory(folder: Path) -> list[float]:
-    """The plan's six effects in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
-    aliased surface with the true map; the line on the band-limited against the aliased surface."""
-    out = []
-    for planner in ("astar", "lattice"):
-        for level in (2.95, 2.99):
-            out.append(_paired_effect(folder, level, {"planner": planner}, {"planner": "straight"},
-                                      {"band_limited": False, "map_noise_m": 0.0}))
-    for level in (2.95, 2.99):
-        out.append(_paired_effect(folder, level, {"band_limited": True}, {"band_limited": False},
-                                  {"planner": "straight", "map_noise_m": 0.0}))
-    return out
+def _planner_stress_plan(folder: Path) -> list[list[float]]:
+    """The plan's six tests in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
+    aliased surface through the mast sensor; the line (its oracle arm) on the band-limited against the
+    aliased surface. Per test: effect (points), interval (confirmatory.csv), exact sign-flip p, Holm p."""
+    from offroadbench.study.clustered import holm, sign_flip_test
+
+    t = trial_table(folder)
+    rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
+    pairs = [((p, "mast", False, lv), ("straight", "mast", False, lv)) for p in ("astar", "lattice") for lv in (2.95, 2.99)]
+    pairs += [(("straight", "oracle", True, lv), ("straight", "oracle", False, lv)) for lv in (2.95, 2.99)]
+    diffs = [(rate[tr] - rate[co]).dropna().to_numpy(float) for tr, co in pairs]
+    p = [sign_flip_test(d) for d in diffs]
+    ci = pd.read_csv(folder / "confirmatory.csv")
+    return [[float(d.mean()), float(ci["ci_low"].iloc[i]), float(ci["ci_high"].iloc[i]), p[i], float(q)]
+            for i, (d, q) in enumerate(zip(diffs, holm(p), strict=True))]
+
+
+def _planner_stress_sensor_cost(folder: Path) -> list[float]:
+    """The sensor's cost (oracle - mast, points) to astar and lattice on the aliased surface at 2.95 / 2.99,
+    mean per-terrain differences on the same missions."""
+    t = trial_table(folder)
+    rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
+    return [float((rate[(p, "oracle", False, lv)] - rate[(p, "mast", False, lv)]).dropna().mean())
+            for p in ("astar", "lattice") for lv in (2.95, 2.99)]
 
 
 def _shared_missions(folder: Path) -> list[float]:
     """Band-limited trials whose start and goal equal those of the aliased trial of the same planner,
-    level, map, terrain and mission."""
+    level, sensor, terrain and mission."""
     t = trial_table(folder)
-    keys = ["planner", "D_high", "map_noise_m", "terrain", "mission"]
+    keys = ["planner", "D_high", "sensor", "terrain", "mission"]
     ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]
     a = t[~t["band_limited"].astype(bool)].set_index(keys)[ends]
     b = t[t["band_limited"].astype(bool)].set_index(keys)[ends]
@@ -152,11 +166,12 @@ def _above_nyquist_share(folder: Path) -> list[float]:
 
 
 def _straight_breaking_point(folder: Path) -> list[float]:
+    """planner-stress: the line's breaking point on the paper's surface (oracle arm) and its interval."""
     from offroadbench.study.stress import breaking_points
 
     # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
-    bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "map_noise_m"])
-    row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["map_noise_m"] == 0)].iloc[0]
+    bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "sensor"])
+    row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["sensor"] == "oracle")].iloc[0]
     # the README says the interval's low end lies below the first level ("below already at 2.9")
     assert row["ci95_low"] == -np.inf
     return [float(row["breaking_point"]), float(row["ci95_high"])]
@@ -435,6 +450,7 @@ def _failure_search_first_k(folder: Path) -> list[float]:
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
            rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
+_SCI = r"(\d+(?:\.\d+)?(?:e-\d+)?)"
 SAMPLES = [
     Sample("failure-search P(failure), A*", "failure-search", rf"\| A\* \| {_FS_ROW}",
            _failure_search_estimates("astar", 0)),
@@ -526,17 +542,23 @@ SAMPLES = [
            rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
-    Sample("planner-stress confirmatory effects", "planner-stress",
-           "".join(rf"\| {name} \| {level} \| \d+ \| [\d.]+ -> [\d.]+ \| \*\*\+{_NUM} \[[\d., ]+\]\*\* \|[^\n]*\n"
-                   for name, level in [("astar against the line", 2.95), ("astar against the line", 2.99),
-                                       ("lattice against the line", 2.95), ("lattice against the line", 2.99),
-                                       ("the line, band-limited against aliased surface", 2.95),
-                                       ("the line, band-limited against aliased surface", 2.99)]),
-           _planner_stress_confirmatory),
-    Sample("planner-stress faults", "planner-stress", rf"{_NUM} faults, no outcome",
-           lambda f: [float(len(pd.read_csv(f / "faults.csv")))]),
+    Sample("planner-stress plan: effects, intervals, p and Holm p", "planner-stress",
+           "".join(rf"\| {re.escape(name)} \| {level} \| \d+ \| [\d.]+ -> [\d.]+ \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \|\n"
+                   for name, level in [("astar against the line, through the sensor", 2.95),
+                                       ("astar against the line, through the sensor", 2.99),
+                                       ("lattice against the line, through the sensor", 2.95),
+                                       ("lattice against the line, through the sensor", 2.99),
+                                       ("the line (oracle arm), band-limited against aliased surface", 2.95),
+                                       ("the line (oracle arm), band-limited against aliased surface", 2.99)]),
+           lambda f: [v for row in _planner_stress_plan(f) for v in row]),
+    Sample("planner-stress the sensor's cost to the planners", "planner-stress",
+           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \["
+                              for p in ("astar", "lattice") for lv in (2.95, 2.99)),
+           _planner_stress_sensor_cost),
     Sample("planner-stress shared missions", "planner-stress",
-           rf"all\s+{_NUM} band-limited trials have the start and goal of their aliased twin", _shared_missions),
+           rf"all\s+{_NUM}\s+band-limited\s+trials\s+have\s+the\s+start\s+and\s+goal\s+of\s+their\s+aliased\s+twin",
+           _shared_missions),
     Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
            "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
     *(Sample(f"vehicle-comparison {v} against the husky (plan)", "vehicle-comparison",
@@ -582,11 +604,11 @@ SAMPLES = [
                          for v in ("husky", "sojourner", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(trial_table(f))),
     Sample("planner-stress straight-line breaking point", "planner-stress",
-           rf"`straight`, paper's surface: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
+           rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),
-    Sample("planner-stress successes per planner and cell", "planner-stress",
-           r"\| D_high \| W-M surface \| planner map \| straight \| astar \| lattice \|[^\n]*\n\|[-|]+\|\n"
-           + r"".join(rf"\| [\d.]+ \| [^|]+ \| [^|]+ \| {_NUM} \| {_NUM} \| {_NUM} \|[^\n]*\n" for _ in range(12)),
+    Sample("planner-stress successes per surface, level, sensor and planner", "planner-stress",
+           r"\| D_high \| W-M surface \| mast: straight \| astar \| lattice \| oracle: straight \| astar \| lattice \|[^\n]*\n"
+           r"\|[-|]+\|\n" + r"".join(r"\| [\d.]+ \| [^|]+ \|" + rf" {_NUM} \|" * 6 + r"[^\n]*\n" for _ in range(6)),
            _planner_successes),
 ]
 
