@@ -362,10 +362,23 @@ PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
 VEHICLE_PLANNER_VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
 
 
+def _vp_trials(folder: Path) -> pd.DataFrame:
+    """The vehicle-planner trials at D_high 2.95, the level of its plan and of the README's main tables."""
+    t = trial_table(folder)
+    return t[t["D_high"] == 2.95]
+
+
+def _vp_refused(folder: Path) -> list[float]:
+    """Faults of the refused HUNTER x astar pair per cell at D_high 2.95 (oracle, then mast)."""
+    cells = pd.read_csv(folder / "terrains.csv").groupby("cell")["D_high"].first()
+    f = pd.read_csv(folder / "faults.csv").query("reason.str.startswith('the planner refuses this vehicle')")
+    return [float(n) for n in f[f["cell"].map(cells) == 2.95].groupby("cell").size()]
+
+
 def _vehicle_planner_successes(folder: Path) -> list[float]:
     """Successes per vehicle and planner, oracle then mast, in the README table's order (the refused
     HUNTER x astar pair left out: the README shows it as refused)."""
-    s = trial_table(folder).groupby(["vehicle", "planner", "sensor"])["success"].sum()
+    s = _vp_trials(folder).groupby(["vehicle", "planner", "sensor"])["success"].sum()
     return [float(s[(v, p, arm)]) for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS
             if (v, p) != ("hunter", "astar") for arm in ("oracle", "mast")]
 
@@ -380,7 +393,7 @@ def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
     def compute(folder: Path) -> list[float]:
         from offroadbench.study.clustered import holm, sign_flip_test
 
-        t = trial_table(folder)
+        t = _vp_trials(folder)
         rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
         rate_astar = (t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"]
                       .mean().mul(100))
@@ -401,7 +414,7 @@ def _vehicle_planner_pooled(folder: Path) -> list[float]:
     per entry), oracle then mast, then the mast - oracle difference with its interval."""
     from offroadbench.study.clustered import cluster_bootstrap
 
-    t = trial_table(folder)
+    t = _vp_trials(folder)
     rate = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
     out: list[float] = []
     for p in PLANNERS:
@@ -583,8 +596,7 @@ SAMPLES = [
                    for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS), _vehicle_planner_successes),
     Sample("vehicle-planner refused pair", "vehicle-planner",
            r"\| hunter \| astar \| refused \| refused \| refused \| refused \| refused \((\d+) faults / (\d+) faults\) \|",
-           lambda f: [float(n) for n in pd.read_csv(f / "faults.csv")
-                      .query("reason.str.startswith('the planner refuses this vehicle')").groupby("cell").size()]),
+           _vp_refused),
     *(Sample(f"vehicle-planner plan: {name}", "vehicle-planner",
              rf"\| {re.escape(name)} \| {_NUM} / {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
              _vehicle_planner_plan(i))
@@ -602,7 +614,15 @@ SAMPLES = [
            lambda f: (lambda t: [float(t["success"].sum()), float(len(t))]
                       + [float(t.groupby("vehicle")["success"].sum()[v])
                          for v in ("husky", "sojourner", "talon", "jackal", "hunter")]
-                      + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(trial_table(f))),
+                      + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(_vp_trials(f))),
+    Sample("vehicle-planner totals at D_high 2.6", "vehicle-planner",
+           rf"Totals at 2.6: {_NUM} of the {_NUM} trials with an outcome succeed \(Sojourner {_NUM} of 96, Husky {_NUM}, "
+           rf"TALON {_NUM},\s+Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, {_NUM} `off_map`",
+           lambda f: (lambda t: [float(t["success"].sum()), float(len(t))]
+                      + [float(t.groupby("vehicle")["success"].sum()[v])
+                         for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
+                      + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
+                          trial_table(f).query("D_high == 2.6"))),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),
