@@ -14,6 +14,17 @@ from offroadbench.sim import World
 from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
 from offroadbench.sim.trial.runner import drive_mission
 
+
+def roll_out(env, policy, obs):
+    """Step ``env`` with ``policy``'s actions from ``obs`` to the episode's end: (the true (x, y) after
+    each step, the last info)."""
+    xy = []
+    while True:
+        obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))
+        xy.append(tuple(env._state["pos"][:2]))
+        if term or trunc:
+            return xy, info
+
 CELL = 0.05
 FLAT = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square
 
@@ -32,12 +43,7 @@ def test_the_runner_and_the_env_drive_a_policy_bit_for_bit_alike():
         obs, _ = env.reset(seed=0, options={"mission": mission})
         policy = make_policy("reactive", choice.config, PolicyContext(
             observation=env.settings.observation, vehicle=env.envelope, track_m=env.vehicle.track_m, control_rate_hz=20))
-        xy = []
-        while True:
-            obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))
-            xy.append(tuple(env._state["pos"][:2]))
-            if term or trunc:
-                break
+        xy, info = roll_out(env, policy, obs)
     assert info["success"] and info["failure_reason"] == ""
     tel = rec.telemetry
     assert len(xy) == len(tel["x_m"]) - 1  # the runner also records the start

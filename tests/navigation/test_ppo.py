@@ -22,6 +22,7 @@ from offroadbench.navigation.missions import Mission
 from offroadbench.navigation.observation import ObservationConfig, height_patch
 from offroadbench.navigation.planners import planner_from_table
 from offroadbench.navigation.policies import make_policy
+from tests.navigation.test_policies import roll_out
 from offroadbench.navigation.policies.ppo import (
     MlpWeights,
     PpoConfig,
@@ -123,12 +124,7 @@ def test_ppo_drives_a_mission_through_drive_mission_and_the_env_alike_and_replay
     with TraverseEnv(hm, config=TraverseConfig(mission_length_m=4.0, border_m=1.0), perception="mast") as env:
         obs, _ = env.reset(seed=0, options={"mission": mission})
         policy = make_policy("ppo", PpoConfig(), PolicyContext())
-        xy = []
-        while True:
-            obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))
-            xy.append(tuple(env._state["pos"][:2]))
-            if term or trunc:
-                break
+        xy, info = roll_out(env, policy, obs)
     tel = np.column_stack([a.telemetry["x_m"], a.telemetry["y_m"]])[1:]  # the runner also records the start
     assert len(xy) - len(tel) in (0, 1)  # a timeout ends the env's last step between telemetry samples
     assert np.array_equal(np.array(xy[:len(tel)]), tel)

@@ -51,6 +51,14 @@ def test_bad_params_are_refused_naming_the_key(change, message):
     ({"ce_quantile": 0.9}, r"SearchConfig.ce_quantile = 0.9 is out of range"),
     ({"params": []}, r"needs at least one"),
     ({"budgt": 3}, r"unknown key\(s\) budgt; known keys: params, methods, budget"),
+    # the local search's and the estimators' own settings
+    ({"local_step": 0.05}, "at least distinct_distance"),
+    ({"local_step": 0.2, "sampler": "cmaes"}, "needs sampler = 'tpe'"),
+    ({"mc_budget": 0}, "mc_budget"),
+    ({"ce_budget": 0}, "ce_budget"),
+    ({"ce_initial_sd": 0.2}, "ce_initial_sd = 0.2 is out of range"),
+    ({"ce_min_failures": -1}, "ce_min_failures"),
+    ({"local_terrain": "other"}, "local_terrain = 'other' is not known"),
 ])
 def test_bad_search_tables_are_refused(change, message):
     data = copy.deepcopy(SEARCH)
@@ -89,20 +97,6 @@ def test_cli_errors_are_one_line_with_exit_2(tmp_path, capsys):
     assert err.count("\n") == 1 and "no [search] table" in err
     assert main(["search", "report", str(tmp_path)]) == 2
     assert "not a search run directory" in capsys.readouterr().err
-
-
-@pytest.mark.parametrize("extra, words", [({"local_step": 0.05}, "at least distinct_distance"),
-                                          ({"local_step": 0.2, "sampler": "cmaes"}, "needs sampler = 'tpe'"),
-                                          ({"mc_budget": 0}, "mc_budget"),
-                                          ({"ce_budget": 0}, "ce_budget"),
-                                          ({"ce_initial_sd": 0.2}, "ce_initial_sd = 0.2 is out of range"),
-                                          ({"ce_min_failures": -1}, "ce_min_failures"),
-                                          ({"local_terrain": "other"}, "local_terrain = 'other' is not known")])
-def test_local_search_and_mc_budget_settings_are_checked(extra, words):
-    data = copy.deepcopy(SEARCH)
-    data["search"].update(extra)
-    with pytest.raises(InputError, match=words):
-        search_from_data(data)
 
 
 def test_each_method_has_its_budget():
