@@ -107,14 +107,8 @@ from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
-from offroadbench.navigation.observation import (
-    STATE_FIELDS,
-    UNKNOWN_FILL_M,
-    ObservationConfig,
-    finite_observation,
-    height_patch,
-    observation,
-)
+from offroadbench.navigation.observation import (STATE_FIELDS, UNKNOWN_FILL_M, ObservationConfig, finite_observation,
+                                                 height_patch, observation)
 from offroadbench.navigation.perception import PerceptionConfig
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem
 from offroadbench.navigation.rules import FailureRules
