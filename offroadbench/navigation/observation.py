@@ -9,19 +9,29 @@ A Dict of
   roll, pitch and yaw rates (rad/s) and the base velocity in the body frame (forward, left, up; m/s);
 * ``height_patch`` (float32, n x n): terrain heights relative to the base on a square grid centred
   on the vehicle and aligned with its heading (:func:`height_patch`).
+
+Two forms of the same information. :func:`observation` gives the trial runner's, which every
+policy of a study reads: under the ``mast`` sensor a sample the sensor has not measured is NaN
+(offroadbench.navigation.sensor; never guessed flat). The Gymnasium env gives
+:func:`finite_observation` of it, which stays inside its Box spaces (a learner's losses stay
+finite): the unknown samples read :data:`UNKNOWN_FILL_M` and a third entry ``known`` (float32,
+n x n) is 1.0 where the sample was measured and 0.0 where it is that fill, so a learner can tell the
+two apart. :func:`nan_observation` turns the env's form back into the runner's, bit for bit.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
 from offroadbench.config import check_int, check_range
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["STATE_FIELDS", "ObservationConfig", "height_patch", "observation"]
+__all__ = ["STATE_FIELDS", "UNKNOWN_FILL_M", "ObservationConfig", "height_patch", "observation", "finite_observation",
+           "nan_observation"]
 
 #: the entries of observation["state"], in order
 STATE_FIELDS = (
@@ -29,6 +39,11 @@ STATE_FIELDS = (
     "roll_rate_rad_s", "pitch_rate_rad_s", "yaw_rate_rad_s",
     "v_forward_m_s", "v_left_m_s", "v_up_m_s",
 )
+
+#: the Gymnasium env's ``height_patch`` where the sensor has no measurement (its ``known`` is 0), m
+#: relative to the base: the base's own height, the value a policy's features give an unknown cell
+#: (offroadbench.navigation.policies.ppo.features)
+UNKNOWN_FILL_M = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -81,3 +96,25 @@ def observation(hm: Heightmap, cfg: ObservationConfig, goal_xy, pos, roll: float
     state = np.array([cos * dx + sin * dy, -sin * dx + cos * dy, roll, pitch, *rates, *v_body], dtype=np.float32)
     patch = height_patch(hm, x, y, yaw, cfg.patch_cells, cfg.patch_spacing_m, fill_m, z_m)
     return {"state": state, "height_patch": (patch - z).astype(np.float32)}
+
+
+def finite_observation(obs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The Gymnasium env's form of an :func:`observation` (module docstring): ``height_patch`` with its
+    unknown (NaN) samples set to :data:`UNKNOWN_FILL_M`, and ``known`` (float32, the patch's shape),
+    1.0 where the sample is a measurement (everywhere under the oracle; also off the map, whose
+    samples read the fall-depth fill of :func:`height_patch`) and 0.0 where it is the fill."""
+    patch = np.asarray(obs["height_patch"], dtype=np.float32)
+    known = np.isfinite(patch)
+    return {"state": obs["state"], "height_patch": np.where(known, patch, np.float32(UNKNOWN_FILL_M)),
+            "known": known.astype(np.float32)}
+
+
+def nan_observation(obs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The trial runner's form of an env observation: ``state`` and ``height_patch``, NaN where
+    ``known`` is 0, which is what the built-in policies read
+    (e.g. ``offroadbench.navigation.policies.ppo.features(nan_observation(obs))``). An observation
+    without ``known`` (already the runner's form) is returned as its ``state`` and ``height_patch``."""
+    patch = np.asarray(obs["height_patch"], dtype=np.float32)
+    if "known" in obs:
+        patch = np.where(np.asarray(obs["known"]) > 0, patch, np.float32(np.nan))
+    return {"state": obs["state"], "height_patch": patch}

@@ -6,8 +6,10 @@ generator. ``reset(seed=s)`` seeds terrain i's env with ``offroadbench.seeding.d
 the first time, as Gymnasium seeds once and then continues the generator; so an episode sequence is
 a pure function of the seed and the pool.
 
-- Observation: ``offroadbench.navigation.policies.ppo.features`` of the TraverseEnv's observation
-  (a finite float32 vector; unknown cells of the ``mast`` sensor counted as unknown, not as ground).
+- Observation: ``offroadbench.navigation.policies.ppo.features`` of the TraverseEnv's observation in
+  the trial runner's form (``offroadbench.navigation.observation.nan_observation``), as the ``ppo``
+  policy reads it in a trial (a finite float32 vector; unknown cells of the ``mast`` sensor counted
+  as unknown, not as ground).
 - Action: ``a`` in [-1, 1]^2 (clipped), driven as ``(v, omega) = a * action_scale`` with
   ``action_scale`` = the vehicle's (top speed m/s, yaw-rate limit rad/s).
 - Reward, termination, truncation and ``info``: the TraverseEnv's.
@@ -21,6 +23,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from offroadbench.navigation.observation import nan_observation
 from offroadbench.navigation.policies.ppo import feature_size, features
 from offroadbench.seeding import derive_seed
 
@@ -56,12 +59,12 @@ class TerrainPool(gym.Env):
             sub_seed, self._seeded[i] = derive_seed(self._root, i), True
         obs, info = env.reset(seed=sub_seed, options=options)
         info["terrain_index"] = i
-        return features(obs).astype(np.float32), info
+        return features(nan_observation(obs)).astype(np.float32), info
 
     def step(self, action):
         a = np.clip(np.asarray(action, dtype=float).reshape(2), -1.0, 1.0) * self.action_scale
         obs, reward, terminated, truncated, info = self.current.step(a)
-        return features(obs).astype(np.float32), reward, terminated, truncated, info
+        return features(nan_observation(obs)).astype(np.float32), reward, terminated, truncated, info
 
     def close(self) -> None:
         for env in self.envs:

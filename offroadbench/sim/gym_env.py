@@ -24,17 +24,25 @@ seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's see
   horizontal), roll and pitch (rad, as in :mod:`offroadbench.navigation.metrics`), body roll, pitch and yaw
   rates (rad/s), and the base velocity in the body frame (forward, left, up; m/s);
   ``height_patch`` (float32, n x n): terrain heights relative to the base (m), on a square grid
-  centred on the vehicle and aligned with its heading (see :func:`height_patch`). The goal distance
-  is the norm of (goal x, goal y) and its direction their angle (rad, CCW + from the heading).
+  centred on the vehicle and aligned with its heading (see :func:`height_patch`; samples off the
+  map read the map's lowest height less ``rules.fall_depth_m``, a drop), and where the sensor has
+  not measured the sample (see Sensor) ``UNKNOWN_FILL_M`` = 0.0 m, the base's own height;
+  ``known`` (float32, n x n, in [0, 1]): 1.0 where ``height_patch`` is a measurement (everywhere
+  under the oracle, off-map samples included), 0.0 where it is that fill, so a learner tells the
+  two apart. Every entry is finite and the observation is inside ``observation_space`` under
+  either sensor. The goal distance is the norm of (goal x, goal y) and its direction their angle
+  (rad, CCW + from the heading).
 - **Sensor** (``perception=``, or ``settings.planner.perception``): ``"oracle"`` (default) observes the
   true terrain and pose; ``"mast"`` (or a PerceptionConfig with ``sensor = "mast"``) observes through
   the mast sensor of :mod:`offroadbench.navigation.sensor` exactly as a policy does in a study's
   trials (:func:`offroadbench.sim.trial.runner.drive_mission`): the goal and the patch are in the
   **believed** frame (odometry drift), the patch is read from the map the sensor has built so far,
-  and **unknown cells are NaN** there (occluded or out of range; never guessed flat), so the
-  observation is then not inside the Dict's Box (learners wrap it, e.g.
-  :func:`offroadbench.navigation.policies.ppo.features`). Attitude, rates and body velocity are the
-  IMU's (true) values. The sensor's stream is the mission's
+  and a sample next to a cell the sensor has not seen (occluded or out of range; never guessed
+  flat) reads the fill with ``known`` 0. The trial runner gives a policy the same observation with
+  NaN at those samples and no ``known``
+  (:func:`offroadbench.navigation.observation.nan_observation` turns the env's into it, bit for
+  bit: ``ppo.features(nan_observation(obs))`` is what the ``ppo`` policy reads in a trial).
+  Attitude, rates and body velocity are the IMU's (true) values. The sensor's stream is the mission's
   (offroadbench.navigation.perception.perception_seed): an episode replays bit for bit.
   ``info["believed_pose"]`` is ``{"x_m", "y_m", "yaw_rad"}`` (the truth under the oracle). The
   reward and ``info``'s distance are measured on the true pose.
@@ -99,7 +107,8 @@ from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
-from offroadbench.navigation.observation import STATE_FIELDS, ObservationConfig, height_patch, observation
+from offroadbench.navigation.observation import (STATE_FIELDS, UNKNOWN_FILL_M, ObservationConfig, finite_observation,
+                                                 height_patch, observation)
 from offroadbench.navigation.perception import PerceptionConfig
 from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem
 from offroadbench.navigation.rules import FailureRules
@@ -118,7 +127,7 @@ from offroadbench.sim.trial.runner import (
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 __all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",
-           "STATE_FIELDS"]
+           "STATE_FIELDS", "UNKNOWN_FILL_M"]
 
 #: the default terrain: the paper's D = 2.45 preset, cut to 241 x 241 cells (12 m at 5 cm)
 DEFAULT_TERRAIN = "paper-d2.45"
@@ -265,6 +274,7 @@ class TraverseEnv(gym.Env):
         self.observation_space = spaces.Dict({
             "state": spaces.Box(-np.inf, np.inf, shape=(len(STATE_FIELDS),), dtype=np.float32),
             "height_patch": spaces.Box(-np.inf, np.inf, shape=(n, n), dtype=np.float32),
+            "known": spaces.Box(0.0, 1.0, shape=(n, n), dtype=np.float32),
         })
         self.mission: Mission | None = None
         self.path_xy: np.ndarray | None = None
@@ -393,9 +403,9 @@ class TraverseEnv(gym.Env):
     def _observation(self, s: dict) -> dict[str, np.ndarray]:
         bx, by, byaw = s["belief"]
         sensing = self._sensing
-        return observation(self.hm, self.settings.observation, self._goal, (bx, by, s["pos"][2]), s["roll"],
-                           s["pitch"], byaw, s["rates"], s["v_body"], self._fill_m,
-                           None if sensing.name == "oracle" else sensing.z)
+        return finite_observation(observation(
+            self.hm, self.settings.observation, self._goal, (bx, by, s["pos"][2]), s["roll"], s["pitch"], byaw,
+            s["rates"], s["v_body"], self._fill_m, None if sensing.name == "oracle" else sensing.z))
 
     def _info(self, s: dict, reason: str) -> dict[str, Any]:
         return {

@@ -11,14 +11,29 @@ import offroadbench.envs  # noqa: F401  (registers offroadbench/Traverse-v0)
 from offroadbench.analysis.roughness import RoughnessConfig, classify, close_rough
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.navigation.missions import MissionConfig, sample_missions
+from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.navigation.observation import nan_observation
 from offroadbench.sim import FailureRules, SimConfig
-from offroadbench.sim.gym_env import STATE_FIELDS, TraverseConfig, TraverseEnv, height_patch
+from offroadbench.sim.gym_env import STATE_FIELDS, UNKNOWN_FILL_M, TraverseConfig, TraverseEnv, height_patch
+from offroadbench.sim.trial.vehicle import list_vehicles
 
 CELL = 0.05
 FLAT = Heightmap.flat(161, 161, CELL, z_m=0.3)  # 8 m square
 SHORT = TraverseConfig(mission_length_m=3.0, border_m=1.0)
 QUIET = TraverseConfig(mission_length_m=3.0, border_m=1.0, accel_weight=0.0, rate_weight=0.0, success_bonus=0.0)
+
+
+def _trench() -> Heightmap:
+    """An 8 m square with a 1 m deep trench across it, 0.4 m ahead of TRENCH_MISSION's start: from the
+    start the mast sensor cannot see its floor behind the rim."""
+    z = np.zeros((161, 161))
+    x = np.arange(161) * CELL
+    z[:, (x > 2.4) & (x < 3.0)] = -1.0
+    return Heightmap(z + 1.0, CELL)
+
+
+TRENCH = _trench()
+TRENCH_MISSION = Mission.between(0, (2.0, 4.0), (6.0, 4.0))
 
 
 def _goal_seeker(obs) -> np.ndarray:
@@ -57,6 +72,72 @@ def test_spaces_follow_the_vehicle_limits():
         assert np.allclose(env.action_space.low, -env.action_space.high)
         assert env.observation_space["state"].shape == (len(STATE_FIELDS),)
         assert env.observation_space["height_patch"].shape == (16, 16)
+        assert env.observation_space["known"].shape == (16, 16)
+
+
+def test_check_env_passes_under_the_mast_sensor():
+    """Every reset under the mast sensor has unmeasured patch samples (at least the sensor's own foot
+    cell): they are a finite fill, inside the observation space."""
+    from gymnasium.utils.env_checker import check_env
+
+    with TraverseEnv(TRENCH, config=SHORT, perception="mast") as env:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # unbounded observation Boxes and unnormalised actions: advice only
+            check_env(env)
+
+
+@pytest.mark.parametrize("sensor", ["oracle", "mast"])
+@pytest.mark.parametrize("vehicle", list_vehicles())
+def test_every_observation_is_finite_and_inside_the_space(vehicle, sensor):
+    with TraverseEnv(TRENCH, vehicle=vehicle, config=SHORT, perception=sensor) as env:
+        env.action_space.seed(0)
+        obs, _ = env.reset(seed=0, options={"mission": TRENCH_MISSION})
+        seen = [obs]
+        for _ in range(20):
+            obs, _, term, trunc, _ = env.step(env.action_space.sample())
+            seen.append(obs)
+            if term or trunc:
+                break
+        for o in seen:
+            assert all(np.all(np.isfinite(v)) for v in o.values()) and env.observation_space.contains(o)
+    unknown = sum(int((o["known"] == 0).sum()) for o in seen)
+    assert (unknown > 0) == (sensor == "mast")
+
+
+def test_known_is_zero_exactly_where_the_mast_sensor_has_no_measurement():
+    """The patch is the sensor's map read at the believed pose; where a sample needs a cell the
+    sensor has not seen, ``known`` is 0 and the patch reads the fill; nan_observation gives the
+    trial runner's form (NaN there) bit for bit."""
+    from offroadbench.navigation.perception import PerceptionConfig, perception_seed
+    from offroadbench.navigation.sensor import MastSensor
+
+    mission = TRENCH_MISSION
+    with TraverseEnv(TRENCH, config=SHORT, perception="mast") as env:
+        obs, info = env.reset(seed=0, options={"mission": mission})
+        known = obs["known"]
+        # the sensor's own map, replayed from the mission's perception stream, read at the believed pose
+        sensor = MastSensor(TRENCH, PerceptionConfig(sensor="mast"), np.random.default_rng(perception_seed(mission)),
+                            mission.start_xy_m, mission.heading_rad)
+        bx, by, byaw = sensor.update(np.array([info["pose"]["x_m"], info["pose"]["y_m"]]), info["pose"]["yaw_rad"])
+        assert (bx, by, byaw) == tuple(info["believed_pose"].values())
+        ref = height_patch(TRENCH, bx, by, byaw, 16, 0.1, 0.0, sensor.z)
+        hidden = np.isnan(ref)
+        assert hidden.any() and not hidden.all()
+        assert np.array_equal(known == 0, hidden) and set(np.unique(known)) == {0.0, 1.0}
+        assert np.all(obs["height_patch"][hidden] == UNKNOWN_FILL_M)
+        runner = (ref - info["pose"]["z_m"]).astype(np.float32)
+        assert np.array_equal(nan_observation(obs)["height_patch"], runner, equal_nan=True)
+        assert np.array_equal(obs["height_patch"][~hidden], runner[~hidden])
+        ahead = (np.arange(16) - 7.5) * 0.1  # body-frame x of the patch's columns, m
+        assert hidden[:, ahead > 0.5].any()  # the trench floor
+        rows, cols = np.nonzero(hidden[:, ahead < 0.3])  # before the rim: only the sensor's own foot cell
+        assert np.all(np.hypot(ahead[cols], ahead[rows]) < 0.1)
+    with TraverseEnv(TRENCH, config=SHORT) as env:  # the oracle stays the default
+        obs, info = env.reset(seed=0, options={"mission": mission})
+        assert np.all(obs["known"] == 1.0) and env.perception is None
+        assert info["believed_pose"] == {k: info["pose"][k] for k in ("x_m", "y_m", "yaw_rad")}
+    with pytest.raises(InputError):
+        TraverseEnv(TRENCH, config=SHORT, perception="lidar")
 
 
 def test_same_seed_same_episode_and_missions_come_from_the_sampler(small_paper_recipe):

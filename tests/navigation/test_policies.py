@@ -8,6 +8,7 @@ import pytest
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.missions import Mission
+from offroadbench.navigation.observation import nan_observation
 from offroadbench.navigation.planners import PlannerChoice, planner_from_table
 from offroadbench.navigation.policies import POLICIES, PolicyContext, ReactiveConfig, make_policy
 from offroadbench.sim import World
@@ -17,10 +18,11 @@ from offroadbench.sim.trial.runner import drive_mission
 
 def roll_out(env, policy, obs):
     """Step ``env`` with ``policy``'s actions from ``obs`` to the episode's end: (the true (x, y) after
-    each step, the last info)."""
+    each step, the last info). The policy reads the observation in the trial runner's form
+    (offroadbench.navigation.observation.nan_observation), as in a trial."""
     xy = []
     while True:
-        obs, _, term, trunc, info = env.step(np.array(policy.act(obs)))
+        obs, _, term, trunc, info = env.step(np.array(policy.act(nan_observation(obs))))
         xy.append(tuple(env._state["pos"][:2]))
         if term or trunc:
             return xy, info

@@ -1,7 +1,8 @@
 """The ``ppo`` policy: its shipped weights load in a fresh process without torch and act
 deterministically; it drives through the trial pipeline (drive_mission, a study slice) and replays
-bit for bit; the env's ``mast`` observation marks unknown cells NaN exactly where the sensor's map
-does; the features never read unknown ground as flat; an SB3 model exports to the same numbers."""
+bit for bit, and through the env alike (tests/contracts/test_gym_env.py checks the env's ``mast``
+observation against the sensor's map); the features never read unknown ground as flat; an SB3 model
+exports to the same numbers."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.drivers import PolicyContext
 from offroadbench.navigation.missions import Mission
-from offroadbench.navigation.observation import ObservationConfig, height_patch
+from offroadbench.navigation.observation import ObservationConfig
 from offroadbench.navigation.planners import planner_from_table
 from offroadbench.navigation.policies import make_policy
 from tests.navigation.test_policies import roll_out
@@ -129,42 +130,6 @@ def test_ppo_drives_a_mission_through_drive_mission_and_the_env_alike_and_replay
     assert len(xy) - len(tel) in (0, 1)  # a timeout ends the env's last step between telemetry samples
     assert np.array_equal(np.array(xy[:len(tel)]), tel)
     assert info["failure_reason"] == a.result.failure_reason
-
-
-def test_mast_observation_is_nan_exactly_where_the_sensor_map_is_unknown():
-    from offroadbench.navigation.sensor import MastSensor
-    from offroadbench.navigation.perception import PerceptionConfig, perception_seed
-    from offroadbench.sim.gym_env import TraverseConfig, TraverseEnv
-
-    z = np.zeros((161, 161))
-    x = np.arange(161) * CELL
-    z[:, (x > 2.4) & (x < 3.0)] = -1.0  # a trench 0.4 m ahead of the start: its floor hidden behind its rim
-    hm = Heightmap(z + 1.0, CELL)
-    mission = Mission.between(0, (2.0, 4.0), (6.0, 4.0))
-    cfg = TraverseConfig(mission_length_m=4.0, border_m=1.0)
-    with TraverseEnv(hm, config=cfg, perception="mast") as env:
-        obs, info = env.reset(seed=0, options={"mission": mission})
-        patch = obs["height_patch"]
-        assert np.all(np.isfinite(obs["state"]))
-        assert np.isnan(patch).any() and np.isfinite(patch).any()
-        # the sensor's own map, replayed from the mission's perception stream, read at the believed pose
-        sensor = MastSensor(hm, PerceptionConfig(sensor="mast"), np.random.default_rng(perception_seed(mission)),
-                            mission.start_xy_m, mission.heading_rad)
-        bx, by, byaw = sensor.update(np.array([info["pose"]["x_m"], info["pose"]["y_m"]]), info["pose"]["yaw_rad"])
-        assert (bx, by, byaw) == tuple(info["believed_pose"].values())
-        ref = height_patch(hm, bx, by, byaw, 16, 0.1, 0.0, sensor.z)
-        assert np.array_equal(np.isnan(patch), np.isnan(ref))
-        hidden = np.isnan(patch)
-        ahead = (np.arange(16) - 7.5) * 0.1  # body-frame x of the patch's columns, m
-        assert hidden[:, ahead > 0.5].any()  # the trench floor
-        rows, cols = np.nonzero(hidden[:, ahead < 0.3])  # before the rim: only the sensor's own foot cell
-        assert np.all(np.hypot(ahead[cols], ahead[rows]) < 0.1)
-    with TraverseEnv(hm, config=cfg) as env:  # the oracle stays the default
-        obs, info = env.reset(seed=0, options={"mission": mission})
-        assert np.all(np.isfinite(obs["height_patch"])) and env.perception is None
-        assert info["believed_pose"] == {k: info["pose"][k] for k in ("x_m", "y_m", "yaw_rad")}
-    with pytest.raises(InputError):
-        TraverseEnv(hm, config=cfg, perception="lidar")
 
 
 def test_ppo_drives_a_study_slice(tmp_path):

@@ -2,8 +2,11 @@
 
 Installed, its entry point (``offroadbench.policies``, see pyproject.toml) adds the policy ``sb3``,
 so a study's ``[planner] name = "sb3"`` drives each mission with the model: the trial runner builds
-the same observation the env gave during training (offroadbench.navigation.observation) and applies
-the returned ``(v, omega)`` at the control rate, with the same failure rules as for a planner.
+the same observation the env gave during training (offroadbench.navigation.observation; the plug-in
+turns the runner's form, NaN at patch samples the ``mast`` sensor has not measured, into the env's
+with ``finite_observation``: the fill and the ``known`` channel) and applies the returned
+``(v, omega)`` at the control rate, with the same failure rules as for a planner. A model trained
+before the env had ``known`` (``state`` and ``height_patch`` only) gets those two entries.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 
 from offroadbench.config import check_choice
 from offroadbench.errors import InputError
+from offroadbench.navigation.observation import finite_observation
 from offroadbench.navigation.planners import PlanningProblem
 from offroadbench.navigation.policies import PolicyContext, PolicySpec
 
@@ -74,9 +78,12 @@ class SB3Policy:
         n = context.observation.patch_cells
         want = {"state": (10,), "height_patch": (n, n)}
         have = {k: tuple(s.shape) for k, s in getattr(space, "spaces", {}).items()}
+        if "known" in have:  # trained on the env since it marks unmeasured patch samples
+            want["known"] = (n, n)
         if have != want:
             raise InputError(f"SB3Config.model = {cfg.model!r} was trained on observations {have}; "
                              f"this study gives {want}")
+        self.keys = tuple(have)
         high = np.asarray(self.model.action_space.high, dtype=float)
         limits = np.array([context.vehicle.max_speed_m_s, context.vehicle.max_yaw_rate_rad_s])
         if high.shape != (2,) or not np.allclose(high, limits):
@@ -87,7 +94,8 @@ class SB3Policy:
         """Nothing to remember between missions (the model sees only the observation)."""
 
     def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
-        action, _ = self.model.predict(dict(observation), deterministic=True)
+        obs = finite_observation(observation)
+        action, _ = self.model.predict({k: obs[k] for k in self.keys}, deterministic=True)
         a = np.asarray(action, dtype=float).reshape(-1)
         return float(a[0]), float(a[1])
 
