@@ -21,7 +21,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("search", help="search TOML, e.g. experiments/failure-search.toml")
     run.add_argument("--out", help="run directory (default: runs/<study name>)")
     run.add_argument("--budget", type=int_at_least(1, "--budget"), default=None,
-                     help="trials per method and grid cell (default: [search] budget)")
+                     help="trials per method and grid cell, every method alike (default: [search] budget, mc_budget, ce_budget)")
     run.add_argument("--workers", type=int_at_least(1, "--workers"), default=None,
                      help="worker processes (default: as many as both the cores and the memory allow)")
     run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")

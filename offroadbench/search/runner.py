@@ -91,7 +91,7 @@ def _cell_meta(c: CellPlan) -> dict[str, Any]:
             "settings": {k: dict(v) for k, v in c.settings.items()}}
 
 
-def search_meta(plan: SearchPlan, budget: int, source_text: str, version: str) -> dict[str, Any]:
+def search_meta(plan: SearchPlan, budget: int | None, source_text: str, version: str) -> dict[str, Any]:
     """The store's meta data of a search (the study keys ``study report`` and ``replay`` read, plus ``search``)."""
     return {
         "study_id": plan.search_id,
@@ -216,15 +216,14 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
                executor_options: Mapping[str, Any] | None = None, trial_fn: TrialFn | None = None,
                source_text: str = "", progress: ProgressFn | None = None) -> SearchSummary:
     """Run (or resume) the search ``plan`` into ``run_dir``, ``budget`` trials per method and group
-    (default ``[search] budget``). ``progress(done, total)`` counts stored trials. Ctrl-C stops the
+    (every method alike; default the ``[search]`` table's ``budget``, ``mc_budget`` and ``ce_budget``). ``progress(done, total)`` counts stored trials. Ctrl-C stops the
     workers and re-raises; every committed trial stays and the next call goes on from there."""
     from offroadbench.study.executors import get_executor
     from offroadbench.study.fingerprint import platform_fingerprint
     from offroadbench.study.runner import code_version, default_trial_timeout_s
 
     cfg = plan.search
-    budget = cfg.budget if budget is None else budget
-    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, int) or budget < 1):
         raise InputError(f"--budget = {budget!r}; must be an integer >= 1")
     options = dict(executor_options or {})
     if executor in ("local", "dask") and options.get("trial_timeout_s") is None:

@@ -147,7 +147,7 @@ class SearchConfig:
     """What to run in every grid cell, one after another: ``falsify`` (the optimiser), ``random``
     (nominal sampling: plain Monte Carlo) and ``ce-is`` (cross-entropy importance sampling)."""
     budget: int = 200
-    """Trials per method and grid cell (``search run --budget`` overrides it)."""
+    """Trials per method and grid cell (``search run --budget`` overrides it, ``mc_budget`` and ``ce_budget`` too)."""
     mc_budget: int | None = None
     """Trials of the ``random`` stream (plain Monte Carlo) per grid cell, if not ``budget``: a large
     one is the Monte Carlo reference the other methods are measured against."""
@@ -264,13 +264,16 @@ class SearchConfig:
         return len(self.params)
 
     def method_budget(self, method: str, budget: int | None = None) -> int:
-        """Trials of ``method`` per grid cell: ``mc_budget`` for ``random`` and ``ce_budget`` for
-        ``ce-is`` where set, else ``budget`` (default the table's)."""
+        """Trials of ``method`` per grid cell. ``budget`` (``search run --budget``) caps every
+        method alike; without it, ``mc_budget`` for ``random`` and ``ce_budget`` for ``ce-is`` where
+        set, else the table's ``budget``."""
+        if budget is not None:
+            return budget
         if method == "random" and self.mc_budget is not None:
             return self.mc_budget
         if method == "ce-is" and self.ce_budget is not None:
             return self.ce_budget
-        return self.budget if budget is None else budget
+        return self.budget
 
     def from_z(self, z: np.ndarray) -> np.ndarray:
         """Parameter values (n, d) of standard-normal coordinates ``z`` (n, d)."""

@@ -104,3 +104,5 @@ def test_each_method_has_its_budget():
     data["search"].update(budget=10, mc_budget=30, ce_budget=20)
     cfg = search_from_data(data).search
     assert [cfg.method_budget(m) for m in ("falsify", "random", "ce-is")] == [10, 30, 20]
+    # search run --budget N: every method N (a quick look at a big study runs N trials a stream, not its mc_budget)
+    assert [cfg.method_budget(m, 4) for m in ("falsify", "random", "ce-is")] == [4, 4, 4]
