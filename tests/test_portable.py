@@ -91,8 +91,8 @@ gravity_m_s2 = 1.62
 """
 
 #: the closed-loop policies with their own numerics, through the mast sensor (their sensor arm in
-#: experiments/vehicle-planner.toml): mppi (rollouts, cos/sin, weights) and ppo (the MLP); 1 terrain x
-#: 2 missions each = 4 trials on 12.8 m maps
+#: experiments/vehicle-planner.toml): mppi (rollouts, cos/sin, weights), ppo (the MLP) and reactive
+#: (its arcs' sin/cos and height look-ups); 1 terrain x 2 missions each = 6 trials on 12.8 m maps
 POLICY_SLICE = """
 [study]
 name = "portable-policies"
@@ -102,7 +102,7 @@ terrains_per_cell = 1
 missions_per_terrain = 2
 
 [grid]
-"planner.name" = ["mppi", "ppo"]
+"planner.name" = ["mppi", "ppo", "reactive"]
 
 [planner]
 sensor = "mast"
@@ -216,20 +216,20 @@ def test_soft_soil_trials_are_identical_on_a_baseline_cpu(tmp_path, engine):
     assert not differ, f"{len(differ)} of {len(out['rows'])} soft-soil rows differ, e.g. {differ[:3]}"
 
 
-def test_mppi_and_ppo_trials_are_identical_on_a_baseline_cpu(tmp_path):
-    """``mppi`` and ``ppo`` through the mast sensor: every number of every row natively (mppi's numba
-    pass where numba is installed) and with numpy/OpenBLAS/glibc switched down, in reversed order and
-    through mppi's Python pass (the policies' modules, "Portability")."""
+def test_mppi_ppo_and_reactive_trials_are_identical_on_a_baseline_cpu(tmp_path):
+    """``mppi``, ``ppo`` and ``reactive`` through the mast sensor: every number of every row natively
+    (mppi's numba pass where numba is installed) and with numpy/OpenBLAS/glibc switched down, in
+    reversed order and through mppi's Python pass (the mppi and ppo modules, "Portability")."""
     (tmp_path / "slice.toml").write_text(POLICY_SLICE)
     namespace: dict = {}
     exec(compile(DRIVER, "driver", "exec"), namespace)
     out = namespace["drive"](str(tmp_path / "slice.toml"), "forward")
     other = _run_driver(tmp_path, "reversed", BASELINE_ENV, "python")
-    assert len(out["rows"]) == 4 and set(other["rows"]) == set(out["rows"])
-    assert {k.split("/")[0] for k in out["rows"]} == {"0", "1"}  # a cell per policy
-    assert len({r["rms_vertical_accel_m_s2"] for r in out["rows"].values()}) == 4  # real, distinct trials
+    assert len(out["rows"]) == 6 and set(other["rows"]) == set(out["rows"])
+    assert {k.split("/")[0] for k in out["rows"]} == {"0", "1", "2"}  # a cell per policy
+    assert len({r["rms_vertical_accel_m_s2"] for r in out["rows"].values()}) == 6  # real, distinct trials
     differ = [k for k in out["rows"] if other["rows"][k] != out["rows"][k]]
-    assert not differ, f"{len(differ)} of {len(out['rows'])} mppi/ppo rows differ: {differ}"
+    assert not differ, f"{len(differ)} of {len(out['rows'])} policy rows differ: {differ}"
 
 
 def test_a_subset_of_missions_in_another_order_gives_the_same_rows(native):
