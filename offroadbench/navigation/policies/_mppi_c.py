@@ -2,9 +2,10 @@
 numbers as its Python pass (offroadbench.navigation.policies.mppi.cos_sin), outside the interpreter.
 
 Both evaluate the C library's scalar double ``cos`` and ``sin`` on each float32 heading widened to
-float64 (exact) and round the result to float32 (to nearest). numba compiles ``math.cos`` to a call
-of that same libm function (no ``fastmath``, so no approximation is substituted), hence the same bits
-as ``math.cos`` in the interpreter (tests/navigation/test_mppi.py). One exception: numba with Intel's
+float64 (exact) and round the result to float32 (to nearest). numba compiles ``math.cos`` and
+``math.sin`` to calls of the same libm (no ``fastmath``, so no approximation is substituted; LLVM
+fuses the pair into glibc's ``sincos``, which runs the code of ``sin`` and ``cos``), hence the same
+bits as in the interpreter (tests/navigation/test_mppi.py). One exception: numba with Intel's
 SVML (the ``icc_rt`` package) vectorises the loop with SVML's own ``cos``, which has other last bits;
 then this module refuses to load and the Python pass runs. It is an accelerator only: without numba
 the Python pass runs (``pip install 'offroadbench[fast]'`` installs numba).
