@@ -90,7 +90,37 @@ soil = "lunar-regolith"
 gravity_m_s2 = 1.62
 """
 
+#: the closed-loop policies with their own numerics, through the mast sensor (their sensor arm in
+#: experiments/vehicle-planner.toml): mppi (rollouts, cos/sin, weights), ppo (the MLP) and reactive
+#: (its arcs' sin/cos and height look-ups); 1 terrain x 2 missions each = 6 trials on 12.8 m maps
+POLICY_SLICE = """
+[study]
+name = "portable-policies"
+recipe = "paper-d2.45"
+root_seed = 5
+terrains_per_cell = 1
+missions_per_terrain = 2
+
+[grid]
+"planner.name" = ["mppi", "ppo", "reactive"]
+
+[planner]
+sensor = "mast"
+
+[recipe_overrides]
+"grid.rows" = 257
+"grid.cols" = 257
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 6.0
+border_m = 1.0
+"""
+
 #: run in a subprocess (or in-process): drive the slice's tasks with the missions in a given order
+#: (a fourth argument ``python``: mppi's headings through its Python pass, not numba's)
 DRIVER = textwrap.dedent('''
     import hashlib, json, sys
     from offroadbench.levels16 import encode_levels
@@ -122,16 +152,19 @@ DRIVER = textwrap.dedent('''
         return out
 
     if __name__ == "__main__":
+        if sys.argv[4:] == ["python"]:
+            import offroadbench.navigation.policies.mppi as mppi
+            mppi.USE_COMPILED_TRIG = False
         json.dump(drive(sys.argv[1], sys.argv[2]), open(sys.argv[3], "w"))
 ''')
 
 
-def _run_driver(tmp_path: Path, order: str, env_extra: dict[str, str]) -> dict:
+def _run_driver(tmp_path: Path, order: str, env_extra: dict[str, str], *extra: str) -> dict:
     script = tmp_path / "driver.py"
     script.write_text(DRIVER)
     out = tmp_path / f"out-{order}-{len(env_extra)}.json"
     env = {**os.environ, **env_extra}
-    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "slice.toml"), order, str(out)],
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "slice.toml"), order, str(out), *extra],
                           env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads(out.read_text())
@@ -181,6 +214,22 @@ def test_soft_soil_trials_are_identical_on_a_baseline_cpu(tmp_path, engine):
     assert len({r["traversal_time_s"] for r in out["rows"].values()}) >= 2  # real trials, not one repeated row
     differ = [k for k in out["rows"] if other["rows"][k] != out["rows"][k]]
     assert not differ, f"{len(differ)} of {len(out['rows'])} soft-soil rows differ, e.g. {differ[:3]}"
+
+
+def test_mppi_ppo_and_reactive_trials_are_identical_on_a_baseline_cpu(tmp_path):
+    """``mppi``, ``ppo`` and ``reactive`` through the mast sensor: every number of every row natively
+    (mppi's numba pass where numba is installed) and with numpy/OpenBLAS/glibc switched down, in
+    reversed order and through mppi's Python pass (the mppi and ppo modules, "Portability")."""
+    (tmp_path / "slice.toml").write_text(POLICY_SLICE)
+    namespace: dict = {}
+    exec(compile(DRIVER, "driver", "exec"), namespace)
+    out = namespace["drive"](str(tmp_path / "slice.toml"), "forward")
+    other = _run_driver(tmp_path, "reversed", BASELINE_ENV, "python")
+    assert len(out["rows"]) == 6 and set(other["rows"]) == set(out["rows"])
+    assert {k.split("/")[0] for k in out["rows"]} == {"0", "1", "2"}  # a cell per policy
+    assert len({r["rms_vertical_accel_m_s2"] for r in out["rows"].values()}) == 6  # real, distinct trials
+    differ = [k for k in out["rows"] if other["rows"][k] != out["rows"][k]]
+    assert not differ, f"{len(differ)} of {len(out['rows'])} policy rows differ: {differ}"
 
 
 def test_a_subset_of_missions_in_another_order_gives_the_same_rows(native):

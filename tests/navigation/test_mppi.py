@@ -157,3 +157,38 @@ def test_a_stalled_vehicle_backs_up_then_drives_on():
     assert vs[stall + 32] > 0.3  # forward again
     blind, _ = _policy(MppiConfig(stall_s=0.0))
     assert min(blind.act({"pose": pose, "elevation_m": hm.z, "state": state})[0] for _ in range(60)) > 0.3
+
+
+def test_cos_sin_is_the_c_librarys_rounded_to_float32_with_and_without_numba(monkeypatch):
+    """The headings' cosines and sines are libm's double ``cos``/``sin`` rounded to float32 (not
+    numpy's SIMD loops, whose bits depend on the CPU), and numba's pass gives the Python pass's bits."""
+    import offroadbench.navigation.policies.mppi as mppi
+
+    th = np.concatenate([(np.random.default_rng(0).normal(0.0, 4.0, (64, 50))).astype(np.float32).ravel(),
+                         np.array([0.0, -0.0, 1e-30, 1e4, -1e5, np.pi, 3e38, np.inf, -np.inf, np.nan], np.float32)])  # 3210 = 107 x 30
+    out = {}
+    for use in (False, True):
+        monkeypatch.setattr(mppi, "USE_COMPILED_TRIG", use)
+        out[use] = mppi.cos_sin(th.reshape(-1, 30))
+    expect = [np.array([np.float32(f(float(a))) if math.isfinite(a) else np.nan for a in th], np.float32).reshape(-1, 30)
+              for f in (math.cos, math.sin)]
+    for got in (out[False], out[True]):
+        assert all(np.array_equal(g.view(np.int32), e.view(np.int32)) for g, e in zip(got, expect, strict=True))
+
+
+def test_a_tick_is_the_same_with_and_without_numba(monkeypatch):
+    """Whole MPPI ticks on a rough map (rollouts, costs, weights, update) with the compiled and the
+    Python headings: the same mean sequences to the bit."""
+    import offroadbench.navigation.policies.mppi as mppi
+    from offroadbench.terrain.recipe import load_terrain
+
+    pytest.importorskip("numba")
+    hm = load_terrain("paper-d2.6", seed=11, overrides={"grid.rows": 201, "grid.cols": 201})[0]
+    runs = []
+    for use in (True, False):
+        monkeypatch.setattr(mppi, "USE_COMPILED_TRIG", use)
+        policy, _ = _policy(MppiConfig(samples=256), hm=hm)
+        poses, actions = _drive(policy, hm, np.array([2.0, 5.0, 0.3]), 8)
+        runs.append((poses, actions, policy.U.copy()))
+    assert runs[0][1] == runs[1][1] and np.array_equal(runs[0][2], runs[1][2])
+    assert len({a for a in runs[0][1]}) > 1  # the ticks act, not one repeated action

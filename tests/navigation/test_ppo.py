@@ -7,6 +7,7 @@ exports to the same numbers."""
 from __future__ import annotations
 
 import importlib.util
+import math
 import json
 import subprocess
 import sys
@@ -213,3 +214,26 @@ def test_the_shipped_weights_loaded_into_sb3_give_the_numpy_mean_actions():
     sb3, _ = model.predict(venv.normalize_obs(f.astype(np.float32)), deterministic=True)
     assert w.mean_action(f) == pytest.approx(sb3, abs=1e-5)  # float32 torch against float64 numpy
     assert np.ptp(sb3, axis=0).max() > 1e-3  # the observations differ enough to move the action
+
+
+def test_the_mlp_sums_each_dot_product_left_to_right_without_blas():
+    """Each layer's dot products are summed in input order (the same bits on every CPU, whatever BLAS
+    kernel it would select): 1e16 + 1 rounds to 1e16, so the order shows in the sum; a batch gives
+    each row's own numbers; and the network is the BLAS formula's to rounding (so it still matches
+    stable-baselines3, tests above)."""
+    from offroadbench.navigation.policies.ppo import _affine, _tanh
+
+    w, b = np.ones((1, 3)), np.zeros(1)
+    assert _affine(w, b, np.array([1e16, 1.0, -1e16]))[0] == 0.0  # (1e16 + 1) - 1e16
+    assert _affine(w, b, np.array([1e16, -1e16, 1.0]))[0] == 1.0
+    assert _affine(w, b, np.array([[1e16, 1.0, -1e16], [1e16, -1e16, 1.0]])).tolist() == [[0.0], [1.0]]
+    h = np.linspace(-3.0, 3.0, 13)
+    assert _tanh(h).tolist() == [math.tanh(v) for v in h]
+    wts = load_weights(shipped_weights())
+    f = np.array([features(_obs(seed, nan_cells=seed * 20)) for seed in range(6)])
+    rows = np.array([wts.mean_action(r) for r in f])
+    assert np.array_equal(wts.mean_action(f), rows)
+    x = np.clip((f - wts.obs_mean) / np.sqrt(wts.obs_var + 1e-8), -10.0, 10.0)
+    blas = np.tanh(np.tanh(x @ wts.pi_w0.T + wts.pi_b0) @ wts.pi_w1.T + wts.pi_b1) @ wts.mu_w.T + wts.mu_b
+    assert rows == pytest.approx(np.clip(blas, -1.0, 1.0), abs=1e-14)
+    assert np.ptp(rows, axis=0).max() > 1e-3

@@ -70,6 +70,16 @@ sensor's (offroadbench.navigation.sensor) otherwise.
 Randomness: its own stream per mission, from ``seed`` and the exact bits of the mission's start and
 goal (``reset``), so a trial replays bit for bit and does not depend on other trials.
 
+Portability: a trial is the same to the last bit on every x86-64 CPU the project runs on (README,
+"Reproducibility"). numpy's ``sin``, ``cos`` and ``exp`` run the SIMD loops of the CPU's dispatch
+level and ``tensordot`` is a BLAS product: each gave other last bits with the dispatch switched down
+(tests/test_portable.py). So the headings' cosines and sines are the C library's scalar double ones
+rounded to float32 (:func:`cos_sin`; compiled by numba when it is installed, the same bits), the
+weights' ``exp`` is ``math.exp``, and the update sums the weighted samples in sample order (a
+cumulative sum). The rest is elementwise IEEE arithmetic (exact on any SIMD width), numpy's pairwise
+sums (a fixed order), scipy's compiled filters and interpolation (no run-time dispatch) and the
+random stream (scalar code), which gave the same bits.
+
 The cost maps (the local window and the cost-to-go) are in :mod:`offroadbench.navigation.policies.mppi_costs`.
 """
 
@@ -88,10 +98,43 @@ from offroadbench.navigation.drivers import PolicyContext, register_policy
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.policies.mppi_costs import CostToGo, CostWindow, cost_to_go, cost_window
 
-__all__ = ["MppiConfig", "MppiPolicy", "MPPI_STREAM", "CostWindow", "CostToGo", "cost_window", "cost_to_go", "rollout"]
+__all__ = ["MppiConfig", "MppiPolicy", "MPPI_STREAM", "CostWindow", "CostToGo", "cost_window", "cost_to_go", "cos_sin",
+           "rollout"]
 
 #: first spawn-key entry of MPPI's stream (terrains 0, missions 1, perception 2; offroadbench.seeding)
 MPPI_STREAM = 3
+
+#: whether :func:`cos_sin` may use the compiled pass (tests switch it off to compare)
+USE_COMPILED_TRIG = True
+
+
+def _compiled_trig():
+    """offroadbench.navigation.policies._mppi_c, or None (numba missing, with SVML, or unable to compile)."""
+    if not USE_COMPILED_TRIG:
+        return None
+    try:
+        from offroadbench.navigation.policies import _mppi_c
+    except (ImportError, RuntimeError):
+        return None
+    return _mppi_c
+
+
+def cos_sin(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``cos`` and ``sin`` of the float32 angles ``th`` (rad) as float32 arrays of its shape: the C
+    library's scalar double functions (``math.cos``, ``math.sin``), each rounded to float32, so the
+    same bits on every CPU (module docstring, "Portability"); numba's compiled pass when installed
+    (offroadbench.navigation.policies._mppi_c, the same bits)."""
+    compiled = _compiled_trig()
+    if compiled is not None:
+        return compiled.cos_sin(th)
+    shape = np.shape(th)
+    flat = np.asarray(th, dtype=np.float32).ravel().tolist()
+    try:
+        cs = [np.fromiter(map(f, flat), np.float64, len(flat)).astype(np.float32) for f in (math.cos, math.sin)]
+    except ValueError:  # an infinite angle: NaN, as the C library (and the compiled pass) gives
+        cs = [np.fromiter((f(a) if math.isfinite(a) else math.nan for a in flat), np.float64, len(flat)).astype(np.float32)
+              for f in (math.cos, math.sin)]
+    return cs[0].reshape(shape), cs[1].reshape(shape)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -168,13 +211,22 @@ def rollout(pose, u: np.ndarray, dt: float, win: CostWindow, cfg: MppiConfig) ->
     """Positions and headings of the controls ``u`` (K, T, 2) from ``pose`` (x, y, theta) through the
     slip model of the module docstring: (x, y, theta), each (K, T), the state after each step
     (float32, relative to the pose's position: add ``pose[:2]`` for map metres)."""
+    return _rollout(pose, u, dt, win, cfg)[:3]
+
+
+def _rollout(pose, u: np.ndarray, dt: float, win: CostWindow, cfg: MppiConfig) -> tuple[np.ndarray, ...]:
+    """:func:`rollout`'s (x, y, theta) and the cosines and sines of the headings (K, T + 1): the
+    pose's, then the one after each step (:func:`cos_sin`)."""
     x0, y0, th0 = (float(a) for a in pose)
     v, w = u[..., 0], u[..., 1]
     dth = ((1.0 - cfg.yaw_slip) * dt) * w
     th = np.cumsum(dth, axis=1)
     th += np.float32(th0)
-    th_before = th - dth
-    c, s = np.cos(th_before), np.sin(th_before)
+    knots = np.empty((th.shape[0], th.shape[1] + 1), dtype=np.float32)
+    knots[:, 0] = th0
+    knots[:, 1:] = th
+    c_all, s_all = cos_sin(knots)
+    c, s = c_all[:, :-1], s_all[:, :-1]  # the heading before each step
     vdt = v * np.float32(dt)
     dx, dy = vdt * c, vdt * s
     # the no-slip positions before each step: where the slip is read
@@ -188,17 +240,17 @@ def rollout(pose, u: np.ndarray, dt: float, win: CostWindow, cfg: MppiConfig) ->
     keep = 1.0 - np.clip(np.float32(cfg.slip_base) + np.float32(cfg.slip_per_grade) * np.maximum(grade, 0.0), 0.0, 1.0)
     x = np.cumsum(keep * dx, axis=1)
     y = np.cumsum(keep * dy, axis=1)
-    return x, y, th
+    return x, y, th, c_all, s_all
 
 
-def _costs(pose, x: np.ndarray, y: np.ndarray, th: np.ndarray, goal: np.ndarray, dt: float, win: CostWindow,
-           veh: VehicleEnvelope, cfg: MppiConfig, ctg: "CostToGo | None" = None) -> np.ndarray:
-    """The cost S_k of each rollout (see the module docstring); ``x, y`` relative to ``pose``."""
+def _costs(pose, x: np.ndarray, y: np.ndarray, c: np.ndarray, s: np.ndarray, goal: np.ndarray, dt: float,
+           win: CostWindow, veh: VehicleEnvelope, cfg: MppiConfig, ctg: "CostToGo | None" = None) -> np.ndarray:
+    """The cost S_k of each rollout (see the module docstring); ``x, y`` relative to ``pose``, ``c, s``
+    the cosine and sine of the heading after each step."""
     ox, oy = float(pose[0]), float(pose[1])
     idx, _ = win.index(x, y, ox, oy)
     static = win.static.ravel()[idx]  # inf off the map (the window's out-of-map cells and its margin)
     gx, gy = win.gx.ravel()[idx], win.gy.ravel()[idx]
-    c, s = np.cos(th), np.sin(th)
     slope = np.maximum(np.abs(gx * c + gy * s), np.abs(gy * c - gx * s))
     slope *= np.float32(1.0 / veh.max_slope)
     hz = np.maximum(static, slope)
@@ -341,12 +393,16 @@ class MppiPolicy:
         lo = np.array([-0.5 * self.v_max if backing else 0.0, -self.w_max])
         hi = np.array([0.0 if backing else self.v_max, self.w_max])
         u = np.clip(self.U.astype(np.float32)[None] + eps, lo.astype(np.float32), hi.astype(np.float32))
-        x, y, th = rollout(pose, u, self.dt, win, cfg)
-        cost = _costs(pose, x, y, th, self.goal, self.dt, win, self.veh, cfg, ctg)
+        x, y, _, c, s = _rollout(pose, u, self.dt, win, cfg)
+        cost = _costs(pose, x, y, c[:, 1:], s[:, 1:], self.goal, self.dt, win, self.veh, cfg, ctg)
         cost = np.where(np.isfinite(cost), cost, np.finfo(float).max / 4)
-        w = np.exp(-(cost - cost.min()) / cfg.temperature)
+        scaled = ((cost - cost.min()) / cfg.temperature).tolist()
+        w = np.fromiter((math.exp(-a) for a in scaled), np.float64, len(scaled))  # libm, not numpy's SIMD exp
         w /= w.sum()
-        self.U = np.clip(self.U + np.tensordot(w, u.astype(np.float64) - self.U[None], axes=1), lo, hi)
+        step = u.astype(np.float64) - self.U[None]
+        step *= w[:, None, None]
+        # sum_k w_k (u_k - U), summed in sample order (not a BLAS product)
+        self.U = np.clip(self.U + np.cumsum(step, axis=0)[-1], lo, hi)
         self.last_cost = cost
         return self.U
 

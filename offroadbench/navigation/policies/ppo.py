@@ -27,6 +27,15 @@ then the height patch averaged over 2 x 2 blocks (an 8 x 8 grid for the default 
 relative to the base, clipped to +-1 m; an unknown cell counts 0), and each block's fraction of known
 cells (0-1; 1 everywhere under the oracle). An unknown (NaN) cell is never read as flat ground:
 the network sees that it is unknown.
+
+Portability: the action is the same to the last bit on every x86-64 CPU the project runs on (README,
+"Reproducibility"). A BLAS matrix product sums in the order of the kernel the CPU selects, and
+numpy's ``tanh`` runs the SIMD loop of the CPU's dispatch level: both gave other last bits with the
+dispatch switched down (tests/test_portable.py). So each layer's dot products are summed left to
+right in plain float64 (elementwise products, then a cumulative sum: every step one IEEE operation)
+and ``tanh`` is the C library's scalar one; the rest (normalisation, clipping, the features) is
+elementwise IEEE arithmetic, exact on any SIMD width. The same function as before to rounding
+(~1e-16): it still matches stable-baselines3's torch inference to float32 precision.
 """
 
 from __future__ import annotations
@@ -113,11 +122,23 @@ class MlpWeights:
     feature_version: int = FEATURE_VERSION
 
     def mean_action(self, f: np.ndarray) -> np.ndarray:
-        """The clipped mean action in [-1, 1]^2 for one feature vector (or a batch, rows)."""
-        x = np.clip((f - self.obs_mean) / np.sqrt(self.obs_var + 1e-8), -10.0, 10.0)
-        h = np.tanh(x @ self.pi_w0.T + self.pi_b0)
-        h = np.tanh(h @ self.pi_w1.T + self.pi_b1)
-        return np.clip(h @ self.mu_w.T + self.mu_b, -1.0, 1.0)
+        """The clipped mean action in [-1, 1]^2 for one feature vector (or a batch, rows); the same
+        bits on every CPU (module docstring, "Portability")."""
+        x = np.clip((np.asarray(f, dtype=np.float64) - self.obs_mean) / np.sqrt(self.obs_var + 1e-8), -10.0, 10.0)
+        h = _tanh(_affine(self.pi_w0, self.pi_b0, x))
+        h = _tanh(_affine(self.pi_w1, self.pi_b1, h))
+        return np.clip(_affine(self.mu_w, self.mu_b, h), -1.0, 1.0)
+
+
+def _affine(w: np.ndarray, b: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``w x + b`` for ``x`` (in,) or rows (n, in): each dot product summed left to right over the
+    inputs (a cumulative sum: one IEEE addition after another), then the bias; float64, no BLAS."""
+    return np.cumsum(x[..., None, :] * w, axis=-1)[..., -1] + b
+
+
+def _tanh(h: np.ndarray) -> np.ndarray:
+    """tanh of each element through the C library's scalar ``tanh`` (``math.tanh``), not numpy's SIMD loop."""
+    return np.fromiter(map(math.tanh, h.ravel().tolist()), np.float64, h.size).reshape(h.shape)
 
 
 _ARRAYS = ("pi_w0", "pi_b0", "pi_w1", "pi_b1", "mu_w", "mu_b", "log_std", "obs_mean", "obs_var", "action_scale")
