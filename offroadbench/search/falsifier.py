@@ -78,8 +78,11 @@ class Proposal:
     failure's terrain), None (or a short tuple) where the stream's own nuisance draw applies."""
 
 
-def stream_seed(root_seed: int, group: int, method: str) -> int:
-    """The integer seed of one stream (grid cell ``group``, ``method``)."""
+def stream_seed(root_seed: int, group: int, method: str, replicate: int = 0) -> int:
+    """The integer seed of one stream (grid cell ``group``, ``method``; ``replicate`` of
+    SearchConfig, 0 the original streams)."""
+    if replicate:
+        return seeding.derive_seed(root_seed, SEARCH_STREAM, group, METHODS.index(method), replicate)
     return seeding.derive_seed(root_seed, SEARCH_STREAM, group, METHODS.index(method))
 
 

@@ -186,13 +186,16 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
 #: not those of the ``random`` stream (trial k of which drives terrain k), so that the Monte Carlo
 #: reference and the importance-sampling estimate are independent and one can check the other
 CE_TERRAIN_OFFSET = 1 << 20
+#: nuisance index offset of each SearchConfig.replicate: replicate r's trial k drives index
+#: k + r * REPLICATE_OFFSET (beyond every stream's own range)
+REPLICATE_OFFSET = 1 << 24
 
 
 def _nuisance(plan: SearchPlan, group: CellPlan, k: int, method: str = "random") -> tuple[int, int]:
     """(terrain seed, mission seed) of trial k of a stream (study seed rules; see SearchConfig.fix_*;
     the ``ce-is`` stream's terrains start at :data:`CE_TERRAIN_OFFSET`)."""
     cfg, root = plan.search, plan.study.root_seed
-    k = k + (CE_TERRAIN_OFFSET if method == "ce-is" else 0)
+    k = k + (CE_TERRAIN_OFFSET if method == "ce-is" else 0) + cfg.replicate * REPLICATE_OFFSET
     j = 0 if cfg.fix_terrain else k
     m = k if (cfg.fix_terrain and not cfg.fix_mission) else 0
     return seeding.terrain_seed(root, j, cell=group.key), seeding.mission_seed(root, j, m, cell=group.key)
@@ -282,7 +285,7 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
     from offroadbench.study.runner import save_trial_telemetry
 
     cfg = plan.search
-    seed = stream_seed(plan.study.root_seed, gi, method)
+    seed = stream_seed(plan.study.root_seed, gi, method, cfg.replicate)
     ran = 0
     while True:
         history, stored = _history(plan, group, stream_trials(store, gi, method))

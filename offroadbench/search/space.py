@@ -209,6 +209,12 @@ class SearchConfig:
     interval keeps its coverage; smaller values adapt faster and risk heavy-tailed weights)."""
     level: float = 0.95
     """Confidence level of the P(failure) intervals."""
+    replicate: int = 0
+    """An independent repeat of the same search: another value draws every stream's proposals
+    from other random numbers and, where the terrain or the mission is random nuisance, drives other
+    terrains or missions; the domain (ranges, nominals, a fixed site) stays. 0: the original.
+    How an estimator's or the falsifier's spread over repeats is measured
+    (``benchmarks/bench_search.py --method ce-is``)."""
 
     def __post_init__(self) -> None:
         if not self.params:
@@ -254,6 +260,7 @@ class SearchConfig:
         if self.ce_budget is not None:
             check_int(self, "ce_budget", self.ce_budget, lo=1)
         check_range(self, "level", self.level, lo=0, hi=1, lo_open=True, hi_open=True)
+        check_int(self, "replicate", self.replicate, lo=0, hi=(1 << 20) - 1)
 
     @property
     def keys(self) -> tuple[str, ...]:

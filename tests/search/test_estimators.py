@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy import special, stats
 
-from offroadbench.search.estimators import (GaussianProposal, ce_is, distinct_failures, is_estimate, mc_estimate,
-                                            trials_for_rel_error)
+from offroadbench.search.estimators import (GaussianProposal, best_is_gain, binned_failure_rate, ce_is,
+                                            distinct_failures, is_estimate, mc_estimate, trials_for_rel_error)
 
 P = 1e-3
 C = float(special.ndtri(1 - P))  # P(Z > C) = 1e-3
@@ -192,3 +192,28 @@ def test_a_failure_the_parameters_do_not_move_leaves_nothing_to_gain():
         ps.append(ce_is(_random_failure(rng, lambda z: np.full(len(z), 0.03)), 2, n, rng, **STUDY_CE).estimate.p)
     true_re = np.std(ps) / 0.03
     assert true_re > 0.9 * np.sqrt(0.97 / (0.03 * n))  # at least plain Monte Carlo's relative error
+
+
+def test_best_is_gain_matches_the_closed_forms():
+    # failure a deterministic function of theta: the best proposal (the nominal restricted to the
+    # failure region) has zero variance
+    assert best_is_gain(np.r_[np.ones(3), np.zeros(97)]) == np.inf
+    # the same failure rate everywhere: nothing to gain
+    assert best_is_gain(np.full(50, 0.02)) == pytest.approx(1.0)
+    # a region of nominal mass m failing at rate a, nothing elsewhere: (1 - m a) / (m (1 - a))
+    m, a = 0.05, 0.4
+    p = np.r_[np.full(50, a), np.zeros(950)]
+    assert best_is_gain(p) == pytest.approx((1 - m * a) / (m * (1 - a)))
+    assert np.isnan(best_is_gain(np.zeros(10)))
+
+
+def test_binned_failure_rate_sees_a_tail_and_ignores_what_is_not_in_the_parameter():
+    rng = np.random.default_rng(7)
+    z = rng.standard_normal(20000)
+    tail = z < -2.0  # fails exactly in the first bin
+    rate = binned_failure_rate(z, tail)
+    assert np.array_equal(rate, tail.astype(float))
+    assert best_is_gain(rate) == np.inf
+    # failures drawn independently of the parameter (the terrain carries them): the bound stays near 1
+    coin = rng.random(z.size) < 0.03
+    assert 1.0 <= best_is_gain(binned_failure_rate(z, coin)) < 1.1

@@ -68,7 +68,7 @@ def test_the_pipeline_estimates_a_known_failure_probability(estimated):
 def test_the_report_of_a_search_holds_its_tables(estimated):
     _, out, _ = estimated
     rep = build_search_report(out)
-    assert {"trials.csv", "streams.csv", "estimates.csv"} <= set(rep.tables)
+    assert {"trials.csv", "streams.csv", "estimates.csv", "is_gain_bounds.csv"} <= set(rep.tables)
     assert "failures_vs_trials.png" in rep.figures
     est = rep.tables["estimates.csv"]
     assert set(est["estimator"]) == {"mc", "ce-is"}

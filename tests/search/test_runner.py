@@ -226,3 +226,24 @@ def test_importance_sampling_drives_terrains_of_its_own(reference):
     seeds = {m: {r[3] for r in rows if method[r[0]] == m} for m in ("random", "ce-is")}
     assert len(seeds["random"]) == len(seeds["ce-is"]) == 24
     assert not seeds["random"] & seeds["ce-is"]
+
+
+@pytest.mark.parametrize("fixed", [False, True])
+def test_a_replicate_draws_other_proposals_and_nuisance_on_the_same_domain(reference, tmp_path, fixed):
+    """replicate = 1 is an independent repeat: other proposals in every stream; other terrains where
+    the terrain is random nuisance, the same site where it is fixed."""
+    _, d, _ = reference
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(replicate=1, fix_terrain=fixed, fix_mission=fixed)
+    run_search(search_from_data(data), tmp_path, executor="inline", trial_fn=stand_in_trials)
+    (p0, r0), (p1, r1) = _table(d), _table(tmp_path)
+    for method in ("falsify", "random", "ce-is"):
+        x0 = [p[6] for p in p0 if p[2] == method]
+        x1 = [p[6] for p in p1 if p[2] == method]
+        assert len(x0) == len(x1) == 24 and not set(x0) & set(x1), method
+    terrains1 = {r[3] for r in r1}
+    if fixed:
+        assert len(terrains1) == 1
+    else:
+        terrains0 = {r[3] for r in r0}
+        assert len(terrains1) == len(terrains0) > 24 and not terrains1 & terrains0
