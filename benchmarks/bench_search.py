@@ -1,36 +1,43 @@
 """Failure search: trials the falsifier and nominal (random) sampling spend to find their first k
-distinct failures, over several seeds, on the same domain.
+distinct failures, and the spread of the importance-sampling estimate, over repeats of one domain.
 
-    .venv/bin/python benchmarks/bench_search.py [--seeds 0 1 2] [--k 10] [--falsify-budget 64] \
-        [--random-budget 320] [--workers 1] [--planner straight|astar] [--keep DIR] [--smoke]
-    .venv/bin/python benchmarks/bench_search.py --mc-run RUN_DIR [--seeds 0 1] [--planner astar] \
-        [--permutations 2000] [--with-run]
+    .venv/bin/python benchmarks/bench_search.py [--study FILE] [--seeds 0 1 2 | --replicates 1 2 3] [--k 10] \
+        [--falsify-budget 64] [--random-budget 320] [--workers 1] [--planner straight|astar] [--keep DIR] [--smoke]
+    .venv/bin/python benchmarks/bench_search.py --mc-run RUN_DIR [--study FILE] [--seeds 0 1 | --replicates 1 2] \
+        [--planner astar] [--permutations 2000] [--with-run] [--method falsify|ce-is]
 
-The domain is experiments/failure-search.toml's, the falsifier its settings (TPE and the local
-search), with the one ``--planner`` (default the straight line; ``astar``: A*). Each seed is the
-study's root seed: it changes the optimiser's and the sampler's streams and the terrains and
-missions. A stream that has not found k distinct failures within its budget counts as "> budget".
-Distinct: the study file's rule, at least ``distinct_distance`` (0.1) of a range apart in some
-parameter (offroadbench.search.estimators.distinct_failures); the rows also say on how many
+The domain is ``--study``'s (default experiments/failure-search.toml), its [search] settings, with the
+one ``--planner`` (default the straight line; ``astar``: A*). A repeat is either a root seed
+(``--seeds``: the study's root seed replaced, so the optimiser's and the sampler's streams and the
+terrains and missions change, and a fixed site with them) or a replicate (``--replicates``:
+``[search] replicate``, the same root seed: other streams and nuisance draws on the same domain, a
+fixed site kept). A stream that has not found k distinct failures within its budget counts as
+"> budget". Distinct: the study file's rule, at least ``distinct_distance`` of a range apart in
+some parameter (offroadbench.search.estimators.distinct_failures); the rows also say on how many
 different terrains the first k distinct failures lie.
 
-Default mode: a falsifier stream and a random stream per seed; prints one row per seed, the medians
-with their range, and P(failure) by plain Monte Carlo from the random streams (all seeds pooled).
+Default mode: a falsifier stream and a random stream per repeat; prints one row per repeat, the
+medians with their range, and P(failure) by plain Monte Carlo from the random streams (pooled).
 
-``--mc-run RUN_DIR`` (the ratio mode): the random baseline is the stored ``random`` stream of a
-finished search of the same domain (the committed study's Monte Carlo reference, the group of
-``--planner``): nominal draws are independent, so ``--permutations`` random orders of that pool are
-draws of what a random stream needs to its k-th distinct failure (without replacement from a finite
-pool: a pool several times the trials needed keeps this close; with few failures in the pool it
-pushes the k-th toward the pool's end). Two model baselines beside it: the negative binomial at the
-pool's P(failure) (trials to the k-th failure, distinctness ignored: a bound in random sampling's
-favour) and simulated random streams (nominal parameter draws failing with that probability
-independently of the parameters, distinctness counted). The falsifier runs for every
-``--seeds`` (``--with-run`` adds the run's own falsifier stream of that planner as one more seed).
-Prints the falsifier's median and range over seeds, the random baseline's median and 10-90 % range
-over orders, and their ratio.
+``--mc-run RUN_DIR`` (the ratio modes): the baseline is the stored ``random`` stream of a finished
+search of the same domain (the committed study's Monte Carlo reference, the group of ``--planner``).
 
-``--smoke``: one seed, budgets 8, k = 1 (checks that the benchmark runs).
+- ``--method falsify`` (default): nominal draws are independent, so ``--permutations`` random
+  orders of that pool are draws of what a random stream needs to its k-th distinct failure (without
+  replacement from a finite pool: with few failures in the pool it pushes the k-th toward the
+  pool's end). Two model baselines beside it: the negative binomial at the pool's P(failure)
+  (trials to the k-th failure, distinctness ignored: a bound in random sampling's favour) and
+  bootstrap streams (draws with replacement from the pool, parameters and outcome together, so
+  the failures keep their parameters; distinctness counted). The falsifier runs for every repeat
+  (``--with-run`` adds the run's own falsifier stream as one more). Prints the falsifier's median
+  and range over repeats, each baseline's median, and their ratios.
+- ``--method ce-is``: a cross-entropy importance-sampling stream (the study's ``ce_*`` settings and
+  ``ce_budget``) per repeat (``--with-run`` adds the run's own): its estimate, relative error and
+  interval, plain Monte Carlo's trials for that relative error at the pool's P over the trials it
+  spent (offroadbench.search.report.mc_trials_ratio), and whether its interval holds the pool's
+  P; then the median and range of the ratio over repeats and how many intervals cover.
+
+``--smoke``: one repeat, budgets 8, k = 1 (checks that the benchmark runs).
 """
 
 from __future__ import annotations
@@ -46,19 +53,36 @@ import numpy as np
 from offroadbench.config import load_toml
 from offroadbench.search import run_search, search_from_data
 from offroadbench.search.estimators import distinct_failures, mc_estimate
-from offroadbench.search.report import first_failures, search_table
+from offroadbench.search.report import estimates, first_failures, mc_trials_ratio, search_table
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def domain(seed: int, method: str, budget: int, planner: str = "straight") -> dict:
-    data = copy.deepcopy(load_toml(ROOT / "experiments" / "failure-search.toml"))
+DEFAULT_STUDY = ROOT / "experiments" / "failure-search.toml"
+
+
+def domain(repeat: tuple[str, int], method: str, budget: int | None, planner: str = "straight",
+           study: Path = DEFAULT_STUDY) -> dict:
+    """The study's search with one method and one planner; ``repeat`` = ("seed", root seed) or
+    ("replicate", r); ``budget`` None keeps the study's own (``ce_budget`` for ``ce-is``)."""
+    data = copy.deepcopy(load_toml(study))
     data.pop("grid", None)
-    data["study"].update(name=f"bench-search-{method}-{seed}", root_seed=seed)
-    data["search"].update(methods=[method], budget=budget)
+    kind, value = repeat
+    data["study"].update(name=f"bench-search-{method}-{kind}{value}")
+    if kind == "seed":
+        data["study"]["root_seed"] = value
+    else:
+        data["search"]["replicate"] = value
+    data["search"].update(methods=[method])
+    if budget is not None:
+        data["search"].update(budget=budget, ce_budget=budget)
     data["search"].pop("mc_budget", None)
-    data["planner"] = {"name": planner}
+    data["planner"] = {**data.get("planner", {}), "name": planner}
     return data
+
+
+def _repeats(args) -> list[tuple[str, int]]:
+    return [("replicate", r) for r in args.replicates] if args.replicates else [("seed", s) for s in args.seeds]
 
 
 def _first_k_terrains(cfg, stream, k: int) -> int:
@@ -74,31 +98,35 @@ def _spread(v: np.ndarray) -> str:
     return f"median {np.median(v):g}, range {v.min():g}-{v.max():g}"
 
 
-def ratio_mode(args, base: Path) -> None:
-    """The falsifier over seeds against random orders of a stored Monte Carlo pool (module docstring)."""
+def _pool(args):
+    """(pool plan, the --planner group's index, its stored finished random stream, MC estimate)."""
     pool_df, pool_plan = search_table(args.mc_run)
     groups = [i for i, g in enumerate(pool_plan.groups) if g.values.get("planner.name", args.planner) == args.planner]
     if not groups:
         raise SystemExit(f"{args.mc_run}: no group with planner.name = {args.planner}")
     grp = groups[0]
-    cfg = pool_plan.search
     pool = pool_df[(pool_df["group"] == grp) & (pool_df["method"] == "random") & pool_df["done"]].reset_index(drop=True)
-    rng = np.random.default_rng(args.seeds[0])
+    return pool_df, pool_plan, grp, pool, mc_estimate(pool["failed"].to_numpy())
+
+
+def ratio_mode(args, base: Path) -> None:
+    """The falsifier over repeats against random orders of a stored Monte Carlo pool (module docstring)."""
+    pool_df, pool_plan, grp, pool, est = _pool(args)
+    cfg = pool_plan.search
+    rng = np.random.default_rng(0)
     rand = []
     for _ in range(args.permutations):
         n = first_failures(cfg, pool.iloc[rng.permutation(len(pool))].reset_index(drop=True), args.k)
         rand.append(n if np.isfinite(n) else np.inf)
     rand = np.array(rand)
-    est = mc_estimate(pool["failed"].to_numpy())
     # trials to the k-th failure of independent nominal draws: k + NegBin(k, p) (distinctness only delays it)
     nb = {name: k_trials(args.k, q) for name, q in (("p", est.p), ("low", est.low), ("high", est.high))}
     print(f"random, negative binomial at the pool's P(failure): trials to the {args.k}-th failure, median "
           f"{nb['p']:g} ({nb['high']:g}-{nb['low']:g} at the interval's ends)", flush=True)
-    model = {name: model_trials(cfg, args.k, q, args.permutations, rng) for name, q in
-             (("p", est.p), ("low", est.low), ("high", est.high))}
-    print(f"random, simulated nominal draws failing with the pool's P(failure) independently of the parameters: "
-          f"trials to {args.k} distinct failures, median {model['p']:g} ({model['high']:g}-{model['low']:g} at the "
-          "interval's ends)", flush=True)
+    boot = bootstrap_trials(cfg, pool, args.k, args.permutations, rng)
+    print(f"random, bootstrap streams (draws with replacement from the pool, parameters and outcome together): "
+          f"trials to {args.k} distinct failures, median {np.median(boot):g}, 10-90 % "
+          f"{np.quantile(boot, 0.1):g}-{np.quantile(boot, 0.9):g}", flush=True)
     print(f"random ({args.planner}, {len(pool)} stored nominal trials, {est.failures} failures, P = {est.p:.4f}, "
           f"95 % CI {est.low:.4f}-{est.high:.4f}): trials to {args.k} distinct failures over {args.permutations} orders: "
           f"median {np.median(rand):g}, 10-90 % {np.quantile(rand, 0.1):g}-{np.quantile(rand, 0.9):g}, "
@@ -106,11 +134,12 @@ def ratio_mode(args, base: Path) -> None:
     fals = []
     runs = [(f"run {args.mc_run}", pool_df[(pool_df["group"] == grp) & (pool_df["method"] == "falsify")])] \
         if args.with_run else []
-    for seed in args.seeds:
-        plan = search_from_data(domain(seed, "falsify", args.falsify_budget, args.planner), where=f"bench seed {seed}")
-        out = base / f"falsify-{args.planner}-{seed}"
+    for rep in _repeats(args):
+        plan = search_from_data(domain(rep, "falsify", args.falsify_budget, args.planner, args.study),
+                                where=f"bench {rep[0]} {rep[1]}")
+        out = base / f"falsify-{args.planner}-{rep[0]}{rep[1]}"
         run_search(plan, out, executor="local", workers=args.workers)
-        runs.append((f"seed {seed}", search_table(out)[0]))
+        runs.append((f"{rep[0]} {rep[1]}", search_table(out)[0]))
     for name, df in runs:
         n = first_failures(cfg, df, args.k)
         fals.append(n if np.isfinite(n) else np.inf)
@@ -119,31 +148,58 @@ def ratio_mode(args, base: Path) -> None:
               f"{'> ' + str(len(done)) if not np.isfinite(n) else int(n)}, on {_first_k_terrains(cfg, df, args.k)} "
               "terrain(s)", flush=True)
     fals = np.array(fals)
-    print(f"falsify ({args.planner}): trials to {args.k} distinct failures over {len(fals)} seeds: {_spread(fals)}")
+    print(f"falsify ({args.planner}): trials to {args.k} distinct failures over {len(fals)} repeats: {_spread(fals)}")
     f_med = np.median(fals)
-    print(f"ratio, random orders of the pool / falsify median: {np.median(rand) / f_med:.1f}x (over the falsifier's "
-          f"range: {np.median(rand) / fals.max():.1f}x-{np.median(rand) / fals.min():.1f}x)")
-    for name, r in (("negative binomial", nb), ("simulated nominal draws", model)):
-        print(f"ratio, {name} / falsify median: {r['p'] / f_med:.1f}x (over the falsifier's range: "
-              f"{r['p'] / fals.max():.1f}x-{r['p'] / fals.min():.1f}x; at the P interval's ends: "
-              f"{r['high'] / f_med:.1f}x-{r['low'] / f_med:.1f}x)")
+    for name, med in (("random orders of the pool", np.median(rand)), ("bootstrap streams", np.median(boot)),
+                      ("negative binomial", nb["p"])):
+        print(f"ratio, {name} / falsify median: {med / f_med:.1f}x (over the falsifier's range: "
+              f"{med / fals.max():.1f}x-{med / fals.min():.1f}x)")
 
 
-def model_trials(cfg, k: int, p: float, runs: int, rng: np.random.Generator) -> float:
-    """Median trials to k distinct failures of simulated random streams: nominal parameter draws
-    (the search's nominal, through its standard-normal map), each failing with probability p
-    independently of its parameters (the study's rule of distinctness applied)."""
-    if not 0 < p < 1:
-        return float("inf")
-    n = int(50 * k / p)
-    out = []
-    for _ in range(runs):
-        failed = rng.random(n) < p
-        x = cfg.from_z(rng.standard_normal((int(failed.sum()), cfg.dim)))
-        counts = distinct_failures(cfg.unit(x), np.ones(len(x), bool), cfg.distinct_distance)
-        hit = np.nonzero(counts >= k)[0]
-        out.append(np.nonzero(failed)[0][hit[0]] + 1 if len(hit) else np.inf)
-    return float(np.median(out))
+def is_mode(args, base: Path) -> None:
+    """Cross-entropy importance sampling over repeats against the stored Monte Carlo pool (module docstring)."""
+    pool_df, pool_plan, grp, pool, mc = _pool(args)
+    print(f"Monte Carlo reference ({args.planner}): P = {mc.p:.4f} ({mc.failures}/{mc.n}; 95 % CI "
+          f"{mc.low:.4f}-{mc.high:.4f}; rel. error {mc.rel_error:.3f})", flush=True)
+    runs = [(f"run {args.mc_run}", pool_df[pool_df["group"] == grp], pool_plan.search)] if args.with_run else []
+    for rep in _repeats(args):
+        plan = search_from_data(domain(rep, "ce-is", args.ce_budget, args.planner, args.study),
+                                where=f"bench {rep[0]} {rep[1]}")
+        out = base / f"ce-is-{args.planner}-{rep[0]}{rep[1]}"
+        run_search(plan, out, executor="local", workers=args.workers)
+        runs.append((f"{rep[0]} {rep[1]}", search_table(out)[0], plan.search))
+    ratios, covered = [], 0
+    for name, df, cfg in runs:
+        groups = sorted(df.loc[df["method"] == "ce-is", "group"].unique())
+        e = estimates(df[df["group"] == groups[0]], cfg)[(groups[0], "ce-is")]
+        r = mc_trials_ratio(mc, e)
+        ratios.append(r)
+        covered += bool(e.covers(mc.p))
+        print(f"ce-is {name}: P = {e.p:.4f} ({e.failures} failures in its {e.n} final draws, {e.trials} trials), "
+              f"95 % interval {e.low:.4f}-{e.high:.4f}, rel. error {e.rel_error:.3f}; MC trials for that rel. error / "
+              f"trials: {r:.2f}x; covers MC: {'yes' if e.covers(mc.p) else 'NO'}", flush=True)
+    ratios = np.array(ratios)
+    print(f"ce-is ({args.planner}) over {len(ratios)} repeats: MC trials for its rel. error / its trials: "
+          f"{_spread(ratios)}; {covered} of {len(ratios)} intervals hold the Monte Carlo P")
+
+
+def bootstrap_trials(cfg, pool, k: int, runs: int, rng: np.random.Generator) -> np.ndarray:
+    """Trials to k distinct failures of ``runs`` bootstrap streams: draws with replacement from the
+    stored nominal ``pool`` (parameters and outcome together; the study's rule of distinctness)."""
+    unit = cfg.unit(pool[list(cfg.keys)].to_numpy(dtype=float))
+    failed = pool["failed"].to_numpy(dtype=bool)
+    if not failed.any():
+        return np.full(runs, np.inf)
+    p = failed.mean()
+    n = int(min(200_000, 40 * k / p))
+    out = np.empty(runs)
+    for i in range(runs):
+        idx = rng.integers(0, len(pool), n)
+        hits = np.nonzero(failed[idx])[0]
+        counts = distinct_failures(unit[idx[hits]], np.ones(len(hits), bool), cfg.distinct_distance)
+        reach = np.nonzero(counts >= k)[0]
+        out[i] = hits[reach[0]] + 1 if len(reach) else np.inf
+    return out
 
 
 def k_trials(k: int, p: float) -> float:
@@ -155,31 +211,37 @@ def k_trials(k: int, p: float) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--study", type=Path, default=DEFAULT_STUDY, help="the search study file (default: %(default)s)")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="repeats as root seeds")
+    ap.add_argument("--replicates", type=int, nargs="+", help="repeats as [search] replicate values (the root seed kept)")
     ap.add_argument("--k", type=int, default=10)
     ap.add_argument("--falsify-budget", type=int, default=64)
     ap.add_argument("--random-budget", type=int, default=320)
+    ap.add_argument("--ce-budget", type=int, default=None, help="--method ce-is: trials per stream (default: the study's)")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--planner", default="straight", help="straight (default) or astar")
     ap.add_argument("--keep", help="keep the run directories here (default: a temporary folder)")
-    ap.add_argument("--mc-run", help="ratio mode: a finished search's run directory whose random stream is the baseline")
+    ap.add_argument("--mc-run", help="ratio modes: a finished search's run directory whose random stream is the baseline")
+    ap.add_argument("--method", choices=("falsify", "ce-is"), default="falsify", help="ratio modes: what to repeat")
     ap.add_argument("--permutations", type=int, default=2000, help="ratio mode: random orders of the stored pool")
-    ap.add_argument("--with-run", action="store_true", help="ratio mode: count the run's own falsifier stream as a seed")
+    ap.add_argument("--with-run", action="store_true", help="ratio modes: count the run's own stream as a repeat")
     ap.add_argument("--smoke", action="store_true")
     args = ap.parse_args()
     if args.smoke:
         args.seeds, args.k, args.falsify_budget, args.random_budget = args.seeds[:1], 1, 8, 8
+        args.replicates = args.replicates[:1] if args.replicates else None
+        args.ce_budget, args.permutations = 16, min(args.permutations, 50)
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bench-search-"))
     if args.mc_run:
-        ratio_mode(args, base)
+        (is_mode if args.method == "ce-is" else ratio_mode)(args, base)
         return
     found = {"falsify": [], "random": []}
     nominal_failed = []
-    for seed in args.seeds:
+    for rep in _repeats(args):
         row = []
         for method, budget in (("falsify", args.falsify_budget), ("random", args.random_budget)):
-            plan = search_from_data(domain(seed, method, budget, args.planner), where=f"bench seed {seed}")
-            out = base / f"{method}-{seed}"
+            plan = search_from_data(domain(rep, method, budget, args.planner, args.study), where=f"bench {rep[0]} {rep[1]}")
+            out = base / f"{method}-{rep[0]}{rep[1]}"
             t0 = time.perf_counter()
             run_search(plan, out, executor="local", workers=args.workers)
             df, _ = search_table(out)
@@ -190,13 +252,18 @@ def main() -> None:
             row.append(f"{method}: {int(df['failed'].sum())} failures in {len(df)} trials, k-th distinct at "
                        f"{'> ' + str(budget) if not np.isfinite(n) else int(n)} on "
                        f"{_first_k_terrains(plan.search, df, args.k)} terrain(s) ({time.perf_counter() - t0:.0f} s)")
-        print(f"seed {seed}: " + "; ".join(row), flush=True)
+        print(f"{rep[0]} {rep[1]}: " + "; ".join(row), flush=True)
     for method, values in found.items():
         v = np.array(values, dtype=float)
         print(f"{method}: trials to {args.k} distinct failures, median {np.median(v):g} (range {v.min():g}-{v.max():g})")
     est = mc_estimate(nominal_failed)
     print(f"P(failure), nominal sampling pooled: {est.p:.4f} ({est.failures}/{est.n}; 95 % CI {est.low:.4f}-{est.high:.4f})")
     print(f"run directories: {base}")
+    if args.smoke:  # the ratio modes too, against this run's own random stream as the pool
+        rep = _repeats(args)[0]
+        args.mc_run = str(base / f"random-{rep[0]}{rep[1]}")
+        ratio_mode(args, base / "ratio")
+        is_mode(args, base / "is")
 
 
 if __name__ == "__main__":

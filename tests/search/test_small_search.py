@@ -84,3 +84,5 @@ def test_the_search_benchmark_runs_in_its_smoke_mode(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     assert "falsify: trials to 1 distinct failures" in out.stdout
     assert "P(failure), nominal sampling pooled" in out.stdout
+    assert "ratio, bootstrap streams / falsify median" in out.stdout  # the ratio mode against that pool
+    assert "intervals hold the Monte Carlo P" in out.stdout  # and the importance-sampling repeats
