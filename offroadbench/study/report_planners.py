@@ -110,12 +110,15 @@ _ARMS = {"band_limited": ("Aliasing: band-limited against aliased W-M surface",
                           "whether removing the W-M terms above the grid's Nyquist frequency changes success on the "
                           "same missions"),
          "map_noise_m": ("Map error: degraded against perfect planner map",
-                         "whether planning on a map with height error changes success on the same missions")}
+                         "whether planning on a map with height error changes success on the same missions"),
+         "sensor": ("Sensing: the mast sensor against the oracle (true map and pose)",
+                    "whether planning through the mast sensor (a map built from its returns, a drifting believed "
+                    "pose) instead of the true map and pose changes success on the same missions")}
 
 
 def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: str, level: str | None,
                   strata: Sequence[str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
-    """Paired tests of the two values of each arm axis (aliasing, map error) within every other stratum."""
+    """Paired tests of the two values of each arm axis (aliasing, map error, sensing) within every other stratum."""
     from offroadbench.study import stress
 
     lines: list[str] = []

@@ -230,6 +230,29 @@ def test_report_with_a_map_error_axis_and_a_band_limited_axis(tmp_path):
     assert {f"planner_success_{i}.png" for i in range(4)} <= set(rep.figures)
 
 
+def fake_sensed_trials(prepared, settings):
+    """As fake_planner_trials, but planning through the mast sensor tolerates less than the oracle."""
+    perception = settings.planner.perception
+    cut = 0.5 if perception is not None and perception.sensor == "mast" else 0.0
+    tolerance = {"straight": 1.2, "astar": 2.0}[settings.planner.name] - cut
+    for row in fake_planner_trials(prepared, settings):
+        ok = row["rms_vertical_accel_m_s2"] < tolerance
+        yield {**row, "success": ok, "failure_reason": "" if ok else "stuck"}
+
+
+def test_report_tests_the_sensor_arm_on_the_same_missions(tmp_path):
+    data = {**STUDY, "grid": {"planner.name": ["straight", "astar"], "recipe.layers.base.D_high": [2.9],
+                              "planner.sensor": ["oracle", "mast"]}}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path, executor="inline", trial_fn=fake_sensed_trials)
+    rep = build_report(tmp_path)
+    arms = rep.tables["sensor_tests.csv"]
+    assert set(arms["planner"]) == {"straight", "astar"} and (arms["sensor"] == "oracle vs mast").all()
+    # the oracle (treatment) succeeds at least as often as the sensor (control) on every stratum
+    assert (arms["diff_pct"] >= 0).all() and (arms["diff_pct"] > 0).any()
+    assert "### Sensing: the mast sensor against the oracle" in rep.markdown
+
+
 def test_band_limited_arm_drives_the_aliased_arms_missions_and_the_plan_is_computed(tmp_path):
     data = {**STUDY, "study": {**STUDY["study"], "terrains_per_cell": 3, "missions_per_terrain": 3,
                                "missions_from": {"recipe.layers.base.wm.band_limited": False}},
