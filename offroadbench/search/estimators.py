@@ -18,8 +18,11 @@ of every stage so far, 0), and refits mu and sd to the elite points of every sta
 cross-entropy-optimal Gaussian is the weighted moment match (de Boer et al. 2005, Eq. 37-38),
 and pooling the stages is the same program on more draws (each stage's weighted elite sum
 estimates the same cross-entropy objective at a given level, so their union does too; this
-project's variant, which keeps a noisy margin from steering the proposal on a handful of elites). Adaptation stops at the
-first stage whose level reaches 0 (at least rho of the draws so far failed) or after ``max_stages``. The rest
+project's variant, which keeps a noisy margin from steering the proposal on a handful of elites;
+``pool_weights = "mixture"`` weights every pooled draw by the nominal over the stages' mixture
+instead, :func:`mixture_log_weight`, which keeps a wide first stage's few heavy elites from
+fixing the proposal). Adaptation stops at the first stage, from the ``min_stages``-th on, whose
+level reaches 0 (at least rho of the draws so far failed) or after ``max_stages``. The rest
 of the budget is drawn from the *defensive mixture* q = alpha phi + (1 - alpha) q_T
 (Hesterberg 1995; Owen 2013, Ch. 9, mixture importance sampling), whose weights are bounded by 1/alpha, and
 
@@ -68,7 +71,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy import special, stats
 
-__all__ = ["Estimate", "GaussianProposal", "ce_update", "ce_update_pooled", "ce_adapt", "initial_proposal", "mc_estimate", "is_estimate", "ce_is",
+__all__ = ["Estimate", "GaussianProposal", "POOL_WEIGHTS", "mixture_log_weight", "ce_update", "ce_update_pooled", "ce_adapt", "initial_proposal", "mc_estimate", "is_estimate", "ce_is",
            "CEResult", "trials_for_rel_error", "distinct_failures", "best_is_gain", "binned_failure_rate",
            "Z_BIN_EDGES"]
 
@@ -211,26 +214,55 @@ def initial_proposal(d: int, initial_sd: float = 1.0) -> GaussianProposal:
     return GaussianProposal((0.0,) * d, (float(initial_sd),) * d, 0.0)
 
 
+#: how :func:`ce_adapt` weights the pooled draws of its stages: each by the likelihood ratio of the
+#: proposal it came from (``own``), or every draw by the nominal over the stages' mixture (``mixture``)
+POOL_WEIGHTS = ("own", "mixture")
+
+
+def mixture_log_weight(z: np.ndarray, proposals: Sequence[GaussianProposal], sizes: Sequence[int]) -> np.ndarray:
+    """log(phi(z) / sum_s (n_s / N) q_s(z)) of each row of ``z``: the likelihood ratio of the nominal
+    against the mixture of ``proposals`` in the proportions of their draws ``sizes`` (the balance
+    heuristic of Veach & Guibas 1995, Eq. 7-8; deterministic-mixture weights, Owen & Zhou 2000,
+    Sec. 3; the reweighting of adaptive multiple importance sampling, Cornuet et al. 2012, Sec. 2)."""
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    total = float(sum(sizes))
+    # log q_s = log phi - log(phi / q_s): each proposal's own log ratio gives its density
+    log_ratios = np.stack([p.log_weight(z) for p in proposals])
+    log_mix_over_phi = np.logaddexp.reduce(-log_ratios + np.log(np.asarray(sizes, dtype=float) / total)[:, None], axis=0)
+    return -log_mix_over_phi
+
+
 def ce_adapt(stages: Sequence[tuple[np.ndarray, np.ndarray]], d: int, *, quantile: float, min_sd: float,
-             max_stages: int, initial_sd: float = 1.0, min_failures: int = 0) -> tuple[GaussianProposal, bool]:
+             max_stages: int, initial_sd: float = 1.0, min_failures: int = 0, min_stages: int = 1,
+             pool_weights: str = "own") -> tuple[GaussianProposal, bool]:
     """The proposal after the adaptive stages ``stages`` ((z, margin) of each, in order, stage t
     drawn from the proposal this function gives for stages[:t]; stage 0 from
-    :func:`initial_proposal`). Each update pools the elites of every stage so far, each weighted
-    by the likelihood ratio of the proposal it was drawn from (module docstring). Returns
-    (proposal, adapted): ``adapted`` once a level reached 0 or ``max_stages`` stages ran; the
+    :func:`initial_proposal`). Each update pools the elites of every stage so far, weighted by the
+    likelihood ratio of the proposal each was drawn from (``pool_weights = "own"``, module
+    docstring) or by that of the stages' mixture (``"mixture"``, :func:`mixture_log_weight`: a draw
+    of a wide first stage no longer outweighs the later stages' draws near the failures, where the
+    later proposals put their mass; each stage's weighted elite sum stays an unbiased estimate of
+    the same cross-entropy objective in either case). Returns (proposal, adapted): ``adapted`` once
+    at least ``min_stages`` stages ran and a level reached 0, or ``max_stages`` stages ran; the
     proposal is then the final one (without the defensive mixture, which the caller adds)."""
+    if pool_weights not in POOL_WEIGHTS:
+        raise ValueError(f"pool_weights = {pool_weights!r}; allowed: {', '.join(POOL_WEIGHTS)}")
     prop = initial_proposal(d, initial_sd)
     zs: list[np.ndarray] = []
     ms: list[np.ndarray] = []
     lws: list[np.ndarray] = []
+    props: list[GaussianProposal] = []
     for t, (z, m) in enumerate(stages):
         z = np.atleast_2d(np.asarray(z, dtype=float))
         zs.append(z)
         ms.append(np.asarray(m, dtype=float))
+        props.append(prop)
         lws.append(prop.log_weight(z))
-        prop, gamma = ce_update_pooled(np.vstack(zs), np.concatenate(ms), np.concatenate(lws), quantile, min_sd,
-                                       min_failures)
-        if gamma <= 0 or t + 1 >= max_stages:
+        pooled = np.vstack(zs)
+        lw = (mixture_log_weight(pooled, props, [len(x) for x in zs]) if pool_weights == "mixture"
+              else np.concatenate(lws))
+        prop, gamma = ce_update_pooled(pooled, np.concatenate(ms), lw, quantile, min_sd, min_failures)
+        if (gamma <= 0 and t + 1 >= min_stages) or t + 1 >= max_stages:
             return prop, True
     return prop, False
 
@@ -268,7 +300,8 @@ class CEResult:
 
 def ce_is(margin_fn: Callable[[np.ndarray], np.ndarray], d: int, budget: int, rng: np.random.Generator, *,
           stage_size: int = 100, quantile: float = 0.1, max_stages: int = 6, defensive: float = 0.1,
-          min_sd: float = 1.0, initial_sd: float = 1.0, min_failures: int = 0, level: float = 0.95) -> CEResult:
+          min_sd: float = 1.0, initial_sd: float = 1.0, min_failures: int = 0, min_stages: int = 1,
+          pool_weights: str = "own", level: float = 0.95) -> CEResult:
     """Cross-entropy importance sampling of P(margin_fn(Z) <= 0), Z ~ N(0, I_d), on ``budget``
     evaluations of ``margin_fn`` (vectorised: (n, d) -> (n,)). The in-memory twin of what
     ``search run`` does with method ``ce-is`` (same :func:`ce_adapt`, same estimator)."""
@@ -282,7 +315,8 @@ def ce_is(margin_fn: Callable[[np.ndarray], np.ndarray], d: int, budget: int, rn
         stages.append((z, margin_fn(z)))
         used += stage_size
         prop, adapted = ce_adapt(stages, d, quantile=quantile, min_sd=min_sd, max_stages=max_stages,
-                                 initial_sd=initial_sd, min_failures=min_failures)
+                                 initial_sd=initial_sd, min_failures=min_failures, min_stages=min_stages,
+                                 pool_weights=pool_weights)
     final = prop.with_defensive(defensive)
     props.append(final)
     z = final.sample(budget - used, rng)

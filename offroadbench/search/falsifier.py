@@ -117,7 +117,8 @@ def _ranked_last(margin: np.ndarray) -> np.ndarray:
 def _ce_state(cfg: SearchConfig, history: list[Batch]) -> tuple[GaussianProposal, bool]:
     stages = [(b.z, _ranked_last(b.margin)) for b in history if b.stage == "ce-stage"]
     return ce_adapt(stages, cfg.dim, quantile=cfg.ce_quantile, min_sd=cfg.ce_min_sd, max_stages=cfg.ce_max_stages,
-                    initial_sd=cfg.ce_initial_sd, min_failures=cfg.ce_min_failures)
+                    initial_sd=cfg.ce_initial_sd, min_failures=cfg.ce_min_failures, min_stages=cfg.ce_min_stages,
+                    pool_weights=cfg.ce_pool_weights)
 
 
 def propose(method: str, stage: str, n: int, cfg: SearchConfig, seed: int, batch: int, history: list[Batch]) -> Proposal:

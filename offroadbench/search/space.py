@@ -41,6 +41,7 @@ from scipy import special
 
 from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
+from offroadbench.search.estimators import POOL_WEIGHTS
 
 __all__ = ["METHODS", "SAMPLERS", "NOMINALS", "SearchParam", "SearchConfig", "search_from_dict"]
 
@@ -201,6 +202,15 @@ class SearchConfig:
     margin of a passing trial says little about how near it came to failing, the rho-quantile's
     passing elites would pull the proposal back to the nominal's centre (their likelihood ratios
     are the largest); a few failures are a better guide."""
+    ce_min_stages: int = 1
+    """Cross-entropy: adaptive stages at least, even when a level reached 0 earlier (2: the second
+    stage draws from the proposal fitted to the first's failures, and the fit pools both)."""
+    ce_pool_weights: str = "own"
+    """Cross-entropy: how the pooled draws of the adaptive stages are weighted in each fit: ``own``
+    (each by the likelihood ratio of the proposal it came from) or ``mixture`` (each by the nominal
+    over the mixture of the stages' proposals: the balance heuristic, Veach & Guibas 1995; Owen &
+    Zhou 2000; offroadbench.search.estimators.mixture_log_weight). With a wide first stage
+    (``ce_initial_sd`` > 1) ``mixture`` keeps its few heavy elites from fixing the proposal."""
     ce_budget: int | None = None
     """Trials of the ``ce-is`` stream per grid cell (adaptive stages included), if not ``budget``."""
     ce_min_sd: float = 1.0
@@ -257,6 +267,8 @@ class SearchConfig:
         check_range(self, "ce_min_sd", self.ce_min_sd, lo=0, lo_open=True)
         check_range(self, "ce_initial_sd", self.ce_initial_sd, lo=0.5, hi=4)
         check_int(self, "ce_min_failures", self.ce_min_failures, lo=0)
+        check_int(self, "ce_min_stages", self.ce_min_stages, lo=1, hi=self.ce_max_stages)
+        check_choice(self, "ce_pool_weights", self.ce_pool_weights, POOL_WEIGHTS)
         if self.ce_budget is not None:
             check_int(self, "ce_budget", self.ce_budget, lo=1)
         check_range(self, "level", self.level, lo=0, hi=1, lo_open=True, hi_open=True)
