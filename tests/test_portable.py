@@ -32,6 +32,20 @@ BASELINE_ENV = {
     "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX512F,-AVX512DQ,-AVX512BW,-AVX512VL,-AVX512CD",
 }
 
+#: the maps and missions of the slices below: 12.8 m maps, 6 m missions 1 m from the edge
+SMALL_MAPS = """
+[recipe_overrides]
+"grid.rows" = 257
+"grid.cols" = 257
+
+[roughness]
+border_m = 1.0
+
+[missions]
+length_m = 6.0
+border_m = 1.0
+"""
+
 #: a short study slice: two roughness levels, two planners (one plans on the class map), 2 terrains
 #: per cell, 3 missions per terrain = 24 trials on 12.8 m maps
 SLICE = """
@@ -45,18 +59,7 @@ missions_per_terrain = 3
 [grid]
 "recipe.layers.base.D_high" = [2.45, 2.9]
 "planner.name" = ["straight", "astar"]
-
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
+""" + SMALL_MAPS
 
 #: a soft-soil slice: the terramechanics tyre model's tables (sin, cos, exp, acos, pow and the
 #: quadrature nodes) on lunar regolith in lunar gravity, and its per-step soil contact; 2 terrains x 2
@@ -106,18 +109,7 @@ missions_per_terrain = 2
 
 [planner]
 sensor = "mast"
-
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
+""" + SMALL_MAPS
 
 #: run in a subprocess (or in-process): drive the slice's tasks with the missions in a given order
 #: (a fourth argument ``python``: mppi's headings through its Python pass, not numba's)
