@@ -208,7 +208,8 @@ def build_search_report(run_dir: str | Path):
             f"failures, {cfg.explore_slots} of every {cfg.batch_size} proposals on fresh terrains"
             if cfg.local_terrain == "same" else
             f"; the falsifier's local search moves its failures by {cfg.local_step:g} of a range, "
-            f"{cfg.batch_size - cfg.explore_slots} of every {cfg.batch_size} proposals, every proposal on a fresh terrain")
+            f"{cfg.batch_size - cfg.explore_slots} of every {cfg.batch_size} proposals"
+            + ("" if cfg.fix_terrain else ", every proposal on a fresh terrain"))
            if cfg.local_step else ""),
         f"- distinct failures: at least {cfg.distinct_distance:g} of a range apart in some parameter "
         "(`terrains failed`: how many different terrains the failures lie on)",

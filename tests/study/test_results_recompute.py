@@ -460,6 +460,28 @@ def _failure_search_first_k(folder: Path) -> list[float]:
     return out
 
 
+def _site_boundary_reference(group: int) -> Callable[[Path], list[float]]:
+    """failure-search-site: P(failure) from the friction boundary (every trial below the lowest passing
+    friction failed, every one above the highest failing one passed; the band between at its failure
+    fraction), with the Clopper-Pearson interval of that fraction carried through."""
+    def compute(folder: Path) -> list[float]:
+        from scipy import stats
+
+        from offroadbench.search import load_search
+
+        cfg = load_search(folder / "search.toml").search
+        df = pd.read_csv(folder / "trials.csv")
+        t = df[(df["group"] == group) & df["done"]]
+        f, failed = t["sim.terrain_friction"].to_numpy(float), t["failed"].to_numpy(bool)
+        lo, hi = f[~failed].min(), f[failed].max()
+        band = (f >= lo) & (f <= hi)
+        k, n = int(failed[band].sum()), int(band.sum())
+        f_lo, f_hi = cfg.params[0].cdf(np.array([lo, hi]))
+        frac = [k / n, stats.beta.ppf(0.025, k, n - k + 1), stats.beta.ppf(0.975, k + 1, n - k)]
+        return [float(f_lo + (f_hi - f_lo) * q) for q in frac]
+    return compute
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
            rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
@@ -469,6 +491,14 @@ SAMPLES = [
            _failure_search_estimates("astar", 0)),
     Sample("failure-search P(failure), straight", "failure-search", rf"\| straight \| {_FS_ROW}",
            _failure_search_estimates("straight", 1)),
+    Sample("failure-search-site P(failure), A*", "failure-search-site", rf"\| A\* \| {_FS_ROW}",
+           _failure_search_estimates("astar", 0)),
+    Sample("failure-search-site P(failure), straight", "failure-search-site", rf"\| straight \| {_FS_ROW}",
+           _failure_search_estimates("straight", 1)),
+    Sample("failure-search-site boundary reference", "failure-search-site",
+           rf"for A\* \*\*{_NUM}\*\* \(the band's 22 of 28 with its\s+Clopper-Pearson interval: {_NUM}-{_NUM}\), "
+           rf"for the line \*\*{_NUM}\*\* \({_NUM}-{_NUM}\)",
+           lambda f: _site_boundary_reference(0)(f) + _site_boundary_reference(1)(f)),
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
            rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
            rf"\(on {_NUM}\)", _failure_search_first_k),
