@@ -22,18 +22,8 @@ def flat_map():
     return Heightmap.flat(21, 31, 0.1, z_m=1.5)
 
 
-#: A study small enough for executor and crash tests: two D values on 257^2 paper maps, 6 m missions.
-TINY_STUDY_TOML = """
-[study]
-name = "{name}"
-recipe = "paper-d2.45"
-root_seed = {root_seed}
-terrains_per_cell = {terrains}
-missions_per_terrain = {missions}
-
-[grid]
-"recipe.layers.base.D_high" = [2.3, 2.6]
-
+#: the maps and missions of the small test studies: 257^2 paper maps (12.8 m), 6 m missions 1 m from the edge
+SMALL_MAPS_TOML = """
 [recipe_overrides]
 "grid.rows" = 257
 "grid.cols" = 257
@@ -45,6 +35,19 @@ border_m = 1.0
 length_m = 6.0
 border_m = 1.0
 """
+
+#: A study small enough for executor and crash tests: two D values on 257^2 paper maps, 6 m missions.
+TINY_STUDY_TOML = """
+[study]
+name = "{name}"
+recipe = "paper-d2.45"
+root_seed = {root_seed}
+terrains_per_cell = {terrains}
+missions_per_terrain = {missions}
+
+[grid]
+"recipe.layers.base.D_high" = [2.3, 2.6]
+""" + SMALL_MAPS_TOML
 
 
 @pytest.fixture(scope="session")

@@ -25,26 +25,14 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SMALL_MAPS_TOML as SMALL_MAPS
+
 #: the environment of an older x86-64 CPU (see the module docstring)
 BASELINE_ENV = {
     "NPY_DISABLE_CPU_FEATURES": "X86_V3 X86_V4 AVX512_ICL AVX512_SPR",
     "OPENBLAS_CORETYPE": "Nehalem",
     "GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX512F,-AVX512DQ,-AVX512BW,-AVX512VL,-AVX512CD",
 }
-
-#: the maps and missions of the slices below: 12.8 m maps, 6 m missions 1 m from the edge
-SMALL_MAPS = """
-[recipe_overrides]
-"grid.rows" = 257
-"grid.cols" = 257
-
-[roughness]
-border_m = 1.0
-
-[missions]
-length_m = 6.0
-border_m = 1.0
-"""
 
 #: a short study slice: two roughness levels, two planners (one plans on the class map), 2 terrains
 #: per cell, 3 missions per terrain = 24 trials on 12.8 m maps
