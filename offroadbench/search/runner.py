@@ -151,17 +151,26 @@ def margin_of(plan: SearchPlan, group: CellPlan, values: Mapping[str, Any], row:
 
 
 def stream_trials(store: Store, grp: int, method: str) -> list[dict[str, Any]]:
-    """The stored proposals of one stream in order, each with its trial row (None if not run yet)."""
+    """The stored proposals of one stream in order, each with its trial row (None if not run yet or
+    faulted) and its fault's reason (None unless it is stored as a fault)."""
     cur = store.con.execute(
-        "SELECT s.cell, s.batch, s.slot, s.stage, s.x, s.z, s.log_w, t.row, t.terrain_seed, t.mission_seed "
+        "SELECT s.cell, s.batch, s.slot, s.stage, s.x, s.z, s.log_w, t.row, "
+        "COALESCE(t.terrain_seed, f.terrain_seed), COALESCE(t.mission_seed, f.mission_seed), f.reason "
         "FROM search_trials s LEFT JOIN trials t ON t.cell = s.cell AND t.terrain = 0 AND t.mission = 0 "
+        "LEFT JOIN faults f ON f.cell = s.cell AND f.terrain = 0 AND f.mission = 0 "
         "WHERE s.grp = ? AND s.method = ? ORDER BY s.batch, s.slot", (grp, method))
     out = []
-    for cell, batch, slot, stage, x, z, log_w, row, tseed, mseed in cur.fetchall():
+    for cell, batch, slot, stage, x, z, log_w, row, tseed, mseed, fault in cur.fetchall():
         out.append({"cell": cell, "batch": batch, "slot": slot, "stage": stage, "x": json.loads(x), "z": json.loads(z),
                     "log_w": float("nan") if log_w is None else log_w,
-                    "row": None if row is None else json.loads(row), "terrain_seed": tseed, "mission_seed": mseed})
+                    "row": None if row is None else json.loads(row), "terrain_seed": tseed, "mission_seed": mseed,
+                    "fault": fault})
     return out
+
+
+def _ended(entry: Mapping[str, Any]) -> bool:
+    """Whether a stored proposal is done: its trial stored, as a row or as a fault."""
+    return entry["row"] is not None or entry.get("fault") is not None
 
 
 def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) -> tuple[list[Batch], list[list[dict]]]:
@@ -172,10 +181,12 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
     ordered = [batches[b] for b in sorted(batches)]
     done = []
     for entries in ordered:
-        if any(e["row"] is None for e in entries):
+        if not all(_ended(e) for e in entries):
             break
         x = np.array([e["x"] for e in entries], dtype=float)
-        m = np.array([margin_of(plan, group, plan.search.values(e["x"]), e["row"]) for e in entries])
+        # a faulted trial gave no outcome: no margin (as a proposal whose terrain holds no mission)
+        m = np.array([float("nan") if e["row"] is None else margin_of(plan, group, plan.search.values(e["x"]), e["row"])
+                      for e in entries])
         seeds = tuple(None if e["terrain_seed"] is None else (int(e["terrain_seed"]), int(e["mission_seed"]))
                       for e in entries)
         done.append(Batch(entries[0]["stage"], x, np.array([e["z"] for e in entries], dtype=float), m, seeds))
@@ -205,7 +216,7 @@ def _same_seeds(seeds: tuple, entries: list[dict[str, Any]]) -> bool:
     """Whether the stored trials of a re-proposed batch drove the seeds the proposal names (where it names them)."""
     for i, e in enumerate(entries):
         chosen = seeds[i] if i < len(seeds) else None
-        if chosen is not None and e["row"] is not None and (int(e["terrain_seed"]), int(e["mission_seed"])) != chosen:
+        if chosen is not None and _ended(e) and (int(e["terrain_seed"]), int(e["mission_seed"])) != chosen:
             return False
     return True
 
@@ -253,6 +264,8 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
         if meta and meta.get("kind") != "search":
             raise InputError(f"{run_dir} holds a study, not a search; use another --out directory")
         store.init_meta(search_meta(plan, budget, source_text, version))
+        store.mark_killed_sessions()  # we hold the lock: a session still "running" was killed
+        store.ensure_faults_table()
         done, _ = store.counts()
         report(progress, done, total)
         run_id = store.start_run(executor, ex.workers, version, platform_fingerprint())
@@ -311,7 +324,7 @@ def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: C
         k0 = sum(len(h.margin) for h in history)
         tasks = []
         for i, (e, c) in enumerate(zip(entries, cells, strict=True)):
-            if e["row"] is None:
+            if not _ended(e):
                 chosen = prop.seeds[i] if i < len(prop.seeds) else None
                 tseed, mseed = _nuisance(plan, group, k0 + i, method) if chosen is None else chosen
                 tasks.append(TerrainTask(cell=c, terrain=0, terrain_seed=tseed, missions=((0, mseed),),
