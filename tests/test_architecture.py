@@ -334,3 +334,44 @@ def test_the_module_length_check_sees_a_long_module(tmp_path):
     (pkg / "sub" / "long.py").write_text("x = 1\n" * (MAX_MODULE_LINES + 1))
     (pkg / "ok.py").write_text("x = 1\n" * MAX_MODULE_LINES)
     assert _long_modules(pkg, MAX_MODULE_LINES) == [f"offroadbench/sub/long.py: {MAX_MODULE_LINES + 1} lines"]
+
+
+#: the storage package: the only place in the package that talks SQL (issue 43)
+STORE_PACKAGE = "offroadbench.study.store"
+_SQL = __import__("re").compile(r"^\s*(SELECT|INSERT|UPDATE|DELETE|CREATE|ALTER|DROP|PRAGMA|BEGIN|COMMIT|ROLLBACK)\b")
+
+
+def _sql_uses(tree: ast.AST) -> list[str]:
+    """Where ``tree`` talks SQL: imports sqlite3, calls ``execute``/``executemany``/``executescript``,
+    or holds a string that starts with an SQL statement."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import) and any(a.name == "sqlite3" for a in node.names):
+            found.append(f"line {node.lineno}: imports sqlite3")
+        elif isinstance(node, ast.ImportFrom) and node.module == "sqlite3":
+            found.append(f"line {node.lineno}: imports sqlite3")
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in (
+                "execute", "executemany", "executescript"):
+            found.append(f"line {node.lineno}: .{node.func.attr}()")
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and _SQL.match(node.value):
+            found.append(f"line {node.lineno}: SQL text {node.value.strip()[:30]!r}")
+    return found
+
+
+def test_sql_only_in_the_store_package():
+    """Every table of a run directory is read and written through the store's own functions: no
+    module outside offroadbench.study.store talks SQL (the search's table included)."""
+    offenders = [f"{m}: {what}" for m, path in _modules().items()
+                 if not (m == STORE_PACKAGE or m.startswith(STORE_PACKAGE + "."))
+                 for what in _sql_uses(ast.parse(path.read_text()))]
+    assert offenders == []
+
+
+def test_the_sql_check_sees_sql():
+    code = ("import sqlite3\n"
+            "def f(store):\n"
+            "    store.con.execute('SELECT 1')\n"
+            "    q = '''\n    CREATE TABLE IF NOT EXISTS t (a);'''\n")
+    assert {w.split(": ", 1)[1] for w in _sql_uses(ast.parse(code))} == {
+        "imports sqlite3", ".execute()", "SQL text 'SELECT 1'", "SQL text 'CREATE TABLE IF NOT EXISTS t ('"}
+    assert _sql_uses(ast.parse("x = 'Select the cells'\nprint('selects')\n")) == []

@@ -10,7 +10,7 @@ import sys
 from typing import Callable
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.execution.tasks import TerrainTask, TrialFaulted, remaining_task
+from offroadbench.study.execution.tasks import TIMEOUT_KIND, TerrainTask, TrialFaulted, remaining_task
 
 log = logging.getLogger(__name__)
 
@@ -86,7 +86,8 @@ def timeout_faults(task: TerrainTask, hung: int | None, finished: set, limit_s: 
     cell, terrain = task.cell.index, task.terrain
     if hung is None:  # the build hung: none of the task's missions can run
         reason = f"the terrain build ran longer than {limit_s:g} s, the per-trial limit{where}"
-        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason)
+        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason, TIMEOUT_KIND)
                 for k, s in task.missions if k not in finished], None
     reason = f"the trial ran longer than {limit_s:g} s, the per-trial limit{where}"
-    return [TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason)], remaining_task(task, hung)
+    return ([TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason, TIMEOUT_KIND)],
+            remaining_task(task, hung))

@@ -88,8 +88,9 @@ class LocalExecutor:
             return
         ctx = mp.get_context("fork")
         task_q = ctx.Queue()
-        for task in tasks:
-            task_q.put(task)
+        # at once, before its feeder thread exists: a stop may leave that thread blocked writing tasks
+        # to workers that are gone, and the interpreter must not wait for it at exit (issue 43)
+        task_q.cancel_join_thread()
         procs: dict = {}  # reading end of a worker's pipe -> its process
         serial = iter(range(10**9))
         by_key = {(t.cell.index, t.terrain): t for t in tasks}
@@ -150,7 +151,7 @@ class LocalExecutor:
                     return
             del running[key]
             hung = r.hung_mission()
-            log.warning("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
+            log.info("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
                         key[0], key[1], "the terrain build" if hung is None else f"mission {hung}",
                         self.trial_timeout_s)
             if reader is not None and reader in procs:
@@ -165,10 +166,12 @@ class LocalExecutor:
                 state["pending"] -= 1
             start()
 
-        for _ in range(min(self.workers, len(tasks))):
-            start()
         finished = False
         try:
+            for task in tasks:
+                task_q.put(task)
+            for _ in range(min(self.workers, len(tasks))):
+                start()
             while state["pending"]:
                 if self.trial_timeout_s is not None:
                     now = time.monotonic()
@@ -192,5 +195,4 @@ class LocalExecutor:
                     p.terminate()
                     p.join(timeout=5)
                 stop(reader)
-            task_q.cancel_join_thread()
             task_q.close()

@@ -219,6 +219,17 @@ class Store:
         self._write("INSERT OR IGNORE INTO terrains (cell, terrain, terrain_seed, stats) VALUES (?, ?, ?, ?)",
                     (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)))
 
+    @contextlib.contextmanager
+    def transaction(self):
+        """``with store.transaction() as con:`` the statements run on ``con`` commit together, or none
+        does (rolled back on any error; a full disk is an OSError naming the store)."""
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            yield self.con
+            self.con.execute("COMMIT")
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
+
     def _write(self, sql: str, params: tuple = ()) -> sqlite3.Cursor:
         """One statement in its own transaction; a full disk is an OSError naming the store."""
         try:
@@ -258,6 +269,12 @@ class Store:
                 log.warning("trial (%d, %d, %d) ran twice with different results", cell, terrain, mission)
             return False
         return True
+
+    def trial(self, cell: int, terrain: int, mission: int) -> tuple[int, int, dict[str, Any]] | None:
+        """(terrain seed, mission seed, row) of one stored trial; None if it is not stored."""
+        hit = self.con.execute("SELECT terrain_seed, mission_seed, row FROM trials WHERE cell=? AND terrain=? AND "
+                               "mission=?", (cell, terrain, mission)).fetchone()
+        return None if hit is None else (hit[0], hit[1], json.loads(hit[2]))
 
     def has_trial(self, cell: int, terrain: int, mission: int) -> bool:
         return self.con.execute("SELECT 1 FROM trials WHERE cell=? AND terrain=? AND mission=?",
