@@ -375,3 +375,42 @@ def test_the_sql_check_sees_sql():
     assert {w.split(": ", 1)[1] for w in _sql_uses(ast.parse(code))} == {
         "imports sqlite3", ".execute()", "SQL text 'SELECT 1'", "SQL text 'CREATE TABLE IF NOT EXISTS t ('"}
     assert _sql_uses(ast.parse("x = 'Select the cells'\nprint('selects')\n")) == []
+
+
+def _private_names_imported(tree: ast.AST, module: str, package: str, known: set[str]) -> list[str]:
+    """Private names (``_x``, not dunders and not submodules) that ``module`` imports from another
+    module, at any level: ``from offroadbench.a import _helper`` in ``offroadbench.b``."""
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        base = node.module or ""
+        if node.level:
+            anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+            base = ".".join([*anchor, base] if base else anchor)
+        if not base.startswith("offroadbench") or base == module:
+            continue
+        found += [f"{module} imports {base}.{a.name}" for a in node.names
+                  if a.name.startswith("_") and not a.name.startswith("__") and f"{base}.{a.name}" not in known]
+    return found
+
+
+def test_no_module_imports_another_modules_private_name():
+    """What one module lets others use is public (and exported by its package's ``__init__`` where
+    others outside the package use it); a private name is the module's own (issue 43)."""
+    mods = _modules()
+    offenders = []
+    for m, p in mods.items():
+        package = m if p.name == "__init__.py" else m.rpartition(".")[0]
+        offenders += _private_names_imported(ast.parse(p.read_text()), m, package, set(mods))
+    assert offenders == []
+
+
+def test_the_private_name_check_sees_private_names():
+    known = {"offroadbench", "offroadbench.a", "offroadbench.a._impl", "offroadbench.b"}
+    code = ("from offroadbench.a import _helper, public, __version__, _impl\n"
+            "def f():\n    from .a import _other\n")
+    assert _private_names_imported(ast.parse(code), "offroadbench.b", "offroadbench", known) == [
+        "offroadbench.b imports offroadbench.a._helper", "offroadbench.b imports offroadbench.a._other"]
+    assert _private_names_imported(ast.parse("from offroadbench.b import _x\n"), "offroadbench.b", "offroadbench",
+                                   known) == []

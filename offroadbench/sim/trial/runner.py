@@ -43,7 +43,7 @@ from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, m
 from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
-from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, _result
+from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, make_result
 from offroadbench.sim.trial.settings import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
@@ -222,7 +222,7 @@ class TrialLoop:
         """The trial's row (:class:`TrialResult`), once it has ended."""
         tel = self.telemetry()
         reason = "timeout" if self.reason is None else self.reason
-        result = _result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
+        result = make_result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
                          1.0 / self.world.sim.telemetry_rate_hz, self.goal)
         if any(map(math.isfinite, self.slips)):  # on soil: slip and sinkage over the moving samples
             moving = metrics.moving_samples(tel["cmd_v_m_s"], tel["vx_m_s"], tel["vy_m_s"])

@@ -19,7 +19,7 @@ Handle = Callable[[tuple], None]
 
 
 # ---------------------------------------------------------------------------- local processes
-def _die_with_parent(parent_pid: int) -> None:
+def die_with_parent(parent_pid: int) -> None:
     """Ask Linux to SIGKILL this process when its parent dies; exit if it already has."""
     if sys.platform.startswith("linux"):
         try:
@@ -33,14 +33,14 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(1)
 
 
-def _worker_bootstrap() -> None:
+def worker_bootstrap() -> None:
     """What every worker process does first: import pybullet without its banner."""
     from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
 
 
-def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
+def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
     """An ("error", ...) message that survives pickling, whatever the exception."""
     import pickle
 

@@ -13,7 +13,7 @@ from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
 from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, run_terrain
-from offroadbench.study.execution.common import (Handle, _die_with_parent, _error_message, _worker_bootstrap,
+from offroadbench.study.execution.common import (Handle, die_with_parent, error_message, worker_bootstrap,
                                                 check_trial_timeout, task_failure, timeout_faults)
 
 log = logging.getLogger(__name__)
@@ -22,10 +22,10 @@ log = logging.getLogger(__name__)
 def _worker(task_q, conn, trial_fn: TrialFn | None, parent_pid: int) -> None:
     """A worker process: pull tasks, send every message through its own pipe ``conn`` (a worker
     killed for a hung trial takes only its own pipe with it)."""
-    _die_with_parent(parent_pid)
+    die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the coordinator's SIGTERM handler is not the worker's
-    _worker_bootstrap()
+    worker_bootstrap()
     while True:
         task = task_q.get()
         if task is None:
@@ -38,7 +38,7 @@ def _worker(task_q, conn, trial_fn: TrialFn | None, parent_pid: int) -> None:
                     os._exit(1)
                 conn.send(msg)
         except BaseException as exc:  # report and stop: the coordinator decides
-            conn.send(_error_message(key, exc, traceback.format_exc()))
+            conn.send(error_message(key, exc, traceback.format_exc()))
             return
         conn.send(("done", key))
 
