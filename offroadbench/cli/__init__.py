@@ -11,7 +11,7 @@ import logging
 import os
 import sys
 
-from offroadbench.errors import InputError, PluginError, StudyError
+from offroadbench.errors import InputError, PluginError, StudyError, TrialFault
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config")
@@ -68,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_FAILED
     except PluginError as exc:
         sys.stderr.write(f"offroadbench: plug-in fault: {_one_line(exc)}\n")
+        return EXIT_FAILED
+    except TrialFault as exc:  # a trial outside a study (drive, checks): thrown while settling, past its limit
+        sys.stderr.write(f"offroadbench: trial fault: {_one_line(exc)}\n")
         return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("offroadbench: interrupted\n")
