@@ -155,6 +155,18 @@ def base(tmp_path_factory) -> Path:
         (b / f"study-{stem}.toml").write_text(STUDY.format(length=2.0) + f'\n[vehicle]\nname = "{stem}/vehicle.toml"\n')
         search = (Path(__file__).parents[1] / "search" / "small-search.toml").read_text()
         (b / f"search-{stem}.toml").write_text(search + f'\n[vehicle]\nname = "{stem}/vehicle.toml"\n')
+    (b / "search.toml").write_text(search)
+    # issue 44: stores that carry code or do not decode
+    row = "INSERT INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) VALUES (0, 0, 0, 1, 2, 1, '{}')"
+    for stem, sql in (("trigger", "CREATE TRIGGER t AFTER INSERT ON trials BEGIN UPDATE trials SET success = 1; END"),
+                      ("view", "CREATE VIEW v AS SELECT * FROM trials"),
+                      ("meta-not-json", "UPDATE meta SET value = '{not json' WHERE key = 'study_id'"),
+                      ("deep-row", row.format("[" * 100_000 + "]" * 100_000))):
+        _store(b / stem)
+        con = sqlite3.connect(b / stem / "study.sqlite")
+        with con:
+            con.execute(sql)
+        con.close()
     return b
 
 
@@ -270,6 +282,13 @@ CASES = [
         (f"run-urdf-{stem}", ["study", "run", f"study-{stem}.toml", "--out", "r"]),
         (f"vehicle-check-urdf-{stem}", ["vehicle", "check", f"{stem}/vehicle.toml"]),
         (f"search-urdf-{stem}", ["search", "run", f"search-{stem}.toml", "--out", "s"]))],
+    # issue 44: a store that carries code, or whose values do not decode
+    *[case for stem in ("trigger", "view", "meta-not-json", "deep-row") for case in (
+        (f"run-store-{stem}", ["study", "run", "study.toml", "--out", stem]),
+        (f"rep-store-{stem}", ["study", "report", stem]),
+        (f"sexp-store-{stem}", ["study", "export", stem]),
+        (f"search-store-{stem}", ["search", "run", "search.toml", "--out", stem]),
+        (f"search-report-store-{stem}", ["search", "report", stem]))],
     # study export / report
     ("sexp-not-a-run", ["study", "export", "adir"]),
     ("sexp-corrupt", ["study", "export", "corrupt"]),
@@ -294,6 +313,11 @@ def _check(case_id: str, res: dict) -> None:
     assert "pybullet" not in err + res["stdout"], f"{case_id}: banner"
     for key in ("added", "removed", "changed"):
         assert not res.get(key), f"{case_id}: files {key}: {res[key]}"
+    if "-store-" in case_id:  # the line names the store and what is wrong with it
+        stem = case_id.split("-store-")[1]
+        assert f"{stem}/study.sqlite: " in err, f"{case_id}: the store is not named:\n{err}"
+        assert ("corrupt study store" if stem in ("meta-not-json", "deep-row") else "which no offroadbench store has") \
+            in err, f"{case_id}:\n{err}"
     if "-urdf-" in case_id:  # the line names the model file, and the link where one is wrong
         stem = case_id.split("-urdf-")[1]
         assert f"/{stem}/husky.urdf" in err, f"{case_id}: the file is not named:\n{err}"

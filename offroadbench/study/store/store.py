@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench.errors import InputError, StudyError
+from offroadbench.study.store.integrity import TRUSTED_SCHEMA_OFF, check_store
 from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, _lock_holder_alive, _reason
 from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, _FAULTS_SQL, _SCHEMA,
                                            _SCHEMA2_COLUMNS, _check_existing, _nearly_full, remove_stale_temp_files,
@@ -98,8 +99,10 @@ class Store:
                 _check_existing(path)
         else:
             _check_existing(path)
+        check_store(path)  # data only, every value decodes (issue 44); read-only, before any write
         try:
             self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+            self.con.execute(TRUSTED_SCHEMA_OFF)
             self.con.execute("PRAGMA synchronous=NORMAL")
             if create:
                 self._migrate()
