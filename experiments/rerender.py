@@ -70,7 +70,7 @@ def rerender(folder: Path) -> list[str]:
     terrains = pd.read_csv(folder / "terrains.csv")
     md = (folder / "report.md").read_text().rstrip("\n").split("\n")
     written = []
-    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains, [Path(__file__).resolve().parent])
     if confirm is not None:
         a, b = _section(md, "## Confirmatory analysis")
         md[a:b] = confirm_lines

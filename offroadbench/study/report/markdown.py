@@ -235,7 +235,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     tables["held_fixed.csv"] = fixed
     faults = _faults_section(run_dir, tables)
     n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains, [Path(run_dir)])
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
     lines = [
