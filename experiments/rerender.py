@@ -74,6 +74,9 @@ def rerender(folder: Path) -> list[str]:
     if confirm is not None:
         a, b = _section(md, "## Confirmatory analysis")
         md[a:b] = confirm_lines
+        if "engine_verdicts" in confirm.attrs:
+            confirm.attrs.pop("engine_verdicts").to_csv(folder / "engine_verdicts.csv", index=False)
+            written.append("engine_verdicts.csv")
         confirm.to_csv(folder / "confirmatory.csv", index=False)
         written.append("confirmatory.csv")
     if "planner.name" in meta["columns"]:

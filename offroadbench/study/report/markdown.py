@@ -238,6 +238,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     confirm_lines, confirm = _confirmatory_section(meta, trials, terrains, [Path(run_dir)])
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
+        if "engine_verdicts" in confirm.attrs:
+            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
     lines = [
         f"# {report_title(meta)}",
         "",

@@ -187,7 +187,36 @@ def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: 
                         f"{c.test})" for c in plan.comparisons)
             + ". **Every other number in this report is exploratory** (sections marked so): chosen or read after "
             "the data, not covered by the plan's error rate.")
-    return head + [text, "", markdown_table(shown), ""], tab
+    return head + [text, "", markdown_table(shown), "", *_engine_lines(plan, meta, trials, terrains, tab)], tab
+
+
+def _engine_lines(plan: Any, meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame,
+                  tab: pd.DataFrame) -> list[str]:
+    """The plan's tests on each engine with the cross-engine verdict (stats.plan.engine_table), stored in
+    ``tab.attrs["engine_verdicts"]``; nothing for a study on one engine."""
+    from offroadbench.study.stats.plan import engine_table
+
+    eng = engine_table(plan, meta, trials, terrains, tab)
+    if eng is None:
+        return []
+    tab.attrs["engine_verdicts"] = eng
+    order = eng["engines"].iloc[0]
+    shown = eng.assign(**{
+        "interval": [f"[{a:.3g}, {b:.3g}]" for a, b in zip(eng["ci_low"], eng["ci_high"], strict=True)],
+        f"engine difference ({order})": [f"{d:+.3g} [{a:.3g}, {b:.3g}] ({n} terrains)" for d, a, b, n in zip(
+            eng["engine_difference"], eng["engine_difference_low"], eng["engine_difference_high"],
+            eng["engine_difference_terrains"], strict=True)]})
+    shown = shown[["comparison", "stratum", "engine", "terrains", "effect", "interval", "p_adjusted", "reject",
+                   "verdict", f"engine difference ({order})"]]
+    lines = [f"- **{c}** ({s}): {v}." for (c, s), v in eng.groupby(["comparison", "stratum"], sort=False)["verdict"].first().items()]
+    return ["### The plan on each engine", "",
+            "Each planned test on each engine, over the same terrains and missions (terrain j of every cell has one "
+            "seed; the engines' tests are one Holm family, above). Verdict: holds on both (rejected on both, in one "
+            "direction), on one engine only (which), on neither. Engine difference: per terrain, the test's "
+            f"difference on {order.split(' - ')[0]} minus that on {order.split(' - ')[1]}, averaged over the "
+            "terrains with both, with its 95 % terrain-bootstrap interval (Efron & Tibshirani 1993); exploratory "
+            "(not in the plan's adjustment) ([engine_verdicts.csv](engine_verdicts.csv)).", "",
+            markdown_table(shown), "", *lines, ""]
 
 
 def _mark_exploratory(lines: list[str]) -> list[str]:
