@@ -171,3 +171,29 @@ def test_study_run_refuses_an_underpowered_plan_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "has power" in err and "exploratory" in err
     assert not (tmp_path / "run").exists()
+
+
+def test_a_pooled_axis_pools_only_the_studys_values_in_the_pilot():
+    from offroadbench.study.stats.power import _within_design
+
+    pilot = pd.DataFrame({"vehicle": ["husky", "jackal", "hunter"], "D_high": [2.95, 2.95, 2.6], "terrain": 0})
+    cells = [{"vehicle.name": v, "recipe.layers.base.D_high": 2.95} for v in ("husky", "jackal")]
+    cols = {"vehicle.name": "vehicle", "recipe.layers.base.D_high": "D_high"}
+    assert list(_within_design(pilot, cells, cols)["vehicle"]) == ["husky", "jackal"]
+    # an axis read at the pilot's own value (pilot_where) is not restricted
+    cells99 = [{"vehicle.name": "husky", "recipe.layers.base.D_high": 2.99}]
+    assert list(_within_design(pilot, cells99, cols, keep=["recipe.layers.base.D_high"])["vehicle"]) == ["husky"]
+    assert _within_design(pilot, cells99, cols).empty
+
+
+def test_pilot_select_keeps_the_pilots_rows_of_a_fixed_setting(tmp_path):
+    pilot = pd.concat([_pilot(10, {"straight": 0.3, "astar": 0.9}, seed=1).assign(sensor="oracle"),
+                       _pilot(10, {"straight": 0.3, "astar": 0.3}, seed=2).assign(sensor="mast")])
+    data = {**STUDY, "analysis": {**_plan(20.0), "pilot_select": {"sensor": "mast"}}}
+    study = study_from_dict(data)
+    t = plan_power(study.analysis, study.cell_values(), study.column_names(), 20, pilot)
+    mast = pilot[pilot["sensor"] == "mast"].groupby(["planner", "terrain"])["success"].mean().mul(100)
+    assert t["pilot_mean"].iloc[0] == pytest.approx((mast["astar"] - mast["straight"]).mean())
+    with pytest.raises(InputError, match="no column 'lidar'"):
+        bad = study_from_dict({**STUDY, "analysis": {**_plan(20.0), "pilot_select": {"lidar": 1}}})
+        plan_power(bad.analysis, bad.cell_values(), bad.column_names(), 20, pilot)

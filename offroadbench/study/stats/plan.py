@@ -14,6 +14,7 @@ TOML::
     n_boot = 2000                   # terrain-cluster bootstrap resamples
     seed = 0                        # seed of the bootstrap (and of Monte Carlo tests)
     pilot = "results/x/trials.parquet"   # optional: an earlier run's trials, for the power of each test
+    pilot_select = { sensor = "mast" }   # optional: the pilot's rows to use (a setting fixed outside the grid)
     min_power = 0.8                 # study run refuses a planned test under it (unless exploratory)
     power_sims = 1000               # simulated studies per power
 
@@ -177,12 +178,18 @@ class AnalysisPlan:
     """``study run`` refuses a non-exploratory test whose power is under this."""
     power_sims: int = 1000
     """Simulated studies per power."""
+    pilot_select: Mapping[str, Any] = field(default_factory=dict)
+    """Pilot column -> value: the pilot's rows the power is simulated from (the pilot's values of a setting
+    the study fixes outside its grid, e.g. ``{ sensor = "mast" }``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "comparisons", tuple(self.comparisons))
         if not isinstance(self.pilot, str):
             raise InputError(f"analysis.pilot = {self.pilot!r}; give a path to a trial table")
         check_range(self, "min_power", self.min_power, lo=0, hi=1)
+        if not isinstance(self.pilot_select, Mapping):
+            raise InputError(f"analysis.pilot_select = {self.pilot_select!r}; give a table of pilot column = value")
+        object.__setattr__(self, "pilot_select", dict(self.pilot_select))
         check_int(self, "power_sims", self.power_sims, lo=100)
         check_range(self, "alpha", self.alpha, lo=0, hi=0.5, lo_open=True)
         check_choice(self, "multiplicity", self.multiplicity, MULTIPLICITY)
@@ -196,7 +203,7 @@ class AnalysisPlan:
 
 
 _PLAN_KEYS = ("alpha", "multiplicity", "confidence", "n_boot", "seed", "pilot", "min_power", "power_sims",
-              "comparisons")
+              "pilot_select", "comparisons")
 _COMP_KEYS = ("name", "treatment", "control", "metric", "where", "test", "pool", "effect", "exploratory", "summary",
               "pilot_where")
 

@@ -171,8 +171,27 @@ def pilot_terrain_values(rows: pd.DataFrame, metric: str, summary: str = "median
     return v.groupby(level="terrain").mean() if len(keys) > 1 else v
 
 
-def _pilot_differences(pilot: pd.DataFrame, comp: Any, stratum: Mapping[str, Any], columns: Mapping[str, str]
-                       ) -> np.ndarray:
+def _within_design(pilot: pd.DataFrame, cells: Sequence[Mapping[str, Any]], columns: Mapping[str, str],
+                   keep: Sequence[str] = ()) -> pd.DataFrame:
+    """The pilot's rows whose grid columns take values of the study's axes (a pooled axis pools the study's
+    values only: a vehicle the study drops is dropped from its pilot too), except the axes in ``keep``."""
+    t = pilot
+    for key in {k for c in cells for k in c}:
+        col = columns.get(key, key)
+        if key in keep or col not in t:
+            continue
+        values = {c[key] for c in cells}
+        num = [v for v in values if isinstance(v, (int, float)) and not isinstance(v, bool)]
+        if num and len(num) == len(values) and pd.api.types.is_numeric_dtype(t[col]) and not pd.api.types.is_bool_dtype(t[col]):
+            t = t[np.isclose(t[col].to_numpy(float)[:, None], np.array(num, float)[None, :]).any(axis=1)]
+        else:
+            t = t[t[col].isin(values)]
+    return t
+
+
+def _pilot_differences(pilot: pd.DataFrame, comp: Any, stratum: Mapping[str, Any], columns: Mapping[str, str],
+                       cells: Sequence[Mapping[str, Any]] = ()) -> np.ndarray:
+    pilot = _within_design(pilot, cells, columns, keep=list(comp.pilot_where)) if cells else pilot
     strat = {**stratum, **{k: v for k, v in comp.pilot_where.items()}}
     base = {columns.get(k, k): v for k, v in strat.items()}
     t = _select(pilot, {**base, **{columns.get(k, k): v for k, v in comp.treatment.items()}})
@@ -197,11 +216,15 @@ def plan_power(plan: Any, cells: Sequence[Mapping[str, Any]], columns: Mapping[s
     from offroadbench.study.stats.clustered import keyed_rng
     from offroadbench.study.stats.plan import _label, expand
 
+    for col, v in plan.pilot_select.items():
+        if col not in pilot:
+            raise InputError(f"analysis.pilot_select: the pilot has no column {col!r}")
+        pilot = _select(pilot, {col: v})
     rows, diffs, effects, tests, groups = [], [], [], [], []
     for comp, stratum, _, _ in expand(plan, cells):
         if comp.test == "permutation":
             raise InputError(f"analysis comparison {comp.name!r}: power is simulated for paired tests only")
-        d = _pilot_differences(pilot, comp, stratum, columns)
+        d = _pilot_differences(pilot, comp, stratum, columns, cells)
         diffs.append(d)
         effects.append(comp.effect)
         tests.append(comp.test)
