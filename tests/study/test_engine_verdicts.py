@@ -77,3 +77,30 @@ def test_engine_difference_interval_is_a_terrain_bootstrap():
     assert r["engine_difference"] == pytest.approx(d.mean())
     assert r["engine_difference_low"] <= d.mean() <= r["engine_difference_high"]
     assert r["engine_difference_low"] >= d.min() and r["engine_difference_high"] <= d.max()
+
+
+def test_the_report_gives_the_plan_on_each_engine(tmp_path):
+    import copy
+
+    from offroadbench.study import run_study, study_from_dict
+    from offroadbench.study.report.markdown import build_report
+    from offroadbench.study.spec.config import plan_cells
+
+    from tests.study.test_stress import STUDY, fake_planner_trials
+
+    data = copy.deepcopy(STUDY)
+    data["study"].update(terrains_per_cell=3, missions_per_terrain=2)
+    data["grid"] = {"planner.name": ["straight", "astar"], "recipe.layers.base.D_high": [2.9],
+                    "sim.engine": ["pybullet", "mujoco"]}
+    data["analysis"] = {"comparisons": [{"name": "astar against the line", "treatment": {"planner.name": "astar"},
+                                         "control": {"planner.name": "straight"}}]}
+    study = study_from_dict(data)
+    run_study(study, plan_cells(study), tmp_path, executor="inline", trial_fn=fake_planner_trials)
+    rep = build_report(tmp_path)
+    eng = rep.tables["engine_verdicts.csv"]
+    assert sorted(eng["engine"]) == ["mujoco", "pybullet"] and eng["verdict"].nunique() == 1
+    assert "### The plan on each engine" in rep.markdown
+    assert f"- **astar against the line** (D_high = 2.9): {eng['verdict'].iloc[0]}." in rep.markdown
+    # the fake trials ignore the engine: the same outcomes on both, no engine difference
+    assert eng["engine_difference"].iloc[0] == 0
+    assert len(rep.tables["confirmatory.csv"]) == 2 and "power" in rep.tables["confirmatory.csv"]
