@@ -62,7 +62,7 @@ def _builder_class(builder: Any) -> type | None:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec.config import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis", "blind_seed")  # blind_seed: set by root_seed = "blind"
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
