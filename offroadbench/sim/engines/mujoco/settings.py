@@ -59,6 +59,15 @@ class MuJoCoConfig:
     bit at a fraction of the cost), ``python`` (the interpreted loop over CoulombBristles or
     SoilWheels) or ``auto`` (compiled when numba is installed, else python). Vehicles with
     articulated wheels (steering, rockers, bogies) always use the Python loop."""
+    hfield_collision: str = "exact"
+    """How the wheels and the chassis collide with the terrain's height field: ``mujoco`` (MuJoCo's
+    own ``mjc_ConvexHField``: a GJK/EPA call per candidate prism), ``exact`` (the chassis box's
+    early-out when no height sample under it reaches its lowest point, else MuJoCo's own call: the
+    same contacts to the bit, so the same trials as ``mujoco``) or ``closed_form`` (``exact`` plus the
+    sphere wheels' prisms in closed form: MuJoCo's contacts to ~1e-15 m and normals to ~1e-10 at
+    driving depths, trials within run-to-run chaos, not to the bit). Both need numba
+    (offroadbench.sim.engines.mujoco._hfield_c); without it the world uses ``mujoco``, which gives
+    ``exact``'s trials but not ``closed_form``'s."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):
@@ -81,6 +90,7 @@ class MuJoCoConfig:
         check_int(self, "ccd_iterations", self.ccd_iterations, lo=1, hi=1000)
         check_range(self, "servo_gain", self.servo_gain, lo=0, lo_open=True)
         check_choice(self, "tyre_loop", self.tyre_loop, TYRE_LOOPS)
+        check_choice(self, "hfield_collision", self.hfield_collision, HFIELD_COLLISIONS)
         for name in ("refsafe", "tyres_each_substep"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"MuJoCoConfig.{name} = {getattr(self, name)!r}: allowed true or false")
@@ -88,6 +98,8 @@ class MuJoCoConfig:
 
 #: values of MuJoCoConfig.tyre_loop
 TYRE_LOOPS = ("auto", "compiled", "python")
+#: values of MuJoCoConfig.hfield_collision (offroadbench.sim.engines.mujoco._hfield_c.MODES)
+HFIELD_COLLISIONS = ("mujoco", "exact", "closed_form")
 
 
 def _check_pair(owner, name: str, value) -> None:

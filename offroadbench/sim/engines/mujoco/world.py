@@ -85,6 +85,23 @@ def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
     return module
 
 
+def _hfield_functions(mode: str, model, data):
+    """The world's height-field collision functions for ``[sim.mujoco] hfield_collision = mode``
+    (offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision), or None for MuJoCo's own: mode
+    ``mujoco``, or numba missing or unable to build them (logged)."""
+    if mode == "mujoco":
+        return None
+    try:
+        from offroadbench.sim.engines.mujoco import _hfield_c
+    except ImportError:
+        log.warning("MuJoCoConfig.hfield_collision = %r needs numba (pip install 'offroadbench[fast]'): "
+                    "MuJoCo's own height-field collision", mode)
+        return None
+    except RuntimeError as exc:  # numba installed but unable to compile or cache
+        log.warning("the compiled height-field collision is unavailable (%s): MuJoCo's own", exc)
+        return None
+    return _hfield_c.HFieldCollision.for_world(mode, model, data)
+
 
 # ---------------------------------------------------------------------------- the world
 class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
@@ -109,6 +126,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._write_heights()
         self.data = mujoco.MjData(self.model)
         self._index()
+        self._hfield = _hfield_functions(contact.hfield_collision, self.model, self.data)
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
@@ -281,7 +299,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         bottom = base[2] - min(lows)
         d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
                                    self.sim.spawn_clearance_m)
-        mujoco.mj_forward(m, d)
+        self._forward()
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0
         if self._tyres is not None:
@@ -316,9 +334,34 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         n = len(self._wheel_bodies)
         self.data.ctrl[n : n + len(angles_rad)] = angles_rad
 
+    def _forward(self) -> None:
+        """``mj_forward`` with this world's height-field collision functions."""
+        hf = self._hfield
+        if hf is None:
+            mujoco.mj_forward(self.model, self.data)
+            return
+        hf.install()
+        try:
+            mujoco.mj_forward(self.model, self.data)
+        finally:
+            hf.restore()
+
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
-        ``xfrc_applied``, ``mj_step2``, then the contacts."""
+        ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
+        functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
+        hf = self._hfield
+        if hf is None:
+            self._advance()
+            return
+        hf.install()
+        try:
+            self._advance()
+        finally:
+            hf.restore()
+
+    def _advance(self) -> None:
+        """:meth:`step`'s MuJoCo calls and force loops."""
         if self._fast is not None:
             self._step_compiled()
             return

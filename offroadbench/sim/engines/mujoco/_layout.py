@@ -1,0 +1,160 @@
+"""Where MuJoCo keeps what the compiled collision functions read: byte offsets of fields in the C
+structs ``mjModel``, ``mjData`` and ``mjPreContact`` of the installed MuJoCo, and the address of its
+public collision table ``mjCOLLISIONFUNC`` (``mujoco.h``: ``MJAPI extern mjfCollision
+mjCOLLISIONFUNC[mjNGEOMTYPES][mjNGEOMTYPES]``).
+
+The offsets come from the struct declarations that the mujoco wheel ships for its own bindings
+(``mujoco.introspect.structs``, generated from the installed headers), laid out with ``ctypes``
+(which follows the platform's C ABI), and are then checked against a live model and data: every
+pointer field read at its offset must equal the address of the array that the Python bindings hand
+out for it, and every size field the binding's value. A MuJoCo whose layout does not check out gives
+no layout (None), and the world keeps MuJoCo's own collision functions.
+
+No numba here: plain ``ctypes``.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import os
+from dataclasses import dataclass
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Layout", "layout_for", "table_slot_addresses"]
+
+#: mjModel pointer fields the collision functions read, with the numpy dtype the bindings give them
+MODEL_ARRAYS = {"geom_dataid": "int32", "geom_size": "float64", "geom_rbound": "float64",
+                "hfield_size": "float64", "hfield_nrow": "int32", "hfield_ncol": "int32",
+                "hfield_adr": "int32", "hfield_data": "float32"}
+#: mjData pointer fields they read
+DATA_ARRAYS = {"geom_xpos": "float64", "geom_xmat": "float64"}
+#: mjPreContact fields they write, in the order of its declaration (mjdata.h), each mjtNum
+PRECONTACT_FIELDS = (("dist", 1), ("pos", 3), ("normal", 3), ("tangent", 3))
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Byte offsets of the fields that the compiled collision functions use (the installed MuJoCo)."""
+
+    model: dict
+    """mjModel field name -> byte offset of its pointer."""
+    data: dict
+    """mjData field name -> byte offset of its pointer."""
+    precontact_size: int
+    """sizeof(mjPreContact), bytes: ten mjtNum (dist, pos, normal, tangent) in MuJoCo 3.3 to 4.0."""
+
+
+_VALUE_TYPES = {
+    "int": ctypes.c_int, "mjtNum": ctypes.c_double, "double": ctypes.c_double, "float": ctypes.c_float,
+    "size_t": ctypes.c_size_t, "uintptr_t": ctypes.c_size_t, "char": ctypes.c_char,
+    "mjtByte": ctypes.c_ubyte, "mjtBool": ctypes.c_bool, "mjtSize": ctypes.c_int64,
+    "int64_t": ctypes.c_int64, "uint64_t": ctypes.c_uint64, "unsigned int": ctypes.c_uint,
+}
+
+
+def _ctypes_structs():
+    """ctypes mirrors of MuJoCo's structs from ``mujoco.introspect``: {name: Structure class}."""
+    from mujoco.introspect import ast_nodes as ast
+    from mujoco.introspect import structs
+
+    made: dict = {}
+
+    def ctype(t):
+        if isinstance(t, ast.PointerType):
+            return ctypes.c_void_p
+        if isinstance(t, ast.ArrayType):
+            c = ctype(t.inner_type)
+            for extent in reversed(t.extents):
+                c = c * extent
+            return c
+        if isinstance(t, (ast.AnonymousStructDecl, ast.AnonymousUnionDecl)):
+            base = ctypes.Union if isinstance(t, ast.AnonymousUnionDecl) else ctypes.Structure
+            return type("anonymous", (base,), {"_fields_": [(f.name, ctype(f.type)) for f in t.fields]})
+        name = t.name
+        if name in _VALUE_TYPES:
+            return _VALUE_TYPES[name]
+        if name in structs.STRUCTS:
+            return struct(name)
+        if name.startswith("mjt"):  # an enum (mjtGeom, mjtObj, ...): a C int
+            return ctypes.c_int
+        raise KeyError(f"MuJoCo struct field type {name!r} unknown to offroadbench's layout")
+
+    def struct(name: str):
+        if name not in made:
+            cls = type(name, (ctypes.Structure,), {})
+            made[name] = cls
+            cls._fields_ = [(f.name, ctype(f.type)) for f in structs.STRUCTS[name].fields]
+        return made[name]
+
+    return {name: struct(name) for name in ("mjModel", "mjData", "mjPreContact")}
+
+
+def _compute_layout() -> Layout:
+    c = _ctypes_structs()
+    model = {name: getattr(c["mjModel"], name).offset for name in MODEL_ARRAYS}
+    data = {name: getattr(c["mjData"], name).offset for name in DATA_ARRAYS}
+    pre = c["mjPreContact"]
+    names = [f[0] for f in pre._fields_]
+    if names != [f[0] for f in PRECONTACT_FIELDS] or ctypes.sizeof(pre) != 80:
+        raise KeyError(f"mjPreContact is {names} ({ctypes.sizeof(pre)} bytes), expected dist, pos, normal, tangent")
+    return Layout(model=model, data=data, precontact_size=ctypes.sizeof(pre))
+
+
+def _checks_out(layout: Layout, model, data) -> bool:
+    """Every pointer at its offset in ``model`` / ``data`` is the address of the binding's array."""
+    for table, obj, dtypes in ((layout.model, model, MODEL_ARRAYS), (layout.data, data, DATA_ARRAYS)):
+        base = obj._address
+        for name, off in table.items():
+            arr = getattr(obj, name)
+            if str(arr.dtype) != dtypes[name] or arr.size == 0:
+                return False
+            if ctypes.c_void_p.from_address(base + off).value != arr.ctypes.data:
+                return False
+    return True
+
+
+_LAYOUT: list = []  # [Layout | None], computed once per process
+
+
+def layout_for(model, data) -> Layout | None:
+    """The installed MuJoCo's layout, checked against this ``model`` (a ``mujoco.MjModel`` with a
+    height field and a geom) and its ``data``; None where the introspection is missing or the
+    layout does not check out (logged once)."""
+    if not _LAYOUT:
+        try:
+            _LAYOUT.append(_compute_layout())
+        except (ImportError, KeyError, AttributeError, TypeError) as exc:
+            log.warning("MuJoCo's struct layout is unavailable (%s): MuJoCo's own height-field collision", exc)
+            _LAYOUT.append(None)
+    layout = _LAYOUT[0]
+    if layout is not None and not _checks_out(layout, model, data):
+        log.warning("MuJoCo's struct layout does not check out against a model: MuJoCo's own height-field collision")
+        return None
+    return layout
+
+
+def _libmujoco():
+    """The MuJoCo library the bindings loaded (dlopen of the same file returns the same handle)."""
+    import mujoco
+
+    folder = os.path.dirname(mujoco.__file__)
+    path = os.path.join(folder, f"libmujoco.so.{mujoco.__version__}")
+    if not os.path.exists(path):  # other platforms' names
+        names = [n for n in os.listdir(folder) if n.startswith(("libmujoco", "mujoco.dll"))]
+        if not names:
+            raise OSError(f"no MuJoCo library in {folder}")
+        path = os.path.join(folder, sorted(names)[0])
+    return ctypes.CDLL(path)
+
+
+def table_slot_addresses(pairs) -> tuple[int, ...]:
+    """Addresses of the entries ``mjCOLLISIONFUNC[type1][type2]`` for each (type1, type2) in ``pairs``
+    (``mujoco.mjtGeom`` values, type1 <= type2 as MuJoCo looks them up)."""
+    import mujoco
+
+    n = int(mujoco.mjtGeom.mjNGEOMTYPES)
+    table = ctypes.addressof(ctypes.c_void_p.in_dll(_libmujoco(), "mjCOLLISIONFUNC"))
+    size = ctypes.sizeof(ctypes.c_void_p)
+    return tuple(table + size * (int(a) * n + int(b)) for a, b in pairs)
