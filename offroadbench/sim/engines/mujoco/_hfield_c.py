@@ -50,12 +50,15 @@ import ctypes
 import math
 
 import numpy as np
-from llvmlite import ir
 from numba import carray, cfunc, njit, types
-from numba.core import cgutils
-from numba.extending import intrinsic
 
 from offroadbench.sim.engines.mujoco import _layout
+from offroadbench.sim.engines.mujoco._cabi import as_address as _as_address
+from offroadbench.sim.engines.mujoco._cabi import as_pointer as _as_pointer
+from offroadbench.sim.engines.mujoco._cabi import call_collision as _call_collision
+from offroadbench.sim.engines.mujoco._cabi import f64_field as _f64
+from offroadbench.sim.engines.mujoco._cabi import i32_field as _i32
+from offroadbench.sim.engines.mujoco._cabi import pointer_at as _pointer_field
 
 __all__ = ["HFieldCollision", "MODES", "box_hfield", "sphere_hfield"]
 
@@ -67,53 +70,6 @@ PRE = 10  # mjtNum per mjPreContact: dist, pos[3], normal[3], tangent[3]
 # indices into the layout tuple handed to the kernels
 # (the struct offsets, then the addresses of MuJoCo's own sphere and box functions)
 (L_DATAID, L_SIZE, L_RBOUND, L_HSIZE, L_NROW, L_NCOL, L_HADR, L_HDATA, L_XPOS, L_XMAT, L_SPHERE0, L_BOX0) = range(12)
-
-
-# ---------------------------------------------------------------------------- raw memory
-@intrinsic
-def _as_pointer(typingctx, address):
-    """int64 address -> void pointer."""
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], cgutils.voidptr_t)
-    return types.voidptr(types.int64), codegen
-
-
-@intrinsic
-def _as_address(typingctx, pointer):
-    """void pointer -> int64 address."""
-    def codegen(context, builder, signature, args):
-        return builder.ptrtoint(args[0], ir.IntType(64))
-    return types.int64(types.voidptr), codegen
-
-
-@intrinsic
-def _call_collision(typingctx, fn, m, d, con, g1, g2, margin):
-    """Call the ``mjfCollision`` at address ``fn`` with (m, d, con addresses, g1, g2, margin)."""
-    sig = types.int32(types.int64, types.int64, types.int64, types.int64, types.int32, types.int32, types.float64)
-
-    def codegen(context, builder, signature, args):
-        i8p = cgutils.voidptr_t
-        fnty = ir.FunctionType(ir.IntType(32), [i8p, i8p, i8p, ir.IntType(32), ir.IntType(32), ir.DoubleType()])
-        target = builder.inttoptr(args[0], fnty.as_pointer())
-        ptrs = [builder.inttoptr(a, i8p) for a in args[1:4]]
-        return builder.call(target, [*ptrs, args[4], args[5], args[6]])
-    return sig, codegen
-
-
-@njit(cache=True)
-def _pointer_field(base, offset):  # pragma: no cover - compiled
-    """The pointer stored at ``base + offset`` (a struct's pointer field), as an int64 address."""
-    return carray(_as_pointer(base + offset), (1,), np.int64)[0]
-
-
-@njit(cache=True)
-def _f64(base, offset, n):  # pragma: no cover - compiled
-    return carray(_as_pointer(_pointer_field(base, offset)), (n,), np.float64)
-
-
-@njit(cache=True)
-def _i32(base, offset, n):  # pragma: no cover - compiled
-    return carray(_as_pointer(_pointer_field(base, offset)), (n,), np.int32)
 
 
 # ---------------------------------------------------------------------------- geometry

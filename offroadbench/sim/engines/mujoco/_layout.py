@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Layout", "layout_for", "table_slot_addresses"]
+__all__ = ["Layout", "StepLayout", "layout_for", "step_layout", "step_functions", "table_slot_addresses"]
 
 #: mjModel pointer fields the collision functions read, with the numpy dtype the bindings give them
 MODEL_ARRAYS = {"geom_dataid": "int32", "geom_size": "float64", "geom_rbound": "float64",
@@ -88,7 +88,7 @@ def _ctypes_structs():
             cls._fields_ = [(f.name, ctype(f.type)) for f in structs.STRUCTS[name].fields]
         return made[name]
 
-    return {name: struct(name) for name in ("mjModel", "mjData", "mjPreContact")}
+    return {name: struct(name) for name in ("mjModel", "mjData", "mjPreContact", "mjContact")}
 
 
 def _compute_layout() -> Layout:
@@ -158,3 +158,88 @@ def table_slot_addresses(pairs) -> tuple[int, ...]:
     table = ctypes.addressof(ctypes.c_void_p.in_dll(_libmujoco(), "mjCOLLISIONFUNC"))
     size = ctypes.sizeof(ctypes.c_void_p)
     return tuple(table + size * (int(a) * n + int(b)) for a, b in pairs)
+
+
+@dataclass(frozen=True)
+class StepLayout:
+    """Where a compiled trial step finds the contacts of the MuJoCo step it just took (byte offsets)."""
+
+    ncon: int
+    """mjData's ``ncon`` (int)."""
+    nefc: int
+    """mjData's ``nefc`` (int)."""
+    contact: int
+    """mjData's ``contact`` pointer."""
+    efc_force: int
+    """mjData's ``efc_force`` pointer."""
+    contact_size: int
+    """sizeof(mjContact), bytes (a multiple of 8)."""
+    dist: int
+    """Offsets in mjContact of ``dist``, ``pos``, ``frame`` (mjtNum), ``geom``, ``efc_address`` (int)."""
+    pos: int
+    frame: int
+    geom: int
+    efc_address: int
+
+    def as_tuple(self) -> tuple[int, ...]:
+        """The offsets in the order the kernels index them (offroadbench.sim.engines.mujoco._tyres_c.S_*)."""
+        return (self.ncon, self.nefc, self.contact, self.efc_force, self.contact_size, self.dist, self.pos,
+                self.frame, self.geom, self.efc_address)
+
+
+_PROBE_XML = """<mujoco><worldbody><geom type="plane" size="1 1 0.1"/>
+<body pos="0 0 0.09"><freejoint/><geom type="box" size="0.1 0.1 0.1"/></body></worldbody></mujoco>"""
+
+
+def _probe_checks_out(lay: StepLayout) -> bool:
+    """``lay`` read on a box resting on a plane (contacts and constraint rows in the data) gives what
+    the bindings give: ncon, nefc, the contact and efc_force arrays' addresses and every field's."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_string(_PROBE_XML)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    if d.ncon < 2 or d.nefc < 2:
+        return False
+    base = d._address
+    ints = (ctypes.c_int.from_address(base + lay.ncon).value, ctypes.c_int.from_address(base + lay.nefc).value)
+    if ints != (d.ncon, d.nefc):
+        return False
+    if ctypes.c_void_p.from_address(base + lay.efc_force).value != d.efc_force.ctypes.data:
+        return False
+    contact = ctypes.c_void_p.from_address(base + lay.contact).value
+    c = d.contact
+    fields = ((c.dist, lay.dist, "float64"), (c.pos, lay.pos, "float64"), (c.frame, lay.frame, "float64"),
+              (c.geom, lay.geom, "int32"), (c.efc_address, lay.efc_address, "int32"))
+    return all(arr.ctypes.data == contact + off and arr.strides[0] == lay.contact_size and str(arr.dtype) == dtype
+               for arr, off, dtype in fields)
+
+
+_STEP: list = []  # [StepLayout | None], once per process
+
+
+def step_layout() -> StepLayout | None:
+    """The installed MuJoCo's :class:`StepLayout`, checked on a probe model; None where it is not
+    available or does not check out (logged once)."""
+    if not _STEP:
+        lay = None
+        try:
+            c = _ctypes_structs()
+            data, con = c["mjData"], c["mjContact"]
+            lay = StepLayout(ncon=data.ncon.offset, nefc=data.nefc.offset, contact=data.contact.offset,
+                             efc_force=data.efc_force.offset, contact_size=ctypes.sizeof(con), dist=con.dist.offset,
+                             pos=con.pos.offset, frame=con.frame.offset, geom=con.geom.offset,
+                             efc_address=con.efc_address.offset)
+            if lay.contact_size % 8 or not _probe_checks_out(lay):
+                log.warning("MuJoCo's mjData / mjContact layout does not check out: the trial step stays in Python")
+                lay = None
+        except (ImportError, KeyError, AttributeError, TypeError) as exc:
+            log.warning("MuJoCo's struct layout is unavailable (%s): the trial step stays in Python", exc)
+        _STEP.append(lay)
+    return _STEP[0]
+
+
+def step_functions() -> tuple[int, int, int]:
+    """Addresses of MuJoCo's ``mj_step``, ``mj_step1`` and ``mj_step2``."""
+    lib = _libmujoco()
+    return tuple(ctypes.cast(getattr(lib, name), ctypes.c_void_p).value for name in ("mj_step", "mj_step1", "mj_step2"))

@@ -85,6 +85,20 @@ def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
     return module
 
 
+def _whole_step(model, data):
+    """What the compiled tyre loop needs to run a whole trial step in one call
+    (offroadbench.sim.engines.mujoco._tyres_c.step_trial): the model's and data's addresses, MuJoCo's
+    ``mj_step``, ``mj_step1``, ``mj_step2`` and where the contacts are; None where MuJoCo's layout does
+    not check out (offroadbench.sim.engines.mujoco._layout: the loop then runs its kernels between
+    the bindings' MuJoCo calls)."""
+    from offroadbench.sim.engines.mujoco import _layout
+
+    lay = _layout.step_layout()
+    if lay is None:
+        return None
+    return model._address, data._address, _layout.step_functions(), lay.as_tuple()
+
+
 def _hfield_functions(mode: str, model, data):
     """The world's height-field collision functions for ``[sim.mujoco] hfield_collision = mode``
     (offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision), or None for MuJoCo's own: mode
@@ -131,6 +145,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        self._fast_step = None  # (mjModel and mjData addresses, MuJoCo's step functions, StepLayout tuple)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -147,6 +162,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
+            self._fast_step = _whole_step(self.model, d)
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         if sim.tyre_model == "terramechanics":
