@@ -59,15 +59,17 @@ class MuJoCoConfig:
     bit at a fraction of the cost), ``python`` (the interpreted loop over CoulombBristles or
     SoilWheels) or ``auto`` (compiled when numba is installed, else python). Vehicles with
     articulated wheels (steering, rockers, bogies) always use the Python loop."""
-    hfield_collision: str = "exact"
-    """How the wheels and the chassis collide with the terrain's height field: ``mujoco`` (MuJoCo's
-    own ``mjc_ConvexHField``: a GJK/EPA call per candidate prism), ``exact`` (the chassis box's
-    early-out when no height sample under it reaches its lowest point, else MuJoCo's own call: the
-    same contacts to the bit, so the same trials as ``mujoco``) or ``closed_form`` (``exact`` plus the
-    sphere wheels' prisms in closed form: MuJoCo's contacts to ~1e-15 m and normals to ~1e-10 at
-    driving depths, trials within run-to-run chaos, not to the bit). Both need numba
-    (offroadbench.sim.engines.mujoco._hfield_c); without it the world uses ``mujoco``, which gives
-    ``exact``'s trials but not ``closed_form``'s."""
+    hfield_collision: str = "closed_form"
+    """How the wheels and the chassis collide with the terrain's height field
+    (offroadbench.sim.engines.mujoco._hfield_c): ``mujoco`` (MuJoCo's own ``mjc_ConvexHField``, a
+    GJK/EPA call per candidate prism); ``exact`` (the chassis box's early-out when no height sample
+    under it reaches its lowest point, else MuJoCo's own call: the same contacts to the bit, so the
+    same trials as ``mujoco``); ``closed_form`` (``exact`` plus the sphere wheels' prisms in closed
+    form: MuJoCo's contacts to ~1e-15 m and normals to ~1e-10 at driving depths, so trials within
+    run-to-run chaos, not to the bit: 1.5x the trials' speed on 36 paper missions with no outcome
+    flipped, benchmarks/RESULTS.md 'Issue 41'). ``exact`` and ``closed_form`` need numba; without it
+    the world uses ``mujoco`` (logged), which gives ``exact``'s trials, not ``closed_form``'s.
+    Studies run before this setting existed (MuJoCo's own collision) are reproduced by ``exact``."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):
