@@ -208,11 +208,18 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _write_heights(self) -> None:
+    def _write_heights(self, block_rows: int = 64) -> None:
+        """The map's heights into the model's height field, normalised to its relief (float32), in
+        blocks of ``block_rows`` rows (elementwise, so the same bits as at once, without a float64
+        copy of the whole map: offroadbench.memory.MUJOCO_BYTES_PER_CELL)."""
         hm = self.hm
-        relief = hm.relief_m
-        data = (hm.z - hm.z_min_m) / relief if relief > 0 else np.zeros_like(hm.z)
-        self.model.hfield_data[:] = data.astype(np.float32).ravel()
+        relief, z_min = hm.relief_m, hm.z_min_m
+        out = self.model.hfield_data
+        cols = hm.cols
+        for r0 in range(0, hm.rows, block_rows):
+            z = hm.z[r0:r0 + block_rows]
+            block = (z - z_min) / relief if relief > 0 else np.zeros_like(z)
+            out[r0 * cols:r0 * cols + block.size] = block.astype(np.float32).ravel()
 
     def _index(self) -> None:
         m = self.model
