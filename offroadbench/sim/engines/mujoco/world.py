@@ -23,7 +23,13 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
-  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin).
+  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
+  the compiled coulomb loop a whole trial step is one compiled call (``_tyres_c.step_trial``: MuJoCo's
+  ``mj_step1`` / ``mj_step2`` called through their C addresses, no Python between them; the same bits).
+- **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
+  the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
+  MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
+  the box's early-out alone (``exact``: MuJoCo's own contacts to the bit); or MuJoCo's own (``mujoco``).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
