@@ -25,7 +25,7 @@ class MuJoCoTyres:
         if pushed is not None:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
-        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        qvel, xmat, xipos, xfrc = self._step_arrays
         whole = self._fast_step
         if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
             tc.STEP(whole[0], whole[1], whole[2], whole[3], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)

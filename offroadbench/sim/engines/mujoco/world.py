@@ -169,6 +169,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
             self._fast_step = _whole_step(self.model, d)
+            self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         if sim.tyre_model == "terramechanics":
