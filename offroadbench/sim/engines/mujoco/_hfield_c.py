@@ -197,6 +197,73 @@ def _sphere_prism(c, r, t, zb, out):  # pragma: no cover - compiled
     return True
 
 
+@njit(cache=True)
+def _field(m, d, g1, g2, lay):  # pragma: no cover - compiled
+    """Height-field geom ``g1`` and geom ``g2`` as MuJoCo holds them: (the field's samples (float32,
+    row-major), nrow, ncol, hfield_size (x, y half-extents, elevation scale, base depth; m), geom
+    ``g2``'s centre in the field's frame xyz (mju_mulMatTVec3), d->geom_xpos, d->geom_xmat)."""
+    ng = max(g1, g2) + 1
+    xpos = _f64(d, lay[L_XPOS], 3 * ng)
+    xmat = _f64(d, lay[L_XMAT], 9 * ng)
+    hid = _i32(m, lay[L_DATAID], ng)[g1]
+    nrow = _i32(m, lay[L_NROW], hid + 1)[hid]
+    ncol = _i32(m, lay[L_NCOL], hid + 1)[hid]
+    size = _f64(m, lay[L_HSIZE], 4 * hid + 4)[4 * hid:4 * hid + 4]
+    adr = _i32(m, lay[L_HADR], hid + 1)[hid]
+    hdata = carray(_as_pointer(_pointer_field(m, lay[L_HDATA]) + 4 * adr), (nrow * ncol,), np.float32)
+    p1, m1, p2 = 3 * g1, 9 * g1, 3 * g2
+    v0, v1, v2 = xpos[p2] - xpos[p1], xpos[p2 + 1] - xpos[p1 + 1], xpos[p2 + 2] - xpos[p1 + 2]
+    a = xmat[m1:m1 + 9]
+    px = a[0] * v0 + a[3] * v1 + a[6] * v2
+    py = a[1] * v0 + a[4] * v1 + a[7] * v2
+    pz = a[2] * v0 + a[5] * v1 + a[8] * v2
+    return hdata, nrow, ncol, size, px, py, pz, xpos, xmat
+
+
+@njit(cache=True)
+def _lowest_over_cell(px, py, pz, r, x0, x1, y0, y1):  # pragma: no cover - compiled
+    """Height of the sphere's (centre (px, py, pz), radius r) lowest point over the cell [x0, x1] x
+    [y0, y1], m; +inf if the sphere does not reach over it. A prism whose vertices all lie at or
+    below it cannot overlap the sphere (its top is their convex hull)."""
+    ddx = x0 - px if px < x0 else (px - x1 if px > x1 else 0.0)
+    ddy = y0 - py if py < y0 else (py - y1 if py > y1 else 0.0)
+    dxy2 = ddx * ddx + ddy * ddy
+    return pz - math.sqrt(r * r - dxy2) if dxy2 < r * r else np.inf
+
+
+@njit(cache=True)
+def _write_contact(out, n, res, a, ox, oy, oz):  # pragma: no cover - compiled
+    """mjPreContact ``n`` of ``out`` from :func:`_sphere_prism`'s ``res`` (the field's frame), in the
+    world: dist = -depth, pos = the witness points' midpoint, normal, tangent 0 (``mjc_penetration``),
+    rotated by the field's xmat ``a`` and moved by its origin (ox, oy, oz)."""
+    b = PRE * n
+    mx, my, mz = 0.5 * (res[4] + res[7]), 0.5 * (res[5] + res[8]), 0.5 * (res[6] + res[9])
+    out[b] = -res[0]
+    out[b + 1] = a[0] * mx + a[1] * my + a[2] * mz + ox
+    out[b + 2] = a[3] * mx + a[4] * my + a[5] * mz + oy
+    out[b + 3] = a[6] * mx + a[7] * my + a[8] * mz + oz
+    out[b + 4] = a[0] * res[1] + a[1] * res[2] + a[2] * res[3]
+    out[b + 5] = a[3] * res[1] + a[4] * res[2] + a[5] * res[3]
+    out[b + 6] = a[6] * res[1] + a[7] * res[2] + a[8] * res[3]
+    out[b + 7] = 0.0
+    out[b + 8] = 0.0
+    out[b + 9] = 0.0
+
+
+@njit(cache=True)
+def _set_prism(t, i, x0, x1, y0, y1, z00, z01, z10, z11):  # pragma: no cover - compiled
+    """Prism ``i`` of the cell with corners (x0|x1, y0|y1) at heights z(row, col) into ``t``, as
+    ``addPrismVert`` orders them: 0: (r+1, c-1), (r, c-1), (r+1, c); 1: (r, c-1), (r+1, c), (r, c)."""
+    if i == 0:
+        t[0, 0], t[0, 1], t[0, 2] = x0, y1, z10
+        t[1, 0], t[1, 1], t[1, 2] = x0, y0, z00
+        t[2, 0], t[2, 1], t[2, 2] = x1, y1, z11
+    else:
+        t[0, 0], t[0, 1], t[0, 2] = x0, y0, z00
+        t[1, 0], t[1, 1], t[1, 2] = x1, y1, z11
+        t[2, 0], t[2, 1], t[2, 2] = x1, y0, z01
+
+
 #: the kernels' one signature: (m, d, con addresses, g1, g2, margin, layout tuple) -> contacts
 _KERNEL_SIG = types.int32(types.int64, types.int64, types.int64, types.int32, types.int32, types.float64,
                           types.UniTuple(types.int64, 12))
@@ -207,35 +274,19 @@ def sphere_hfield(m, d, con, g1, g2, margin, lay):  # pragma: no cover - compile
     """Contacts of sphere geom ``g2`` with height-field geom ``g1`` into ``con`` (mjPreContact
     array at that address), their number; ``m``, ``d`` the mjModel and mjData addresses, ``lay``
     the layout's offsets and MuJoCo's own functions' addresses (its sphere function is called for
-    ``margin != 0``)."""
+    ``margin != 0``). The tests and the sub-grid of ``mjc_ConvexHField``, operation for operation."""
     if margin != 0.0:
         return _call_collision(lay[L_SPHERE0], m, d, con, g1, g2, margin)
-    ng = max(g1, g2) + 1
-    xpos = _f64(d, lay[L_XPOS], 3 * ng)
-    xmat = _f64(d, lay[L_XMAT], 9 * ng)
-    hid = _i32(m, lay[L_DATAID], ng)[g1]
-    nrow = _i32(m, lay[L_NROW], hid + 1)[hid]
-    ncol = _i32(m, lay[L_NCOL], hid + 1)[hid]
-    hsize = _f64(m, lay[L_HSIZE], 4 * hid + 4)
-    size0, size1, size2, size3 = hsize[4 * hid], hsize[4 * hid + 1], hsize[4 * hid + 2], hsize[4 * hid + 3]
-    adr = _i32(m, lay[L_HADR], hid + 1)[hid]
-    hdata = carray(_as_pointer(_pointer_field(m, lay[L_HDATA]) + 4 * adr), (nrow * ncol,), np.float32)
-    out = carray(_as_pointer(con), (MAXCONPAIR * PRE,), np.float64)
-    p1, m1, p2 = 3 * g1, 9 * g1, 3 * g2
-    v0, v1, v2 = xpos[p2] - xpos[p1], xpos[p2 + 1] - xpos[p1 + 1], xpos[p2 + 2] - xpos[p1 + 2]
-    mat1 = xmat[m1:m1 + 9]
-    pos = np.empty(3)  # the centre in the field's frame (mju_mulMatTVec3)
-    pos[0] = mat1[0] * v0 + mat1[3] * v1 + mat1[6] * v2
-    pos[1] = mat1[1] * v0 + mat1[4] * v1 + mat1[7] * v2
-    pos[2] = mat1[2] * v0 + mat1[5] * v1 + mat1[8] * v2
-    radius = _f64(m, lay[L_RBOUND], ng)[g2] + margin
-    if (size0 < pos[0] - radius or -size0 > pos[0] + radius or size1 < pos[1] - radius
-            or -size1 > pos[1] + radius or size2 < pos[2] - radius or -size3 > pos[2] + radius):
+    hdata, nrow, ncol, size, px, py, pz, xpos, xmat = _field(m, d, g1, g2, lay)
+    size0, size1, size2, size3 = size[0], size[1], size[2], size[3]
+    radius = _f64(m, lay[L_RBOUND], g2 + 1)[g2] + margin
+    if (size0 < px - radius or -size0 > px + radius or size1 < py - radius
+            or -size1 > py + radius or size2 < pz - radius or -size3 > pz + radius):
         return 0
-    r = _f64(m, lay[L_SIZE], 3 * ng)[3 * g2]
-    xmax, xmin = r * 1.0 + pos[0], r * -1.0 + pos[0]  # mjc_sphereSupport along +-x, +-y, +-z
-    ymax, ymin = r * 1.0 + pos[1], r * -1.0 + pos[1]
-    zmax, zmin = r * 1.0 + pos[2], r * -1.0 + pos[2]
+    r = _f64(m, lay[L_SIZE], 3 * g2 + 3)[3 * g2]
+    xmax, xmin = r * 1.0 + px, r * -1.0 + px  # mjc_sphereSupport along +-x, +-y, +-z
+    ymax, ymin = r * 1.0 + py, r * -1.0 + py
+    zmax, zmin = r * 1.0 + pz, r * -1.0 + pz
     if (xmin - margin > size0 or xmax + margin < -size0 or ymin - margin > size1 or ymax + margin < -size1
             or zmin - margin > size2 or zmax + margin < -size3):
         return 0
@@ -245,102 +296,60 @@ def sphere_hfield(m, d, con, g1, g2, margin, lay):  # pragma: no cover - compile
     rmax = min(nrow - 1, int(math.ceil((ymax + size1) / (2.0 * size1) * (nrow - 1))))
     dx = (2.0 * size0) / (ncol - 1)
     dy = (2.0 * size1) / (nrow - 1)
-    zb = -size3
+    out = carray(_as_pointer(con), (MAXCONPAIR * PRE,), np.float64)
+    a = xmat[9 * g1:9 * g1 + 9]
+    centre = np.array((px, py, pz))
     t = np.empty((3, 3))
     res = np.empty(10)
     ncon = 0
     for row in range(rmin, rmax):
-        ya, yb = dy * (row + 1) - size1, dy * row - size1  # rows r+1 and r
-        ax, az = dx * cmin - size0, hdata[(row + 1) * ncol + cmin] * size2
-        bz = hdata[row * ncol + cmin] * size2
+        y0, y1 = dy * row - size1, dy * (row + 1) - size1
+        x0, z00, z10 = dx * cmin - size0, hdata[row * ncol + cmin] * size2, hdata[(row + 1) * ncol + cmin] * size2
         for col in range(cmin + 1, cmax + 1):
-            nx_ = dx * col - size0
-            naz = hdata[(row + 1) * ncol + col] * size2
-            nbz = hdata[row * ncol + col] * size2
-            # exact cull: the sphere's lowest point over this cell's footprint
-            ddx = ax - pos[0] if pos[0] < ax else (pos[0] - nx_ if pos[0] > nx_ else 0.0)
-            ddy = yb - pos[1] if pos[1] < yb else (pos[1] - ya if pos[1] > ya else 0.0)
-            dxy2 = ddx * ddx + ddy * ddy
-            zlow = pos[2] - math.sqrt(r * r - dxy2) if dxy2 < r * r else 1e300
+            x1 = dx * col - size0
+            z01, z11 = hdata[row * ncol + col] * size2, hdata[(row + 1) * ncol + col] * size2
+            zlow = _lowest_over_cell(px, py, pz, r, x0, x1, y0, y1)
             for i in range(2):
-                if i == 0:  # (r+1, c-1), (r, c-1), (r+1, c)
-                    t[0, 0], t[0, 1], t[0, 2] = ax, ya, az
-                    t[1, 0], t[1, 1], t[1, 2] = ax, yb, bz
-                    t[2, 0], t[2, 1], t[2, 2] = nx_, ya, naz
-                else:  # (r, c-1), (r+1, c), (r, c)
-                    t[0, 0], t[0, 1], t[0, 2] = ax, yb, bz
-                    t[1, 0], t[1, 1], t[1, 2] = nx_, ya, naz
-                    t[2, 0], t[2, 1], t[2, 2] = nx_, yb, nbz
+                _set_prism(t, i, x0, x1, y0, y1, z00, z01, z10, z11)
                 if t[0, 2] < zmin and t[1, 2] < zmin and t[2, 2] < zmin:  # MuJoCo's prism-height test
                     continue
-                if t[0, 2] <= zlow and t[1, 2] <= zlow and t[2, 2] <= zlow:
+                if t[0, 2] <= zlow and t[1, 2] <= zlow and t[2, 2] <= zlow:  # the exact cull
                     continue
-                if _sphere_prism(pos, r, t, zb, res):
-                    b = PRE * ncon
-                    mx = 0.5 * (res[4] + res[7])
-                    my = 0.5 * (res[5] + res[8])
-                    mz = 0.5 * (res[6] + res[9])
-                    out[b] = -res[0]
-                    out[b + 1] = mat1[0] * mx + mat1[1] * my + mat1[2] * mz + xpos[p1]
-                    out[b + 2] = mat1[3] * mx + mat1[4] * my + mat1[5] * mz + xpos[p1 + 1]
-                    out[b + 3] = mat1[6] * mx + mat1[7] * my + mat1[8] * mz + xpos[p1 + 2]
-                    out[b + 4] = mat1[0] * res[1] + mat1[1] * res[2] + mat1[2] * res[3]
-                    out[b + 5] = mat1[3] * res[1] + mat1[4] * res[2] + mat1[5] * res[3]
-                    out[b + 6] = mat1[6] * res[1] + mat1[7] * res[2] + mat1[8] * res[3]
-                    out[b + 7] = 0.0
-                    out[b + 8] = 0.0
-                    out[b + 9] = 0.0
+                if _sphere_prism(centre, r, t, -size3, res):
+                    _write_contact(out, ncon, res, a, xpos[3 * g1], xpos[3 * g1 + 1], xpos[3 * g1 + 2])
                     ncon += 1
                     if ncon >= MAXCONPAIR:
                         return ncon
-            ax, az, bz = nx_, naz, nbz
+            x0, z00, z10 = x1, z01, z11
     return ncon
 
 
 @njit(_KERNEL_SIG, cache=True)
 def box_hfield(m, d, con, g1, g2, margin, lay):  # pragma: no cover - compiled
     """Contacts of box geom ``g2`` with height-field geom ``g1``: 0 when no height sample under the
-    box reaches its lowest point, else MuJoCo's own function at ``original`` (arguments as
-    :func:`sphere_hfield`)."""
-    ng = max(g1, g2) + 1
-    xpos = _f64(d, lay[L_XPOS], 3 * ng)
-    xmat = _f64(d, lay[L_XMAT], 9 * ng)
-    hid = _i32(m, lay[L_DATAID], ng)[g1]
-    nrow = _i32(m, lay[L_NROW], hid + 1)[hid]
-    ncol = _i32(m, lay[L_NCOL], hid + 1)[hid]
-    hsize = _f64(m, lay[L_HSIZE], 4 * hid + 4)
-    size0, size1, size2 = hsize[4 * hid], hsize[4 * hid + 1], hsize[4 * hid + 2]
-    adr = _i32(m, lay[L_HADR], hid + 1)[hid]
-    hdata = carray(_as_pointer(_pointer_field(m, lay[L_HDATA]) + 4 * adr), (nrow * ncol,), np.float32)
-    size = _f64(m, lay[L_SIZE], 3 * ng)
-    p1, m1, p2, m2 = 3 * g1, 9 * g1, 3 * g2, 9 * g2
-    v0, v1, v2 = xpos[p2] - xpos[p1], xpos[p2 + 1] - xpos[p1 + 1], xpos[p2 + 2] - xpos[p1 + 2]
-    a = xmat[m1:m1 + 9]
-    b = xmat[m2:m2 + 9]
-    px = a[0] * v0 + a[3] * v1 + a[6] * v2
-    py = a[1] * v0 + a[4] * v1 + a[7] * v2
-    pz = a[2] * v0 + a[5] * v1 + a[8] * v2
-    ext = np.empty(3)  # the box's half-extents along the field's axes: sum_k |(a^T b)[i, k]| size[k]
+    box (its bounding box in the field's frame, widened by a cell each way) reaches its lowest
+    point, else MuJoCo's own function (arguments as :func:`sphere_hfield`)."""
+    hdata, nrow, ncol, size, px, py, pz, xpos, xmat = _field(m, d, g1, g2, lay)
+    half = _f64(m, lay[L_SIZE], 3 * g2 + 3)[3 * g2:3 * g2 + 3]
+    a = xmat[9 * g1:9 * g1 + 9]
+    b = xmat[9 * g2:9 * g2 + 9]
+    ext = np.zeros(3)  # the box's half-extents along the field's axes: sum_k |(a^T b)[i, k]| half[k]
     for i in range(3):
-        e = 0.0
         for k in range(3):
-            e += abs(a[i] * b[k] + a[3 + i] * b[3 + k] + a[6 + i] * b[6 + k]) * size[3 * g2 + k]
-        ext[i] = e
+            ext[i] += abs(a[i] * b[k] + a[3 + i] * b[3 + k] + a[6 + i] * b[6 + k]) * half[k]
     # the lowest corner, less a slack far above the rounding of MuJoCo's own support-point sum
     zmin = pz - ext[2] - (1e-9 + 1e-12 * (abs(pz) + ext[2]))
-    cmin = max(0, int(math.floor((px - ext[0] + size0) / (2.0 * size0) * (ncol - 1))) - 1)
-    cmax = min(ncol - 1, int(math.ceil((px + ext[0] + size0) / (2.0 * size0) * (ncol - 1))) + 1)
-    rmin = max(0, int(math.floor((py - ext[1] + size1) / (2.0 * size1) * (nrow - 1))) - 1)
-    rmax = min(nrow - 1, int(math.ceil((py + ext[1] + size1) / (2.0 * size1) * (nrow - 1))) + 1)
+    cmin = max(0, int(math.floor((px - ext[0] + size[0]) / (2.0 * size[0]) * (ncol - 1))) - 1)
+    cmax = min(ncol - 1, int(math.ceil((px + ext[0] + size[0]) / (2.0 * size[0]) * (ncol - 1))) + 1)
+    rmin = max(0, int(math.floor((py - ext[1] + size[1]) / (2.0 * size[1]) * (nrow - 1))) - 1)
+    rmax = min(nrow - 1, int(math.ceil((py + ext[1] + size[1]) / (2.0 * size[1]) * (nrow - 1))) + 1)
     if cmin > cmax or rmin > rmax:
         return _call_collision(lay[L_BOX0], m, d, con, g1, g2, margin)
     hmax = -np.inf
     for row in range(rmin, rmax + 1):
         for col in range(cmin, cmax + 1):
-            h = hdata[row * ncol + col]
-            if h > hmax:
-                hmax = h
-    if hmax * size2 + margin < zmin:
+            hmax = max(hmax, hdata[row * ncol + col])
+    if hmax * size[2] + margin < zmin:
         return 0
     return _call_collision(lay[L_BOX0], m, d, con, g1, g2, margin)
 
