@@ -145,6 +145,12 @@ class SoilWheels:
         """Start a step: forget the last step's contacts (:attr:`last`)."""
         self.last = {}
 
+    def outside_model(self) -> bool:
+        """True when a wheel in contact in the last step bottomed out: its penetration passed the
+        tables' top (:meth:`~offroadbench.sim.tyre_laws.terramechanics.SoilTables.outside`), where the
+        soil's sinkage cap is reached and the series spring alone carries it."""
+        return any(self.tables.outside(v[2]) for v in self.last.values())
+
     # ---------------------------------------------------------------- geometry
     def _surface(self, x: float, y: float):
         """(height, dz/dx, dz/dy) of the bilinear surface at (x, y), or None off the map."""

@@ -16,9 +16,12 @@ of travel, with the entry angle ``theta_1 = acos(1 - h / r)`` and the exit angle
   a spinning wheel digs itself in. Wong & Reece's model alone barely changes the sinkage with slip
   (9.2 -> 10.0 mm from slip 0 to 0.9 for the Husky on lunar regolith in lunar gravity), against
   single-wheel tests where it grows severalfold (Ding et al. 2010: 3-7x at slip 0.6 with lugged
-  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``, with its source);
-  ``n1 = 0`` is the model without slip-sinkage. The moduli keep their values as ``n`` varies (as
-  Ding et al. do), so their units follow ``n(s)``.
+  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``) that must
+  cite its published value (``n1_source``: author, year, page or table); no shipped soil has one
+  that we could read (Ding et al. fit ``n1`` to their own wheels on their own simulant), so every shipped soil has ``n1 = 0``, the model without
+  slip-sinkage, and ``soil check`` shows the published band beside it where one exists
+  (``soils/data/slip-sinkage-*.csv``). The moduli keep their values as ``n`` varies (as Ding et
+  al. do), so their units follow ``n(s)``.
 * **Shear stress** (Janosi & Hanamoto 1961): ``tau = (c + sigma tan(phi)) (1 - exp(-|j| / K))``, signed as
   ``j`` (the soil resists the displacement either way), with the
   shear displacement of a driven wheel (Wong & Reece 1967, Eq. 7)
@@ -83,6 +86,7 @@ __all__ = [
     "SlipSinkageBand",
     "SoilTables",
     "build_tables",
+    "capacity_n",
     "entry_angle",
     "gauss_legendre",
     "lateral_force",
@@ -135,7 +139,10 @@ class SoilParams:
     n1: float = 0.0
     """Slip-sinkage: the sinkage exponent grows with slip, ``n(s) = n + n1 |s|`` (Ding et al. 2011,
     their slip-dependent ``N = n0 + n1 s``), so a spinning wheel sinks deeper; 0: no slip-sinkage.
-    Dimensionless."""
+    Dimensionless. A value above 0 must name its published source in ``n1_source``."""
+    n1_source: str = ""
+    """Where ``n1`` comes from: author, year, and the page, table or equation of its tabulated value
+    (required when ``n1 > 0``; a value fitted to this project's own checks is not a source)."""
 
     def __post_init__(self) -> None:
         check_range(self, "n", self.n, lo=0, lo_open=True, hi=3)
@@ -148,6 +155,9 @@ class SoilParams:
         check_range(self, "a0", self.a0, lo=0, lo_open=True, hi=1)
         check_range(self, "a1", self.a1, lo=0, hi=1)
         check_range(self, "n1", self.n1, lo=0, hi=2)
+        if self.n1 > 0.0 and not self.n1_source.strip():
+            raise InputError(f"soil {self.name!r}: n1 = {self.n1:g} needs n1_source (author, year, page or table "
+                             "of the published value); without one, n1 = 0")
         if self.a0 + self.a1 >= 1.0:
             raise InputError(f"soil {self.name!r}: a0 + a1 = {self.a0 + self.a1:g} must be below 1 (theta_m < theta_1)")
         check_bounds(self, f"soil {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
@@ -200,13 +210,18 @@ class SlipSinkageBand:
     """Highest published sinkage(slip) / sinkage(0)."""
     wheel: str
     soil: str
+    """The soil the source tested (its own words)."""
     source: str
     figure: str
+    applies_to: tuple[str, ...] = ()
+    """Names of the soils (``soils/*.toml``) of the kind the source tested, beside which ``soil check``
+    shows the band."""
 
 
-def published_slip_sinkage() -> list[SlipSinkageBand]:
+def published_slip_sinkage(soil_name: str | None = None) -> list[SlipSinkageBand]:
     """The published single-wheel slip-sinkage bands shipped in ``soils/data/slip-sinkage-*.csv``
-    (each file's header names its source, figure and tolerance)."""
+    (each file's header names its source, figure and tolerance); with ``soil_name``, only those
+    whose ``applies_to`` names that soil."""
     import csv
 
     out = []
@@ -214,9 +229,12 @@ def published_slip_sinkage() -> list[SlipSinkageBand]:
     for path in sorted(folder.glob("slip-sinkage-*.csv")) if folder.is_dir() else []:
         lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
         for row in csv.DictReader(lines):
-            out.append(SlipSinkageBand(slip=float(row["slip"]), ratio_low=float(row["ratio_low"]),
-                                       ratio_high=float(row["ratio_high"]), wheel=row["wheel"], soil=row["soil"],
-                                       source=row["source"], figure=row["figure"]))
+            band = SlipSinkageBand(slip=float(row["slip"]), ratio_low=float(row["ratio_low"]),
+                                   ratio_high=float(row["ratio_high"]), wheel=row["wheel"], soil=row["soil"],
+                                   source=row["source"], figure=row["figure"],
+                                   applies_to=tuple(row["applies_to"].split()))
+            if soil_name is None or soil_name in band.applies_to:
+                out.append(band)
     return out
 
 
@@ -397,6 +415,12 @@ class SoilTables:
             j = self.n_slip - 2
         return i, fi, j, v - j
 
+    def outside(self, delta_m: float) -> bool:
+        """True where the penetration ``delta_m`` passes the table's top ``delta_max_m``: the soil has
+        reached its sinkage cap (``MAX_SINKAGE_FRACTION`` of the radius) at some slip and what carries
+        the wheel beyond it is the series spring alone, not the Wong-Reece model (the wheel bottoms out)."""
+        return delta_m > self.delta_max_m
+
     def lookup(self, delta_m: float, slip: float) -> tuple[float, float, float, float]:
         """(sinkage m, F_z N, F_x N, T N m) at penetration ``delta_m`` >= 0 and slip in [-1, 1]
         (bilinear; past ``delta_max`` the normal force grows with the series spring alone)."""
@@ -471,8 +495,15 @@ def build_tables(soil: SoilParams, radius_m: float, width_m: float, k_series_n_m
                       fz=flat(np.maximum(fz, 0.0)), fx=flat(fx), torque=flat(torque), fy=flat(fy))
 
 
+def capacity_n(soil: SoilParams, radius_m: float, width_m: float, slip: float = 0.0) -> float:
+    """The largest normal load the model carries at slip ``s``: ``F_z`` at the table's sinkage cap
+    ``MAX_SINKAGE_FRACTION * r``, N. A wheel loaded beyond it bottoms out (outside the model)."""
+    return float(wheel_forces(soil, radius_m, width_m, MAX_SINKAGE_FRACTION * radius_m, slip)[0])
+
+
 def static_sinkage(soil: SoilParams, radius_m: float, width_m: float, load_n: float, slip: float = 0.0) -> float:
-    """Sinkage h at which the wheel carries ``load_n`` at slip ``s``, m (bisection on F_z(h, s))."""
+    """Sinkage h at which the wheel carries ``load_n`` at slip ``s``, m (bisection on F_z(h, s)); the
+    cap ``MAX_SINKAGE_FRACTION * r`` where the soil cannot carry the load (:func:`capacity_n`)."""
     lo, hi = 0.0, MAX_SINKAGE_FRACTION * radius_m
     if float(wheel_forces(soil, radius_m, width_m, hi, slip)[0]) < load_n:
         return hi
