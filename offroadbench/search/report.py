@@ -4,7 +4,7 @@ P(failure) by importance sampling beside plain Monte Carlo, and the worst failur
 :func:`search_table` is the tidy table (one row per proposal: its stream, batch, parameters,
 likelihood ratio, and its trial's outcome and margin); :func:`stream_summary` and
 :func:`estimates` are the numbers; :func:`build_search_report` puts them into a
-:class:`~offroadbench.study.report.Report` (Markdown, figures, CSV tables) that ``search report``
+:class:`~offroadbench.study.report.markdown.Report` (Markdown, figures, CSV tables) that ``search report``
 writes.
 """
 
@@ -24,7 +24,7 @@ from offroadbench.search.estimators import (Estimate, best_is_gain, binned_failu
 from offroadbench.search.plan import SearchPlan
 from offroadbench.search.runner import NO_MISSION, margin_of
 from offroadbench.search.space import METHODS, SearchConfig, search_from_dict
-from offroadbench.study.spec import CellPlan, study_from_dict
+from offroadbench.study.spec.config import CellPlan, study_from_dict
 
 __all__ = ["search_table", "stream_summary", "estimates", "first_failures", "build_search_report"]
 
@@ -47,7 +47,7 @@ def _plan_from_meta(meta: dict[str, Any]) -> SearchPlan:
 
 def search_table(run_dir: str | Path) -> tuple[pd.DataFrame, SearchPlan]:
     """One row per stored proposal (run or not) and the search it belongs to."""
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         meta = store.meta()
@@ -171,9 +171,9 @@ def is_gain_bounds(df: pd.DataFrame, plan: SearchPlan) -> pd.DataFrame:
 
 
 def build_search_report(run_dir: str | Path):
-    """The report of a search run directory (offroadbench.study.report.Report)."""
+    """The report of a search run directory (offroadbench.study.report.markdown.Report)."""
     from offroadbench.search.figures import fig_failures_vs_trials, fig_pairwise
-    from offroadbench.study.report import Report, markdown_table
+    from offroadbench.study.report.markdown import Report, markdown_table
 
     run_dir = Path(run_dir)
     df, plan = search_table(run_dir)
