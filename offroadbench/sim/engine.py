@@ -132,6 +132,11 @@ class TrialWorld(Protocol):
         """Mean longitudinal slip of the wheels on soft soil in the last step (1: spinning in place),
         or None where the tyre model has no soil (every model but ``terramechanics``)."""
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model:
+        offroadbench.sim.tyre_laws.soil_wheels.SoilWheels.outside_model), or None where the tyre
+        model has no soil. Optional: the trial runner treats an engine without it as None."""
+
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal contact force from the terrain in the last step, N (spec
         order: left wheels, then right)."""

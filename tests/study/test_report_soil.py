@@ -34,7 +34,7 @@ def fake_soil_trials(prepared, settings):
                "rms_vertical_accel_m_s2": 0.1, "rms_pitch_rate_deg_s": 1.0, "rms_roll_rate_deg_s": 2.0,
                "start_x_m": sx, "start_y_m": sy, "goal_x_m": gx, "goal_y_m": gy,
                "mean_slip": 0.1 * (m.index + 1), "sinkage_median_m": 0.01 * (m.index + 1),
-               "sinkage_p95_m": 0.02 * (m.index + 1)}
+               "sinkage_p95_m": 0.02 * (m.index + 1), "outside_model_fraction": 0.25 * (m.index % 2)}
 
 
 @pytest.fixture(scope="module")
@@ -61,4 +61,7 @@ def test_soft_soil_section_reports_moving_sample_statistics_and_conditions(run):
     assert "soil lunar-regolith (study)" in section
     assert "Median wheel sinkage (moving) (m)" in section and "95th percentile wheel sinkage" in section
     assert "fig8_soil.png" in rep.figures
+    # every other mission spent a quarter of its time bottomed out (fake rows): the line counts them
+    line = next(ln for ln in section.splitlines() if ln.startswith("Outside the soil model"))
+    assert " of " in line and "25.0 % of their time (median)" in line
     assert np.isfinite(rep.tables["summary.csv"].shape[0])

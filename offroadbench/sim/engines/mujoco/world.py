@@ -376,6 +376,13 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
+        without the ``terramechanics`` tyre model."""
+        if self._fast_soil is not None:
+            return self._fast_soil[0].outside(self._fast_soil[1], self._fast_soil[2], len(self._loads))
+        return None if self._soil is None else self._soil.outside_model()
+
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the soil."""

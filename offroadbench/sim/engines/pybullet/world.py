@@ -468,6 +468,13 @@ class World:
                 worst = -c[8]
         return worst
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
+        without the ``terramechanics`` tyre model."""
+        if self.sim.tyre_model != "terramechanics":
+            return None
+        return self._tyres.core.outside_model()
+
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
