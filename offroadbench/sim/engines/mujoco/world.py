@@ -376,6 +376,16 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
 
+    def use_soil_map(self, soil_map) -> None:
+        """Each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap), read at its contact
+        every step: the Python soil loop (the compiled loop holds one soil's tables)."""
+        if self._soil is None:
+            return
+        n = len(self._wheel_bodies)
+        setup = soil_setup(self.spec, self.sim.soil, self._mass_kg, n, self.sim.gravity_m_s2, self.dt_s, soil_map)
+        self._soil = setup.wheels(n, self.hm, self.dt_s, self._dt_mj if self.contact.tyres_each_substep else self.dt_s)
+        self._fast_soil = None
+
     def wheel_outside_model(self) -> bool | None:
         """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
         without the ``terramechanics`` tyre model."""
