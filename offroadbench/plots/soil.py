@@ -1,6 +1,7 @@
 """Soil figures: the single-wheel soil check (sinkage, drawbar pull / load and torque / (load x
 radius) against slip, the engine rig beside the Wong-Reece integrals and the published slip-sinkage
-bands), and a study's soft-soil box plots with the soil and gravity of each group."""
+bands), a study's soft-soil box plots with the soil and gravity of each group, and a terrain's soil
+map over its hillshade."""
 
 from __future__ import annotations
 
@@ -11,7 +12,35 @@ import numpy as np
 
 from offroadbench.plots.style import new_figure
 
-__all__ = ["plot_soil_check", "fig_soil", "conditions_text"]
+__all__ = ["plot_soil_check", "plot_soil_map", "fig_soil", "conditions_text"]
+
+#: soil map colours, by the map's index (index 0, the default soil, first)
+SOIL_COLOURS = ("#d9d9d9", "#e6550d", "#3182bd", "#31a354", "#756bb1", "#fdae6b", "#9ecae1", "#a1d99b")
+
+
+def plot_soil_map(hm, soil_map, title: str = ""):
+    """The soil map (offroadbench.terrain.soil_map.SoilMap) over the terrain's hillshade: one colour per
+    soil, the legend with each soil's share of the map."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    from offroadbench.plots.terrain import hillshade
+
+    n = len(soil_map.soils)
+    colours = [SOIL_COLOURS[k % len(SOIL_COLOURS)] for k in range(n)]
+    fig, axes = new_figure(1, 1, figsize=(7.0, 6.0))
+    ax = np.ravel(axes)[0]
+    ax.imshow(hillshade(hm), cmap="gray", origin="lower", extent=hm.extent_m, vmin=0, vmax=1)
+    ax.imshow(soil_map.index, cmap=ListedColormap(colours), origin="lower", extent=hm.extent_m, alpha=0.55,
+              vmin=-0.5, vmax=n - 0.5, interpolation="nearest")
+    shares = soil_map.fractions()
+    ax.legend(handles=[Patch(color=c, label=f"{s} ({100 * shares[s]:.1f} %)") for s, c in zip(soil_map.soils, colours,
+                                                                                             strict=True)],
+              loc="upper right", fontsize=8, framealpha=0.9)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title or "soil map")
+    return fig
 
 
 def conditions_text(c: Mapping[str, Any]) -> str:

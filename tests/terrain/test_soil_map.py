@@ -153,3 +153,61 @@ def test_a_vehicle_driving_across_a_boundary_changes_soil_on_both_engines(engine
     after = tel["penetration_m"][tel["x_m"] > 3.8]
     assert rec.result.success and before.size and after.size
     assert np.median(before) > 0.006 and np.median(after) < 0.002
+
+
+SMALL_TOML = """
+[recipe]
+name = "soil-map-small"
+[grid]
+rows = 41
+cols = 61
+cell_size_m = 0.1
+[layers.base]
+generator = "fbm"
+D = 2.3
+relief_m = 0.3
+[soil]
+name = "lunar-regolith"
+[[soil.regions]]
+soil = "lete-sand"
+x_range_m = [3.0, 6.0]
+y_range_m = [0.0, 4.0]
+"""
+
+
+def test_the_pipeline_builds_the_map_unless_the_settings_name_a_soil():
+    import dataclasses
+
+    from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain
+
+    recipe = recipe_from_dict(__import__("tomllib").loads(SMALL_TOML))
+    settings = TrialSettings()
+    prepared = prepare_terrain(recipe, 5, settings, [])
+    sm = prepared.soil_map
+    assert sm is not None and sm.soils == ("lunar-regolith", "lete-sand")
+    assert sm.soils[sm.soil_index_at(4.0, 2.0)] == "lete-sand" and sm.soils[sm.soil_index_at(1.0, 2.0)] == "lunar-regolith"
+    assert prepared.soil_map_for(settings.sim) is sm
+    assert prepared.soil_map_for(dataclasses.replace(settings.sim, soil="snow")) is None  # one soil everywhere
+
+
+def test_exports_carry_the_soil_map_and_analyze_draws_it(tmp_path, capsys):
+    import json
+
+    from offroadbench.cli import main
+    from offroadbench.io.soil_raster import read_soil_raster
+    from offroadbench.terrain.recipe import generate_terrain
+
+    toml = tmp_path / "small.toml"
+    toml.write_text(SMALL_TOML)
+    assert main(["export", str(toml), "--seed", "2", "--format", "unreal", "-o", str(tmp_path / "out")]) == 0
+    pngs = sorted((tmp_path / "out").glob("*_soil.png"))
+    assert len(pngs) == 1
+    meta = json.loads(pngs[0].with_suffix(".json").read_text())
+    assert meta["soils"] == ["lunar-regolith", "lete-sand"] and (meta["rows"], meta["cols"]) == (41, 61)
+    recipe = recipe_from_dict(__import__("tomllib").loads(SMALL_TOML))
+    want = soil_map_for(recipe, generate_terrain(recipe, 2), 2).index
+    assert np.array_equal(read_soil_raster(pngs[0]), want)
+    plot = tmp_path / "a.png"
+    assert main(["analyze", str(toml), "--seed", "2", "--border-m", "0.5", "--plot", str(plot)]) == 0
+    out = capsys.readouterr().out
+    assert "Soil map: lunar-regolith" in out and (tmp_path / "a_soil.png").stat().st_size > 0

@@ -95,17 +95,17 @@ def terrain_body(terrain: Any = None, recipe: Any = None) -> tuple[float | None,
 
 def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
                     missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
-                    gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
+                    gravity_m_s2: float | None = None, soil: str | None = None,
+                    soil_map: Any = None) -> PreparedTerrain:
     """The terrain, its class maps and its missions.
 
     ``terrain`` is a Heightmap (``seed`` is then only recorded; ``gravity_m_s2`` and ``soil`` say
-    its body's gravity and its soil, if known) or a recipe
+    its body's gravity and its soil, if known, and ``soil_map`` its soil map) or a recipe
     (:class:`offroadbench.terrain.recipe.Recipe`, generated with ``seed``; its ``[body]`` and
     ``[soil]`` give gravity and soil). ``missions`` are
     ``(index, mission_seed)`` pairs, each drawn alone on the closed class map (Majhor & Bos 2023,
     Sec. 2.3), or Mission objects used as they are; either way in the order they will be driven.
     """
-    soil_map = None
     if isinstance(terrain, Heightmap):
         hm = terrain
     else:
