@@ -48,7 +48,10 @@ def conditions_text(c: Mapping[str, Any]) -> str:
     offroadbench.study.report.header.soil_conditions."""
     g = c.get("gravity_m_s2")
     g_text = f"{g:g} m/s^2" if isinstance(g, (int, float)) else "?"
-    return f"soil {c.get('soil')} ({c.get('soil_source')}), gravity {g_text} ({c.get('gravity_source')})"
+    soil = f"soil {c.get('soil')} ({c.get('soil_source')})"
+    if c.get("soil_map"):
+        soil += " with the recipe's soil map ([[soil.regions]] / raster; the soil named is its default)"
+    return f"{soil}, gravity {g_text} ({c.get('gravity_source')})"
 
 
 def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]],

@@ -49,8 +49,22 @@ def test_conditions_name_soil_gravity_and_their_sources(run):
     meta = load_meta(run)
     first, second = soil_conditions(meta, 0), soil_conditions(meta, 1)
     assert first == {"soil": "lete-sand", "soil_source": "study", "gravity_m_s2": pytest.approx(1.62, abs=0.01),
-                     "gravity_source": "terrain"}
+                     "gravity_source": "terrain", "soil_map": False}
     assert second["soil"] == "lunar-regolith" and second["soil_source"] == "study"
+
+
+def test_conditions_say_when_the_recipes_soil_map_applies(run):
+    """A cell whose recipe has [[soil.regions]] ran on the map unless the study named a soil."""
+    import copy
+
+    from offroadbench.plots.soil import conditions_text
+
+    meta = copy.deepcopy(load_meta(run))
+    meta["cells"][0]["recipe"]["soil"] = {"name": "lunar-regolith", "regions": [{"soil": "snow", "in_crater": True}]}
+    assert not soil_conditions(meta, 0)["soil_map"]  # this study's grid names the soil: it lies everywhere
+    meta["cells"][0]["settings"]["sim"].pop("soil", None)
+    c = soil_conditions(meta, 0)
+    assert c["soil_map"] and "soil map" in conditions_text(c)
 
 
 def test_soft_soil_section_reports_moving_sample_statistics_and_conditions(run):
