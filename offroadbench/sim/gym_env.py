@@ -169,8 +169,7 @@ class TraverseConfig:
 
 
 def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None):
-    """(Heightmap, its gravity, its soil, its soil map) of what the env was given (terrain_body,
-    offroadbench.terrain.soil_map.soil_map_for)."""
+    """(Heightmap, its gravity, its soil, its soil map) of what the env was given (terrain_body, soil_map_for)."""
     from offroadbench.terrain.recipe import load_terrain
     from offroadbench.terrain.soil_map import soil_map_for
 
@@ -256,8 +255,7 @@ class TraverseEnv(gym.Env):
         self.settings = settings
         self.rules = settings.rules
         hm, gravity, soil, soil_map = _terrain(terrain, terrain_seed, overrides)
-        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil,
-                                       soil_map=soil_map)
+        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil, soil_map=soil_map)
         self.hm = hm
         self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
         self._mission_cfg = dataclasses.replace(settings.missions, count=1)

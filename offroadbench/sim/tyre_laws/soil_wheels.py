@@ -44,7 +44,9 @@ from dataclasses import dataclass
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.tyre_laws.terramechanics import SoilTables, build_tables, load_soil
+from offroadbench.sim.tyre_laws.terramechanics import MAX_SINKAGE_FRACTION, SoilTables, build_tables, load_soil
+from offroadbench.sim.tyre_laws.track_patch import (SegmentTable, TrackPatch, compaction_resistance_n, segment_table,
+                                                    shear_development)
 
 __all__ = ["MAX_LATERAL_SLIP", "RESISTANCE_FADE_M_S", "SoilSetup", "SoilWheels", "soil_setup"]
 
@@ -122,6 +124,8 @@ def _one_soil(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2:
     dt = dt_s
     k_cap = share / dt**2
     k_series = min(spec.tyre_stiffness_n_m or k_cap, k_cap)
+    if getattr(spec, "track_contact_length_m", None) is not None:
+        return _belt_setup(spec, soil, share, n_wheels, gravity_m_s2, dt, k_series)
     tables = build_tables(soil, spec.wheel_radius_m, spec.wheel_width_m, k_series)
     k_stab = 0.25 * share / dt**2
     delta = _static_penetration(tables, share * gravity_m_s2)
@@ -130,6 +134,41 @@ def _one_soil(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2:
                   for j in range(tables.n_slip - 1))
     slope_y = tables.lateral(delta, 0.0, 0.01) / 0.01
     return SoilSetup(tables=tables, share_kg=share, relaxation_m=max(soil.shear_modulus_m, slope_x / k_stab),
+                     lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
+
+
+def _belt_segment(table: SegmentTable, delta: float, s_m: float, lam: float, direction: float, fade: float,
+                  radius_m: float) -> tuple[float, float, float, float, float]:
+    """(sinkage m, normal N, pull along the rolling direction N, resistance torque N m, side force
+    magnitude N) of a belt segment at penetration ``delta``, signed slip ``s_m`` (in the direction of
+    motion) and lateral slip ratio ``lam`` (offroadbench.sim.tyre_laws.track_patch); the compaction
+    resistance fades in over the first ``RESISTANCE_FADE_M_S`` of speed, as a wheel's."""
+    soil, patch = table.soil, table.patch
+    sink, f_n = table.lookup(delta)
+    strength = patch.width_m * patch.segment_length_m * soil.cohesion_pa + f_n * math.tan(
+        math.radians(soil.friction_angle_deg))
+    thrust = math.copysign(strength * shear_development(s_m * patch.contact_length_m / soil.shear_modulus_m), s_m)
+    resistance = compaction_resistance_n(soil, patch.width_m, sink) / patch.segments
+    f_x = direction * (thrust - (1.0 - fade) * resistance)
+    torque = direction * radius_m * thrust
+    f_y = strength * shear_development(lam * patch.contact_length_m / soil.lateral_shear_modulus_m)
+    return sink, f_n, f_x, torque, f_y
+
+
+def _belt_setup(spec, soil, share: float, n_wheels: int, gravity_m_s2: float, dt: float, k_series: float) -> SoilSetup:
+    """:func:`soil_setup` for a tracked vehicle's belts: each road wheel a segment of its side's belt
+    (``n_wheels / 2`` a side), its table capped at the wheels' sinkage cap; the relaxation lengths as a
+    wheel's, from the segment's thrust and side-force slopes at the static load."""
+    patch = TrackPatch(contact_length_m=spec.track_contact_length_m, width_m=spec.wheel_width_m,
+                       segments=max(1, n_wheels // 2))
+    table = segment_table(soil, patch, spec.wheel_radius_m, k_series, MAX_SINKAGE_FRACTION * spec.wheel_radius_m)
+    k_stab = 0.25 * share / dt**2
+    strength = patch.width_m * patch.segment_length_m * soil.cohesion_pa + share * gravity_m_s2 * math.tan(
+        math.radians(soil.friction_angle_deg))
+    # the steepest slope of the thrust against slip is at slip 0: strength x d g(iL/K) / di = strength L / (2 K)
+    slope_x = strength * patch.contact_length_m / (2.0 * soil.shear_modulus_m)
+    slope_y = strength * patch.contact_length_m / (2.0 * soil.lateral_shear_modulus_m)
+    return SoilSetup(tables=table, share_kg=share, relaxation_m=max(soil.shear_modulus_m, slope_x / k_stab),
                      lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
 
 
@@ -261,12 +300,15 @@ class SoilWheels:
         lam = abs(uy) / sy
         direction = 1.0 if (u_roll if abs(u_roll) >= abs(v_f) else v_f) >= 0.0 else -1.0
         s_m = direction * slip
-        sink, f_n, f_x, torque = tables.lookup(delta, s_m)
-        _, _, f_x0, torque0 = tables.lookup(delta, 0.0)
         fade = 1.0 - min(1.0, abs(v_f) / RESISTANCE_FADE_M_S)
-        f_x = direction * (f_x - fade * f_x0)
-        torque = direction * (torque - fade * torque0)
-        f_y = tables.lateral(delta, s_m, lam)
+        if isinstance(tables, SegmentTable):  # a track's belt segment (offroadbench.sim.tyre_laws.track_patch)
+            sink, f_n, f_x, torque, f_y = _belt_segment(tables, delta, s_m, lam, direction, fade, self._r)
+        else:
+            sink, f_n, f_x, torque = tables.lookup(delta, s_m)
+            _, _, f_x0, torque0 = tables.lookup(delta, 0.0)
+            f_x = direction * (f_x - fade * f_x0)
+            torque = direction * (torque - fade * torque0)
+            f_y = tables.lateral(delta, s_m, lam)
         if uy < 0.0:
             f_y = -f_y
         f_n = max(0.0, f_n - self._c * v_n)

@@ -137,7 +137,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             n = len(self._wheel_bodies)
             setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
-            sc = self._loop_kernels(contact.tyre_loop, "_soil_c")
+            # the compiled loop holds wheel tables: a track's belt segments run in the Python loop
+            sc = None if self.spec.track_contact_length_m else self._loop_kernels(contact.tyre_loop, "_soil_c")
             if sc is not None:
                 f, ist, tab = sc.new_state(self._soil, hm, self._wheel_bodies, self._wheel_qvel, self._wheel_axis,
                                            self._chassis)
