@@ -98,6 +98,15 @@ def plot_soil_check(rig, model, title: str = "", bands=(), gravity_m_s2: float |
                          elinewidth=2.5, capsize=4,
                          label=f"{band.source.split(' (')[0]}: {band.ratio_low:g}-{band.ratio_high:g}x static, "
                                f"{band.wheel}" if k == 0 else None)
+    outside = np.zeros(len(rig.slip), dtype=bool)
+    for check in (rig, model):
+        if getattr(check, "outside_model", None) is not None:
+            outside |= np.asarray(check.outside_model, dtype=bool)
+    if outside.any():  # the wheel bottomed out there: outside the model, not agreement
+        for ax, _, _ in panels:
+            for k, s in enumerate(rig.slip[outside]):
+                ax.axvspan(s - 0.05, s + 0.05, color="#d62728", alpha=0.12, lw=0,
+                           label="outside the model (bottomed out)" if k == 0 else None)
     axes[0].legend(fontsize=7, loc="upper left")
     g = f", gravity {gravity_m_s2:g} m/s^2" if gravity_m_s2 is not None else ""
     fig.suptitle(title or f"{rig.soil}: wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {load:.1f} N{g}",
