@@ -327,7 +327,11 @@ def render_reference() -> str:
         "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
         "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
         "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
-        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "soil; a soil map with `[[soil.regions]]`, each a `soil` and conditions among `slope_min_deg`, "
+        "`slope_max_deg`, `height_min_m`, `height_max_m`, `in_crater` (with `crater_radius_fraction`, "
+        "`crater_min_diameter_m`), a disc `centre_m` + `radius_m` or a rectangle `x_range_m` + "
+        "`y_range_m`, and/or `raster` (a PNG of soil indices, one pixel per height sample) with "
+        "`raster_soils`: offroadbench.terrain.soil_map) tables. A layer table holds its generator's keys below; a key that is itself a table "
         "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
         "",
     ]

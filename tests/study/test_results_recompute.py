@@ -295,6 +295,13 @@ def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[
     return [float(counts.get(r, 0)) for r in reasons]
 
 
+SOIL_MAP_SNOW = "soil-map/mare-floors-snow.toml"
+SOIL_MAP_SIMULANT = "soil-map/mare-floors-simulant.toml"
+SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on the simulant": SOIL_MAP_SIMULANT,
+                 "crater interiors on the soft deposit": SOIL_MAP_SNOW}
+"""The soil-map README table's rows: (row label regex, recipe)."""
+
+
 LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
 """The lunar-soil README table's rows: (tyre model, gravity m/s^2, surface age Ga)."""
 
@@ -605,6 +612,21 @@ SAMPLES = [
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
+    Sample("soil-map planned effects", "soil-map",
+           rf"Soft crater interiors against one soil: \*\*{_NUM} points\*\*[^\n]*\n[^\n]*simulant crater interiors "
+           rf"against one soil: \*\*{_NUM} points\*\*",
+           lambda f: (_pooled_success_effect("recipe", SOIL_MAP_SNOW, "lunar-mare")(f)
+                      + _pooled_success_effect("recipe", SOIL_MAP_SIMULANT, "lunar-mare")(f))),
+    Sample("soil-map outcomes per soil layout", "soil-map",
+           "".join(rf"\| {label} \| {_NUM} \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for label in SOIL_MAP_ROWS),
+           lambda f: [v for r in SOIL_MAP_ROWS.values()
+                      for v in [float(trial_table(f).query("recipe == @r")["success"].sum())]
+                      + _failure_counts(f, f"recipe == '{r}'", ("entrapped", "stuck", "timeout"))]),
+    Sample("soil-map deposit trials outside the model", "soil-map",
+           rf"Outside the soil model: {_NUM} of the 48 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
+           lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
+                                 100 * float(t["outside_model_fraction"].max())])(
+                                     trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",

@@ -50,6 +50,11 @@ class VehicleSpec:
     wheel_width_m: float | None = None
     """Width of the tyre's tread, metres (the ``terramechanics`` tyre model's b; None: that model
     cannot be used)."""
+    track_contact_length_m: float | None = None
+    """A tracked vehicle's belt ground contact length, m: with it, on the ``terramechanics`` tyre model
+    each side's road wheels are the segments of one belt of this length and ``wheel_width_m`` under the
+    Bekker / Wong track relations (offroadbench.sim.tyre_laws.track_patch); None: wheels (a track as a
+    row of wheels). Rigid-ground tyre models ignore it."""
     track_m: float
     """Lateral distance between left and right wheel centres, metres."""
     max_speed_m_s: float
@@ -139,6 +144,11 @@ class VehicleSpec:
                 check_range(self, name, getattr(self, name), lo=0, hi=90, lo_open=True)
         if self.wheel_width_m is not None:
             check_range(self, "wheel_width_m", self.wheel_width_m, lo=0, lo_open=True)
+        if self.track_contact_length_m is not None:
+            check_range(self, "track_contact_length_m", self.track_contact_length_m, lo=0, lo_open=True)
+            if self.wheel_width_m is None or self.steering != "skid":
+                raise InputError(f"vehicle {self.name!r}: track_contact_length_m needs wheel_width_m (the belt's "
+                                 "width) and steering = 'skid'")
         if self.rated_step_m is not None:
             check_range(self, "rated_step_m", self.rated_step_m, lo=0, lo_open=True)
         if self.wheel_spin_inertia_kg_m2 is not None:

@@ -190,6 +190,19 @@ def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> lis
             markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
 
 
+
+def _outside_model_line(trials: pd.DataFrame) -> str:
+    """One line: how many soil trials had a wheel outside the soil model (bottomed out) and for what
+    share of their time (TrialResult.outside_model_fraction; runs from before the column: not recorded)."""
+    frac = trials["outside_model_fraction"].astype(float) if "outside_model_fraction" in trials else pd.Series([], dtype=float)
+    frac = frac[np.isfinite(frac)]
+    if frac.empty:
+        return "Outside the soil model (a wheel bottomed out): not recorded in this run."
+    some = frac[frac > 0.0]
+    return (f"Outside the soil model (a wheel bottomed out at the tables' sinkage cap, its forces not the "
+            f"Wong-Reece model's): {len(some)} of {len(frac)} soil trials"
+            + (f", for {100 * float(some.median()):.1f} % of their time (median)." if len(some) else "."))
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -343,7 +356,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
                   "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
                   "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
-                  markdown_table(pd.DataFrame(rows)), ""]
+                  markdown_table(pd.DataFrame(rows)), "", _outside_model_line(trials), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",

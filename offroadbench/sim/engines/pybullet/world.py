@@ -468,6 +468,14 @@ class World:
                 worst = -c[8]
         return worst
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model); None without soil."""
+        return self._tyres.core.outside_model() if self.sim.tyre_model == "terramechanics" else None
+
+    def use_soil_map(self, soil_map) -> None:
+        """From the next spawn, each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap)."""
+        self.soil_map, self._soil_setup = soil_map, None
+
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
@@ -489,5 +497,3 @@ class World:
             if hit[0] in self._terrain_set:
                 return float(hit[3][2])
         return float("nan")
-
-
