@@ -124,7 +124,9 @@ def score_run(suite: SuiteConfig, suite_file: str, tier: str, planner: str, out:
         if stored != (expected, planner):
             raise InputError(f"{run_dir}: holds study {stored[0]} with planner {stored[1]}, not {expected} with {planner}")
         tasks += task_rows(suite, cat.name, run_dir)
-        for session in meta["runs"]:
+        for session in meta["runs"]:  # the sessions that ran trials (a resume of a complete run runs none)
+            if not session.get("trials_run"):
+                continue
             versions.add(session.get("version") or meta["version"])
             machines.add(session.get("machine", "?"))
             if session.get("finished"):
