@@ -44,6 +44,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--force", action="store_true", help="skip the up-front memory and size estimate checks")
     run.set_defaults(func=cmd_run)
 
+    sc = sub.add_parser("score", help="write the score card of a finished suite run again (against the current "
+                                      "baselines), running nothing")
+    sc.add_argument("--planner", required=True, help="the planner the run drove")
+    sc.add_argument("--tier", default="quick", help="the run's tier (default: quick)")
+    sc.add_argument("--suite", default=DEFAULT_SUITE, help=f"suite name or suite TOML (default: {DEFAULT_SUITE})")
+    sc.add_argument("--out", required=True, help="the run folder (suite run --out)")
+    sc.add_argument("--card-out", help="folder of the score card (default: --out)")
+    sc.add_argument("--baselines", metavar="DIR", help="folder of the cards set beside it (default: the shipped ones)")
+    sc.set_defaults(func=cmd_score)
+
     lb = sub.add_parser("leaderboard", help="the leaderboard page from every committed score card")
     lb.add_argument("--write", metavar="PATH", help="write the page here (e.g. docs/leaderboard.md) instead of printing it")
     lb.add_argument("--scores", metavar="DIR", help="folder of committed cards (default: the shipped suites/scores)")
@@ -100,7 +110,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.study.execution import check_trial_timeout
     from offroadbench.study.runner import check_study_size
-    from offroadbench.suite import load_suite, plan_suite, run_suite, score_run, shipped_cards, suite_trials, write_card
+    from offroadbench.suite import load_suite, plan_suite, run_suite, suite_trials
 
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
@@ -130,6 +140,26 @@ def cmd_run(args: argparse.Namespace) -> int:
     if incomplete:  # pragma: no cover - run_study raises before leaving a category incomplete
         sys.stderr.write(f"offroadbench: categories not complete: {', '.join(incomplete)}; run again to resume\n")
         return 1
+    _write_and_print(suite, path, args, out, card_out)
+    return 0
+
+
+def cmd_score(args: argparse.Namespace) -> int:
+    from offroadbench.cli._common import check_output_dir
+    from offroadbench.suite import load_suite
+
+    suite, path = load_suite(args.suite)
+    suite.tier(args.tier)
+    out = Path(args.out)
+    card_out = check_output_dir(args.card_out, "--card-out") if args.card_out else out
+    _write_and_print(suite, path, args, out, card_out)
+    return 0
+
+
+def _write_and_print(suite, path: Path, args: argparse.Namespace, out: Path, card_out: Path) -> None:
+    """Score the run in ``out``, write its card into ``card_out`` beside the baselines, say what it holds."""
+    from offroadbench.suite import score_run, shipped_cards, write_card
+
     card = score_run(suite, str(path), args.tier, args.planner, out)
     baselines = shipped_cards(suite.name, args.tier, root=Path(args.baselines) if args.baselines else None)
     paths, card = write_card(card_out, card, baselines)
@@ -142,7 +172,6 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(f"  against {c['baseline']}: score {c['score_diff']:+.3f} per terrain "
                   f"[{c['score_diff_ci'][0]:+.3f}, {c['score_diff_ci'][1]:+.3f}], p = {c['p_sign_flip']:.2g}")
     print(f"score card: {', '.join(str(p) for p in paths)}")
-    return 0
 
 
 def cmd_leaderboard(args: argparse.Namespace) -> int:

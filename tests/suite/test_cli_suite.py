@@ -1,6 +1,7 @@
 """``offroadbench suite`` end to end on a tiny suite: run, resume, card files, baselines, leaderboard."""
 
 import json
+import shutil
 import subprocess
 import sys
 
@@ -104,3 +105,17 @@ def test_the_leaderboard_ranks_the_cards_and_names_the_missing(scored, capsys):
     assert "## tiny-v1, `quick` tier" in text and "## offroadbench-v1, `full` tier" in text
     assert "`straight`" in text and "../scores/tiny-v1/quick/straight/score.md" in text
     assert "No committed card yet for: `astar`" in text.split("## tiny-v1")[1]
+
+
+def test_score_rewrites_a_card_against_later_baselines_running_nothing(scored, capsys):
+    tmp, _ = scored
+    later = tmp / "later" / "tiny-v1" / "quick"
+    shutil.copytree(tmp / "astar", later / "astar")
+    rc, out, err = _run(tmp, capsys, "score", "--suite", str(tmp / "tiny-v1.toml"), "--planner", "straight",
+                        "--out", str(tmp / "straight"), "--card-out", str(tmp / "rescored"), "--baselines", str(tmp / "later"))
+    assert rc == 0, err
+    assert "against astar" in out and "this run" not in out
+    card, astar = read_card(tmp / "rescored"), read_card(tmp / "astar")
+    (cmp,) = card["comparisons"]
+    assert cmp["baseline"] == "astar" and cmp["score_diff"] == pytest.approx(-astar["comparisons"][0]["score_diff"], abs=1e-6)
+    assert card["tasks"] == read_card(tmp / "scores" / "tiny-v1" / "quick" / "straight")["tasks"]
