@@ -71,7 +71,7 @@ import math
 import time
 
 import numpy as np
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
