@@ -160,7 +160,7 @@ def _write_and_print(suite, path: Path, args: argparse.Namespace, out: Path, car
     """Score the run in ``out``, write its card into ``card_out`` beside the baselines, say what it holds."""
     from offroadbench.suite import score_run, shipped_cards, write_card
 
-    card = score_run(suite, str(path), args.tier, args.planner, out)
+    card = score_run(suite, path.name, args.tier, args.planner, out)
     baselines = shipped_cards(suite.name, args.tier, root=Path(args.baselines) if args.baselines else None)
     paths, card = write_card(card_out, card, baselines)
     o = card["overall"]
