@@ -191,7 +191,7 @@ def _check_owned(cat: Mapping[str, Any], where: str) -> None:
     for label, tables in layers:
         for table, keys in SUITE_OWNED.items():
             for key in keys:
-                if key in tables.get(table, {}) or (table == "planner" and tables.get("grid", {}).get(f"planner.{key}")):
+                if key in tables.get(table, {}) or f"{table}.{key}" in tables.get("grid", {}):
                     raise InputError(f"{where}, category {cat.get('name')!r}{label}: [{table}] {key} is set by the "
                                      "suite for every category; remove it")
 

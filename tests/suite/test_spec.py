@@ -67,3 +67,11 @@ def test_the_tier_is_laid_over_the_category_and_the_suite_fixes_the_rest(tiny_su
     assert data["planner"] == {"name": "lattice", "sensor": "oracle"}
     assert data["vehicle"] == {"name": "husky"} and data["controller"] == {"cruise_speed_m_s": 1.0}
     assert tomllib.loads(tiny_suite.read_text())["categories"][0]["study"]["study"] == {"recipe": "paper-d2.45", "root_seed": 5}
+
+
+def test_a_category_may_not_vary_the_planner_either(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(suite_text(TINY_SUITE.replace('grid = {{ "recipe.layers.base.D_high" = [2.3, 2.6] }}',
+                                                  'grid = {{ "planner.name" = ["straight", "astar"] }}')))
+    with pytest.raises(InputError, match=r"\[planner\] name is set by the suite"):
+        load_suite(str(path))
