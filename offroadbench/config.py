@@ -118,7 +118,7 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
     return value
 
 
-def _dataclass_type(annotation: Any) -> type | None:
+def dataclass_type(annotation: Any) -> type | None:
     """The config class of a field annotated ``SomeConfig`` or ``SomeConfig | None``, else None."""
     if dataclasses.is_dataclass(annotation) and isinstance(annotation, type):
         return annotation
@@ -164,7 +164,7 @@ def from_dict(
     hints = typing.get_type_hints(cls)
     kwargs: dict[str, Any] = {}
     for name, value in data.items():
-        sub = _dataclass_type(hints.get(name, Any))
+        sub = dataclass_type(hints.get(name, Any))
         dotted = f"{key}.{name}" if key else name
         if sub is not None and isinstance(value, dict):
             start = getattr(base, name) if base is not None else _field_default(fields[name])

@@ -100,7 +100,7 @@ def drive_record(run, label: str = "", options: dict | None = None) -> dict:
     and seeds, every setting the missions were driven with (the TrialSettings, the terrain's gravity
     and soil filled in), the platform (offroadbench.study.fingerprint) and the code version."""
     from offroadbench.study.fingerprint import platform_fingerprint
-    from offroadbench.study.runner import code_version
+    from offroadbench.study.session import code_version
 
     return {
         "options": _plain(options or {}),

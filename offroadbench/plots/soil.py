@@ -27,14 +27,14 @@ def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapp
     """Soft soil: box plots of each :data:`offroadbench.study.stats.terrain.SOIL_METRICS` over every trial per
     group driven on soil (offroadbench.study.stats.terrain.soil_boxes); ``conditions`` (group label ->
     offroadbench.study.report.header.soil_conditions) are written under the plots, one line per group."""
-    from offroadbench.plots.study import _bxp
+    from offroadbench.plots.study import box_plot
 
     many = max((len(b) for b in boxes.values()), default=0) > 4
     lines = [f"{g}: {conditions_text(c)}" for g, c in (conditions or {}).items()]
     height = (6.0 if many else 3.6) + 0.16 * len(lines)
     fig, axes = new_figure(1, len(metrics), figsize=(5.0 * len(metrics), height))
     for ax, (metric, (title, unit)) in zip(np.ravel(axes), metrics.items(), strict=True):
-        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
+        box_plot(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Soft soil: every trial (successful or not); slip and sinkage over the moving samples", fontsize=10)
     if lines:
         fig.supxlabel("\n".join(lines), fontsize=7, x=0.01, ha="left", family="monospace")

@@ -47,17 +47,14 @@ def _plan_from_meta(meta: dict[str, Any]) -> SearchPlan:
 
 def search_table(run_dir: str | Path) -> tuple[pd.DataFrame, SearchPlan]:
     """One row per stored proposal (run or not) and the search it belongs to."""
+    from offroadbench.study.store.search import search_rows
     from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         meta = store.meta()
         if meta.get("kind") != "search":
             raise InputError(f"{run_dir}: holds a study, not a search (see `study report`)")
-        cur = store.con.execute(
-            "SELECT s.cell, s.grp, s.method, s.batch, s.slot, s.stage, s.x, s.log_w, t.row, t.terrain_seed, "
-            "t.mission_seed FROM search_trials s LEFT JOIN trials t ON t.cell = s.cell "
-            "ORDER BY s.grp, s.method, s.batch, s.slot")
-        raw = cur.fetchall()
+        raw = search_rows(store)
     plan = _plan_from_meta(meta)
     cfg = plan.search
     records = []

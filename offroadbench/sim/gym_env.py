@@ -121,6 +121,7 @@ from offroadbench.sim.trial.runner import (
     TrialRecord,
     body_velocity,
     clamp_action,
+    control_steps,
     plan_within_limits,
     vehicle_envelope,
 )
@@ -239,11 +240,7 @@ class TraverseEnv(gym.Env):
                 config, control_rate_hz=settings.controller.control_rate_hz,
                 mission_length_m=settings.missions.length_m, border_m=settings.missions.border_m,
                 patch_cells=settings.observation.patch_cells, patch_spacing_m=settings.observation.patch_spacing_m)
-        if settings.sim.physics_rate_hz % config.control_rate_hz:
-            raise InputError(
-                f"TraverseConfig.control_rate_hz = {config.control_rate_hz} must divide "
-                f"SimConfig.physics_rate_hz = {settings.sim.physics_rate_hz}"
-            )
+        control_steps(settings.sim.physics_rate_hz, config.control_rate_hz, "TraverseConfig.control_rate_hz")
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
         self.perception = _perception(settings.planner.perception if perception is None else perception)

@@ -200,7 +200,7 @@ def test_soil_check_json_compares_with_the_published_band(capsys):
 def test_slip_is_higher_on_a_slope(flat):
     """Lunar regolith, lunar gravity: climbing a 8 deg grade at 0.3 m/s takes more slip than the flat."""
     from offroadbench.sim import SimConfig, World
-    from offroadbench.sim.rigs.vehicle_check import _set_gravity
+    from offroadbench.sim.rigs.vehicle_check import set_tilted_gravity
     from offroadbench.sim.trial.skid_steer import wheel_speeds
 
     sim = SimConfig(tyre_model="terramechanics", soil="lunar-regolith", gravity_m_s2=1.62)
@@ -208,7 +208,7 @@ def test_slip_is_higher_on_a_slope(flat):
     with World(flat, "husky", sim) as world:
         for grade in (0.0, 8.0):
             world.spawn(2.0, 4.0, 0.0)
-            _set_gravity(world, math.radians(grade), "y")
+            set_tilted_gravity(world, math.radians(grade), "y")
             samples = []
             for k in range(300):
                 world.command_wheels(*wheel_speeds(min(0.3, 0.3 * k / 60), 0.0, world.spec))
@@ -216,7 +216,7 @@ def test_slip_is_higher_on_a_slope(flat):
                 if k >= 180:
                     samples.append(world.wheel_slip())
             slips.append(sum(samples) / len(samples))
-            _set_gravity(world, 0.0, "y")
+            set_tilted_gravity(world, 0.0, "y")
     assert 0.0 < slips[0] < slips[1] < 1.0, slips
 
 

@@ -17,7 +17,7 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.steering import drive_twist
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.rigs.vehicle_measure import CheckResult, _FLAT_CELL_M, _abs_row, _bisect, _climbs, _ratio_row
+from offroadbench.sim.rigs.vehicle_measure import CheckResult, FLAT_CELL_M, abs_row, bisect_threshold, climbs_grade, ratio_row
 
 
 #: soil and gravity of the soft-soil rows
@@ -126,7 +126,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     soil = load_soil(SOFT_SOIL)
     soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
                                settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
     r, b = spec.wheel_radius_m, spec.wheel_width_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
     with open_world(flat, spec, soft) as world:
@@ -139,7 +139,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         load = mass * g / n
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
-        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
         pull = _tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
     expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
@@ -150,9 +150,9 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n, n_driven)
     mu = spec.wheel_friction * sim.terrain_friction
     return [
-        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
+        ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
                    f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
-        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
                  f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
                  f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
         CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",

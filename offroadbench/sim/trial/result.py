@@ -91,7 +91,7 @@ class TrialResult:
     __hash__ = None  # type: ignore[assignment]  # NaN-aware equality has no matching hash
 
 
-def _result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialResult:
+def make_result(mission, tel, reason, traversal_time, end_time, dt, goal) -> TrialResult:
     return TrialResult(
         mission_index=mission.index,
         success=reason == "",

@@ -14,7 +14,7 @@ from typing import Sequence
 from offroadbench.errors import InputError, StudyError
 from offroadbench.study.execution.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
                                       run_terrain)
-from offroadbench.study.execution.common import (Handle, _worker_bootstrap, check_trial_timeout, task_failure,
+from offroadbench.study.execution.common import (Handle, worker_bootstrap, check_trial_timeout, task_failure,
                                                 timeout_faults)
 
 log = logging.getLogger(__name__)
@@ -25,7 +25,7 @@ class TrialTimeout(RuntimeError):
     """A trial (or a terrain build) ran longer than the per-trial wall-clock limit on a Dask worker."""
 
 
-def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list:
+def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list:
     """A terrain task on a Dask worker: quiet bootstrap, then every message of :func:`run_terrain`.
 
     With ``limit_s`` the work runs in a helper thread and every message (the terrain build, then
@@ -35,7 +35,7 @@ def _dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | Non
     worker (a hung trial cannot be interrupted from Python) and submits the rest. The wait is
     sliced into short waits, so any limit up to MAX_TRIAL_TIMEOUT_S works.
     """
-    _worker_bootstrap()
+    worker_bootstrap()
     if limit_s is None:
         return collect_terrain(task, trial_fn)
     import threading
@@ -148,7 +148,7 @@ class DaskExecutor:
         logging.getLogger("distributed.client").addFilter(quiet)
         try:
             futures = {
-                client.submit(_dask_task, task, trial_fn, self.trial_timeout_s, pure=False): task for task in tasks
+                client.submit(dask_task, task, trial_fn, self.trial_timeout_s, pure=False): task for task in tasks
             }
             pending = set(futures)
             no_workers_since = None
@@ -167,7 +167,7 @@ class DaskExecutor:
                     done = set()
                 for fut in done:
                     for rest in self._collect(client, fut, futures[fut], handle):
-                        new = client.submit(_dask_task, rest, trial_fn, self.trial_timeout_s, pure=False)
+                        new = client.submit(dask_task, rest, trial_fn, self.trial_timeout_s, pure=False)
                         futures[new] = rest
                         pending.add(new)
                 if pending:

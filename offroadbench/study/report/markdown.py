@@ -50,13 +50,13 @@ from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions,
 from offroadbench.study.stats import terrain as stats
 from offroadbench.study.report.format import markdown_table
 from offroadbench.study.report.paper import (
-    _axis_effects_section,
-    _confirmatory_section,
-    _mark_exploratory,
-    _reference_sections,
-    _terrain_changes_section,
+    axis_effects_section,
+    confirmatory_section,
+    mark_exploratory,
+    reference_sections,
+    terrain_changes_section,
 )
-from offroadbench.study.report.planners import _numeric, planner_sections
+from offroadbench.study.report.planners import all_numeric, planner_sections
 from offroadbench.study.store.results import load, load_meta, load_terrains
 
 __all__ = ["Report", "build_report", "markdown_table"]
@@ -235,7 +235,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     tables["held_fixed.csv"] = fixed
     faults = _faults_section(run_dir, tables)
     n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains)
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
     lines = [
@@ -289,7 +289,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(tabs["metrics"]),
         "",
     ]
-    if len(labels) > 1 and len(study["grid"]) == 1 and _numeric(study["grid"][0]["values"]):
+    if len(labels) > 1 and len(study["grid"]) == 1 and all_numeric(study["grid"][0]["values"]):
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
@@ -308,18 +308,18 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
                   "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
                   markdown_table(changes), ""]
-        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
+        terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(trials, terrains, labels, names, study)
         lines += terrain_lines
-    elif len(labels) > 1 and study["grid"] and all(_numeric(a["values"]) for a in study["grid"]):
+    elif len(labels) > 1 and study["grid"] and all(all_numeric(a["values"]) for a in study["grid"]):
         # several numeric axes (a sensitivity study): every cell against the first
         names = ["success_rate_pct", *stats.METRICS]
         first = min(labels)
-        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(
+        terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(
             trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
         lines += terrain_lines
     elif len(labels) > 1 and "planner.name" not in meta["columns"] and bool(study.get("paired_terrains", True)):
         # a grid with a categorical axis (engine, tyre model): each axis's effect within the others
-        terrain_lines, tables["terrain_changes.csv"] = _axis_effects_section(trials, terrains, labels, meta)
+        terrain_lines, tables["terrain_changes.csv"] = axis_effects_section(trials, terrains, labels, meta)
         lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     soil = stats.soil_boxes(trials, labels)
@@ -351,11 +351,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
+    ref_lines, ref_tables = reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
                                                 tables.get("median_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
-    lines = _mark_exploratory(lines)
+    lines = mark_exploratory(lines)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
 
 

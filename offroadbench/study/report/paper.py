@@ -25,7 +25,7 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
-def _reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
+def reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
                         ours_changes: pd.DataFrame | None = None) -> tuple[list[str], dict[str, pd.DataFrame]]:
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
@@ -116,7 +116,7 @@ def _terrain_verdict(terrain: pd.DataFrame | None, name: str, frm: str, to: str,
             "significant at the terrain level": verdict}
 
 
-def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
+def terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str], names: list[str],
                              study: dict[str, Any], pairs: list[tuple[int, int]] | None = None
                              ) -> tuple[list[str], pd.DataFrame]:
     """Changes between groups (consecutive, or ``pairs``) tested with the terrain as the unit
@@ -137,7 +137,7 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
 
 
 # ---------------------------------------------------------------------------- confirmatory
-def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
+def confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
                           ) -> tuple[list[str], pd.DataFrame | None]:
     """The study's analysis plan, computed exactly (offroadbench.study.stats.plan), or the note that it has none."""
     from offroadbench.study.stats.plan import confirmatory_table, stored_plan
@@ -168,7 +168,7 @@ def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: 
     return head + [text, "", markdown_table(shown), ""], tab
 
 
-def _mark_exploratory(lines: list[str]) -> list[str]:
+def mark_exploratory(lines: list[str]) -> list[str]:
     """Append "(exploratory)" to every section heading after the confirmatory one, except the run's records."""
     out, after = [], False
     for line in lines:
@@ -180,7 +180,7 @@ def _mark_exploratory(lines: list[str]) -> list[str]:
     return out
 
 
-def _axis_effects_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str],
+def axis_effects_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[int, str],
                           meta: dict[str, Any]) -> tuple[list[str], pd.DataFrame]:
     """Each grid axis's effect within every stratum of the others (each value against the axis's first), at
     the terrain level with intervals: for grids with a categorical axis (engines, soil models)."""
@@ -197,6 +197,6 @@ def _axis_effects_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels: 
     names = ["success_rate_pct", *stats.METRICS]
     if "mean_slip" in trials and np.isfinite(trials["mean_slip"].astype(float)).any():
         names += list(stats.SOIL_METRICS)
-    lines, tab = _terrain_changes_section(trials, terrains, labels, names, study, pairs)
+    lines, tab = terrain_changes_section(trials, terrains, labels, names, study, pairs)
     lines[0] = "## Changes at the terrain level: each axis within the others"
     return lines, tab

@@ -17,7 +17,7 @@ from offroadbench.study.report.format import markdown_table
 
 
 # ---------------------------------------------------------------------------- planner stress test
-def _numeric(values) -> bool:
+def all_numeric(values) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
@@ -28,7 +28,7 @@ def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str
     columns = meta["columns"]
     axes = meta["study"]["grid"]
     planner = columns.get("planner.name")
-    numeric = [a["key"] for a in axes if _numeric(a["values"])]
+    numeric = [a["key"] for a in axes if all_numeric(a["values"])]
     if len(numeric) > 1:
         numeric = [k for k in numeric if k.startswith("recipe.")]
     level = columns[numeric[0]] if len(numeric) == 1 else None

@@ -24,7 +24,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
 - Building a heightfield from data walks every triangle into a render mesh that the shape keeps
   (about 2-3 s and 600 MB for 1009^2, even in DIRECT mode). The walk skips triangles outside the
   shape's height range, so the shape is first created empty with the map's height range
-  (:func:`_empty_heights`: almost no walk), and the heights are then written in place with
+  (:func:`empty_heights`: almost no walk), and the heights are then written in place with
   ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept). Replacing
   never updates a shape's height range, so the range is set at creation. The shape, and so
   every result, is bit for bit the one built from the data directly.
@@ -36,7 +36,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   and 3 int indices to arrays that double in capacity, and Bullet's allocator zero-fills every
   allocation (capacity, not size, is resident); then one position and one normal ``btVector3``
   (32 B, double precision) per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the
-  heights. :func:`_lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
+  heights. :func:`lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
 - So the map is built as tiles (``SimConfig.heightfield_tile_cells``, :func:`tile_spans`), one
   heightfield body each, written one after the other: the transient is one tile's (~45 MiB for
   the default 256-cell tiles of a 1009^2 map: peak RSS of a build 0.24 GB instead of 0.88 GB, in
@@ -82,7 +82,7 @@ from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.engines.pybullet.heap import _empty_heights, _lean_heap
+from offroadbench.sim.engines.pybullet.heap import empty_heights, lean_heap
 
 __all__ = ["World"]
 
@@ -171,8 +171,8 @@ class World:
         for r0, r1 in rows:
             for c0, c1 in cols:
                 z = hm.z[r0 : r1 + 1, c0 : c1 + 1]
-                shape = self._heightfield(_empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
-                with _lean_heap():
+                shape = self._heightfield(empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
+                with lean_heap():
                     self._heightfield(z.ravel(), z.shape, replace=shape)
                 centre = [(c0 + c1) / 2.0 * hm.cell_size_m, (r0 + r1) / 2.0 * hm.cell_size_m, z_centre]
                 body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=cid)
