@@ -15,7 +15,7 @@ import sys
 from offroadbench.errors import InputError, PluginError, StudyError, TrialFault
 
 #: command modules under offroadbench.cli, each with register(subparsers)
-COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config")
+COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config", "suite")
 
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 1

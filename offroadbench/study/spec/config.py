@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from offroadbench.config import check_int, config_id, load_toml, to_dict
+from offroadbench.config import check_int, config_id, did_you_mean, load_toml, to_dict
 from offroadbench.errors import InputError
 from offroadbench.sim.trial.pipeline import SETTINGS_TABLES, TrialSettings, settings_part
 from offroadbench import seeding
@@ -439,13 +439,15 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
         raise InputError(f"{where}: expected a TOML table")
     unknown = sorted(set(data) - set(_TOP_KEYS))
     if unknown:
-        raise InputError(f"{where}: unknown table(s) {', '.join(unknown)}; known: {', '.join(_TOP_KEYS)}")
+        raise InputError(f"{where}: unknown table(s) {', '.join(unknown)}; known: {', '.join(_TOP_KEYS)}"
+                         f"{did_you_mean(unknown, _TOP_KEYS)}")
     if "study" not in data or not isinstance(data["study"], dict):
         raise InputError(f"{where}: missing [study] table (keys: {', '.join(_STUDY_KEYS)})")
     head = dict(data["study"])
     bad = sorted(set(head) - set(_STUDY_KEYS))
     if bad:
-        raise InputError(f"{where}: [study]: unknown key(s) {', '.join(bad)}; known keys: {', '.join(_STUDY_KEYS)}")
+        raise InputError(f"{where}: [study]: unknown key(s) {', '.join(bad)}; known keys: {', '.join(_STUDY_KEYS)}"
+                         f"{did_you_mean(bad, _STUDY_KEYS)}")
     missing = [k for k in ("name", "recipe", "root_seed") if k not in head]
     if missing:
         raise InputError(f"{where}: [study] is missing {', '.join(missing)} (required: name, recipe, root_seed; "
