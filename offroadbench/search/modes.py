@@ -51,14 +51,21 @@ PERMUTATIONS = 999
 ALPHA = 0.01
 
 
+def _bins(x: np.ndarray, bins: int) -> np.ndarray:
+    """Equal-count bin of each value (by rank; ties broken by order)."""
+    x = np.asarray(x, dtype=float).ravel()
+    return np.minimum((np.argsort(np.argsort(x, kind="stable"), kind="stable") * bins) // max(len(x), 1), bins - 1)
+
+
 def correlation_ratio(x: np.ndarray, y: np.ndarray, bins: int = BINS) -> float:
     """eta^2 of y on ``bins`` equal-count bins of x (module docstring); 0 where y is constant."""
-    x = np.asarray(x, dtype=float).ravel()
-    y = np.asarray(y, dtype=float).ravel()
+    return _eta2(_bins(x, bins), np.asarray(y, dtype=float).ravel(), bins)
+
+
+def _eta2(b: np.ndarray, y: np.ndarray, bins: int) -> float:
     ss = float(((y - y.mean()) ** 2).sum())
     if ss == 0 or len(y) < 2:
         return 0.0
-    b = np.minimum((np.argsort(np.argsort(x, kind="stable"), kind="stable") * bins) // len(x), bins - 1)
     n_b = np.bincount(b, minlength=bins)
     s_b = np.bincount(b, weights=y, minlength=bins)
     mean_b = np.divide(s_b, n_b, out=np.zeros(bins), where=n_b > 0)
@@ -92,8 +99,9 @@ def sensitivity(x: np.ndarray, failed: np.ndarray, keys: tuple[str, ...], source
     perms = [rng.permutation(y) for _ in range(permutations)]
     out = []
     for i, key in enumerate(keys):
-        eta = correlation_ratio(x[:, i], y, bins)
-        null = np.array([correlation_ratio(x[:, i], yp, bins) for yp in perms])
+        b = _bins(x[:, i], bins)
+        eta = _eta2(b, y, bins)
+        null = np.array([_eta2(b, yp, bins) for yp in perms])
         thr = float(np.quantile(null, 1 - alpha))
         p = (1 + int((null >= eta).sum())) / (1 + permutations)
         out.append(Sensitivity(key, eta, thr, p, bool(y.any() and eta > thr), len(y), int(y.sum()), source))
