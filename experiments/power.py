@@ -3,7 +3,7 @@
 The test is the one the study's plan uses: the exact two-sided sign-flip test of the mean per-terrain
 difference, at Holm's strictest level alpha / m (m = the plan's tests; the power of the first Holm
 step, a lower bound for the later ones). The effects are a pilot's per-terrain differences,
-resampled as the truth (offroadbench.study.clustered.sign_flip_power). Two pilots, each kept as
+resampled as the truth (offroadbench.study.stats.clustered.sign_flip_power). Two pilots, each kept as
 per-terrain success counts in experiments/pilots/ so that the design's justification does not change
 when a study is re-run:
 
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from offroadbench.study.clustered import sign_flip_power
+from offroadbench.study.stats.clustered import sign_flip_power
 
 HERE = Path(__file__).resolve().parent
 PILOTS = {

@@ -2,14 +2,14 @@
 
 Everything here is read from the code, so the reference cannot drift from it:
 
-* the settings tables are the config dataclasses behind ``offroadbench.study.spec.SECTIONS``
+* the settings tables are the config dataclasses behind ``offroadbench.study.spec.config.SECTIONS``
   (a table built by ``from_dict(SomeConfig, ...)`` is found automatically, so a new section or
   field appears in the reference by itself);
 * a key's meaning (with its unit and the paper or source behind it) is the field's docstring,
   read from the source with :mod:`ast`; its allowed range is read from the ``check_range`` /
   ``check_int`` / ``check_choice`` calls of the config's ``__post_init__``;
 * the trial columns are the fields of :class:`offroadbench.sim.trial.runner.TrialResult` with their
-  docstrings, after the key columns of :func:`offroadbench.study.results.load`.
+  docstrings, after the key columns of :func:`offroadbench.study.store.results.load`.
 
 ``offroadbench config --write-reference docs/reference.md`` rewrites the committed reference
 (``tests/test_reference.py`` fails while it differs from :func:`render_reference`), and
@@ -60,7 +60,7 @@ def _builder_class(builder: Any) -> type | None:
 
 
 def _study_section() -> SectionDoc:
-    from offroadbench.study.spec import StudyConfig
+    from offroadbench.study.spec.config import StudyConfig
 
     skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
     notes = (
@@ -70,7 +70,7 @@ def _study_section() -> SectionDoc:
         ("`[recipe_overrides]`: fixed `\"dotted.key\" = value` changes of the recipe, for every cell "
         "(the keys of `offroadbench generate --set`)."),
         ("`[reference]`: published numbers the report sets beside the study's (free-form; "
-        "`offroadbench.study.report`)."),
+        "`offroadbench.study.report.markdown`)."),
         ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
     return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
@@ -134,8 +134,8 @@ def _planner_sections() -> list[SectionDoc]:
 
 def study_sections() -> list[SectionDoc]:
     """Every table a study TOML accepts, in the order of the file: ``[study]``, then the settings
-    tables of ``offroadbench.study.spec.SECTIONS`` (planners' settings as ``planner.NAME``)."""
-    from offroadbench.study.spec import SECTIONS
+    tables of ``offroadbench.study.spec.config.SECTIONS`` (planners' settings as ``planner.NAME``)."""
+    from offroadbench.study.spec.config import SECTIONS
 
     out = [_study_section()]
     for name, builder in SECTIONS.items():
@@ -175,7 +175,7 @@ def section_names() -> list[str]:
 
 
 # ---------------------------------------------------------------------------- the tables a study writes
-#: the key columns of a study's trial table (offroadbench.study.results.load), before the TrialResult fields
+#: the key columns of a study's trial table (offroadbench.study.store.results.load), before the TrialResult fields
 KEY_COLUMNS = (
     ("(grid columns)", "", ("One column per grid axis, named by its last key part (`D_high`), `planner` for "
      "`planner.name`, `vehicle` for `vehicle.name`, or the full key where the last part is ambiguous.")),
@@ -187,7 +187,7 @@ KEY_COLUMNS = (
     ("mission_seed", "", "Integer seed the mission was drawn from (offroadbench.seeding.mission_seed)."),
 )
 
-#: columns of the terrain table (offroadbench.study.results.load_terrains) after the grid columns and keys
+#: columns of the terrain table (offroadbench.study.store.results.load_terrains) after the grid columns and keys
 TERRAIN_COLUMNS = (
     ("area_low", "", ("Fraction of the map inside the border whose Moore gradient is low (Majhor & Bos 2023, "
      "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
@@ -196,7 +196,7 @@ TERRAIN_COLUMNS = (
     ("twin_unexplained_var", "", "Only in cells with `[study] missions_from` whose missions come from another cell's "
      "terrain: 1 - r^2 of this terrain's heights against that terrain's (same seed); for a band-limited arm against "
      "its aliased twin, the share of the surface's variance carried by the W-M terms above the grid's Nyquist "
-     "frequency (offroadbench.study.tasks.prepare_cell)."),
+     "frequency (offroadbench.study.execution.tasks.prepare_cell)."),
 )
 
 #: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
@@ -272,8 +272,8 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
 
 
 def _analysis_lines() -> list[str]:
-    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.plan)."""
-    from offroadbench.study import plan
+    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.stats.plan)."""
+    from offroadbench.study.stats import plan
 
     doc = inspect.getdoc(plan) or ""
     tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
@@ -344,7 +344,7 @@ def render_reference() -> str:
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
         "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`. `study export` adds, after these, the "
         "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
-        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
+        "`rules`, `recipe`; `offroadbench.study.report.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",

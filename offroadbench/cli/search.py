@@ -12,7 +12,7 @@ from offroadbench.errors import InputError
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``search`` command group."""
     from offroadbench.cli._common import float_at_least, int_at_least
-    from offroadbench.study.executors import EXECUTORS
+    from offroadbench.study.execution.executors import EXECUTORS
 
     p = subparsers.add_parser("search", help="search for failures and estimate P(failure) (falsifier, importance sampling)")
     sub = p.add_subparsers(dest="search_command", required=True)
@@ -47,7 +47,7 @@ def write_search_report(run_dir: Path, out: Path, html: bool = False) -> Path:
     from offroadbench.cli._common import created_dirs, save_figure
     from offroadbench.io.export import staged_dir
     from offroadbench.search.report import build_search_report
-    from offroadbench.study.results import load_meta
+    from offroadbench.study.store.results import load_meta
 
     report = build_search_report(run_dir)
     toml = load_meta(run_dir).get("study_toml")

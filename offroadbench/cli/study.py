@@ -26,7 +26,7 @@ def _raise_terminated(signum, frame) -> None:
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
     from offroadbench.cli._common import float_at_least, int_at_least
-    from offroadbench.study.executors import EXECUTORS
+    from offroadbench.study.execution.executors import EXECUTORS
 
     p = subparsers.add_parser("study", help="run, export and report Monte Carlo studies")
     sub = p.add_subparsers(dest="study_command", required=True)
@@ -122,7 +122,7 @@ def apply_sets(data: dict, sets: list[str] | None) -> dict:
     ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
     that a grid axis varies is refused (it would be overwritten in every cell)."""
     from offroadbench.cli._common import parse_sets
-    from offroadbench.study.spec import SECTIONS
+    from offroadbench.study.spec.config import SECTIONS
 
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
     grid = set(_flat_keys(out.get("grid", {})))
@@ -154,14 +154,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     from offroadbench.config import load_toml
     from offroadbench.study import run_study
     from offroadbench.study.runner import check_study_size
-    from offroadbench.study.spec import plan_cells, study_from_dict
+    from offroadbench.study.spec.config import plan_cells, study_from_dict
 
     path = check_input_file(args.study, "study TOML")
     if args.scheduler and args.executor != "dask":
         raise InputError("--scheduler needs --executor dask")
     if args.trial_timeout_s is not None and args.executor == "inline":
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    from offroadbench.study.executors import check_trial_timeout
+    from offroadbench.study.execution.executors import check_trial_timeout
 
     try:
         check_trial_timeout(args.trial_timeout_s)
@@ -197,7 +197,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                                 executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
                                 retry_faults=args.retry_faults)
     except Terminated:
-        from offroadbench.study.store import Store
+        from offroadbench.study.store.store import Store
 
         with Store(out) as store:
             stored = store.counts()[0]
@@ -224,12 +224,12 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     run_dir = _run_dir(args.run_dir)
     out = check_output_dir(args.out if args.out else run_dir, "--out")
-    from offroadbench.study.stats import terrain_success
+    from offroadbench.study.stats.terrain import terrain_success
 
     trials = load(run_dir)
     if len(trials):  # each row says what made it: the fixed settings beside the grid axes
-        from offroadbench.study.header import settings_columns
-        from offroadbench.study.results import load_meta
+        from offroadbench.study.report.header import settings_columns
+        from offroadbench.study.store.results import load_meta
 
         fixed = settings_columns(load_meta(run_dir))
         fixed = fixed[["cell", *(c for c in fixed.columns if c not in trials.columns)]]
@@ -264,8 +264,8 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
 def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
     """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
     ``html`` also the self-contained report.html) to ``out``."""
-    from offroadbench.study.report import build_report
-    from offroadbench.study.results import load_meta
+    from offroadbench.study.report.markdown import build_report
+    from offroadbench.study.store.results import load_meta
 
     from offroadbench.cli._common import created_dirs, save_figure
 
@@ -284,7 +284,7 @@ def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, 
             (stage / "study.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
         if html:
-            from offroadbench.study.html_report import report_html
+            from offroadbench.study.report.html import report_html
 
             (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
     return out / ("report.html" if html else "report.md")
@@ -304,7 +304,7 @@ def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantis
     """A line when the stored trial ran on another platform or offroadbench, saying whether
     bit-identity is promised here (offroadbench.study.fingerprint); "" when it ran on this one."""
     from offroadbench.study.fingerprint import describe, identity_promise, platform_fingerprint
-    from offroadbench.study.results import trial_platform
+    from offroadbench.study.store.results import trial_platform
     from offroadbench.study.runner import code_version
 
     stored, stored_version = trial_platform(run_dir, cell, terrain, mission)
@@ -324,7 +324,7 @@ def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantis
 def cmd_replay(args: argparse.Namespace) -> int:
     """Replay one trial; exit 1 if it does not reproduce the stored row."""
     from offroadbench.cli._common import check_output_dir, check_output_file, created_dirs
-    from offroadbench.study.tasks import replay_trial
+    from offroadbench.study.execution.tasks import replay_trial
 
     run_dir = _run_dir(args.run_dir)
     png = None

@@ -30,7 +30,7 @@ _BATCH = 256
 class NoMissionError(InputError):
     """This terrain admits no mission under the rules (no start cell, or no goal found within the
     tries): a property of the drawn terrain, not of the settings. ``drive`` reports it as bad input
-    (one line); a study stores the terrain's trials as faults (offroadbench.study.tasks.run_terrain)."""
+    (one line); a study stores the terrain's trials as faults (offroadbench.study.execution.tasks.run_terrain)."""
 
 @dataclass(frozen=True, kw_only=True)
 class MissionConfig:

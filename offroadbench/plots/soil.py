@@ -16,7 +16,7 @@ __all__ = ["plot_soil_check", "fig_soil", "conditions_text"]
 
 def conditions_text(c: Mapping[str, Any]) -> str:
     """``soil lunar-regolith (study), gravity 1.62 m/s^2 (terrain)`` from
-    offroadbench.study.header.soil_conditions."""
+    offroadbench.study.report.header.soil_conditions."""
     g = c.get("gravity_m_s2")
     g_text = f"{g:g} m/s^2" if isinstance(g, (int, float)) else "?"
     return f"soil {c.get('soil')} ({c.get('soil_source')}), gravity {g_text} ({c.get('gravity_source')})"
@@ -24,9 +24,9 @@ def conditions_text(c: Mapping[str, Any]) -> str:
 
 def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]],
              conditions: Mapping[str, Mapping[str, Any]] | None = None):
-    """Soft soil: box plots of each :data:`offroadbench.study.stats.SOIL_METRICS` over every trial per
-    group driven on soil (offroadbench.study.stats.soil_boxes); ``conditions`` (group label ->
-    offroadbench.study.header.soil_conditions) are written under the plots, one line per group."""
+    """Soft soil: box plots of each :data:`offroadbench.study.stats.terrain.SOIL_METRICS` over every trial per
+    group driven on soil (offroadbench.study.stats.terrain.soil_boxes); ``conditions`` (group label ->
+    offroadbench.study.report.header.soil_conditions) are written under the plots, one line per group."""
     from offroadbench.plots.study import _bxp
 
     many = max((len(b) for b in boxes.values()), default=0) > 4

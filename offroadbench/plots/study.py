@@ -2,7 +2,7 @@
 :class:`matplotlib.figure.Figure`; the caller saves it.
 
 The figures draw what they are given: box plots take the box statistics the report's tables come
-from (offroadbench.study.stats.box_stats), so tables and plots agree exactly, and this module
+from (offroadbench.study.stats.terrain.box_stats), so tables and plots agree exactly, and this module
 imports nothing of offroadbench.study (the report imports it, never the other way round)."""
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def fig_class_areas(summary: pd.DataFrame):
 
 def fig_success(boxes: Mapping[str, Mapping[str, Any]]):
     """Fig. 6: box plots of the per-terrain success rate, given per group label as box statistics
-    (offroadbench.study.stats.success_boxes)."""
+    (offroadbench.study.stats.terrain.success_boxes)."""
     fig, ax = new_figure(figsize=(5, 3.6))
     _bxp(ax, boxes, "success rate per terrain (%)", "Success rate (Eq. 5)")
     ax.set_ylim(-3, 103)
@@ -92,7 +92,7 @@ def fig_success(boxes: Mapping[str, Mapping[str, Any]]):
 
 def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]]):
     """Fig. 7: box plots of the traversal metrics of successful trials per group; ``boxes`` is metric
-    -> group label -> box statistics (offroadbench.study.stats.metric_boxes), ``metrics`` is metric
+    -> group label -> box statistics (offroadbench.study.stats.terrain.metric_boxes), ``metrics`` is metric
     -> (title, unit) for the four panels."""
     many = max((len(b) for b in boxes.values()), default=0) > 4  # rotated labels need room
     fig, axes = new_figure(2, 2, figsize=(11, 10) if many else (9, 6.4))

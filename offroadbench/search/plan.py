@@ -1,5 +1,5 @@
 """A search file read and resolved: its study part, its grid cells (the groups searched) and, for
-each proposal, the study cell a worker drives (:class:`~offroadbench.study.spec.CellPlan`).
+each proposal, the study cell a worker drives (:class:`~offroadbench.study.spec.config.CellPlan`).
 
 A proposal becomes a cell like a grid value does: ``recipe.<key>`` values go into the recipe,
 ``<table>.<field>`` values into the settings tables, on top of the group's own grid values. So a
@@ -19,7 +19,7 @@ from offroadbench.config import config_id, load_toml, to_dict
 from offroadbench.errors import InputError
 from offroadbench.search.analysis import SearchAnalysis, analysis_from_dict
 from offroadbench.search.space import SearchConfig, search_from_dict
-from offroadbench.study.spec import CellPlan, StudyConfig, plan_cells, study_from_dict
+from offroadbench.study.spec.config import CellPlan, StudyConfig, plan_cells, study_from_dict
 
 __all__ = ["SearchPlan", "load_search", "search_from_data", "trial_cell"]
 

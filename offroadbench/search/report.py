@@ -5,7 +5,7 @@ Monte Carlo judged at the plan's reference, the failure region, and the worst fa
 :func:`search_table` is the tidy table (one row per proposal: its stream, batch, parameters,
 likelihood ratio, and its trial's outcome and margin); :func:`stream_summary` and
 :func:`estimates` are the numbers; :func:`build_search_report` puts them into a
-:class:`~offroadbench.study.report.Report` (Markdown, figures, CSV tables) that ``search report``
+:class:`~offroadbench.study.report.markdown.Report` (Markdown, figures, CSV tables) that ``search report``
 writes.
 """
 
@@ -25,7 +25,7 @@ from offroadbench.search.estimators import (Estimate, best_is_gain, binned_failu
 from offroadbench.search.plan import SearchPlan
 from offroadbench.search.runner import NO_MISSION, margin_of
 from offroadbench.search.space import METHODS, SearchConfig, search_from_dict
-from offroadbench.study.spec import CellPlan, study_from_dict
+from offroadbench.study.spec.config import CellPlan, study_from_dict
 
 __all__ = ["search_table", "stream_summary", "estimates", "first_failures", "build_search_report", "provenance",
            "search_report_html"]
@@ -79,7 +79,7 @@ def provenance(meta: dict[str, Any]) -> str:
 
 def search_table(run_dir: str | Path) -> tuple[pd.DataFrame, SearchPlan]:
     """One row per stored proposal (run or not) and the search it belongs to."""
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         meta = store.meta()
@@ -307,9 +307,9 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
 
 
 def build_search_report(run_dir: str | Path):
-    """The report of a search run directory (offroadbench.study.report.Report)."""
+    """The report of a search run directory (offroadbench.study.report.markdown.Report)."""
     from offroadbench.search.figures import fig_failures_vs_trials, fig_pairwise
-    from offroadbench.study.report import Report, markdown_table
+    from offroadbench.study.report.markdown import Report, markdown_table
 
     from offroadbench.study import load_meta
 

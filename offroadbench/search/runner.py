@@ -1,6 +1,6 @@
 """Run (or resume) a failure search into a run directory: propose a batch, store it, drive it, repeat.
 
-A search's run directory is a study's: the same ``study.sqlite`` (offroadbench.study.store), in
+A search's run directory is a study's: the same ``study.sqlite`` (offroadbench.study.store.store), in
 which every trial is a study cell of its own (cell c, terrain 0, mission 0; its recipe and
 settings in the meta data, so ``study replay`` and ``study export`` work on it), plus one table
 of the search's own::
@@ -47,9 +47,9 @@ from offroadbench.progress import ProgressFn, report
 from offroadbench.search.falsifier import Batch, plan_batch, propose, stream_seed
 from offroadbench.search.objective import failure_margin
 from offroadbench.search.plan import SearchPlan, trial_cell
-from offroadbench.study.spec import CellPlan
-from offroadbench.study.store import RunLock, Store, remove_stale_temp_files
-from offroadbench.study.tasks import NO_MISSION_FAULT, TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn
+from offroadbench.study.spec.config import CellPlan
+from offroadbench.study.store.store import RunLock, Store, remove_stale_temp_files
+from offroadbench.study.execution.tasks import NO_MISSION_FAULT, TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn
 
 log = logging.getLogger(__name__)
 
@@ -221,7 +221,7 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
     """Run (or resume) the search ``plan`` into ``run_dir``, ``budget`` trials per method and group
     (every method alike; default the ``[search]`` table's ``budget``, ``mc_budget`` and ``ce_budget``). ``progress(done, total)`` counts stored trials. Ctrl-C stops the
     workers and re-raises; every committed trial stays and the next call goes on from there."""
-    from offroadbench.study.executors import get_executor
+    from offroadbench.study.execution.executors import get_executor
     from offroadbench.study.fingerprint import platform_fingerprint
     from offroadbench.study.runner import code_version, default_trial_timeout_s
 

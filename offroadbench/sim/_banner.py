@@ -8,7 +8,7 @@ so the banner goes nowhere whichever stream a build uses.
 
 Only application entry points call this (as ``offroadbench.sim.import_pybullet_quietly``): the
 CLI's ``main`` and the study workers' bootstrap
-(``offroadbench.study.executors``). A library import never touches the process's descriptors.
+(``offroadbench.study.execution.executors``). A library import never touches the process's descriptors.
 """
 
 from __future__ import annotations

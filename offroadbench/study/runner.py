@@ -19,27 +19,22 @@ from offroadbench import resources
 from offroadbench.config import to_dict
 from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
-from offroadbench.study.header import driver_files
-from offroadbench.study.spec import CellPlan, StudyConfig, study_id
+from offroadbench.study.report.header import driver_files
+from offroadbench.study.store.results import telemetry_paths
+from offroadbench.study.spec.config import CellPlan, StudyConfig, study_id
 from offroadbench.errors import InputError
 from offroadbench.io.outputs import missing_dirs
 from offroadbench.memory import world_bytes
-from offroadbench.study.executors import StudyError, get_executor
+from offroadbench.study.execution.executors import StudyError, get_executor
 from offroadbench.study.fingerprint import platform_fingerprint
-from offroadbench.study.store import RunLock, Store, remove_stale_temp_files, remove_store
-from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, keeps_telemetry
+from offroadbench.study.store.store import RunLock, Store, remove_stale_temp_files, remove_store
+from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, keeps_telemetry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta", "telemetry_paths",
+__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta",
            "save_trial_telemetry", "worker_memory_bytes"]
 
-
-
-def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
-    """(telemetry, planned path) Parquet files of one trial in a run directory."""
-    stem = Path(run_dir) / "telemetry" / f"cell{cell}_terrain{terrain}_mission{mission}"
-    return stem.with_name(stem.name + ".parquet"), stem.with_name(stem.name + "_path.parquet")
 
 
 def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> list[str]:
@@ -260,7 +255,7 @@ def code_version() -> str:
 
 def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "", version: str = "") -> dict[str, Any]:
     """What the store records about the study (config, cells, seeds' root, version)."""
-    from offroadbench.study.inputs import trial_inputs
+    from offroadbench.study.spec.inputs import trial_inputs
 
     return {
         "study_id": study_id(study, plans),
@@ -313,7 +308,7 @@ def run_study(
     default :func:`default_trial_timeout_s`). A trial past that limit, or one whose vehicle was
     thrown while settling, is stored as a fault (``faults`` table) and the study goes on; a
     resume skips faulted trials unless ``retry_faults``. A resume whose resolved inputs
-    (:mod:`offroadbench.study.inputs`) differ from the stored ones is refused, naming the change.
+    (:mod:`offroadbench.study.spec.inputs`) differ from the stored ones is refused, naming the change.
     """
     options = dict(executor_options or {})
     if executor in ("local", "dask") and options.get("trial_timeout_s") is None:

@@ -59,7 +59,7 @@ def _png16(path: Path, rows: int = 41, cols: int = 41, sidecar: object = "auto")
 
 
 def _store(run_dir: Path, study_id: str = "another-study", user_version: int | None = None) -> None:
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     with Store(run_dir, create=True) as store:
         store.init_meta({"study_id": study_id})

@@ -125,7 +125,7 @@ def test_perception_keys_are_validated_and_the_sheet_gives_published_limits():
 
 
 def test_a_study_can_put_mppi_and_the_sensor_arms_on_its_grid():
-    from offroadbench.study.spec import plan_cells, study_from_dict
+    from offroadbench.study.spec.config import plan_cells, study_from_dict
 
     study = study_from_dict({
         "study": {"name": "arms", "recipe": "paper-d2.45", "root_seed": 0},

@@ -6,7 +6,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from offroadbench.study.clustered import paired_power, terrains_needed
+from offroadbench.study.stats.clustered import paired_power, terrains_needed
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -44,8 +44,8 @@ def test_planner_stress_has_the_terrains_its_planned_tests_need():
     import numpy as np
 
     from offroadbench.study import load_study
-    from offroadbench.study.clustered import sign_flip_power
-    from offroadbench.study.plan import expand
+    from offroadbench.study.stats.clustered import sign_flip_power
+    from offroadbench.study.stats.plan import expand
 
     study, _ = load_study(ROOT / "experiments" / "planner-stress.toml", check_sections=False)
     assert study.root_seed not in (11, 29, 31)  # not a pilot's terrains
@@ -94,7 +94,7 @@ def test_the_previous_designs_power_from_its_pilot():
     # 12 terrains): 20 terrains gave 0.8 or more for its aliasing test at 2.95, 12 fell short
     import numpy as np
 
-    from offroadbench.study.clustered import sign_flip_power
+    from offroadbench.study.stats.clustered import sign_flip_power
 
     t = pd.read_csv(ROOT / "experiments" / "pilots" / "planner-stress-2026-11-25.csv")
     assert t["terrain"].nunique() == 12 and (t["missions"] == 8).all()

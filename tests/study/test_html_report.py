@@ -11,8 +11,8 @@ import pytest
 
 from offroadbench.cli import study as cli_study
 from offroadbench.study import load, run_study, study_from_dict
-from offroadbench.study.html_report import markdown_to_html, replay_anchor
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.report.html import markdown_to_html, replay_anchor
+from offroadbench.study.spec.config import plan_cells
 
 from tests.study.test_run import STUDY, fake_trials
 

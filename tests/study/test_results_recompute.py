@@ -122,7 +122,7 @@ def _planner_stress_plan(folder: Path) -> list[list[float]]:
     """The plan's six tests in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
     aliased surface through the mast sensor; the line (its oracle arm) on the band-limited against the
     aliased surface. Per test: effect (points), interval (confirmatory.csv), exact sign-flip p, Holm p."""
-    from offroadbench.study.clustered import holm, sign_flip_test
+    from offroadbench.study.stats.clustered import holm, sign_flip_test
 
     t = trial_table(folder)
     rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
@@ -167,7 +167,7 @@ def _above_nyquist_share(folder: Path) -> list[float]:
 
 def _straight_breaking_point(folder: Path) -> list[float]:
     """planner-stress: the line's breaking point on the paper's surface (oracle arm) and its interval."""
-    from offroadbench.study.stress import breaking_points
+    from offroadbench.study.stats.stress import breaking_points
 
     # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
     bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "sensor"])
@@ -178,12 +178,12 @@ def _straight_breaking_point(folder: Path) -> list[float]:
 
 
 def _terrain_success_changes(folder: Path) -> list[float]:
-    from offroadbench.study.stats import terrain_changes
+    from offroadbench.study.stats.terrain import terrain_changes
 
     t = trial_table(folder)
     ter = pd.read_csv(folder / "terrains.csv")
     labels = {c: f"D_high = {d}" for c, d in ter.groupby("cell")["D_high"].first().items()}
-    from offroadbench.study.stats import METRICS
+    from offroadbench.study.stats.terrain import METRICS
 
     areas = [f"area_{c}_pct" for c in ("low", "semi", "high")]
     # the report's family of comparisons (Holm over all of them); metrics need the trial table
@@ -223,7 +223,7 @@ def _vehicle_sensitivity_pitch_plan(folder: Path) -> list[float]:
     """The plan's 16.5 N m / 1.0 kg m^2 pitch-rate test: effect, interval (confirmatory.csv), p and Holm p
     over the plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials),
     recomputed from the trial table."""
-    from offroadbench.study.clustered import holm, sign_flip_test
+    from offroadbench.study.stats.clustered import holm, sign_flip_test
 
     t = trial_table(folder)
     key = ["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]
@@ -318,7 +318,7 @@ def _sign_flip_plan(trials: pd.DataFrame, axis: str, pairs: list[tuple], which: 
     """A plan of pooled per-terrain success comparisons (treatment, control) along ``axis``, every
     other column pooled (each terrain's rate over the rest), exact sign-flip tests, Holm over the
     pairs: comparison ``which``'s effect, p and Holm p, recomputed from the trial table."""
-    from offroadbench.study.clustered import holm, sign_flip_test
+    from offroadbench.study.stats.clustered import holm, sign_flip_test
 
     rate = trials.groupby([axis, "terrain"])["success"].mean().mul(100).unstack(axis)
     diffs = [(rate[t] - rate[c]).to_numpy(float) for t, c in pairs]
@@ -391,7 +391,7 @@ def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
             (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
 
     def compute(folder: Path) -> list[float]:
-        from offroadbench.study.clustered import holm, sign_flip_test
+        from offroadbench.study.stats.clustered import holm, sign_flip_test
 
         t = _vp_trials(folder)
         rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
@@ -412,7 +412,7 @@ def _vehicle_planner_pooled(folder: Path) -> list[float]:
     """The README's pooled table: per planner, successes and the per-terrain rate over the vehicles
     (the trials with an outcome) with its terrain-bootstrap interval (2000 draws, a generator seeded 0
     per entry), oracle then mast, then the mast - oracle difference with its interval."""
-    from offroadbench.study.clustered import cluster_bootstrap
+    from offroadbench.study.stats.clustered import cluster_bootstrap
 
     t = _vp_trials(folder)
     rate = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)

@@ -8,10 +8,10 @@ import pandas as pd
 import pytest
 
 from offroadbench.study import load, run_study, study_from_dict
-from offroadbench.study.report import build_report
-from offroadbench.study.spec import plan_cells
-from offroadbench.study.clustered import fieller_set, isotonic_decreasing
-from offroadbench.study.stress import (
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.stats.clustered import fieller_set, isotonic_decreasing
+from offroadbench.study.stats.stress import (
     _fmt_set,
     arm_table,
     breaking_points,
@@ -98,7 +98,7 @@ def test_isotonic_decreasing_is_the_least_squares_monotone_fit():
 
 
 def test_fieller_set_prints_two_rays_when_the_slope_is_unclear():
-    from offroadbench.study.clustered import LogisticFit
+    from offroadbench.study.stats.clustered import LogisticFit
 
     sure = LogisticFit(intercept=30.0, slope=-10.0, cov=np.diag([0.01, 0.001]), n=100, clusters=10, converged=True)
     (piece,) = fieller_set(sure)

@@ -1,6 +1,6 @@
 """A study report as one self-contained HTML file (``offroadbench study report RUN_DIR --html``).
 
-The HTML carries the same content as ``report.md`` (:func:`offroadbench.study.report.build_report`):
+The HTML carries the same content as ``report.md`` (:func:`offroadbench.study.report.markdown.build_report`):
 the "what ran" header, every table and every figure, plus
 
 * the per-trial table (one row per stored trial, every column sortable by a click on its header,
@@ -327,10 +327,10 @@ def build_html(title: str, markdown: str, figures_png: Mapping[str, bytes], tria
 
 
 def report_html(run_dir: str | Path, report: Any) -> str:
-    """The HTML page of a built :class:`~offroadbench.study.report.Report` of ``run_dir``: its
+    """The HTML page of a built :class:`~offroadbench.study.report.markdown.Report` of ``run_dir``: its
     figures rendered in memory, the stored trials, the replays in ``run_dir/replays`` and ``run_dir``."""
-    from offroadbench.study.header import report_title
-    from offroadbench.study.results import load, load_meta
+    from offroadbench.study.report.header import report_title
+    from offroadbench.study.store.results import load, load_meta
 
     run_dir = Path(run_dir)
     meta = load_meta(run_dir)

@@ -1,6 +1,6 @@
 """What a study's trials depend on, resolved, so a resume never mixes two configurations.
 
-The study id (:func:`offroadbench.study.spec.study_id`) hashes the study TOML's tables and the
+The study id (:func:`offroadbench.study.spec.config.study_id`) hashes the study TOML's tables and the
 cells' recipes. A resumed run also needs to know that what those names *point at* is unchanged:
 a soil TOML or a ``vehicle.toml`` found on ``OFFROADBENCH_PATH`` may be edited between a killed
 run and its resume, a planner plug-in upgraded, the engine replaced. :func:`trial_inputs` resolves

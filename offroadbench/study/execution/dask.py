@@ -1,5 +1,5 @@
 """The ``dask`` executor: one Dask task per terrain on a ``distributed`` cluster (see
-offroadbench.study.executors), with the per-trial time limit on the workers, restarts of hung or
+offroadbench.study.execution.executors), with the per-trial time limit on the workers, restarts of hung or
 killed workers and the handling of a lost scheduler."""
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import traceback
 from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
+from offroadbench.study.execution.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
                                       run_terrain)
-from offroadbench.study.executor_common import (Handle, _worker_bootstrap, check_trial_timeout, task_failure,
+from offroadbench.study.execution.common import (Handle, _worker_bootstrap, check_trial_timeout, task_failure,
                                                 timeout_faults)
 
 log = logging.getLogger(__name__)

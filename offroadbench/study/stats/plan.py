@@ -35,7 +35,7 @@ traversal metric's median over its successful trials; a soil metric's median ove
 gives the difference d_j = treatment - control (paired terrains: terrain j of every cell shares its
 seed). The effect is the mean of d_j with a percentile terrain-cluster bootstrap interval
 (Davison & Hinkley 1997, Sec. 3.8; not adjusted for multiplicity); the test is the exact sign-flip
-test of the mean (Fisher 1935; offroadbench.study.clustered.sign_flip_test), or the Wilcoxon
+test of the mean (Fisher 1935; offroadbench.study.stats.clustered.sign_flip_test), or the Wilcoxon
 signed-rank test, or for unpaired terrains the two-sample permutation test of the difference of
 means. The multiplicity rule runs over every expanded test of the plan. ``min_p`` is the smallest p
 the test can give with the stratum's terrains (2 / 2^K for the sign-flip test): a row with
@@ -68,7 +68,7 @@ METRIC_HELP = ("success_rate_pct, area_<low|semi|high>_pct, a traversal metric (
 
 
 def _known_metric(name: str) -> bool:
-    from offroadbench.study.stats import CLASSES, METRICS, SOIL_METRICS
+    from offroadbench.study.stats.terrain import CLASSES, METRICS, SOIL_METRICS
 
     return name == "success_rate_pct" or name in METRICS or name in SOIL_METRICS or name in {
         f"area_{c}_pct" for c in CLASSES}
@@ -249,7 +249,7 @@ def _pooled(vals: pd.Series, cells: Sequence[int]) -> pd.Series:
 
 def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: str) -> pd.Series:
     """Per (cell, terrain): the metric's per-terrain value (see the module docstring)."""
-    from offroadbench.study.stats import METRICS, SOIL_METRICS, terrain_success
+    from offroadbench.study.stats.terrain import METRICS, SOIL_METRICS, terrain_success
 
     if metric == "success_rate_pct":
         return terrain_success(trials).set_index(["cell", "terrain"])["success_rate_pct"]
@@ -298,7 +298,7 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
     control_mean, effect (mean per-terrain difference), ci_low, ci_high, test, p, min_p, p_adjusted
     (Holm or Bonferroni over every row), reject (p_adjusted < alpha).
     """
-    from offroadbench.study.clustered import cluster_bootstrap, holm, sign_flip_test, wilcoxon_test
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test, wilcoxon_test
 
     rng = np.random.default_rng(plan.seed)
     columns = meta.get("columns", {})

@@ -86,7 +86,7 @@ def success_by_level(trials: pd.DataFrame, group: str, level: str, by: Sequence[
     rate, its terrain-cluster bootstrap 95 % interval (``ci95_low``/``ci95_high``: terrains resampled,
     the rate recomputed from their pooled missions) and, for comparison only, the Wilson interval
     that treats missions as independent (``wilson_low``/``wilson_high``)."""
-    from offroadbench.study.clustered import cluster_bootstrap
+    from offroadbench.study.stats.clustered import cluster_bootstrap
 
     rng = np.random.default_rng(seed)
     keys = [group, *by, level]
@@ -108,7 +108,7 @@ def isotonic_crossing(levels: Sequence[float], successes: Sequence[float], trial
     ``threshold``, linearly interpolated between the two studied levels around it; ``+inf`` when it
     does not fall below it up to the last level, ``-inf`` when it is below already at the first.
     Never outside the studied levels."""
-    from offroadbench.study.clustered import isotonic_decreasing
+    from offroadbench.study.stats.clustered import isotonic_decreasing
 
     x = np.asarray(levels, float)
     n = np.asarray(trials, float)
@@ -154,7 +154,7 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
     confidence set, two rays when the slope is not clearly non-zero), ``logistic_gof_p`` (Pearson's
     X^2 over the levels; small: the logistic curve does not follow the data).
     """
-    from offroadbench.study.clustered import (
+    from offroadbench.study.stats.clustered import (
         breaking_point_logistic,
         fieller_set,
         fit_logistic,
@@ -223,7 +223,7 @@ def describe_breaking_point(point: float, low: float, high: float, levels: Seque
 
 def _terrain_row(p: pd.DataFrame, rng: np.random.Generator, n_boot: int) -> dict:
     """Terrain-level statistics of one comparison; ``p`` has columns terrain, a, b (booleans)."""
-    from offroadbench.study.clustered import (
+    from offroadbench.study.stats.clustered import (
         cluster_bootstrap,
         durkalski_mcnemar,
         sign_flip_test,
@@ -278,7 +278,7 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
                          "mcnemar_p_missions": mcnemar_exact(n10, n01), **_terrain_row(p, rng, n_boot)})
     out = pd.DataFrame(rows)
     if not out.empty:
-        from offroadbench.study.clustered import holm
+        from offroadbench.study.stats.clustered import holm
 
         out["p_holm"] = holm(out["p_sign_flip"])
         out["significant"] = out["p_holm"] < 0.05
@@ -301,7 +301,7 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
     """
     from scipy.stats import spearmanr
 
-    from offroadbench.study.clustered import cluster_bootstrap, holm, sign_flip_test
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
 
     rng = np.random.default_rng(seed)
     ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]

@@ -1,5 +1,5 @@
 """The file of a study's store: its name and schema, the checks that an existing ``study.sqlite`` is
-a store this version can use, and its removal (see offroadbench.study.store for the tables)."""
+a store this version can use, and its removal (see offroadbench.study.store.store for the tables)."""
 
 from __future__ import annotations
 

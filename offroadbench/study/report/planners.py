@@ -1,5 +1,5 @@
 """The planner sections of the study report: a grid with a ``planner.name`` axis (a planner
-stress test, see offroadbench.study.stress), with its aliasing and map-error arms, paired tests,
+stress test, see offroadbench.study.stats.stress), with its aliasing and map-error arms, paired tests,
 outcomes with replay commands and a figure of planned and driven paths."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from offroadbench.study import stats
-from offroadbench.study.report_format import markdown_table
+from offroadbench.study.stats import terrain as stats
+from offroadbench.study.report.format import markdown_table
 
 
 # ---------------------------------------------------------------------------- planner stress test
@@ -53,9 +53,9 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
     between planners, at the middle level), over the closed class map."""
     from offroadbench.io.telemetry import load_telemetry
     from offroadbench.plots.study import fig_paths
-    from offroadbench.study.runner import telemetry_paths
-    from offroadbench.study.spec import CellPlan
-    from offroadbench.study.tasks import prepare_cell
+    from offroadbench.study.store.results import telemetry_paths
+    from offroadbench.study.spec.config import CellPlan
+    from offroadbench.study.execution.tasks import prepare_cell
 
     t = trials
     for col in strata:  # one stratum: the first value of every other axis
@@ -81,7 +81,7 @@ def _paths_figure(meta: dict[str, Any], run_dir: Path, trials: pd.DataFrame, gro
             tel = load_telemetry(tel_p)
             driven = np.column_stack([tel["x_m"], tel["y_m"]])
         if driven is None:  # [study] telemetry = "failed" keeps none of a success: re-run it, bit for bit
-            from offroadbench.study.tasks import replay_trial
+            from offroadbench.study.execution.tasks import replay_trial
 
             rec = replay_trial(run_dir, int(r.cell), int(r.terrain), int(r.mission)).record
             path = np.asarray(rec.path_xy) if path is None else path
@@ -119,7 +119,7 @@ _ARMS = {"band_limited": ("Aliasing: band-limited against aliased W-M surface",
 def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: str, level: str | None,
                   strata: Sequence[str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
     """Paired tests of the two values of each arm axis (aliasing, map error, sensing) within every other stratum."""
-    from offroadbench.study import stress
+    from offroadbench.study.stats import stress
 
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
@@ -158,7 +158,7 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                      terrains: pd.DataFrame | None = None) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
     """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
     from offroadbench.plots.study import fig_success_vs_level
-    from offroadbench.study import stress
+    from offroadbench.study.stats import stress
 
     group, level, strata = _stress_axes(meta)
     if group is None:

@@ -1,7 +1,7 @@
 """The paper's statistics (Majhor & Bos 2023, Sec. 2.4, 3): medians, IQR (Eq. 6), 1.5 IQR outliers
 (Eq. 7-8), per-terrain success rate (Eq. 5), and the group tables of a study; and, beyond the
 paper, :func:`terrain_changes`: each change between consecutive groups tested with the terrain as
-the unit (offroadbench.study.clustered).
+the unit (offroadbench.study.stats.clustered).
 
 Quartiles use the ``hazen`` definition (the p-th percentile sits at rank n p / 100 + 1/2),
 which is MATLAB's ``prctile``, the tool the paper's box plots come from (red medians, red "+"
@@ -250,7 +250,7 @@ def terrain_changes(trials: pd.DataFrame, terrains: pd.DataFrame, labels: dict[i
     """
     from scipy.stats import mannwhitneyu
 
-    from offroadbench.study.clustered import (
+    from offroadbench.study.stats.clustered import (
         cluster_bootstrap,
         holm,
         sign_flip_test,

@@ -11,8 +11,8 @@ import numpy as np
 import pandas as pd
 
 from offroadbench.plots.study import short_label
-from offroadbench.study import stats
-from offroadbench.study.report_format import markdown_table
+from offroadbench.study.stats import terrain as stats
+from offroadbench.study.report.format import markdown_table
 
 
 # ---------------------------------------------------------------------------- reference
@@ -139,8 +139,8 @@ def _terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, label
 # ---------------------------------------------------------------------------- confirmatory
 def _confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
                           ) -> tuple[list[str], pd.DataFrame | None]:
-    """The study's analysis plan, computed exactly (offroadbench.study.plan), or the note that it has none."""
-    from offroadbench.study.plan import confirmatory_table, stored_plan
+    """The study's analysis plan, computed exactly (offroadbench.study.stats.plan), or the note that it has none."""
+    from offroadbench.study.stats.plan import confirmatory_table, stored_plan
 
     plan = stored_plan(meta)
     head = ["## Confirmatory analysis (the study's plan)", ""]

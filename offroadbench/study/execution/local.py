@@ -1,6 +1,6 @@
 """The ``local`` executor: forked worker processes pull terrain tasks from a queue and stream each
 trial back as it finishes; a worker silent for longer than ``trial_timeout_s`` is killed and
-replaced (see offroadbench.study.executors)."""
+replaced (see offroadbench.study.execution.executors)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ import traceback
 from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, run_terrain
-from offroadbench.study.executor_common import (Handle, _die_with_parent, _error_message, _worker_bootstrap,
+from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, run_terrain
+from offroadbench.study.execution.common import (Handle, _die_with_parent, _error_message, _worker_bootstrap,
                                                 check_trial_timeout, task_failure, timeout_faults)
 
 log = logging.getLogger(__name__)

@@ -2,7 +2,7 @@
 
 Registry :data:`EXECUTORS` (name -> class). Each executor's ``run(tasks, trial_fn, handle)``
 calls ``handle(message)`` in the calling process for every message of every task (see
-:mod:`offroadbench.study.tasks`); the coordinator commits them to the store. Whatever the
+:mod:`offroadbench.study.execution.tasks`); the coordinator commits them to the store. Whatever the
 executor, a task's results depend only on the task, so all of them give the same table.
 
 * ``local`` (default): ``workers`` forked processes pull tasks from a queue and stream each
@@ -26,10 +26,10 @@ from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
 from offroadbench.registry import Registry
-from offroadbench.study.tasks import TerrainTask, TrialFn, run_terrain
-from offroadbench.study.executor_dask import DaskExecutor, TrialTimeout, _dask_task  # noqa: F401  (_dask_task re-exported)
-from offroadbench.study.executor_common import Handle, MAX_TRIAL_TIMEOUT_S, check_trial_timeout
-from offroadbench.study.executor_local import LocalExecutor
+from offroadbench.study.execution.tasks import TerrainTask, TrialFn, run_terrain
+from offroadbench.study.execution.dask import DaskExecutor, TrialTimeout, _dask_task  # noqa: F401  (_dask_task re-exported)
+from offroadbench.study.execution.common import Handle, MAX_TRIAL_TIMEOUT_S, check_trial_timeout
+from offroadbench.study.execution.local import LocalExecutor
 
 __all__ = ["EXECUTORS", "MAX_TRIAL_TIMEOUT_S", "check_trial_timeout", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
 

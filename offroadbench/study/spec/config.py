@@ -26,8 +26,8 @@ File layout (every table but ``[study]`` is optional)::
     [controller]  # offroadbench.sim.ControllerConfig fields
     [sim]         # offroadbench.sim.SimConfig fields
     [rules]       # offroadbench.sim.FailureRules fields
-    [reference]   # published numbers to set beside ours in the report (see offroadbench.study.report)
-    [analysis]    # the confirmatory analysis plan, fixed before the run (offroadbench.study.plan)
+    [reference]   # published numbers to set beside ours in the report (see offroadbench.study.report.markdown)
+    [analysis]    # the confirmatory analysis plan, fixed before the run (offroadbench.study.stats.plan)
 
 Grid keys. ``recipe`` varies the recipe itself (values: preset names or paths);
 ``recipe.<dotted key>`` a key of the recipe TOML; ``<section>.<field>`` a field of one of the
@@ -144,7 +144,7 @@ class StudyConfig:
     band-limited arm exactly the aliased arm's starts and goals, so the arms are paired mission by
     mission. Empty: each cell draws on its own terrain."""
     analysis: Any = None
-    """The confirmatory analysis plan (:class:`offroadbench.study.plan.AnalysisPlan`, the
+    """The confirmatory analysis plan (:class:`offroadbench.study.stats.plan.AnalysisPlan`, the
     ``[analysis]`` table), or None."""
 
     def __post_init__(self) -> None:
@@ -179,7 +179,7 @@ class StudyConfig:
         if self.missions_from and not self.paired_terrains:
             raise InputError("study.missions_from needs paired terrains (paired_terrains = true)")
         if self.analysis is not None:
-            from offroadbench.study.plan import AnalysisPlan, check_plan
+            from offroadbench.study.stats.plan import AnalysisPlan, check_plan
 
             if not isinstance(self.analysis, AnalysisPlan):
                 raise InputError(f"study.analysis must be an AnalysisPlan, got {type(self.analysis).__name__}")
@@ -383,7 +383,7 @@ def study_id(study: StudyConfig, plans: list[CellPlan]) -> str:
     """Stable id of a study: its config plus every cell's resolved recipe (a changed preset changes it).
 
     The analysis plan is not part of it (a changed plan is refused on its own, with its own message:
-    offroadbench.study.plan.check_unchanged), nor is an empty ``missions_from`` (ids of studies
+    offroadbench.study.stats.plan.check_unchanged), nor is an empty ``missions_from`` (ids of studies
     made before it existed stay the same)."""
     data = to_dict(study)
     data.pop("analysis", None)
@@ -437,7 +437,7 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
                 raise InputError(f"{where}: [{name}] must be a table")
             settings[name] = dict(data[name])
     reference = data.get("reference", {})
-    from offroadbench.study.plan import plan_from_dict
+    from offroadbench.study.stats.plan import plan_from_dict
 
     try:
         analysis = plan_from_dict(data.get("analysis"), where=where)

@@ -51,7 +51,7 @@ from offroadbench.errors import TrialFault
 from offroadbench.navigation.missions import NoMissionError
 from offroadbench.navigation.problem import PlannerRefusal
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
-from offroadbench.study.spec import CellPlan
+from offroadbench.study.spec.config import CellPlan
 
 __all__ = ["NO_MISSION_FAULT", "REFUSED_FAULT", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
            "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
@@ -274,7 +274,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     import json
 
     from offroadbench.errors import InputError
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         meta = store.meta()

@@ -11,7 +11,7 @@ writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023
 * tables of medians, IQR, counts and 1.5 IQR outliers, median changes between groups, failure
   reasons, run sessions (wall time, machine, version);
 * if the study has a ``[reference]`` table: the published numbers beside ours;
-* if the grid has a ``planner.name`` axis (a planner stress test, see offroadbench.study.stress):
+* if the grid has a ``planner.name`` axis (a planner stress test, see offroadbench.study.stats.stress):
   success against the numeric axis per planner with terrain-bootstrap intervals, breaking points
   measured inside the studied levels (isotonic fit, terrain-bootstrap intervals; a logistic fit with
   its goodness of fit for comparison), terrain-level paired tests on the same missions, the paired
@@ -19,7 +19,7 @@ writes it (``offroadbench study report DIR``). Contents, after Majhor & Bos 2023
   above Nyquist, outcomes per planner with replay commands for failures, medians of the traversal
   metrics of successes, and a figure of planned and driven paths on one mission over the class map.
 
-The study's ``[analysis]`` plan (offroadbench.study.plan) is computed first, in "Confirmatory
+The study's ``[analysis]`` plan (offroadbench.study.stats.plan) is computed first, in "Confirmatory
 analysis"; every later section is marked "(exploratory)". The header names the code's git commit
 and whether its tree was clean, for every session.
 
@@ -47,17 +47,17 @@ import pandas as pd
 
 from offroadbench.plots.soil import conditions_text, fig_soil
 from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions, fig_success, short_label
-from offroadbench.study import stats
-from offroadbench.study.report_format import markdown_table
-from offroadbench.study.report_paper import (
+from offroadbench.study.stats import terrain as stats
+from offroadbench.study.report.format import markdown_table
+from offroadbench.study.report.paper import (
     _axis_effects_section,
     _confirmatory_section,
     _mark_exploratory,
     _reference_sections,
     _terrain_changes_section,
 )
-from offroadbench.study.report_planners import _numeric, planner_sections
-from offroadbench.study.results import load, load_meta, load_terrains
+from offroadbench.study.report.planners import _numeric, planner_sections
+from offroadbench.study.store.results import load, load_meta, load_terrains
 
 __all__ = ["Report", "build_report", "markdown_table"]
 
@@ -75,7 +75,7 @@ def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     """Fig. 4 of one terrain of a run: rebuilt from the run's recipe and seed, then drawn."""
     from offroadbench.seeding import terrain_seed
     from offroadbench.sim.trial.pipeline import prepare_terrain
-    from offroadbench.study.spec import CellPlan
+    from offroadbench.study.spec.config import CellPlan
 
     plan = CellPlan.from_meta(meta, cell)
     seed = terrain_seed(meta["study"]["root_seed"], terrain, cell=plan.key)
@@ -120,8 +120,8 @@ def _platforms_section(run_dir: str | Path, meta: dict[str, Any]) -> tuple[list[
     """Which platforms the trials ran on, and whether the project's bit-identity promise covers
     each against the one that ran the most (offroadbench.study.fingerprint.identity_promise)."""
     from offroadbench.study.fingerprint import identity_promise
-    from offroadbench.study.results import load_platforms
-    from offroadbench.study.spec import CellPlan
+    from offroadbench.study.store.results import load_platforms
+    from offroadbench.study.spec.config import CellPlan
 
     plats = load_platforms(run_dir)
     quantise = "png16"
@@ -173,7 +173,7 @@ def _summary_tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
 def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> list[str]:
     """The report's list of faulted trials (``faults`` table of the store: no outcome, so no
     statistic counts them); adds ``faults.csv`` to ``tables``. Nothing when there are none."""
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         rows = store.fault_rows()
@@ -229,7 +229,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
 
     n_total = meta["n_trials"]
     grid = ", ".join(f"`{a['key']}` = {list(a['values'])}" for a in study["grid"]) or "none"
-    from offroadbench.study.header import held_fixed, report_title
+    from offroadbench.study.report.header import held_fixed, report_title
 
     fixed = held_fixed(meta)
     tables["held_fixed.csv"] = fixed
@@ -324,7 +324,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     soil = stats.soil_boxes(trials, labels)
     if soil:
-        from offroadbench.study.header import soil_conditions
+        from offroadbench.study.report.header import soil_conditions
 
         cond = {labels[c]: soil_conditions(meta, c) for c in sorted(labels) if labels[c] in next(iter(soil.values()))}
         figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS, cond)

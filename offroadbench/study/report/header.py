@@ -35,7 +35,7 @@ _SHOWN = (
 def _sections(meta: dict[str, Any], cell: int = 0) -> dict[str, Any]:
     """The cell's settings by part, as its trials ran: read from the store (CellPlan.from_meta; a
     store made before they were kept rebuilds them from the tables there), the sim on the terrain."""
-    from offroadbench.study.spec import SECTIONS, CellPlan
+    from offroadbench.study.spec.config import SECTIONS, CellPlan
 
     plan = CellPlan.from_meta(meta, cell)
     try:

@@ -23,7 +23,7 @@ from typing import Any
 
 import pandas as pd
 
-from offroadbench.study.store import Store
+from offroadbench.study.store.store import Store
 
 __all__ = ["TIMING_COLUMNS", "load", "load_meta", "load_platforms", "load_terrains", "trial_platform"]
 
@@ -120,3 +120,9 @@ def trial_platform(run_dir: str | Path, cell: int, terrain: int, mission: int
     if rid not in runs:
         return None, None
     return runs[rid]["platform"], runs[rid]["version"]
+
+
+def telemetry_paths(run_dir: str | Path, cell: int, terrain: int, mission: int) -> tuple[Path, Path]:
+    """(telemetry, planned path) Parquet files of one trial in a run directory."""
+    stem = Path(run_dir) / "telemetry" / f"cell{cell}_terrain{terrain}_mission{mission}"
+    return stem.with_name(stem.name + ".parquet"), stem.with_name(stem.name + "_path.parquet")

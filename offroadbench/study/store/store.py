@@ -36,8 +36,8 @@ loses no committed row and leaves a consistent database; only a power cut may lo
 few commits. A trial that was in flight when the process died has no row, so the next run
 does it again.
 
-The lock is :mod:`offroadbench.study.run_lock`; the file (schema, checks, removal) is
-:mod:`offroadbench.study.store_file`.
+The lock is :mod:`offroadbench.study.store.lock`; the file (schema, checks, removal) is
+:mod:`offroadbench.study.store.file`.
 """
 
 from __future__ import annotations
@@ -55,8 +55,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.run_lock import LOCK_NAME, RunDirLocked, RunLock, _lock_holder_alive, _reason
-from offroadbench.study.store_file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, _FAULTS_SQL, _SCHEMA,
+from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, _lock_holder_alive, _reason
+from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, _FAULTS_SQL, _SCHEMA,
                                            _SCHEMA2_COLUMNS, _check_existing, _nearly_full, remove_stale_temp_files,
                                            remove_store, store_path)
 
@@ -149,7 +149,7 @@ class Store:
     def init_meta(self, values: Mapping[str, Any]) -> list[str]:
         """Write the study's metadata once; a store of another configuration refuses to be reused.
 
-        ``values["trial_inputs"]`` (:func:`offroadbench.study.inputs.trial_inputs`) decides: a
+        ``values["trial_inputs"]`` (:func:`offroadbench.study.spec.inputs.trial_inputs`) decides: a
         resume whose resolved inputs differ from the stored ones is refused with one line naming
         what changed (a soil, the vehicle or its URDF, a plug-in's version, the engine ...). A
         store made before trial inputs were recorded falls back to the study id, and a refusal
@@ -157,13 +157,13 @@ class Store:
         a comment, a ``[reference]`` table, a default written out) is accepted: the new study
         config replaces the stored one and ``meta.amendments`` records when and what changed.
         Returns those changed keys ([] when nothing changed)."""
-        from offroadbench.study.inputs import COSMETIC_STUDY_KEYS, changed_inputs, changed_study_keys
+        from offroadbench.study.spec.inputs import COSMETIC_STUDY_KEYS, changed_inputs, changed_study_keys
 
         old = self.meta()
         if not old:
             self._write_meta(values)
             return []
-        from offroadbench.study.plan import check_unchanged
+        from offroadbench.study.stats.plan import check_unchanged
 
         # the [analysis] plan (issue 29) is fixed once a trial is stored; before, it may change
         check_unchanged(old, values, self.counts()[0], str(self.run_dir))

@@ -1,4 +1,4 @@
-"""What the executors of offroadbench.study.executors share: worker set-up (die with the parent,
+"""What the executors of offroadbench.study.execution.executors share: worker set-up (die with the parent,
 ignore Ctrl-C), the per-trial time limit and how a failed or hung task becomes an error or faults."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import sys
 from typing import Callable
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.tasks import TerrainTask, TrialFaulted, remaining_task
+from offroadbench.study.execution.tasks import TerrainTask, TrialFaulted, remaining_task
 
 log = logging.getLogger(__name__)
 

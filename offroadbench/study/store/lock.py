@@ -1,5 +1,5 @@
 """The lock of a run directory: only the process holding it writes the store (``fcntl.flock`` on
-``study.lock``, released by the kernel when the process dies; see offroadbench.study.store)."""
+``study.lock``, released by the kernel when the process dies; see offroadbench.study.store.store)."""
 
 from __future__ import annotations
 
