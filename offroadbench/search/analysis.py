@@ -1,6 +1,6 @@
 """A search study's analysis plan (``[analysis]``): what its claims are about, fixed before the run.
 
-A study's ``[analysis]`` (offroadbench.study.plan) names confirmatory tests between grid cells; a
+A study's ``[analysis]`` (offroadbench.study.stats.plan) names confirmatory tests between grid cells; a
 search's names the estimand, the estimator and interval its P(failure) claim rests on, the
 reference that estimate is judged against, the baseline the falsifier is judged against and by
 which count, and the stopping rule. The table is part of the search file, so it is stored with the

@@ -404,11 +404,11 @@ def build_search_report(run_dir: str | Path):
 
 
 def search_report_html(run_dir: str | Path, report) -> str:
-    """The report as one self-contained HTML page (offroadbench.study.html_report.build_html): the
+    """The report as one self-contained HTML page (offroadbench.study.report.html.build_html): the
     Markdown with its figures inline, then one sortable row per search trial (its stream, stage,
     parameters, margin and outcome; a failure's row gives its replay command or links to a replay
     found in the run directory)."""
-    from offroadbench.study.html_report import build_html, figure_png, find_replays
+    from offroadbench.study.report.html import build_html, figure_png, find_replays
 
     run_dir = Path(run_dir)
     df, plan = search_table(run_dir)
