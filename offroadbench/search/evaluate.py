@@ -28,13 +28,15 @@ import numpy as np
 import pandas as pd
 
 from offroadbench.search.analysis import SearchAnalysis
-from offroadbench.search.baselines import (MeasuredBoundary, measured_boundary, model_streams, nominal_draws,
-                                           pool_streams, trials_to_k, uniform_box)
+from offroadbench.search.baselines import (MeasuredBoundary, measured_boundary, median_interval, model_streams,
+                                           nominal_draws, pool_streams, ratio_interval, trials_to_k, uniform_box)
 from offroadbench.search.estimators import Estimate, bootstrap_t_interval, is_estimate, is_gain, mc_estimate
 from offroadbench.search.modes import Sensitivity, failure_modes, mode_table, sensitivity, stream_modes
 from offroadbench.search.space import SearchConfig
 
-__all__ = ["Reference", "reference", "is_summary", "mc_position", "falsifier_counts", "modes", "STREAMS", "SEED"]
+__all__ = ["Reference", "reference", "is_summary", "mc_position", "falsifier_counts", "modes", "stream_mode_rows",
+           "repeat_streams", "pooled_reference", "is_repeats", "spread_gain", "stream_counts", "results_figures",
+           "STREAMS", "SEED"]
 
 #: streams of each computed or pool-order baseline
 STREAMS = 2000
@@ -185,3 +187,136 @@ def stream_mode_rows(df: pd.DataFrame, labels: pd.Series) -> pd.DataFrame:
         rows.append({"method": method, "trials": len(s), "failures": int(s["failed"].sum()), "modes found": found,
                      "trials to first failure": first})
     return pd.DataFrame(rows)
+
+
+# ---------------------------------------------------------------------------- over repeats
+def repeat_streams(run: pd.DataFrame, repeats: pd.DataFrame, method: str, group: int, planner: str) -> list[pd.DataFrame]:
+    """Every stream of ``method``: the run's own (group ``group`` of ``run``, the search's trial table)
+    first, then each replicate's in ``repeats`` (the results' repeats table: its ``planner`` and
+    ``replicate`` columns name the stream), in replicate order."""
+    own = run[(run["group"] == group) & (run["method"] == method)]
+    out = [own.reset_index(drop=True)] if len(own) else []
+    reps = repeats[(repeats["planner"] == planner) & (repeats["method"] == method)]
+    out += [r.assign(group=group).reset_index(drop=True) for _, r in reps.groupby("replicate", sort=True)]
+    return out
+
+
+def pooled_reference(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis,
+                     group: int, planner: str) -> Reference | None:
+    """The reference from every finished trial of the group, the run's and every repeat's (each
+    outcome at its parameters is data, whoever proposed it)."""
+    reps = repeats[repeats["planner"] == planner].assign(group=group)
+    both = pd.concat([run[run["group"] == group], reps], ignore_index=True)
+    return reference(both, cfg, analysis)
+
+
+def is_repeats(streams: list[pd.DataFrame], cfg: SearchConfig, p_ref: float, level: float = 0.95) -> pd.DataFrame:
+    """One row per importance-sampling stream: its estimate, relative error, normal and bootstrap-t
+    intervals, whether each holds ``p_ref``, and its gain at ``p_ref`` from its stated error."""
+    rows = []
+    for i, s in enumerate(streams):
+        r = is_summary(s, cfg, p_ref, level)
+        e = r["estimate"]
+        rows.append({"stream": i, "P": e.p, "failures": e.failures, "final draws": e.n, "trials": e.trials,
+                     "stated rel. error": e.rel_error, "normal low": e.low, "normal high": e.high,
+                     "bootstrap-t low": r["bootstrap_t"][0], "bootstrap-t high": r["bootstrap_t"][1],
+                     "normal holds the reference": bool(r["covers_normal"]),
+                     "bootstrap-t holds the reference": bool(r["covers_bootstrap_t"]),
+                     "stated gain at the reference": r["gain"]})
+    return pd.DataFrame(rows)
+
+
+def spread_gain(ps: np.ndarray, p_ref: float, trials: int, n_boot: int = 2000, level: float = 0.95) -> tuple[float, float, float, float]:
+    """(relative RMSE about ``p_ref``, gain, lower, upper): the work-normalised gain from the mean
+    squared error of repeated estimates, p (1 - p) / (trials MSE), with the percentile bootstrap
+    interval over the repeats (Efron & Tibshirani 1993, Ch. 13)."""
+    ps = np.asarray(ps, dtype=float)
+    mse = float(np.mean((ps - p_ref) ** 2))
+    rng = np.random.default_rng(SEED)
+    boot = np.array([np.mean((ps[rng.integers(0, len(ps), len(ps))] - p_ref) ** 2) for _ in range(n_boot)])
+    g = is_gain(p_ref, mse, trials)
+    a = 1 - level
+    b_lo, b_hi = np.quantile(boot, [1 - a / 2, a / 2])  # a larger MSE is a smaller gain
+    return math.sqrt(mse) / p_ref, g, is_gain(p_ref, float(b_lo), trials), is_gain(p_ref, float(b_hi), trials)
+
+
+def stream_counts(streams: list[pd.DataFrame], cfg: SearchConfig, ks: tuple[int, ...]) -> pd.DataFrame:
+    """Per stream: trials to the k-th failure for each k, and to the largest k's distinct failure
+    (inf where it never got there)."""
+    rows = []
+    for i, s in enumerate(streams):
+        d = _done(s)
+        f = d["failed"].to_numpy(bool)
+        row = {"stream": i, "trials": len(d)}
+        for k in ks:
+            row[f"{k}-th failure"] = trials_to_k(f, k)
+        k = max(ks)
+        row[f"{k}-th distinct failure"] = trials_to_k(f, k, cfg.unit(d[list(cfg.keys)].to_numpy(float)),
+                                                      cfg.distinct_distance)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis,
+                    group: int, planner: str, streams: int = STREAMS) -> dict:
+    """The committed figures of one planner of a results folder (its trial table ``run`` and its
+    repeats table): the pooled reference, the importance-sampling repeats with both intervals and
+    the gains, the falsifier's streams against real uniform streams (the ``uniform`` replicates),
+    nominal pool orders and streams computed from the boundary, and the failure modes over every
+    trial. Deterministic."""
+    ks = analysis.first_k
+    ref = pooled_reference(run, repeats, cfg, analysis, group, planner)
+    out: dict = {"reference": ref}
+    ce = repeat_streams(run, repeats, "ce-is", group, planner)
+    if ce:
+        tab = is_repeats(ce, cfg, ref.p, analysis.level)
+        trials = int(tab["trials"].iloc[0])
+        rmse, g, g_lo, g_hi = spread_gain(tab["P"].to_numpy(), ref.p, trials, level=analysis.level)
+        out["is"] = tab
+        out["is_summary"] = {"runs": len(tab), "mean P": float(tab["P"].mean()), "rel. RMSE": rmse, "gain": g,
+                             "gain low": g_lo, "gain high": g_hi,
+                             "median stated gain": float(tab["stated gain at the reference"].median()),
+                             "normal holds": int(tab["normal holds the reference"].sum()),
+                             "bootstrap-t holds": int(tab["bootstrap-t holds the reference"].sum())}
+    fals = stream_counts(repeat_streams(run, repeats, "falsify", group, planner), cfg, ks)
+    uni = stream_counts(repeat_streams(run, repeats, "uniform", group, planner), cfg, ks)
+    rng = np.random.default_rng(SEED)
+    d = _done(run[run["group"] == group])
+    pool = d[d["method"] == "random"]
+    rows = []
+    for col in [c for c in fals.columns if c not in ("stream", "trials")]:
+        k = int(col.split("-")[0])
+        distinct = "distinct" in col
+        dist = cfg.distinct_distance if distinct else None
+        f_med = float(np.median(fals[col]))
+        f_lo, f_hi, f_cov = median_interval(fals[col].to_numpy(float), analysis.level)
+        row = {"count": col, "falsifier streams": len(fals), "falsifier median": f_med, "falsifier low": f_lo,
+               "falsifier high": f_hi, "falsifier coverage": f_cov}
+        model_u = model_streams(cfg, ref.boundary, uniform_box(cfg), k, streams, rng, distinct=distinct)
+        model_n = model_streams(cfg, ref.boundary, nominal_draws(cfg), k, streams, rng, distinct=distinct)
+        orders = pool_streams(pool["failed"].to_numpy(bool), k, streams, rng,
+                              cfg.unit(pool[list(cfg.keys)].to_numpy(float)) if distinct else None, dist)
+        for name, values, independent in (("uniform, real streams", uni[col].to_numpy(float) if len(uni) else None, True),
+                                          ("uniform, computed", model_u, True),
+                                          ("nominal, computed", model_n, True),
+                                          ("nominal, orders of the Monte Carlo pool", orders, False)):
+            if values is None:
+                continue
+            med = float(np.median(values))
+            row[f"{name}: streams"] = len(values)
+            row[f"{name}: median"] = med
+            if independent:
+                r, lo, hi, cov = ratio_interval(values, fals[col].to_numpy(float), analysis.level)
+                row[f"{name}: ratio"], row[f"{name}: ratio low"], row[f"{name}: ratio high"] = r, lo, hi
+                row[f"{name}: joint coverage"] = cov
+            else:
+                row[f"{name}: ratio"] = med / f_med
+        rows.append(row)
+    out["falsifier"] = fals
+    out["uniform"] = uni
+    out["baselines"] = pd.DataFrame(rows)
+    both = pd.concat([run[run["group"] == group], repeats[repeats["planner"] == planner].assign(group=group)],
+                     ignore_index=True)
+    sens, _, _, table = modes(both, cfg)
+    out["sensitivity"], out["modes"] = sens, table
+    return out

@@ -153,19 +153,23 @@ def _medoid(u: np.ndarray) -> int:
 
 def mode_table(failures: pd.DataFrame, modes: pd.Series, cfg: SearchConfig, active: list[str]) -> pd.DataFrame:
     """One row per mode: failures, the extent of every searched parameter, the failure reasons, the
-    methods that found it, and its representative failure (cell, parameters)."""
+    methods that found it, and its representative failure (cell, parameters): the medoid in the
+    active parameters among the failures with a stored cell (None where no failure has one)."""
     idx = [cfg.keys.index(k) for k in active]
     rows = []
     for m in sorted(modes.unique()):
         f = failures[modes == m]
-        u = cfg.unit(f[list(cfg.keys)].to_numpy(dtype=float))[:, idx]
-        rep = f.iloc[_medoid(u)]
+        # the representative: the medoid among the failures that can be replayed (a stored cell;
+        # a repeat's trials in a results table have none), else among all
+        pick = f[f["cell"].notna()] if "cell" in f and f["cell"].notna().any() else f
+        u = cfg.unit(pick[list(cfg.keys)].to_numpy(dtype=float))[:, idx]
+        rep = pick.iloc[_medoid(u)]
         row = {"mode": int(m), "failures": len(f)}
         for k in cfg.keys:
             row[f"{k} range"] = f"{f[k].min():.4g}-{f[k].max():.4g}"
         row["reasons"] = ", ".join(f"{r} {n}" for r, n in f["failure_reason"].value_counts().items())
         row["found by"] = ", ".join(sorted(f["method"].unique()))
-        row["representative cell"] = int(rep["cell"])
+        row["representative cell"] = int(rep["cell"]) if "cell" in rep and pd.notna(rep["cell"]) else None
         for k in cfg.keys:
             row[f"representative {k}"] = float(rep[k])
         rows.append(row)

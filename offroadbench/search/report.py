@@ -249,7 +249,7 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
                        "p": x.p_value, "active": x.active, "draws": f"{x.draws} ({x.source})", "failures": x.failures}
                       for x in sens]
         for _, r in table.iterrows():
-            cell = int(r["representative cell"])
+            cell = r["representative cell"]
             mode_rows.append({"group": label, **r.to_dict(),
                               "replay": f"`offroadbench study replay {run_dir} --cell {cell} --terrain 0 --mission 0 "
                                         f"--plot --animate cell{cell}.gif`"})

@@ -112,3 +112,18 @@ def test_single_linkage_chains_close_points():
     u = np.array([[0.0], [0.04], [0.08], [0.3]])
     assert single_linkage(u, 0.05).tolist() == [0, 0, 0, 1]
     assert single_linkage(u, 0.03).tolist() == [0, 1, 2, 3]
+
+
+def test_the_gain_from_repeats_is_one_for_plain_monte_carlo_and_its_interval_holds_it():
+    from offroadbench.search.evaluate import spread_gain
+
+    rng = np.random.default_rng(5)
+    p, n = 0.02, 200
+    ps = rng.binomial(n, p, size=400) / n  # 400 repeats of plain Monte Carlo on 200 trials
+    rmse, gain, lo, hi = spread_gain(ps, p, n)
+    assert gain == pytest.approx(1.0, rel=0.15) and lo < 1.0 < hi
+    assert rmse == pytest.approx(np.sqrt((1 - p) / (n * p)), rel=0.1)
+    # twenty repeats of an estimator with a tenth of that variance: a gain near 10, an honest interval
+    ps = p + rng.normal(0, np.sqrt(p * (1 - p) / n / 10), size=20)
+    _, gain, lo, hi = spread_gain(ps, p, n)
+    assert lo < 10 < hi and lo > 4
