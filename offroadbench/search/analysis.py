@@ -6,8 +6,9 @@ reference that estimate is judged against, the baseline the falsifier is judged 
 which count, and the stopping rule. The table is part of the search file, so it is stored with the
 run (the stored study TOML) and enters the search's id: a run whose plan was changed after trials
 were stored is refused like a changed search (offroadbench.search.plan.SearchPlan.search_id). The
-report (offroadbench.search.report) computes exactly these figures first and calls every other
-number exploratory. TOML::
+report (offroadbench.search.report) prints the plan above the figures it names (the modes, the
+falsifier against both baselines, the estimates at the reference with both intervals; the plan
+says which of them the claims rest on) and calls every other number exploratory. TOML::
 
     [analysis]
     estimand = "P(failure) of each planner under the nominal distribution of friction and speed"
