@@ -156,7 +156,8 @@ def study_sections() -> list[SectionDoc]:
 
 
 def search_sections() -> list[tuple[str, SectionDoc]]:
-    """(title, table) of the failure search's ``[search]`` and ``[[search.params]]`` tables."""
+    """(title, table) of the failure search's ``[search]``, ``[[search.params]]`` and ``[analysis]`` tables."""
+    from offroadbench.search.analysis import SearchAnalysis
     from offroadbench.search.space import SearchConfig, SearchParam
 
     notes = ("A search file is a study file plus these tables (`offroadbench search run SEARCH.toml`); "
@@ -167,7 +168,12 @@ def search_sections() -> list[tuple[str, SectionDoc]]:
                                       field_docs(SearchConfig, skip=("params",)), notes)),
             ("`[[search.params]]`", SectionDoc("search.params", qualname(SearchParam),
                                                "One searched key, with its range and nominal distribution "
-                                               "(one table per key)", field_docs(SearchParam)))]
+                                               "(one table per key)", field_docs(SearchParam))),
+            ("`[analysis]` of a search file", SectionDoc("analysis", _qualname(SearchAnalysis),
+                                                         "A search's analysis plan, fixed before the run and stored with it",
+                                                         field_docs(SearchAnalysis),
+                                                         ("Source: `offroadbench.search.analysis`; the report computes "
+                                                          "these figures first (`offroadbench.search.evaluate`).",)))]
 
 
 def section_names() -> list[str]:
