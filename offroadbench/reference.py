@@ -169,7 +169,7 @@ def search_sections() -> list[tuple[str, SectionDoc]]:
             ("`[[search.params]]`", SectionDoc("search.params", qualname(SearchParam),
                                                "One searched key, with its range and nominal distribution "
                                                "(one table per key)", field_docs(SearchParam))),
-            ("`[analysis]` of a search file", SectionDoc("analysis", _qualname(SearchAnalysis),
+            ("`[analysis]` of a search file", SectionDoc("analysis", qualname(SearchAnalysis),
                                                          "A search's analysis plan, fixed before the run and stored with it",
                                                          field_docs(SearchAnalysis),
                                                          ("Source: `offroadbench.search.analysis`; the report computes "

@@ -204,7 +204,7 @@ def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
     soil = load_soil(SOFT_SOIL)
     soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
                                settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
     b, length = spec.wheel_width_m, spec.track_contact_length_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity); belts {length:g} x {b:g} m"
     with open_world(flat, spec, soft) as world:
@@ -214,16 +214,16 @@ def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
         mass = world.geometry.mass_kg
         sink = world.wheel_penetration_m()
         com_height = world.centre_of_mass_m()[2] - (flat.z_min_m - sink)  # above the belts' bottom
-        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
         pull = _tow_pull(world, 0.2, seconds=16.0)
     w = mass * g / 2.0
     expected_pull = 2.0 * drawbar_pull_n(soil, b, length, w, 0.2)
     limit = track_climb_limit_deg(soil, b, length, mass, g, 0.75, com_height)
     mu = spec.wheel_friction * sim.terrain_friction
     return [
-        _ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
+        ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
                    f"{where}; Bekker sinkage of a belt carrying {w:.1f} N"),
-        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
                  f"{where}; quasi-static belt limit at slip 0.75 with the load moved back (centre of mass "
                  f"{com_height:.3f} m above the belts); on rigid ground grip alone allows "
                  f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
