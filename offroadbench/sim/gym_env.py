@@ -180,15 +180,31 @@ def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] |
     return (hm, *terrain_body(terrain, recipe), soil_map_for(recipe, hm, seed) if recipe is not None else None)
 
 
+#: the TraverseConfig fields that are the trial settings' own, field -> (TrialSettings section, its
+#: field): one table for both ways (the env's settings from its config, its config from given settings)
+SETTINGS_FIELDS: Mapping[str, tuple[str, str]] = {
+    "mission_length_m": ("missions", "length_m"), "border_m": ("missions", "border_m"),
+    "control_rate_hz": ("controller", "control_rate_hz"),
+    "patch_cells": ("observation", "patch_cells"), "patch_spacing_m": ("observation", "patch_spacing_m")}
+
+
 def _settings(config: TraverseConfig, vehicle, sim: SimConfig, rules: FailureRules,
               roughness: RoughnessConfig) -> TrialSettings:
-    """The trial settings of the env's own arguments."""
+    """The trial settings of the env's own arguments (one mission per episode)."""
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    return TrialSettings(vehicle=spec, sim=sim, controller=ControllerConfig(control_rate_hz=config.control_rate_hz),
-                         rules=rules, roughness=roughness,
-                         missions=MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m),
-                         observation=ObservationConfig(patch_cells=config.patch_cells,
-                                                       patch_spacing_m=config.patch_spacing_m))
+    sections: dict[str, dict[str, Any]] = {"controller": {}, "missions": {"count": 1}, "observation": {}}
+    for field, (section, name) in SETTINGS_FIELDS.items():
+        sections[section][name] = getattr(config, field)
+    return TrialSettings(vehicle=spec, sim=sim, rules=rules, roughness=roughness,
+                         controller=ControllerConfig(**sections["controller"]),
+                         missions=MissionConfig(**sections["missions"]),
+                         observation=ObservationConfig(**sections["observation"]))
+
+
+def _config_of(config: TraverseConfig, settings: TrialSettings) -> TraverseConfig:
+    """``config`` with the fields that are the settings' taken from ``settings`` (its reward kept)."""
+    return dataclasses.replace(config, **{field: getattr(getattr(settings, section), name)
+                                          for field, (section, name) in SETTINGS_FIELDS.items()})
 
 
 class TraverseEnv(gym.Env):
@@ -237,10 +253,7 @@ class TraverseEnv(gym.Env):
                      if v is not None]
             if given:
                 raise InputError(f"TraverseEnv: give {', '.join(given)} inside settings, not beside it")
-            config = dataclasses.replace(
-                config, control_rate_hz=settings.controller.control_rate_hz,
-                mission_length_m=settings.missions.length_m, border_m=settings.missions.border_m,
-                patch_cells=settings.observation.patch_cells, patch_spacing_m=settings.observation.patch_spacing_m)
+            config = _config_of(config, settings)
         control_steps(settings.sim.physics_rate_hz, config.control_rate_hz, "TraverseConfig.control_rate_hz")
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
