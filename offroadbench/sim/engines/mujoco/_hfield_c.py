@@ -407,6 +407,13 @@ class HFieldCollision:
         sphere, box = _wrappers(lay, sphere0, box0)
         return cls(slots, (sphere.address if mode == "closed_form" else None, box.address))
 
+    def entries(self) -> tuple[int, int, int, int]:
+        """(table entry address, this world's function address or 0) for the sphere and the box:
+        for a compiled trial step that writes them itself (offroadbench.sim.engines.mujoco._tyres_c.
+        step_trial)."""
+        ours = [0 if f is None else int(f) for f in self._ours]
+        return ctypes.addressof(self._slots[0]), ours[0], ctypes.addressof(self._slots[1]), ours[1]
+
     def install(self) -> None:
         """Point the table's hfield-sphere and hfield-box entries at this world's functions."""
         for k, slot in enumerate(self._slots):

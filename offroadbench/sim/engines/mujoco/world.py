@@ -91,18 +91,20 @@ def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
     return module
 
 
-def _whole_step(model, data):
+def _whole_step(model, data, hfield):
     """What the compiled tyre loop needs to run a whole trial step in one call
     (offroadbench.sim.engines.mujoco._tyres_c.step_trial): the model's and data's addresses, MuJoCo's
-    ``mj_step``, ``mj_step1``, ``mj_step2`` and where the contacts are; None where MuJoCo's layout does
-    not check out (offroadbench.sim.engines.mujoco._layout: the loop then runs its kernels between
-    the bindings' MuJoCo calls)."""
+    ``mj_step``, ``mj_step1``, ``mj_step2``, where the contacts are, and the collision-table entries
+    that the step writes for the world's height-field functions (``hfield``, or none); None where
+    MuJoCo's layout does not check out (offroadbench.sim.engines.mujoco._layout: the loop then runs
+    its kernels between the bindings' MuJoCo calls)."""
     from offroadbench.sim.engines.mujoco import _layout
 
     lay = _layout.step_layout()
     if lay is None:
         return None
-    return model._address, data._address, _layout.step_functions(), lay.as_tuple()
+    entries = hfield.entries() if hfield is not None else (0, 0, 0, 0)
+    return model._address, data._address, _layout.step_functions(), lay.as_tuple(), entries
 
 
 def _hfield_functions(mode: str, model, data):
@@ -151,7 +153,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
-        self._fast_step = None  # (mjModel and mjData addresses, MuJoCo's step functions, StepLayout tuple)
+        self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -168,7 +170,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
-            self._fast_step = _whole_step(self.model, d)
+            self._fast_step = _whole_step(self.model, d, self._hfield)
             self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
@@ -381,7 +383,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
         functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
         hf = self._hfield
-        if hf is None:
+        if hf is None or self._fast_step is not None:  # none, or the compiled step installs them itself
             self._advance()
             return
         hf.install()
