@@ -153,6 +153,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
         self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
         tc = None
         if sim.tyre_model == "coulomb":
@@ -210,6 +211,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def close(self) -> None:
         """Drop the model and data (MuJoCo frees them with the objects). Safe to call twice."""
         self.data = None
+        self._fast_step = self._step_arrays = None  # the data's addresses and views
 
     def __enter__(self) -> MuJoCoWorld:
         return self
