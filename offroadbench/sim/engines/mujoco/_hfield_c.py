@@ -308,6 +308,10 @@ def sphere_hfield(m, d, con, g1, g2, margin, lay):  # pragma: no cover - compile
         for col in range(cmin + 1, cmax + 1):
             x1 = dx * col - size0
             z01, z11 = hdata[row * ncol + col] * size2, hdata[(row + 1) * ncol + col] * size2
+            # MuJoCo's prism-height test: prism 0 spans z10, z00, z11; prism 1 z00, z11, z01
+            if z00 < zmin and z11 < zmin and z10 < zmin and z01 < zmin:
+                x0, z00, z10 = x1, z01, z11
+                continue
             zlow = _lowest_over_cell(px, py, pz, r, x0, x1, y0, y1)
             for i in range(2):
                 _set_prism(t, i, x0, x1, y0, y1, z00, z01, z10, z11)
