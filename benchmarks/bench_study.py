@@ -79,7 +79,7 @@ class Phase:
 # ---------------------------------------------------------------------------- profile
 def bench_store(n: int = 5000) -> float:
     """Seconds per committed trial row (one transaction each)."""
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     row = {"mission_index": 0, "success": True, "failure_reason": "", **{f"m{i}": 1.2345 for i in range(16)}}
     with tempfile.TemporaryDirectory() as d, Store(d, create=True) as store:
@@ -204,7 +204,7 @@ def _tasks(terrains: int, missions: int, rows: int | None):
 
     from offroadbench.study import load_study
     from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     study, _ = load_study(STUDY)
     study = dataclasses.replace(study, terrains_per_cell=terrains, missions_per_terrain=missions)
@@ -239,7 +239,7 @@ def child(spec: dict) -> dict:
     import dataclasses
 
     from offroadbench.study import load, load_study, run_study
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     study, _ = load_study(STUDY)
     overrides = dict(study.recipe_overrides)
@@ -319,7 +319,7 @@ def main() -> None:
     sub.add_parser("smoke", help="profile and plans on 161^2 maps, one trial per D (CI: seconds)")
     args = ap.parse_args()
     sys.path.insert(0, str(ROOT))
-    from offroadbench.study.store import machine_description
+    from offroadbench.study.store.store import machine_description
 
     print(f"machine: {machine_description()}; load average {os.getloadavg()[0]:.1f}")
     if args.cmd == "smoke":  # every mode's code runs, on small maps (its figures mean nothing)

@@ -112,7 +112,7 @@ def _study_terrains(missions: int, rows: int | None = None):
     from offroadbench.sim.trial.pipeline import prepare_terrain
     from offroadbench.study import load_study
     from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     study, _ = load_study(Path(__file__).resolve().parents[1] / "experiments" / "majhor2023-mujoco.toml")
     study = dataclasses.replace(study, terrains_per_cell=1, missions_per_terrain=missions)

@@ -2,14 +2,14 @@
 
 Everything here is read from the code, so the reference cannot drift from it:
 
-* the settings tables are the config dataclasses behind ``offroadbench.study.spec.SECTIONS``
+* the settings tables are the config dataclasses behind ``offroadbench.study.spec.config.SECTIONS``
   (a table built by ``from_dict(SomeConfig, ...)`` is found automatically, so a new section or
   field appears in the reference by itself);
 * a key's meaning (with its unit and the paper or source behind it) is the field's docstring,
   read from the source with :mod:`ast`; its allowed range is read from the ``check_range`` /
   ``check_int`` / ``check_choice`` calls of the config's ``__post_init__``;
 * the trial columns are the fields of :class:`offroadbench.sim.trial.runner.TrialResult` with their
-  docstrings, after the key columns of :func:`offroadbench.study.results.load`.
+  docstrings, after the key columns of :func:`offroadbench.study.store.results.load`.
 
 ``offroadbench config --write-reference docs/reference.md`` rewrites the committed reference
 (``tests/test_reference.py`` fails while it differs from :func:`render_reference`), and
@@ -28,8 +28,8 @@ import math
 import re
 from pathlib import Path
 from typing import Any
-from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, _first_line, _qualname, field_docs, unit_of
-from offroadbench.reference_recipes import FILE_KEYS, _nested_sections, recipe_sections  # noqa: F401  (FILE_KEYS re-exported)
+from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, first_line, qualname, field_docs, unit_of
+from offroadbench.reference_recipes import FILE_KEYS, nested_sections, recipe_sections  # noqa: F401  (FILE_KEYS re-exported)
 
 __all__ = [
     "REFERENCE_PATH",
@@ -60,9 +60,9 @@ def _builder_class(builder: Any) -> type | None:
 
 
 def _study_section() -> SectionDoc:
-    from offroadbench.study.spec import StudyConfig
+    from offroadbench.study.spec.config import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis", "blind_seed")  # blind_seed: set by root_seed = "blind"
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -70,10 +70,10 @@ def _study_section() -> SectionDoc:
         ("`[recipe_overrides]`: fixed `\"dotted.key\" = value` changes of the recipe, for every cell "
         "(the keys of `offroadbench generate --set`)."),
         ("`[reference]`: published numbers the report sets beside the study's (free-form; "
-        "`offroadbench.study.report`)."),
+        "`offroadbench.study.report.markdown`)."),
         ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
-    return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
+    return SectionDoc("study", qualname(StudyConfig), first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
                       notes)
 
 
@@ -86,7 +86,7 @@ def _vehicle_section() -> SectionDoc:
     fields = (name, *field_docs(VehicleSpec, skip=("name", "urdf"), defaults=husky))
     notes = (("Defaults shown are the Husky's (`vehicles/husky/vehicle.toml`, every figure with its source "
              "beside it); another `name` brings that vehicle's own values."),)
-    return SectionDoc("vehicle", _qualname(VehicleSpec), _first_line(VehicleSpec), fields, notes)
+    return SectionDoc("vehicle", qualname(VehicleSpec), first_line(VehicleSpec), fields, notes)
 
 
 def _driver_entries() -> list[tuple[str, str, Any]]:
@@ -112,7 +112,7 @@ def _planner_sections() -> list[SectionDoc]:
     entries = _driver_entries()
     names = ", ".join(f"`{n}`" for _, n, _ in entries)
     head = SectionDoc(
-        "planner", _qualname(PlannerChoice), _first_line(PlannerChoice),
+        "planner", qualname(PlannerChoice), first_line(PlannerChoice),
         (FieldDoc("name", "str", "straight", "", f"one of {names} (and installed plug-ins)",
                   "The planner (pure pursuit follows its path) or closed-loop policy that drives every trial; "
                   "the table's other keys are what it perceives (the keys after `name`, "
@@ -127,15 +127,15 @@ def _planner_sections() -> list[SectionDoc]:
         cfg = spec.config
         fields = () if cfg is NoConfig else field_docs(cfg)
         summary = f"{kind} `{name}`: {spec.summary}" if spec.summary else f"{kind} `{name}`"
-        out.append(SectionDoc(f"planner.{name}", _qualname(cfg), summary, fields,
+        out.append(SectionDoc(f"planner.{name}", qualname(cfg), summary, fields,
                               ("No settings.",) if not fields else ()))
     return out
 
 
 def study_sections() -> list[SectionDoc]:
     """Every table a study TOML accepts, in the order of the file: ``[study]``, then the settings
-    tables of ``offroadbench.study.spec.SECTIONS`` (planners' settings as ``planner.NAME``)."""
-    from offroadbench.study.spec import SECTIONS
+    tables of ``offroadbench.study.spec.config.SECTIONS`` (planners' settings as ``planner.NAME``)."""
+    from offroadbench.study.spec.config import SECTIONS
 
     out = [_study_section()]
     for name, builder in SECTIONS.items():
@@ -150,24 +150,30 @@ def study_sections() -> list[SectionDoc]:
                                    "teach offroadbench.reference about it")
             skip = ("count",) if name == "missions" else ()
             notes = ("`count` is not a study key: `[study] missions_per_terrain` sets it.",) if skip else ()
-            out.append(SectionDoc(name, _qualname(cls), _first_line(cls), field_docs(cls, skip=skip), notes))
-            out += _nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
+            out.append(SectionDoc(name, qualname(cls), first_line(cls), field_docs(cls, skip=skip), notes))
+            out += nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
     return out
 
 
 def search_sections() -> list[tuple[str, SectionDoc]]:
-    """(title, table) of the failure search's ``[search]`` and ``[[search.params]]`` tables."""
+    """(title, table) of the failure search's ``[search]``, ``[[search.params]]`` and ``[analysis]`` tables."""
+    from offroadbench.search.analysis import SearchAnalysis
     from offroadbench.search.space import SearchConfig, SearchParam
 
     notes = ("A search file is a study file plus these tables (`offroadbench search run SEARCH.toml`); "
              "`[study]` takes no `terrains_per_cell` or `missions_per_terrain` (one terrain and mission per "
              "trial), and a `[grid]`, if any, lists the cells searched one after another. "
              "Source of the estimators: `offroadbench.search.estimators`.",)
-    return [("`[search]`", SectionDoc("search", _qualname(SearchConfig), "What a failure search runs and on which budget",
+    return [("`[search]`", SectionDoc("search", qualname(SearchConfig), "What a failure search runs and on which budget",
                                       field_docs(SearchConfig, skip=("params",)), notes)),
-            ("`[[search.params]]`", SectionDoc("search.params", _qualname(SearchParam),
+            ("`[[search.params]]`", SectionDoc("search.params", qualname(SearchParam),
                                                "One searched key, with its range and nominal distribution "
-                                               "(one table per key)", field_docs(SearchParam)))]
+                                               "(one table per key)", field_docs(SearchParam))),
+            ("`[analysis]` of a search file", SectionDoc("analysis", qualname(SearchAnalysis),
+                                                         "A search's analysis plan, fixed before the run and stored with it",
+                                                         field_docs(SearchAnalysis),
+                                                         ("Source: `offroadbench.search.analysis`; the report computes "
+                                                          "these figures first (`offroadbench.search.evaluate`).",)))]
 
 
 def section_names() -> list[str]:
@@ -175,7 +181,7 @@ def section_names() -> list[str]:
 
 
 # ---------------------------------------------------------------------------- the tables a study writes
-#: the key columns of a study's trial table (offroadbench.study.results.load), before the TrialResult fields
+#: the key columns of a study's trial table (offroadbench.study.store.results.load), before the TrialResult fields
 KEY_COLUMNS = (
     ("(grid columns)", "", ("One column per grid axis, named by its last key part (`D_high`), `planner` for "
      "`planner.name`, `vehicle` for `vehicle.name`, or the full key where the last part is ambiguous.")),
@@ -187,7 +193,7 @@ KEY_COLUMNS = (
     ("mission_seed", "", "Integer seed the mission was drawn from (offroadbench.seeding.mission_seed)."),
 )
 
-#: columns of the terrain table (offroadbench.study.results.load_terrains) after the grid columns and keys
+#: columns of the terrain table (offroadbench.study.store.results.load_terrains) after the grid columns and keys
 TERRAIN_COLUMNS = (
     ("area_low", "", ("Fraction of the map inside the border whose Moore gradient is low (Majhor & Bos 2023, "
      "Eq. 3-4, Sec. 2.4; before the morphological closing).")),
@@ -196,7 +202,7 @@ TERRAIN_COLUMNS = (
     ("twin_unexplained_var", "", "Only in cells with `[study] missions_from` whose missions come from another cell's "
      "terrain: 1 - r^2 of this terrain's heights against that terrain's (same seed); for a band-limited arm against "
      "its aliased twin, the share of the surface's variance carried by the W-M terms above the grid's Nyquist "
-     "frequency (offroadbench.study.tasks.prepare_cell)."),
+     "frequency (offroadbench.study.execution.tasks.prepare_cell)."),
 )
 
 #: meaning of each telemetry column (offroadbench.sim.trial.runner.TELEMETRY_COLUMNS)
@@ -272,17 +278,17 @@ def _md_table(fields: tuple[FieldDoc, ...] | list[FieldDoc], *, columns: bool = 
 
 
 def _analysis_lines() -> list[str]:
-    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.plan)."""
-    from offroadbench.study import plan
+    """The ``[analysis]`` table and its ``[[analysis.comparisons]]`` (offroadbench.study.stats.plan)."""
+    from offroadbench.study.stats import plan
 
     doc = inspect.getdoc(plan) or ""
     tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
-    return ["### `[analysis]`", "", f"{_md_cell(_first_line(plan.AnalysisPlan))} Source: "
-            f"`{_qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
+    return ["### `[analysis]`", "", f"{_md_cell(first_line(plan.AnalysisPlan))} Source: "
+            f"`{qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
             "in its Confirmatory section and marks every other number exploratory; a plan changed after "
             "trials were stored is refused.", "", *_md_table(field_docs(plan.AnalysisPlan, skip=("comparisons",))),
-            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(_first_line(plan.Comparison))} Source: "
-            f"`{_qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
+            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(first_line(plan.Comparison))} Source: "
+            f"`{qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
 
 
 def render_reference() -> str:
@@ -327,7 +333,11 @@ def render_reference() -> str:
         "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
         "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
         "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
-        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "soil; a soil map with `[[soil.regions]]`, each a `soil` and conditions among `slope_min_deg`, "
+        "`slope_max_deg`, `height_min_m`, `height_max_m`, `in_crater` (with `crater_radius_fraction`, "
+        "`crater_min_diameter_m`), a disc `centre_m` + `radius_m` or a rectangle `x_range_m` + "
+        "`y_range_m`, and/or `raster` (a PNG of soil indices, one pixel per height sample) with "
+        "`raster_soils`: offroadbench.terrain.soil_map) tables. A layer table holds its generator's keys below; a key that is itself a table "
         "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
         "",
     ]
@@ -344,7 +354,7 @@ def render_reference() -> str:
         ("One row per trial. Metrics are computed for every trial; the paper analyses them for successful "
         "trials only. Source: `offroadbench.sim.trial.runner.TrialResult`. `study export` adds, after these, the "
         "settings the cell held fixed (`vehicle.name`, `planner.name`, `sim.gravity_m_s2`, `sim.engine`, ..., "
-        "`rules`, `recipe`; `offroadbench.study.header.settings_columns`), so an exported row says what made it."),
+        "`rules`, `recipe`; `offroadbench.study.report.header.settings_columns`), so an exported row says what made it."),
         "",
         *_md_table(trial_columns(), columns=True),
         "",

@@ -122,7 +122,7 @@ def test_recipes_load_or_raise_input_error(data):
 @given(data=st.data())
 def test_studies_load_or_raise_input_error(data):
     from offroadbench.config import load_toml
-    from offroadbench.study.spec import plan_cells, study_from_dict
+    from offroadbench.study.spec.config import plan_cells, study_from_dict
 
     base = load_toml(SMOKE)
 

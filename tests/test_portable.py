@@ -105,8 +105,8 @@ DRIVER = textwrap.dedent('''
     import hashlib, json, sys
     from offroadbench.levels16 import encode_levels
     from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import load_study
-    from offroadbench.study.tasks import TerrainTask, run_terrain
+    from offroadbench.study.spec.config import load_study
+    from offroadbench.study.execution.tasks import TerrainTask, run_terrain
     from offroadbench.terrain.recipe import generate_terrain
 
     def drive(study_path, order):

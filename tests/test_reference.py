@@ -14,7 +14,7 @@ from offroadbench.cli import main
 from offroadbench.errors import InputError
 from offroadbench.navigation.planners import planner_from_table
 from offroadbench.sim.trial.runner import TELEMETRY_COLUMNS, TrialResult
-from offroadbench.study.spec import _STUDY_KEYS, SECTIONS, plan_cells, study_from_dict
+from offroadbench.study.spec.config import _STUDY_KEYS, SECTIONS, plan_cells, study_from_dict
 
 REPO = Path(__file__).resolve().parents[1]
 REGENERATE = "offroadbench config --write-reference docs/reference.md"

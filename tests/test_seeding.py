@@ -88,8 +88,8 @@ def test_roughness_study_terrain_j_is_generate_with_the_shown_seed(tmp_path, mon
 def test_study_terrain_j_is_generate_with_the_shown_seed(tmp_path, capsys):
     from offroadbench.io.png16 import write_png16
     from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.spec import load_study
-    from offroadbench.study.tasks import run_terrain
+    from offroadbench.study.spec.config import load_study
+    from offroadbench.study.execution.tasks import run_terrain
 
     study, plans = load_study(Path(__file__).resolve().parents[1] / "experiments" / "smoke.toml")
     tasks = [t for t in plan_tasks(study, plans, set()) if t.terrain == 1 and t.cell.index == 2]

@@ -26,7 +26,7 @@ class PlannerRefusal(InputError):
     car): a property of the (planner, vehicle) pair, not of the terrain. ``drive`` reports it as bad
     input (one line); a study stores the pair's trials as faults, so a cartesian grid of vehicles and
     planners runs to the end and its report shows the pair as refused
-    (offroadbench.study.tasks.run_terrain)."""
+    (offroadbench.study.execution.tasks.run_terrain)."""
 
 @dataclass(frozen=True, kw_only=True)
 class VehicleEnvelope:

@@ -8,8 +8,8 @@ Typical use::
     df = load("runs/smoke")          # one tidy row per trial
 """
 
-from offroadbench.study.spec import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
-from offroadbench.study.results import load, load_meta, load_terrains
+from offroadbench.study.spec.config import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
+from offroadbench.study.store.results import load, load_meta, load_terrains
 from offroadbench.study.runner import RunSummary, run_study
 
 __all__ = [

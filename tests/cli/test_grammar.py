@@ -58,7 +58,7 @@ def test_seed_help_states_root_or_terrain_seed():
 
 def test_study_export_terrains_carry_trials_and_successes(tmp_path):
     from offroadbench.study import run_study, study_from_dict
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     def fake_trials(prepared, settings):  # a stand-in for the physics: success on even missions
         for m in prepared.missions:

@@ -106,7 +106,7 @@ def test_bare_plot_of_analyze_writes_beside(tmp_path, capsys, monkeypatch):
 
 def test_config_shows_grid_and_recipe_overrides(capsys):
     from offroadbench.study import study_from_dict
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     code, out, _ = run(capsys, "config")
     assert code == 0
@@ -149,8 +149,8 @@ def test_analyze_says_when_d_from_the_psd_does_not_hold(capsys):
 
 def test_the_rules_row_states_the_capped_stuck_window():
     from offroadbench.navigation.rules import FailureRules, stuck_window_s, trial_timeout_s
-    from offroadbench.study.header import _stuck_window_text
-    from offroadbench.study.spec import build_section
+    from offroadbench.study.report.header import _stuck_window_text
+    from offroadbench.study.spec.config import build_section
 
     secs = {name: build_section(name, table, where="test") for name, table in
             (("missions", {"length_m": 6.0}), ("controller", {}), ("vehicle", {"name": "husky"}))}
@@ -168,7 +168,7 @@ def test_exported_rows_carry_the_fixed_settings(tmp_path, capsys):
     import pandas as pd
 
     from offroadbench.study import run_study, study_from_dict
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
     from tests.study.test_run import STUDY, fake_trials
 
     study = study_from_dict({**STUDY, "sim": {"gravity_m_s2": 1.62}})
@@ -191,7 +191,7 @@ def test_the_model_file_that_drove_is_recorded(tmp_path):
     import hashlib
 
     from offroadbench.navigation.drivers import PlannerChoice
-    from offroadbench.study.header import _files_rows, driver_files
+    from offroadbench.study.report.header import _files_rows, driver_files
 
     @dataclasses.dataclass(frozen=True)
     class ModelConfig:

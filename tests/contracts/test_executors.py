@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from offroadbench.study import load, load_study, load_terrains, run_study
-from offroadbench.study.executors import EXECUTORS
+from offroadbench.study.execution.executors import EXECUTORS
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory, write_tiny_study):
@@ -29,7 +29,7 @@ def test_executor_gives_the_inline_table(name, reference, tmp_path):
 
 def test_unknown_executor_suggests_the_closest():
     from offroadbench.errors import InputError
-    from offroadbench.study.executors import get_executor
+    from offroadbench.study.execution.executors import get_executor
 
     with pytest.raises(InputError, match=r"unknown executor 'locl'; did you mean 'local'"):
         get_executor("locl")

@@ -135,7 +135,7 @@ def test_ppo_drives_a_mission_through_drive_mission_and_the_env_alike_and_replay
 
 def test_ppo_drives_a_study_slice(tmp_path):
     from offroadbench.study import load, run_study, study_from_dict
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     data = load_toml(resources.study_files()["smoke"])
     data["study"].update(terrains_per_cell=1, missions_per_terrain=2)

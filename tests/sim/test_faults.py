@@ -122,7 +122,7 @@ STUDY_TOML = {
 
 def test_a_nan_policys_study_fixed_and_resumed_equals_the_fixed_run(tmp_path, nan_policy):
     from offroadbench.study import load, load_meta, run_study, study_from_dict
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.spec.config import plan_cells
 
     study = study_from_dict(copy.deepcopy(STUDY_TOML))
     cells = plan_cells(study)

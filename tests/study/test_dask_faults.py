@@ -182,7 +182,7 @@ def hang_once(prepared, settings):
 
 @pytest.mark.timeout(400)
 def test_hung_trial_hits_the_wall_clock_limit_and_resume_completes(tmp_path, reference, monkeypatch):
-    from offroadbench.study.store import Store
+    from offroadbench.study.store.store import Store
 
     study_path, expected = reference
     study, cells = load_study(study_path)
@@ -222,7 +222,7 @@ def test_scheduler_lost_while_fetching_a_result_is_one_study_error():
 
     from distributed.comm.core import CommClosedError
 
-    from offroadbench.study.executors import DaskExecutor, StudyError
+    from offroadbench.study.execution.executors import DaskExecutor, StudyError
 
     class Finished:
         status = "finished"

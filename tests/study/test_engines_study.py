@@ -10,7 +10,7 @@ import pytest
 from offroadbench import resources
 from offroadbench.config import load_toml
 from offroadbench.study import load, run_study, study_from_dict
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.spec.config import plan_cells
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="mujoco not installed")
 

@@ -19,9 +19,9 @@ import pytest
 from offroadbench import resources
 from offroadbench.errors import InputError, TrialFault
 from offroadbench.study import load, load_meta, run_study, study_from_dict
-from offroadbench.study.executors import MAX_TRIAL_TIMEOUT_S, check_trial_timeout
-from offroadbench.study.spec import plan_cells
-from offroadbench.study.store import LOCK_NAME, Store
+from offroadbench.study.execution.executors import MAX_TRIAL_TIMEOUT_S, check_trial_timeout
+from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.store.store import LOCK_NAME, Store
 from tests.study.test_run import STUDY, fake_trials
 
 
@@ -83,7 +83,7 @@ def test_a_resume_refuses_an_edited_vehicle_or_urdf(tmp_path, user_dir):
 
 
 def test_a_changed_engine_or_planner_version_is_named(tmp_path, monkeypatch):
-    from offroadbench.study import inputs
+    from offroadbench.study.spec import inputs
 
     data = small()
     run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
@@ -160,7 +160,7 @@ def test_a_terrain_with_no_drawable_mission_is_faults_and_the_study_goes_on(tmp_
     """Issue 29: a drawn terrain with no start cell (rough everywhere inside the border) stops no
     study: each of its missions is a fault naming why, the other terrains run, nothing is redrawn."""
     from offroadbench.navigation.missions import NoMissionError
-    from offroadbench.study import tasks
+    from offroadbench.study.execution import tasks
 
     real = tasks.prepare_cell
 
@@ -186,7 +186,7 @@ def test_a_planner_that_refuses_the_vehicle_is_faults_and_the_grid_goes_on(tmp_p
     the HUNTER, an Ackermann car, cannot): those trials are faults naming the refusal, the other cells
     run, and ``drive`` with the same pair still answers with one line (InputError)."""
     from offroadbench.navigation.problem import PlannerRefusal
-    from offroadbench.study.tasks import REFUSED_FAULT
+    from offroadbench.study.execution.tasks import REFUSED_FAULT
 
     data = small(grid={"vehicle.name": ["hunter"], "planner.name": ["straight", "astar"]})
     data["study"].update(missions_per_terrain=1)
@@ -204,7 +204,7 @@ def test_a_planner_that_refuses_the_vehicle_is_faults_and_the_grid_goes_on(tmp_p
 
 
 def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
-    from offroadbench.study.report import build_report
+    from offroadbench.study.report.markdown import build_report
 
     study, cells = cells_of(small())
     run_study(study, cells, tmp_path, executor="inline", trial_fn=thrown_on(1))
@@ -216,7 +216,7 @@ def test_the_report_lists_faults_and_its_statistics_leave_them_out(tmp_path):
 
 
 def test_a_limit_shorter_than_the_poll_is_enforced(tmp_path, monkeypatch):
-    from offroadbench.study.executors import LocalExecutor
+    from offroadbench.study.execution.executors import LocalExecutor
 
     monkeypatch.setattr(LocalExecutor, "poll_s", 60.0)  # the deadline, not the poll, sets the wait
     def slow_mission_1(prepared, settings):
@@ -243,13 +243,13 @@ def test_a_limit_beyond_the_sane_range_is_refused(value):
 def test_a_dask_task_waits_in_slices_so_no_limit_overflows(limit):
     """A limit past ``threading.TIMEOUT_MAX`` made every Dask task fail with OverflowError; the task
     now waits in short slices (1e10 s is refused by the CLI, but the task would cope)."""
-    from offroadbench.study.executors import _dask_task
+    from offroadbench.study.execution.executors import dask_task
     from offroadbench.study.runner import plan_tasks
-    from offroadbench.study.tasks import TerrainBuilt, TrialDone
+    from offroadbench.study.execution.tasks import TerrainBuilt, TrialDone
 
     study, cells = cells_of(small())
     task = plan_tasks(study, cells, set())[0]
-    msgs = _dask_task(task, fake_trials, limit)
+    msgs = dask_task(task, fake_trials, limit)
     assert isinstance(msgs[0], TerrainBuilt) and [type(m) for m in msgs[1:]] == [TrialDone] * 3
 
 
@@ -306,7 +306,7 @@ def test_a_full_disk_in_a_trial_commit_is_one_oserror_naming_the_store(tmp_path,
 
 
 def test_a_full_disk_while_locking_leaves_no_lock_file(tmp_path, monkeypatch):
-    from offroadbench.study.store import RunLock
+    from offroadbench.study.store.store import RunLock
 
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")

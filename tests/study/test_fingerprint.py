@@ -22,9 +22,9 @@ from offroadbench.study.fingerprint import (
     identity_promise,
     platform_fingerprint,
 )
-from offroadbench.study.report import build_report
-from offroadbench.study.results import load_platforms, trial_platform
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.store.results import load_platforms, trial_platform
+from offroadbench.study.spec.config import plan_cells
 from tests.study.test_run import STUDY, failing_after
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -109,7 +109,7 @@ RESUME = """
 import sys
 sys.path.insert(0, {root!r})
 from offroadbench.study import run_study, study_from_dict
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.spec.config import plan_cells
 from tests.study.test_run import STUDY, fake_trials
 study = study_from_dict(STUDY)
 run_study(study, plan_cells(study), {out!r}, executor="inline", trial_fn=fake_trials)

@@ -12,7 +12,7 @@ import pytest
 from offroadbench.errors import InputError
 from offroadbench.study import load, load_meta, run_study, study_from_dict
 from offroadbench.study.runner import TRIAL_LIMIT_BASE_S, default_trial_timeout_s
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.spec.config import plan_cells
 
 from tests.study.test_run import STUDY, fake_trials
 

@@ -18,9 +18,9 @@ import pytest
 
 from offroadbench.errors import InputError
 from offroadbench.study import load, load_meta, run_study, study_from_dict
-from offroadbench.study import store as store_mod
-from offroadbench.study.spec import plan_cells
-from offroadbench.study.store import STORE_NAME, RunDirLocked, RunLock, Store
+from offroadbench.study.store import store as store_mod
+from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.store.store import STORE_NAME, RunDirLocked, RunLock, Store
 from tests.study.test_run import STUDY, fake_trials
 
 CLI = [sys.executable, "-c", "import sys; from offroadbench.cli import main; sys.exit(main())"]

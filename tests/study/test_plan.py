@@ -1,4 +1,4 @@
-"""The analysis plan of a study ([analysis], offroadbench.study.plan): validation against the grid,
+"""The analysis plan of a study ([analysis], offroadbench.study.stats.plan): validation against the grid,
 its expansion into tests, and the confirmatory numbers against hand computations."""
 
 import math
@@ -8,9 +8,9 @@ import pandas as pd
 import pytest
 
 from offroadbench.errors import InputError
-from offroadbench.study.clustered import holm, sign_flip_power
-from offroadbench.study.plan import confirmatory_table, expand, min_p, plan_from_dict
-from offroadbench.study.spec import study_from_dict
+from offroadbench.study.stats.clustered import holm, sign_flip_power
+from offroadbench.study.stats.plan import confirmatory_table, expand, min_p, plan_from_dict
+from offroadbench.study.spec.config import study_from_dict
 
 GRID = {"sim.engine": ["pybullet", "mujoco"], "recipe.layers.base.D_high": [2.3, 2.6]}
 

@@ -8,7 +8,7 @@ import os
 
 from offroadbench.cli import study as cli_study
 from offroadbench.study import run_study, study_from_dict
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.spec.config import plan_cells
 
 from tests.study.test_run import STUDY, fake_trials
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from offroadbench.study import run_study, study_from_dict
-from offroadbench.study.header import held_fixed, report_title
-from offroadbench.study.report import build_report
-from offroadbench.study.results import load_meta
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.report.header import held_fixed, report_title
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.store.results import load_meta
+from offroadbench.study.spec.config import plan_cells
 
 STUDY = {
     "study": {"name": "lunar-astar", "recipe": "paper-d2.45", "root_seed": 5, "terrains_per_cell": 2,

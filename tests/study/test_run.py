@@ -12,11 +12,11 @@ import pytest
 
 from offroadbench.errors import InputError
 from offroadbench.study import load, load_meta, load_terrains, run_study, study_from_dict
-from offroadbench.study.spec import plan_cells
-from offroadbench.study.executors import StudyError
-from offroadbench.study.report import build_report
-from offroadbench.study.stats import box_stats, median_changes
-from offroadbench.study.store import Store
+from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.execution.executors import StudyError
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.stats.terrain import box_stats, median_changes
+from offroadbench.study.store.store import Store
 
 STUDY = {
     "study": {"name": "fake", "recipe": "paper-d2.45", "root_seed": 5, "terrains_per_cell": 3, "missions_per_terrain": 4},

@@ -5,9 +5,9 @@ import pytest
 
 from offroadbench.cli.study import apply_sets
 from offroadbench.errors import InputError
-from offroadbench.study.report import _provenance
-from offroadbench.study.spec import plan_cells, study_from_dict, study_id
-from offroadbench.study.tasks import unexplained_variance
+from offroadbench.study.report.markdown import _provenance
+from offroadbench.study.spec.config import plan_cells, study_from_dict, study_id
+from offroadbench.study.execution.tasks import unexplained_variance
 
 BASE = {"study": {"name": "s", "recipe": "paper-d2.45", "root_seed": 1, "terrains_per_cell": 10},
         "grid": {"sim.engine": ["pybullet", "mujoco"]}, "recipe_overrides": {"grid.rows": 121, "grid.cols": 121}}

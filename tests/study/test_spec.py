@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from offroadbench.errors import InputError
-from offroadbench.study.spec import load_study, plan_cells, study_from_dict, study_id
+from offroadbench.study.spec.config import load_study, plan_cells, study_from_dict, study_id
 from offroadbench.study.runner import plan_tasks
 
 ROOT = Path(__file__).resolve().parents[2]

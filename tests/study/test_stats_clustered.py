@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from offroadbench.study.clustered import (
+from offroadbench.study.stats.clustered import (
     breaking_point_logistic,
     cluster_bootstrap,
     durkalski_mcnemar,

@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from offroadbench.study.clustered import wilcoxon_test
-from offroadbench.study.stats import terrain_changes
+from offroadbench.study.stats.clustered import wilcoxon_test
+from offroadbench.study.stats.terrain import terrain_changes
 
 RESULTS = Path(__file__).resolve().parents[2] / "experiments" / "results"
 
@@ -73,8 +73,8 @@ def test_unpaired_groups_use_independent_samples(paper):
 
 def test_report_tests_each_change_at_the_terrain_level(tmp_path):
     from offroadbench.study import run_study, study_from_dict
-    from offroadbench.study.report import build_report
-    from offroadbench.study.spec import plan_cells
+    from offroadbench.study.report.markdown import build_report
+    from offroadbench.study.spec.config import plan_cells
 
     def fake(prepared, settings):
         hm = prepared.hm
@@ -108,7 +108,7 @@ def test_report_tests_each_change_at_the_terrain_level(tmp_path):
 
 
 def test_median_change_intervals_resample_terrains_in_both_groups():
-    from offroadbench.study.stats import group_summary, median_change_intervals, median_changes
+    from offroadbench.study.stats.terrain import group_summary, median_change_intervals, median_changes
 
     rows = []
     for j in range(8):

@@ -16,9 +16,9 @@ from offroadbench.errors import InputError
 from offroadbench.sim.trial import settings as settings_module
 from offroadbench.sim.trial.pipeline import TrialSettings
 from offroadbench.study import run_study, spec, study_from_dict
-from offroadbench.study.report import build_report
-from offroadbench.study.results import load, load_meta
-from offroadbench.study.spec import CellPlan, plan_cells
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.store.results import load, load_meta
+from offroadbench.study.spec.config import CellPlan, plan_cells
 
 ROOT = Path(__file__).resolve().parents[2]
 

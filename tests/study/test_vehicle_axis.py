@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from offroadbench.study import load, run_study, study_from_dict
-from offroadbench.study.report import build_report
-from offroadbench.study.spec import plan_cells
+from offroadbench.study.report.markdown import build_report
+from offroadbench.study.spec.config import plan_cells
 
 STUDY = {
     "study": {"name": "vehicles", "recipe": "paper-d2.3", "root_seed": 3, "terrains_per_cell": 1,

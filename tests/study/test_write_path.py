@@ -19,10 +19,10 @@ import pandas as pd
 import pytest
 
 from offroadbench.study import load, load_meta, run_study, study_from_dict
-from offroadbench.study import runner as runner_mod
-from offroadbench.study.runner import telemetry_paths
-from offroadbench.study.spec import plan_cells
-from offroadbench.study.store import Store
+from offroadbench.study import session as runner_mod
+from offroadbench.study.store.results import telemetry_paths
+from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.store.store import Store
 from tests.study.test_run import STUDY, fake_trials
 
 KILL_AT = 3  # the third trial's write path is cut
@@ -54,7 +54,7 @@ def _die_on(counter: dict, n: int) -> None:
 def _child(run_dir, point: str) -> None:
     """Run the study and die at ``point`` of the KILL_AT-th trial's write path."""
     from offroadbench.io import atomic, telemetry
-    from offroadbench.study import store as store_mod
+    from offroadbench.study.store import store as store_mod
 
     count = {"n": 0}
     if point == "before_telemetry":

@@ -57,7 +57,7 @@ def test_study_sim_overrides_the_terrain_body_and_soil():
 
 def test_study_cells_use_the_terrain_gravity(tmp_path):
     from offroadbench.sim.trial.pipeline import prepare_terrain
-    from offroadbench.study.spec import load_study
+    from offroadbench.study.spec.config import load_study
 
     def sim_of(plan):  # what drive_terrain gives the World
         recipe = plan.recipe()

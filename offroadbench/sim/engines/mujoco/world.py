@@ -181,7 +181,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             n = len(self._wheel_bodies)
             setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
-            sc = self._loop_kernels(contact.tyre_loop, "_soil_c")
+            # the compiled loop holds wheel tables: a track's belt segments run in the Python loop
+            sc = None if self.spec.track_contact_length_m else self._loop_kernels(contact.tyre_loop, "_soil_c")
             if sc is not None:
                 f, ist, tab = sc.new_state(self._soil, hm, self._wheel_bodies, self._wheel_qvel, self._wheel_axis,
                                            self._chassis)
@@ -452,6 +453,23 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         if self._soil is not None:
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
+
+    def use_soil_map(self, soil_map) -> None:
+        """Each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap), read at its contact
+        every step: the Python soil loop (the compiled loop holds one soil's tables)."""
+        if self._soil is None:
+            return
+        n = len(self._wheel_bodies)
+        setup = soil_setup(self.spec, self.sim.soil, self._mass_kg, n, self.sim.gravity_m_s2, self.dt_s, soil_map)
+        self._soil = setup.wheels(n, self.hm, self.dt_s, self._dt_mj if self.contact.tyres_each_substep else self.dt_s)
+        self._fast_soil = None
+
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
+        without the ``terramechanics`` tyre model."""
+        if self._fast_soil is not None:
+            return self._fast_soil[0].outside(self._fast_soil[1], self._fast_soil[2], len(self._loads))
+        return None if self._soil is None else self._soil.outside_model()
 
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),

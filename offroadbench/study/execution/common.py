@@ -1,0 +1,93 @@
+"""What the executors of offroadbench.study.execution.executors share: worker set-up (die with the parent,
+ignore Ctrl-C), the per-trial time limit and how a failed or hung task becomes an error or faults."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import sys
+from typing import Callable
+
+from offroadbench.errors import InputError, StudyError
+from offroadbench.study.execution.tasks import TIMEOUT_KIND, TerrainTask, TrialFaulted, remaining_task
+
+log = logging.getLogger(__name__)
+
+
+Handle = Callable[[tuple], None]
+
+
+# ---------------------------------------------------------------------------- local processes
+def die_with_parent(parent_pid: int) -> None:
+    """Ask Linux to SIGKILL this process when its parent dies; exit if it already has."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL("libc.so.6", use_errno=True)
+            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except OSError:  # pragma: no cover - no libc: the ppid check below still applies
+            pass
+    if os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def worker_bootstrap() -> None:
+    """What every worker process does first: import pybullet without its banner."""
+    from offroadbench.sim import import_pybullet_quietly
+
+    import_pybullet_quietly()
+
+
+def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
+    """An ("error", ...) message that survives pickling, whatever the exception."""
+    import pickle
+
+    try:
+        pickle.dumps(exc)
+        carried = exc
+    except Exception:  # an unpicklable exception: keep its text
+        carried = None
+    return ("error", key, carried, f"{type(exc).__name__}: {exc}", tb)
+
+
+#: the largest per-trial wall-clock limit accepted, seconds (30 days): a larger one is no limit in
+#: practice, and timeouts beyond ``threading.TIMEOUT_MAX`` overflow (Dask's helper thread)
+MAX_TRIAL_TIMEOUT_S = 30 * 86400.0
+
+
+def check_trial_timeout(value: float | None) -> float | None:
+    """``trial_timeout_s`` validated: None (no limit) or a finite number of seconds in (0, 30 days]."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= MAX_TRIAL_TIMEOUT_S:
+        raise InputError(f"trial_timeout_s = {value!r}; must be > 0 and at most {MAX_TRIAL_TIMEOUT_S:g} seconds "
+                         "(30 days)")
+    return float(value)
+
+
+def task_failure(key: tuple[int, int], exc: BaseException | None, text: str, tb: str = "") -> Exception:
+    """The error the coordinator raises for a failed terrain task: bad input stays an InputError
+    (naming the terrain), anything else is a one-line StudyError; the traceback goes to the log."""
+    if tb:
+        log.info("terrain %d of cell %d failed:\n%s", key[1], key[0], tb)
+    where = f"cell {key[0]}, terrain {key[1]}"
+    if isinstance(exc, InputError):
+        return InputError(f"{where}: {exc}")
+    return StudyError(f"{where} failed in a worker: {' '.join(text.split())}")
+
+
+def timeout_faults(task: TerrainTask, hung: int | None, finished: set, limit_s: float,
+                   where: str = "") -> tuple[list[TrialFaulted], TerrainTask | None]:
+    """The fault message(s) of a task whose trial (``hung``; None: the terrain build) ran past
+    ``limit_s``, and the task of the missions still to run after it (None if none)."""
+    seeds = dict(task.missions)
+    cell, terrain = task.cell.index, task.terrain
+    if hung is None:  # the build hung: none of the task's missions can run
+        reason = f"the terrain build ran longer than {limit_s:g} s, the per-trial limit{where}"
+        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason, TIMEOUT_KIND)
+                for k, s in task.missions if k not in finished], None
+    reason = f"the trial ran longer than {limit_s:g} s, the per-trial limit{where}"
+    return ([TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason, TIMEOUT_KIND)],
+            remaining_task(task, hung))
