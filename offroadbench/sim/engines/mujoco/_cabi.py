@@ -4,7 +4,9 @@ offsets (offroadbench.sim.engines.mujoco._layout), and calls of MuJoCo's C funct
 addresses (``mjfCollision``; ``mj_step1`` and its kin, ``void (const mjModel*, mjData*)``).
 
 The addresses are run-time arguments, never compiled in, so the kernels that use these stay in
-numba's on-disk cache across processes (and address-space layouts)."""
+numba's on-disk cache across processes (and address-space layouts). numba's cache checks only the
+calling kernel's own source file: after editing this module, clear the ``__pycache__`` ``*.nbi`` /
+``*.nbc`` files of ``_hfield_c`` and ``_tyres_c`` (an installed release rewrites them all)."""
 
 from __future__ import annotations
 

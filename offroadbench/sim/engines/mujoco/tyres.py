@@ -28,7 +28,7 @@ class MuJoCoTyres:
         qvel, xmat, xipos, xfrc = self._step_arrays
         whole = self._fast_step
         if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
-            tc.STEP(whole[0], whole[1], whole[2], whole[3], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
+            tc.STEP(whole[0], whole[1], whole[2], whole[3], whole[4], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
             if pushed is not None:
                 self._base_force = None
                 f[push + 3] = 0.0
