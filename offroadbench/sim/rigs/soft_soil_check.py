@@ -98,7 +98,7 @@ def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float,
     return math.degrees(lo)
 
 
-def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
+def tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N. With undriven
     wheels the slip fed back is the driven wheels' ``1 - v / (omega r)`` from the chassis's forward
     speed ``v`` and their commanded tyre speed ``omega r`` (the engines' mean slip counts the towed
@@ -128,7 +128,7 @@ def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     return sum(pulls) / len(pulls)
 
 
-def _come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
+def come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
     """Step a vehicle still moving after its spawn's settle until its vertical speed has stayed under
     ``speed_m_s`` for ``hold_s`` (at most ``limit_s``); a vehicle already still is left as it is. A sprung
     vehicle (the HUNTER's struts) landing on the soil in lunar gravity still bounced after the settle's
@@ -162,7 +162,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         mass = world.geometry.mass_kg
         n = len(spec.wheel_joints)
         n_driven = sum(spec.is_driven(w) for w in spec.wheel_joints)
@@ -170,7 +170,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
         grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2)
+        pull = tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
     expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
     towed = ""
@@ -204,26 +204,26 @@ def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
     soil = load_soil(SOFT_SOIL)
     soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
                                settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
     b, length = spec.wheel_width_m, spec.track_contact_length_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity); belts {length:g} x {b:g} m"
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         mass = world.geometry.mass_kg
         sink = world.wheel_penetration_m()
         com_height = world.centre_of_mass_m()[2] - (flat.z_min_m - sink)  # above the belts' bottom
-        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2, seconds=16.0)
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
+        pull = tow_pull(world, 0.2, seconds=16.0)
     w = mass * g / 2.0
     expected_pull = 2.0 * drawbar_pull_n(soil, b, length, w, 0.2)
     limit = track_climb_limit_deg(soil, b, length, mass, g, 0.75, com_height)
     mu = spec.wheel_friction * sim.terrain_friction
     return [
-        _ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
+        ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
                    f"{where}; Bekker sinkage of a belt carrying {w:.1f} N"),
-        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
                  f"{where}; quasi-static belt limit at slip 0.75 with the load moved back (centre of mass "
                  f"{com_height:.3f} m above the belts); on rigid ground grip alone allows "
                  f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
