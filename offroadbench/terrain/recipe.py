@@ -138,11 +138,25 @@ def load_recipe(name_or_path: str | Path) -> Recipe:
     text = str(name_or_path)
     p = Path(text)
     if text.endswith(".toml") or p.exists():
+        _check_recipe_kind(p)
         return recipe_from_dict(load_toml(p), source=str(p))
     presets = resources.terrain_presets()
     if text not in presets:
         raise unknown_name("terrain preset", text, presets, extra="(or give a path to a .toml)")
     return recipe_from_dict(load_toml(presets[text]), source=str(presets[text]))
+
+
+def _check_recipe_kind(p: Path) -> None:
+    """Name what a file handed in as a recipe is when it is plainly not TOML (an image, a sidecar)."""
+    from offroadbench.io.inputs import file_kind
+
+    kind = file_kind(p) if p.is_file() else None
+    if kind is None:
+        return
+    hint = ("if it is a PNG heightmap's sidecar, give the .png beside it" if kind == "a JSON file" else
+            "a PNG heightmap is read from a .png name (16-bit grayscale, with its .json sidecar)" if kind == "a PNG image" else
+            "terrain commands take a 16-bit PNG heightmap (with its .json sidecar), a preset name or a recipe .toml")
+    raise InputError(f"{p}: {kind}, not a terrain recipe (TOML); {hint}")
 
 
 # --------------------------------------------------------------------------- files

@@ -136,12 +136,40 @@ def _planner_stress_plan(folder: Path) -> list[list[float]]:
 
 
 def _planner_stress_sensor_cost(folder: Path) -> list[float]:
-    """The sensor's cost (oracle - mast, points) to astar and lattice on the aliased surface at 2.95 / 2.99,
-    mean per-terrain differences on the same missions."""
+    """The sensor's cost (mast - oracle, points, as the README names it: mast against the oracle) to astar and
+    lattice on the aliased surface at 2.95 / 2.99: the mean per-terrain difference on the same missions and
+    its terrain-bootstrap interval (as the report draws it: a generator of the row's own, keyed_rng)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
+
     t = trial_table(folder)
     rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
-    return [float((rate[(p, "oracle", False, lv)] - rate[(p, "mast", False, lv)]).dropna().mean())
-            for p in ("astar", "lattice") for lv in (2.95, 2.99)]
+    out = []
+    for p in ("astar", "lattice"):
+        for lv in (2.95, 2.99):
+            d = (rate[(p, "mast", False, lv)] - rate[(p, "oracle", False, lv)]).dropna().to_numpy(float)
+            b = cluster_bootstrap(d, np.mean, keyed_rng(0, "arm_table", "sensor", "mast", "oracle", p, False, lv))
+            out += [float(d.mean()), b.low, b.high]
+    return out
+
+
+def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
+    """vehicle-planner: the Husky's successes, rates and terrain-bootstrap intervals (%) per planner, oracle then
+    mast, at ``level``, as the report computes them (stress.success_by_level over the report's strata: a
+    generator per cell)."""
+    def compute(folder: Path) -> list[float]:
+        from experiments.rerender import folder_meta
+        from offroadbench.study.report.planners import _stress_axes
+        from offroadbench.study.stats.stress import success_by_level
+
+        group, lv, strata = _stress_axes(folder_meta(folder))
+        by = success_by_level(trial_table(folder), group, lv, by=strata).set_index([group, "vehicle", "sensor", lv])
+        out = []
+        for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo"):
+            for sensor in ("oracle", "mast"):
+                r = by.loc[(p, "husky", sensor, level)]
+                out += [float(r["successes"]), 100 * r["success_rate"], 100 * r["ci95_low"], 100 * r["ci95_high"]]
+        return out
+    return compute
 
 
 def _shared_missions(folder: Path) -> list[float]:
@@ -558,6 +586,9 @@ SAMPLES = [
            rf"of \*\*{_NUM}x\*\*, {_NUM}-{_NUM}x\)\. \*\*{_NUM} of the 9 intervals\s+hold the boundary reference\*\*, "
            rf"{_NUM} of 9",
            _site_is_repeats),
+    Sample("failure-search-site distance left by the failures", "failure-search-site",
+           rf"a median {_NUM} m of the 6 m route left",
+           lambda f: [float(trial_table(f).query("not success")["final_distance_to_goal_m"].median())]),
     Sample("failure-search-site falsifier repeats", "failure-search-site",
            rf"\| 20; 23, 27, 20, 27 \| \*\*{_NUM}\*\* \({_NUM}-{_NUM}\)", _site_falsifier_repeats),
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
@@ -672,7 +703,7 @@ SAMPLES = [
                                        ("the line (oracle arm), band-limited against aliased surface", 2.99)]),
            lambda f: [v for row in _planner_stress_plan(f) for v in row]),
     Sample("planner-stress the sensor's cost to the planners", "planner-stress",
-           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \["
+           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\]"
                               for p in ("astar", "lattice") for lv in (2.95, 2.99)),
            _planner_stress_sensor_cost),
     Sample("planner-stress shared missions", "planner-stress",
@@ -729,6 +760,12 @@ SAMPLES = [
                          for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
                           trial_table(f).query("D_high == 2.6"))),
+    *[Sample(f"vehicle-planner the Husky's success intervals at {lv}", "vehicle-planner",
+             rf"{head}[\s\S]*?" + "".join(rf"\| husky \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| "
+                                           rf"{_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
+                                           for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
+             _vp_success_intervals(lv))
+      for lv, head in ((2.95, "## Success per vehicle, planner and sensor at D_high 2.95"), (2.6, "## D_high 2.6"))],
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),

@@ -248,9 +248,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     tables["held_fixed.csv"] = fixed
     faults = _faults_section(run_dir, tables)
     n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(run_dir)])
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
+        if "engine_verdicts" in confirm.attrs:
+            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
     lines = [
         f"# {report_title(meta)}",
         "",
@@ -264,7 +266,10 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
         + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
-        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
+        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']} "
+        + ("(**blind**: the hash of the `[analysis]` plan and the design, so no terrain of this study existed "
+           "before its plan was fixed)" if study.get("blind_seed") else "(chosen by hand: **not blind**)")
+        + f"; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
         f"- code: {_provenance(meta)}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",

@@ -11,7 +11,7 @@ and torque, and applies them at the wheel centre.
 
 from __future__ import annotations
 
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.sim.tyre_laws.soil_wheels import SoilWheels, soil_setup
 

@@ -71,7 +71,7 @@ import math
 import time
 
 import numpy as np
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
@@ -178,7 +178,9 @@ class World:
                 body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=cid)
                 pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=cid)
                 lo, hi = pb.getAABB(body, physicsClientId=cid)
-                if abs(lo[2] - hm.z_min_m) > 1e-5 or abs(hi[2] - hm.z_max_m) > 1e-5:  # pragma: no cover - a pybullet change
+                # Bullet keeps the range in float32: a few ulps of the heights (2e-5 m at a DEM's 320 m)
+                tol_m = max(1e-5, 8 * float(np.finfo(np.float32).eps) * max(abs(hm.z_min_m), abs(hm.z_max_m)))
+                if abs(lo[2] - hm.z_min_m) > tol_m or abs(hi[2] - hm.z_max_m) > tol_m:  # pragma: no cover - a pybullet change
                     raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
                                        f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
                 bodies.append(body)
