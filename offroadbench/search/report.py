@@ -235,7 +235,8 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
              ("Which searched parameters the failure depends on: the correlation ratio eta^2 of the failure "
               "indicator on 10 equal-count bins of each parameter, over independent draws (the `random` stream, "
               "else `uniform`), against the 99 % quantile of eta^2 over 999 permutations of the failures "
-              "(offroadbench.search.modes.sensitivity); a parameter below it is inactive and left out of the modes. "
+              "(offroadbench.search.modes.sensitivity); a parameter below it is inactive and left out of the modes "
+              "(where none is found active, too few failures to tell, every parameter is kept). "
               "A mode: failures chained within the study's distinct distance "
               f"({cfg.distinct_distance:g} of a range) in every active parameter (single linkage)."), ""]
     tables: dict[str, pd.DataFrame] = {}
