@@ -129,27 +129,53 @@ def isotonic_decreasing(u: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.nd
 @dataclass(frozen=True)
 class MeasuredBoundary:
     """Failure as a function of one parameter: certain below ``low``, never above ``high``, the
-    isotonic failure rate in between (module docstring)."""
+    isotonic failure rate in between (module docstring), in v = ``sign`` u: where failure lies at
+    high values of the parameter (``sign`` -1) the boundary is held in -u, so that failure is
+    below it there too."""
 
     index: int
     """Which searched parameter (its index in the search config)."""
     low: float
-    """The smallest value at which a trial passed."""
+    """The smallest value of v at which a trial passed."""
     high: float
-    """The largest value at which a trial failed."""
+    """The largest value of v at which a trial failed."""
     band_u: np.ndarray
-    """The band's trials' values, sorted."""
+    """The band's trials' values of v, sorted."""
     band_p: np.ndarray
     """The isotonic failure rate at each of them."""
     band_failed: int
     band_trials: int
     trials: int
     """Trials the boundary was measured on."""
+    sign: int = 1
+    """1: failure at low values of the parameter; -1: at high values (v = -u)."""
+
+    def edges(self) -> tuple[float, float]:
+        """The band's ends in the parameter's own values, in increasing order."""
+        return (self.low, self.high) if self.sign > 0 else (-self.high, -self.low)
+
+    def describe(self) -> str:
+        """The boundary in words, in the parameter's own values."""
+        if self.sign > 0:
+            return f"every trial below {self.low:.4g} failed, every one above {self.high:.4g} passed"
+        return f"every trial above {-self.low:.4g} failed, every one below {-self.high:.4g} passed"
+
+    def _cdf(self, cdf: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+        """The CDF of v from the parameter's CDF (continuous: P(-u <= v) = 1 - F(-v))."""
+        return cdf if self.sign > 0 else (lambda v: 1.0 - cdf(-np.asarray(v, dtype=float)))
+
+    def certain_mass(self, param: SearchParam) -> float:
+        """The nominal mass where failure is certain (beyond the band on the failing side)."""
+        return float(self._cdf(param.cdf)(np.array([self.low]))[0])
+
+    def certain(self, u: np.ndarray) -> np.ndarray:
+        """Whether each value lies where every trial failed (below the band in v)."""
+        return self.sign * np.asarray(u, dtype=float) < self.low
 
     def failure_rate(self, u: np.ndarray) -> np.ndarray:
-        """p(u): 1 below ``low``, 0 above ``high``, the isotonic step function in between (its
-        value at the nearest band trial at or below u; at ``low`` itself the first one's)."""
-        u = np.asarray(u, dtype=float)
+        """p(u): 1 below ``low``, 0 above ``high`` (in v), the isotonic step function in between
+        (its value at the nearest band trial at or below v; at ``low`` itself the first one's)."""
+        u = self.sign * np.asarray(u, dtype=float)
         idx = np.clip(np.searchsorted(self.band_u, u, side="right") - 1, 0, len(self.band_u) - 1)
         inside = self.band_p[idx] if len(self.band_u) else np.zeros_like(u)
         return np.where(u < self.low, 1.0, np.where(u > self.high, 0.0, inside))
@@ -163,15 +189,15 @@ class MeasuredBoundary:
 
     def probability(self, param: SearchParam) -> float:
         """P(failure) under ``param``'s nominal distribution: F(low) + integral of p dF over the band."""
-        return self._integral(param.cdf)
+        return self._integral(self._cdf(param.cdf))
 
     def box_probability(self, param: SearchParam) -> float:
         """P(failure) of a uniform draw on ``param``'s range."""
-        return self._integral(lambda x: np.clip((np.asarray(x) - param.low) / (param.high - param.low), 0, 1))
+        return self._integral(self._cdf(lambda x: np.clip((np.asarray(x) - param.low) / (param.high - param.low), 0, 1)))
 
     def bracket(self, param: SearchParam) -> tuple[float, float]:
-        """[F(low), F(high)]: P(failure) whatever the band does (nominal F)."""
-        lo, hi = param.cdf(np.array([self.low, self.high]))
+        """[F(low), F(high)]: P(failure) whatever the band does (nominal F, in v)."""
+        lo, hi = self._cdf(param.cdf)(np.array([self.low, self.high]))
         return float(lo), float(hi)
 
     def sample_outcomes(self, u: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -181,18 +207,21 @@ class MeasuredBoundary:
 
 
 def measured_boundary(u: np.ndarray, failed: np.ndarray, index: int = 0) -> MeasuredBoundary:
-    """The boundary of failure in one parameter's values ``u`` of finished trials (module docstring);
-    failure must lie at low values (a ValueError when nothing failed or nothing passed)."""
+    """The boundary of failure in one parameter's values ``u`` of finished trials (module
+    docstring); failure lies at low values when the failing trials' median is below the passing
+    ones' (else at high values: ``sign`` -1). A ValueError when nothing failed or nothing passed."""
     u = np.asarray(u, dtype=float).ravel()
     f = np.asarray(failed, dtype=bool).ravel()
     if not f.any() or f.all():
         raise ValueError("a boundary needs failing and passing trials")
-    low, high = float(u[~f].min()), float(u[f].max())
+    sign = 1 if np.median(u[f]) <= np.median(u[~f]) else -1
+    v = sign * u
+    low, high = float(v[~f].min()), float(v[f].max())
     if high < low:  # a clean cut: no band
-        return MeasuredBoundary(index, high, high, np.zeros(0), np.zeros(0), 0, 0, len(u))
-    band = (u >= low) & (u <= high)
-    us, fit = isotonic_decreasing(u[band], f[band])
-    return MeasuredBoundary(index, low, high, us, fit, int(f[band].sum()), int(band.sum()), len(u))
+        return MeasuredBoundary(index, high, high, np.zeros(0), np.zeros(0), 0, 0, len(u), sign)
+    band = (v >= low) & (v <= high)
+    us, fit = isotonic_decreasing(v[band], f[band])
+    return MeasuredBoundary(index, low, high, us, fit, int(f[band].sum()), int(band.sum()), len(u), sign)
 
 
 def uniform_box(cfg: SearchConfig) -> Callable[[int, np.random.Generator], np.ndarray]:

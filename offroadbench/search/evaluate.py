@@ -73,10 +73,10 @@ def reference(g: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis | Non
             return None
         lo, hi = b.bracket(cfg.params[i])
         return Reference(b.probability(cfg.params[i]), lo, hi,
-                         f"measured boundary in `{analysis.boundary_param}` over all {b.trials} finished trials: every "
-                         f"trial below {b.low:.4g} failed, every one above {b.high:.4g} passed, {b.band_failed} of the "
-                         f"{b.band_trials} between failed (P = F(low) + the isotonic failure rate integrated over the "
-                         f"band; bracket [F(low), F(high)] = [{lo:.4g}, {hi:.4g}] whatever the band does)", b)
+                         f"measured boundary in `{analysis.boundary_param}` over all {b.trials} finished trials: "
+                         f"{b.describe()}, {b.band_failed} of the {b.band_trials} between failed (P = the nominal "
+                         f"mass where failure is certain + the isotonic failure rate integrated over the band; "
+                         f"bracket [{lo:.4g}, {hi:.4g}] whatever the band does)", b)
     rnd = d[d["method"] == "random"]
     if not len(rnd):
         return None
@@ -108,7 +108,8 @@ def is_summary(g: pd.DataFrame, cfg: SearchConfig, p_ref: float | None, level: f
 def mc_position(g: pd.DataFrame, cfg: SearchConfig, ref: Reference | None) -> dict | None:
     """Plain Monte Carlo against the reference: its estimate, its distance from the reference in its
     standard errors at the reference, and with a boundary the draws that fell where failure is
-    certain (below the boundary's low end) against the n F(low) the nominal puts there."""
+    certain (``below``: beyond the band on the failing side) against the n F(low) the nominal puts
+    there (``expected_below``)."""
     d = _done(g)
     rnd = d[d["method"] == "random"]
     if not len(rnd) or ref is None:
@@ -120,8 +121,8 @@ def mc_position(g: pd.DataFrame, cfg: SearchConfig, ref: Reference | None) -> di
         b = ref.boundary
         param = cfg.params[b.index]
         u = rnd[cfg.keys[b.index]].to_numpy(float)
-        out["below"] = int((u < b.low).sum())
-        out["expected_below"] = float(e.n * param.cdf(np.array([b.low]))[0])
+        out["below"] = int(b.certain(u).sum())
+        out["expected_below"] = e.n * b.certain_mass(param)
     return out
 
 

@@ -9,7 +9,8 @@ from independent draws by the correlation ratio eta^2 of Y on B equal-count bins
 
     eta_i^2 = sum_b n_b (ybar_b - ybar)^2 / sum_j (y_j - ybar)^2.
 
-Under independence eta^2 is not 0 but about (B - 1) / (n - 1), so a parameter is **active** when
+(B = 10, or n / 5 with fewer than 50 draws, so that a bin holds 5 draws at least). Under
+independence eta^2 is not 0 but about (B - 1) / (n - 1), so a parameter is **active** when
 its eta^2 exceeds the ``1 - alpha`` quantile of eta^2 over random permutations of Y (the same
 bins and failures with the dependence destroyed: a permutation test of independence, Good
 2005), and **inactive** otherwise. The draws are a stream of independent draws (``random``,
@@ -95,6 +96,7 @@ def sensitivity(x: np.ndarray, failed: np.ndarray, keys: tuple[str, ...], source
     it exceeds the permutation threshold (module docstring). Deterministic (``seed``)."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     y = np.asarray(failed, dtype=float).ravel()
+    bins = max(2, min(bins, len(y) // 5))  # at least 5 draws a bin: with fewer eta^2 is 1 for any y
     rng = np.random.default_rng(seed)
     perms = [rng.permutation(y) for _ in range(permutations)]
     out = []

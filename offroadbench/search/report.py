@@ -232,7 +232,8 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
              ("Which searched parameters the failure depends on: the correlation ratio eta^2 of the failure "
               "indicator on 10 equal-count bins of each parameter, over independent draws (the `random` stream, "
               "else `uniform`), against the 99 % quantile of eta^2 over 999 permutations of the failures "
-              "(offroadbench.search.modes.sensitivity); a parameter below it is inactive and left out of the modes. "
+              "(offroadbench.search.modes.sensitivity); a parameter below it is inactive and left out of the modes "
+              "(where none is found active, too few failures to tell, every parameter is kept). "
               "A mode: failures chained within the study's distinct distance "
               f"({cfg.distinct_distance:g} of a range) in every active parameter (single linkage)."), ""]
     tables: dict[str, pd.DataFrame] = {}
@@ -260,7 +261,8 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
             pos = ev.mc_position(g, cfg, ref)
             if pos is not None:
                 e = pos["estimate"]
-                why = (f" Of its {e.n} nominal draws, {pos['below']} fell below {ref.boundary.low:.4g}, where every "
+                side = (f"below {ref.boundary.low:.4g}" if ref.boundary.sign > 0 else f"above {-ref.boundary.low:.4g}")
+                why = (f" Of its {e.n} nominal draws, {pos['below']} fell {side}, where every "
                        f"trial fails, against {pos['expected_below']:.1f} the nominal puts there: the estimate sits "
                        f"{'above' if e.p > ref.p else 'below'} the reference by that chance "
                        f"{'excess' if pos['below'] > pos['expected_below'] else 'shortage'} of draws in the failure "

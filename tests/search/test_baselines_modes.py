@@ -81,6 +81,21 @@ def test_the_measured_boundary_gives_the_probability_of_a_threshold_failure():
         measured_boundary(x[:, 0], np.zeros(len(x), bool))
 
 
+def test_a_failure_at_high_values_is_measured_on_the_mirrored_parameter():
+    """Failure above a cruise speed of 0.95 (uniform draws, a clean cut): P = 1 - F(0.95) under the
+    nominal, the box's 0.05 / 0.5, and the certain region is above the cut."""
+    rng = np.random.default_rng(6)
+    x = uniform_box(CFG)(3000, rng)
+    failed = x[:, 1] > 0.95
+    b = measured_boundary(x[:, 1], failed, index=1)
+    assert b.sign == -1 and "above" in b.describe()
+    truth = 1 - float(SPEED.cdf(np.array([0.95]))[0])
+    assert b.probability(SPEED) == pytest.approx(truth, abs=2e-3)
+    assert b.box_probability(SPEED) == pytest.approx(0.1, abs=2e-3)
+    assert b.certain(np.array([0.99, 0.5])).tolist() == [True, False]
+    assert b.certain_mass(SPEED) == pytest.approx(truth, abs=2e-3)
+
+
 def test_sensitivity_finds_the_parameter_that_carries_the_failure_and_only_it():
     rng = np.random.default_rng(4)
     z = rng.standard_normal((1600, 2))
