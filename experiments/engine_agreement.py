@@ -25,7 +25,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from experiments.rerender import folder_meta  # noqa: E402
-from offroadbench.study.stats.plan import ENGINE_KEY, confirmatory_table, engine_table, stored_plan  # noqa: E402
+from offroadbench.study.stats.engines import ENGINE_KEY, engine_table  # noqa: E402
+from offroadbench.study.stats.plan import confirmatory_table, stored_plan  # noqa: E402
 
 
 def agreement(first: Path, second: Path) -> tuple[pd.DataFrame, pd.DataFrame]:
