@@ -24,8 +24,9 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
   loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
-  the compiled coulomb loop a whole trial step is one compiled call (``_tyres_c.step_trial``: MuJoCo's
-  ``mj_step1`` / ``mj_step2`` called through their C addresses, no Python between them; the same bits).
+  the compiled loops a whole trial step is one compiled call (``_tyres_c.step_trial``,
+  ``_soil_step_c.step_trial_soil``: MuJoCo's ``mj_step1`` / ``mj_step2`` called through their C
+  addresses, no Python between them; the same bits).
 - **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
   the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
   MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
