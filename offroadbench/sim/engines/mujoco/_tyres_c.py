@@ -38,7 +38,7 @@ import math
 import numpy as np
 from numba import carray, njit, types
 
-from offroadbench.sim.engines.mujoco._cabi import as_pointer, call_step, int_at, pointer_at
+from offroadbench.sim.engines.mujoco._cabi import as_pointer, call_step, int_at, pointer_at, swap_entry
 
 __all__ = ["APPLY", "READ", "STEP", "apply_tyres", "step_trial", "check_types", "loads", "new_state", "penetration", "read_contacts", "reset_state",
            "wheel_force"]
@@ -299,18 +299,6 @@ _STEP_SIG = types.void(types.int64, types.int64, types.UniTuple(types.int64, 3),
                        types.float64[::1], types.int64[::1], types.int64, types.boolean)
 
 
-@njit(cache=True)
-def _swap_entry(slot, fn):  # pragma: no cover - compiled
-    """Write function address ``fn`` into the collision-table entry at address ``slot`` and return
-    what was there (``fn`` 0: leave it, return 0)."""
-    if fn == 0:
-        return 0
-    entry = carray(as_pointer(slot), (1,), np.int64)
-    old = entry[0]
-    entry[0] = fn
-    return old
-
-
 @njit(_STEP_SIG, cache=True)
 def step_trial(m, d, fns, lay, table, qvel, xmat, xipos, xfrc, f, st, substeps, each):  # pragma: no cover - compiled
     """One trial step of the MuJoCo world with the compiled tyre loop, wholly outside the interpreter:
@@ -323,8 +311,8 @@ def step_trial(m, d, fns, lay, table, qvel, xmat, xipos, xfrc, f, st, substeps, 
     calls and the entries' old values put back after them (a function 0: the entry left alone;
     offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision.entries); the arrays as for the two
     kernels. The same calls in the same order as MuJoCoTyres._step_compiled, so the same bits."""
-    old0 = _swap_entry(table[0], table[1])
-    old1 = _swap_entry(table[2], table[3])
+    old0 = swap_entry(table[0], table[1])
+    old1 = swap_entry(table[2], table[3])
     last = substeps - 1
     for k in range(substeps):
         if each or k == 0:
@@ -345,9 +333,9 @@ def step_trial(m, d, fns, lay, table, qvel, xmat, xipos, xfrc, f, st, substeps, 
             og, oe = lay[S_GEOM] // 4, lay[S_EFC_ADDRESS] // 4
             read_contacts(iv[:, og:og + 2], fv[:, od], fv[:, op:op + 3], fv[:, of:of + 9], iv[:, oe], efc, f, st)
     if table[1] != 0:
-        _swap_entry(table[0], old0)
+        swap_entry(table[0], old0)
     if table[3] != 0:
-        _swap_entry(table[2], old1)
+        swap_entry(table[2], old1)
 
 
 #: :func:`read_contacts`, :func:`apply_tyres` and :func:`step_trial` without numba's per-call type dispatch

@@ -10,7 +10,7 @@ import logging
 
 from offroadbench.errors import InputError
 
-__all__ = ["compiled_loop", "hfield_functions", "whole_step"]
+__all__ = ["compiled_loop", "hfield_functions", "soil_step", "whole_step"]
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +48,17 @@ def whole_step(model, data, hfield):
         return None
     entries = hfield.entries() if hfield is not None else (0, 0, 0, 0)
     return model._address, data._address, _layout.step_functions(), lay.as_tuple(), entries
+
+
+def soil_step(model, data, hfield):
+    """What the compiled soil loop needs to run a whole trial step in one call
+    (offroadbench.sim.engines.mujoco._soil_step_c.step_trial_soil): (its entry point, the model's and
+    data's addresses, MuJoCo's ``mj_step``, ``mj_step1``, ``mj_step2``, the collision-table entries
+    of the world's height-field functions ``hfield``)."""
+    from offroadbench.sim.engines.mujoco import _layout, _soil_step_c
+
+    entries = hfield.entries() if hfield is not None else (0, 0, 0, 0)
+    return _soil_step_c.STEP, model._address, data._address, _layout.step_functions(), entries
 
 
 def hfield_functions(mode: str, model, data):

@@ -24,8 +24,9 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
   loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
-  the compiled coulomb loop a whole trial step is one compiled call (``_tyres_c.step_trial``: MuJoCo's
-  ``mj_step1`` / ``mj_step2`` called through their C addresses, no Python between them; the same bits).
+  the compiled loops a whole trial step is one compiled call (``_tyres_c.step_trial``,
+  ``_soil_step_c.step_trial_soil``: MuJoCo's ``mj_step1`` / ``mj_step2`` called through their C
+  addresses, no Python between them; the same bits).
 - **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
   the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
   MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
@@ -63,7 +64,7 @@ from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.engines.mujoco.kernels import compiled_loop, hfield_functions, whole_step
+from offroadbench.sim.engines.mujoco.kernels import compiled_loop, hfield_functions, soil_step, whole_step
 from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
 from offroadbench.sim.engines.mujoco.tyres import MuJoCoTyres
 
@@ -122,6 +123,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
+        self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
             # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
@@ -136,6 +138,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
                 d = self.data
                 sc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied)
                 self._fast_soil = (sc, f, ist, tab)
+                self._fast_soil_step = soil_step(self.model, d, self._hfield)  # the whole step in one call
+                self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)
         self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
@@ -159,7 +163,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def close(self) -> None:
         """Drop the model and data (MuJoCo frees them with the objects). Safe to call twice."""
         self.data = None
-        self._fast_step = self._step_arrays = None  # the data's addresses and views
+        self._fast_step = self._fast_soil_step = self._step_arrays = None  # the data's addresses and views
 
     def __enter__(self) -> MuJoCoWorld:
         return self
@@ -333,7 +337,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
         functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
         hf = self._hfield
-        if hf is None or self._fast_step is not None:  # none, or the compiled step installs them itself
+        whole = (self._fast_step if self._fast is not None else
+                 self._fast_soil_step if self._fast_soil is not None else None)
+        if hf is None or whole is not None:  # none, or the compiled step installs them itself
             self._advance()
             return
         hf.install()
