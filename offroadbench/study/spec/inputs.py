@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import inspect
 import importlib
 import json
 import sys
@@ -95,7 +96,7 @@ def _code_sha256(module: str | None) -> str | None:
         mod = sys.modules.get(module) or importlib.import_module(module)
     except Exception:  # noqa: BLE001 - a plug-in that does not import was refused when the study was loaded
         return None
-    file = getattr(mod, "__file__", None)
+    file = inspect.getfile(mod) if hasattr(mod, "__spec__") and getattr(mod.__spec__, "has_location", False) else None
     if not file:
         return None
     h = hashlib.sha256()
