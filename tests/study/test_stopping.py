@@ -25,19 +25,21 @@ def _run(study, out, *extra) -> subprocess.Popen:
 
 @pytest.mark.timeout(600)
 def test_ctrl_c_at_random_moments_ends_the_run_within_10_s_with_one_line(tmp_path, write_tiny_study, stored_trials):
-    """SIGINT at a random moment of the run (from the lock's taking to a few seconds into the
-    trials), several times on the same run directory: every time the process is gone within 10 s,
-    says one line (the trials saved, how to resume) and records the session as interrupted."""
+    """SIGINT at a random moment of the run (from the lock's taking to 8 s later: opening the store,
+    starting the workers, building terrains, trials), 8 times on the same run directory: every time
+    the process is gone within 10 s, says one line (the trials saved, how to resume) and records
+    the session as interrupted. (A Ctrl-C raised inside a fork's callback used to be swallowed, and
+    the run went on; one that stopped the workers could leave the exit waiting on the task queue.)"""
     study = write_tiny_study(tmp_path, name="ctrl-c", root_seed=5, terrains=3, missions=4)  # 24 trials
     out = tmp_path / "run"
     rng = random.Random(43)
     interrupted = 0
-    for attempt in range(6):
+    for attempt in range(8):
         proc = _run(study, out)
         t0 = time.monotonic()
         while not (out / LOCK_NAME).exists() and proc.poll() is None and time.monotonic() - t0 < 120:
             time.sleep(0.01)
-        time.sleep(rng.uniform(0.0, 3.0))
+        time.sleep(rng.uniform(0.0, 8.0))
         proc.send_signal(signal.SIGINT)
         sent = time.monotonic()
         try:
@@ -59,7 +61,7 @@ def test_ctrl_c_at_random_moments_ends_the_run_within_10_s_with_one_line(tmp_pat
             assert load_meta(out)["runs"][-1]["status"] == "interrupted"
         assert not (out / LOCK_NAME).exists()
         interrupted += 1
-    assert interrupted >= 3
+    assert interrupted >= 4
 
 
 #: a [roughness] line that makes every pixel rougher than "low": no start cell anywhere
