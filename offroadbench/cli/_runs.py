@@ -9,9 +9,9 @@ import signal
 from pathlib import Path
 from typing import Iterator
 
-from offroadbench.errors import InputError, RunInterrupted, Stopped, StudyError
+from offroadbench.errors import InputError, RunInterrupted, StudyError
 
-__all__ = ["check_dir_name", "fault_lines", "stop_on_sigterm", "run_workers"]
+__all__ = ["check_dir_name", "fault_lines", "stop_signals", "run_workers"]
 
 
 def check_dir_name(name: str, path: Path) -> None:
@@ -37,26 +37,22 @@ def run_workers(args: argparse.Namespace, plans) -> int | None:
     return workers
 
 
-def _raise_stopped(signum, frame) -> None:
-    raise Stopped(signum=signum)
-
-
 @contextlib.contextmanager
-def stop_on_sigterm() -> Iterator[None]:
-    """While inside: SIGTERM ends the run as Ctrl-C does (a :class:`~offroadbench.errors.Stopped`
-    in the main thread: workers stopped, the session ``interrupted``, every committed trial kept,
-    the same one line said; exit 143). A stop outside the run's session (resolving the cells, the
-    report) says so in the same one line."""
-    old = signal.signal(signal.SIGTERM, _raise_stopped)
+def stop_signals() -> Iterator[None]:
+    """While inside: Ctrl-C and SIGTERM end the run (offroadbench.stop: noted, so never lost;
+    workers stopped, the session ``interrupted``, every committed trial kept, the same one line
+    said; exit 130 and 143). A stop outside the run's session (resolving the cells, the report)
+    says so in the same one line."""
+    from offroadbench import stop
+
     try:
-        yield
+        with stop.handled():
+            yield
     except RunInterrupted:
         raise
     except KeyboardInterrupt as exc:
         raise RunInterrupted("every trial stored so far is kept; run the same command again to resume",
                              signum=getattr(exc, "signum", signal.SIGINT)) from None
-    finally:
-        signal.signal(signal.SIGTERM, old)
 
 
 def fault_lines(summary, out: Path) -> list[str]:

@@ -71,9 +71,9 @@ def write_search_report(run_dir: Path, out: Path, html: bool = False) -> Path:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``search run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
-    from offroadbench.cli._runs import stop_on_sigterm
+    from offroadbench.cli._runs import stop_signals
 
-    with stop_on_sigterm():
+    with stop_signals():
         return _run(args)
 
 

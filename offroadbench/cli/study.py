@@ -117,9 +117,9 @@ def _flat_keys(table: dict, prefix: str = "") -> list[str]:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``study run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
-    from offroadbench.cli._runs import stop_on_sigterm
+    from offroadbench.cli._runs import stop_signals
 
-    with stop_on_sigterm():
+    with stop_signals():
         return _run(args)
 
 

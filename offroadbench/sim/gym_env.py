@@ -116,15 +116,8 @@ from offroadbench.navigation.sensor import make_sensing
 from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain, terrain_body
-from offroadbench.sim.trial.runner import (
-    TrialLoop,
-    TrialRecord,
-    body_velocity,
-    clamp_action,
-    control_steps,
-    plan_within_limits,
-    vehicle_envelope,
-)
+from offroadbench.sim.trial.runner import (TrialLoop, TrialRecord, body_velocity, clamp_action, control_steps,
+                                           plan_within_limits, vehicle_envelope)
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 from offroadbench.sim.topdown import top_down_image  # noqa: E402  (the env's public name, kept)
@@ -194,13 +187,11 @@ def _settings(config: TraverseConfig, vehicle, sim: SimConfig, rules: FailureRul
               roughness: RoughnessConfig) -> TrialSettings:
     """The trial settings of the env's own arguments (one mission per episode)."""
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    sections: dict[str, dict[str, Any]] = {"controller": {}, "missions": {"count": 1}, "observation": {}}
+    kw: dict[str, dict[str, Any]] = {"controller": {}, "missions": {"count": 1}, "observation": {}}
     for field, (section, name) in SETTINGS_FIELDS.items():
-        sections[section][name] = getattr(config, field)
-    return TrialSettings(vehicle=spec, sim=sim, rules=rules, roughness=roughness,
-                         controller=ControllerConfig(**sections["controller"]),
-                         missions=MissionConfig(**sections["missions"]),
-                         observation=ObservationConfig(**sections["observation"]))
+        kw[section][name] = getattr(config, field)
+    return TrialSettings(vehicle=spec, sim=sim, rules=rules, roughness=roughness, controller=ControllerConfig(
+        **kw["controller"]), missions=MissionConfig(**kw["missions"]), observation=ObservationConfig(**kw["observation"]))
 
 
 def _config_of(config: TraverseConfig, settings: TrialSettings) -> TraverseConfig:

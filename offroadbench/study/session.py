@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from offroadbench import resources
+from offroadbench import resources, stop
 from offroadbench.errors import InputError, RunInterrupted, StudyError
 from offroadbench.io.outputs import missing_dirs
 from offroadbench.progress import ProgressFn, report
@@ -281,6 +281,7 @@ class RunSession:
 
     def handle(self, msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
         """Store one message of a task (the executors call this in this process)."""
+        stop.check()  # a stop asked while a message was on its way (the inline executor has no loop of its own)
         if isinstance(msg, TerrainBuilt):
             self.store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
         elif isinstance(msg, TrialFaulted):

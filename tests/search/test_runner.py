@@ -157,6 +157,10 @@ def test_a_study_directory_is_refused(tmp_path, write_tiny_study):
     run_study(study, cells, tmp_path / "run", executor="inline", trial_fn=fake_trials)
     with pytest.raises(InputError, match="holds a study, not a search"):
         run_search(search_from_data(SEARCH), tmp_path / "run", executor="inline", trial_fn=stand_in_trials)
+    # and the other way round: one run session, one kind of run per directory
+    run_search(search_from_data(SEARCH), tmp_path / "search", budget=4, executor="inline", trial_fn=stand_in_trials)
+    with pytest.raises(InputError, match="holds a search, not a study"):
+        run_study(study, cells, tmp_path / "search", executor="inline", trial_fn=fake_trials)
 
 
 @pytest.mark.parametrize("executor", ["inline", "local"])

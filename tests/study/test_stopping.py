@@ -25,19 +25,21 @@ def _run(study, out, *extra) -> subprocess.Popen:
 
 @pytest.mark.timeout(600)
 def test_ctrl_c_at_random_moments_ends_the_run_within_10_s_with_one_line(tmp_path, write_tiny_study, stored_trials):
-    """SIGINT at a random moment of the run (from the lock's taking to a few seconds into the
-    trials), several times on the same run directory: every time the process is gone within 10 s,
-    says one line (the trials saved, how to resume) and records the session as interrupted."""
-    study = write_tiny_study(tmp_path, name="ctrl-c", root_seed=5, terrains=3, missions=4)  # 24 trials
+    """SIGINT at a random moment of the run (from the lock's taking to 8 s later: opening the store,
+    starting the workers, building terrains, trials), 8 times on the same run directory: every time
+    the process is gone within 10 s, says one line (the trials saved, how to resume) and records
+    the session as interrupted. (A Ctrl-C raised inside a fork's callback used to be swallowed, and
+    the run went on; one that stopped the workers could leave the exit waiting on the task queue.)"""
+    study = write_tiny_study(tmp_path, name="ctrl-c", root_seed=5, terrains=8, missions=6)  # 96 trials: more than 8 stops can reach
     out = tmp_path / "run"
     rng = random.Random(43)
     interrupted = 0
-    for attempt in range(6):
+    for attempt in range(8):
         proc = _run(study, out)
         t0 = time.monotonic()
         while not (out / LOCK_NAME).exists() and proc.poll() is None and time.monotonic() - t0 < 120:
             time.sleep(0.01)
-        time.sleep(rng.uniform(0.0, 3.0))
+        time.sleep(rng.uniform(0.0, 8.0))
         proc.send_signal(signal.SIGINT)
         sent = time.monotonic()
         try:
@@ -47,19 +49,19 @@ def test_ctrl_c_at_random_moments_ends_the_run_within_10_s_with_one_line(tmp_pat
             proc.communicate()
             raise AssertionError(f"try {attempt}: still running 10 s after SIGINT") from None
         assert time.monotonic() - sent < 10
-        if proc.returncode == 0:  # it finished before the signal came
-            assert "24 / 24 trials" in stdout
+        if "96 / 96 trials" in stdout:  # it finished before the signal came, or as it came (exiting)
+            assert proc.returncode in (0, 130, -signal.SIGINT) and len(err.splitlines()) <= 1, err
             break
         assert proc.returncode == 130, err
         lines = err.splitlines()
         assert len(lines) == 1 and lines[0].startswith("offroadbench: interrupted; "), err
         assert "run the same command again to" in lines[0]
         if stored_trials(out):
-            assert f"of 24 stored in {out};" in lines[0]
+            assert f"of 96 stored in {out};" in lines[0]
             assert load_meta(out)["runs"][-1]["status"] == "interrupted"
         assert not (out / LOCK_NAME).exists()
         interrupted += 1
-    assert interrupted >= 3
+    assert interrupted >= 6  # (a fast machine may finish the study before the last tries)
 
 
 #: a [roughness] line that makes every pixel rougher than "low": no start cell anywhere

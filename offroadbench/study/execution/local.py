@@ -11,6 +11,7 @@ import time
 import traceback
 from typing import Sequence
 
+from offroadbench import stop
 from offroadbench.errors import InputError, StudyError
 from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, run_terrain
 from offroadbench.study.execution.common import (Handle, die_with_parent, error_message, worker_bootstrap,
@@ -118,6 +119,7 @@ class _LocalRun:
         """Replace the workers past the limit, then wait for messages (at most until the next deadline)."""
         from multiprocessing.connection import wait
 
+        stop.check()  # a Ctrl-C swallowed where it was raised (a fork's callback) still stops the run
         if self.limit_s is not None:
             now = time.monotonic()
             for key in [k for k, r in self.running.items() if now - r.since > self.limit_s]:

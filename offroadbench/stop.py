@@ -1,0 +1,60 @@
+"""A stop asked by a signal (Ctrl-C is SIGINT, ``kill`` is SIGTERM), noted so that it is never lost.
+
+Python raises a signal's exception wherever the main thread happens to be; when that is inside a
+callback run from C (a fork's ``at_fork`` handler while a worker process starts, a finaliser) the
+exception is printed as "ignored" and the run goes on as if nothing had been asked. So the
+command line's handler (:func:`handled`) notes the signal before it raises
+:class:`~offroadbench.errors.Stopped` (and keeps a swallowed one from printing), and the loops that
+wait on workers call :func:`check`, which raises it again if it was swallowed: a run stops within
+one poll of the signal, every time, with its one line.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import sys
+import threading
+from typing import Iterator
+
+from offroadbench.errors import Stopped
+
+__all__ = ["check", "handled"]
+
+_asked: list[int] = []  # the signals received while handled(), in order
+
+
+def _handler(signum, frame) -> None:
+    _asked.append(signum)
+    raise Stopped(signum=signum)
+
+
+def check() -> None:
+    """Raise :class:`~offroadbench.errors.Stopped` if a stop was asked (and perhaps swallowed)."""
+    if _asked:
+        raise Stopped(signum=_asked[-1])
+
+
+@contextlib.contextmanager
+def handled(signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
+    """While inside: each of ``signals`` is noted and raises Stopped (a KeyboardInterrupt) in the main
+    thread. Outside the main thread (where no handler can be set) nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _asked.clear()
+    old = {s: signal.signal(s, _handler) for s in signals}
+    old_hook = sys.unraisablehook
+
+    def quiet(info) -> None:  # a swallowed stop is noted (check raises it again): no "Exception ignored" lines
+        if not isinstance(info.exc_value, Stopped):
+            old_hook(info)
+
+    sys.unraisablehook = quiet
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        sys.unraisablehook = old_hook
+        _asked.clear()
