@@ -1,6 +1,6 @@
 """Package layout for setuptools; the metadata lives in pyproject.toml.
 
-The data folders stay at the top of the repository (``terrains/``, ``vehicles/``, ``experiments/``, ``soils/``)
+The data folders stay at the top of the repository (``terrains/``, ``vehicles/``, ``experiments/``, ``soils/``, ``suites/``)
 and are mapped into the package as ``offroadbench.data.<folder>``, so an installed wheel carries
 them and ``offroadbench.resources`` finds them with ``importlib.resources`` in an editable install
 too. This file only exists because ``pyproject.toml`` cannot combine package discovery with such a
@@ -13,8 +13,9 @@ from setuptools import find_namespace_packages, find_packages, setup
 DATA = {
     "terrains": ["*.toml", "*.npy", "*.json", "*.png"],
     "vehicles": ["*.toml", "*.urdf", "*.sdf", "*.xml", "*.obj", "*.stl", "*.dae", "*.png"],
-    "experiments": ["*.toml"],
+    "experiments": ["*.toml", "*.csv"],  # the study TOMLs and their pilots (experiments/pilots/: a plan's power)
     "soils": ["*.toml", "*.csv"],
+    "suites": ["*.toml", "*.json"],  # task suites and the baselines' score cards (scores/)
 }
 #: sub-folders that stay in the repository (committed study outputs)
 KEEP_OUT = {"experiments": ["results", "results.*"]}

@@ -78,10 +78,22 @@ def check_int(owner: object, field: str, value: int, lo: int | None = None, hi: 
         )
 
 
+def did_you_mean(names, known) -> str:
+    """``" (did you mean 'x'?)"`` for the known names closest to any of ``names`` (difflib), or ``""``:
+    the tail of an unknown-name message, after the list of known names."""
+    import difflib
+
+    known = [str(k) for k in known]
+    close = [c for n in names for c in difflib.get_close_matches(str(n), known, n=2, cutoff=0.6)]
+    close = list(dict.fromkeys(close))
+    return f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
+
+
 def check_choice(owner: object, field: str, value: str, allowed) -> None:
-    """Raise InputError unless ``value`` is one of ``allowed``."""
+    """Raise InputError unless ``value`` is one of ``allowed`` (naming the closest allowed values)."""
     if value not in allowed:
-        raise InputError(f"{_label(owner, field)} = {value!r} is not known; allowed: {', '.join(map(str, allowed))}")
+        raise InputError(f"{_label(owner, field)} = {value!r} is not known; allowed: {', '.join(map(str, allowed))}"
+                         f"{did_you_mean([value], allowed)}")
 
 
 # --------------------------------------------------------------------------- dict / TOML
@@ -106,7 +118,7 @@ def _coerce(value: Any, annotation: Any, name: str) -> Any:
     return value
 
 
-def _dataclass_type(annotation: Any) -> type | None:
+def dataclass_type(annotation: Any) -> type | None:
     """The config class of a field annotated ``SomeConfig`` or ``SomeConfig | None``, else None."""
     if dataclasses.is_dataclass(annotation) and isinstance(annotation, type):
         return annotation
@@ -147,12 +159,12 @@ def from_dict(
         dotted = ", ".join(f"{key}.{k}" if key else k for k in unknown)
         raise InputError(
             f"{where or cls.__name__}: unknown key(s) {dotted}; known keys{' of ' + key if key else ''}: "
-            f"{', '.join(sorted(fields))}"
+            f"{', '.join(sorted(fields))}{did_you_mean(unknown, fields)}"
         )
     hints = typing.get_type_hints(cls)
     kwargs: dict[str, Any] = {}
     for name, value in data.items():
-        sub = _dataclass_type(hints.get(name, Any))
+        sub = dataclass_type(hints.get(name, Any))
         dotted = f"{key}.{name}" if key else name
         if sub is not None and isinstance(value, dict):
             start = getattr(base, name) if base is not None else _field_default(fields[name])

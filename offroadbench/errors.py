@@ -22,3 +22,18 @@ class TrialFault(RuntimeError):
     vehicle far outside physical bounds), or the trial ran past its wall-clock limit. A study
     stores it as a fault (its ``faults`` table), never as an outcome, and goes on; no statistic
     counts it."""
+
+
+class Stopped(KeyboardInterrupt):
+    """A signal asked a run to stop (Ctrl-C is SIGINT, ``kill`` is SIGTERM): raised in the main
+    thread by the command line's signal handlers; a run stops its workers and keeps every
+    committed trial, as on Ctrl-C. ``signum`` is the signal's number."""
+
+    def __init__(self, message: str = "", signum: int = 2) -> None:
+        super().__init__(message)
+        self.signum = signum
+
+
+class RunInterrupted(Stopped):
+    """A run of a study or a search stopped by a signal, after its session closed: the message is
+    the one line saying what was saved and how to resume (offroadbench.study.session)."""

@@ -28,8 +28,8 @@ import math
 import re
 from pathlib import Path
 from typing import Any
-from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, _first_line, _qualname, field_docs, unit_of
-from offroadbench.reference_recipes import FILE_KEYS, _nested_sections, recipe_sections  # noqa: F401  (FILE_KEYS re-exported)
+from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, first_line, qualname, field_docs, unit_of
+from offroadbench.reference_recipes import FILE_KEYS, nested_sections, recipe_sections  # noqa: F401  (FILE_KEYS re-exported)
 
 __all__ = [
     "REFERENCE_PATH",
@@ -62,7 +62,7 @@ def _builder_class(builder: Any) -> type | None:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec.config import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis", "blind_seed")  # blind_seed: set by root_seed = "blind"
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -73,7 +73,7 @@ def _study_section() -> SectionDoc:
         "`offroadbench.study.report.markdown`)."),
         ("`[analysis]`: the confirmatory analysis plan, fixed before the run (below, `Analysis plan`)."),
     )
-    return SectionDoc("study", _qualname(StudyConfig), _first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
+    return SectionDoc("study", qualname(StudyConfig), first_line(StudyConfig), field_docs(StudyConfig, skip=skip),
                       notes)
 
 
@@ -86,7 +86,7 @@ def _vehicle_section() -> SectionDoc:
     fields = (name, *field_docs(VehicleSpec, skip=("name", "urdf"), defaults=husky))
     notes = (("Defaults shown are the Husky's (`vehicles/husky/vehicle.toml`, every figure with its source "
              "beside it); another `name` brings that vehicle's own values."),)
-    return SectionDoc("vehicle", _qualname(VehicleSpec), _first_line(VehicleSpec), fields, notes)
+    return SectionDoc("vehicle", qualname(VehicleSpec), first_line(VehicleSpec), fields, notes)
 
 
 def _driver_entries() -> list[tuple[str, str, Any]]:
@@ -112,7 +112,7 @@ def _planner_sections() -> list[SectionDoc]:
     entries = _driver_entries()
     names = ", ".join(f"`{n}`" for _, n, _ in entries)
     head = SectionDoc(
-        "planner", _qualname(PlannerChoice), _first_line(PlannerChoice),
+        "planner", qualname(PlannerChoice), first_line(PlannerChoice),
         (FieldDoc("name", "str", "straight", "", f"one of {names} (and installed plug-ins)",
                   "The planner (pure pursuit follows its path) or closed-loop policy that drives every trial; "
                   "the table's other keys are what it perceives (the keys after `name`, "
@@ -127,7 +127,7 @@ def _planner_sections() -> list[SectionDoc]:
         cfg = spec.config
         fields = () if cfg is NoConfig else field_docs(cfg)
         summary = f"{kind} `{name}`: {spec.summary}" if spec.summary else f"{kind} `{name}`"
-        out.append(SectionDoc(f"planner.{name}", _qualname(cfg), summary, fields,
+        out.append(SectionDoc(f"planner.{name}", qualname(cfg), summary, fields,
                               ("No settings.",) if not fields else ()))
     return out
 
@@ -150,8 +150,8 @@ def study_sections() -> list[SectionDoc]:
                                    "teach offroadbench.reference about it")
             skip = ("count",) if name == "missions" else ()
             notes = ("`count` is not a study key: `[study] missions_per_terrain` sets it.",) if skip else ()
-            out.append(SectionDoc(name, _qualname(cls), _first_line(cls), field_docs(cls, skip=skip), notes))
-            out += _nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
+            out.append(SectionDoc(name, qualname(cls), first_line(cls), field_docs(cls, skip=skip), notes))
+            out += nested_sections(name, cls, "", "table")[1:]  # e.g. [sim.mujoco], an engine's own table
     return out
 
 
@@ -164,12 +164,12 @@ def search_sections() -> list[tuple[str, SectionDoc]]:
              "`[study]` takes no `terrains_per_cell` or `missions_per_terrain` (one terrain and mission per "
              "trial), and a `[grid]`, if any, lists the cells searched one after another. "
              "Source of the estimators: `offroadbench.search.estimators`.",)
-    return [("`[search]`", SectionDoc("search", _qualname(SearchConfig), "What a failure search runs and on which budget",
+    return [("`[search]`", SectionDoc("search", qualname(SearchConfig), "What a failure search runs and on which budget",
                                       field_docs(SearchConfig, skip=("params",)), notes)),
-            ("`[[search.params]]`", SectionDoc("search.params", _qualname(SearchParam),
+            ("`[[search.params]]`", SectionDoc("search.params", qualname(SearchParam),
                                                "One searched key, with its range and nominal distribution "
                                                "(one table per key)", field_docs(SearchParam))),
-            ("`[analysis]` of a search file", SectionDoc("analysis", _qualname(SearchAnalysis),
+            ("`[analysis]` of a search file", SectionDoc("analysis", qualname(SearchAnalysis),
                                                          "A search's analysis plan, fixed before the run and stored with it",
                                                          field_docs(SearchAnalysis),
                                                          ("Source: `offroadbench.search.analysis`; the report computes "
@@ -283,12 +283,12 @@ def _analysis_lines() -> list[str]:
 
     doc = inspect.getdoc(plan) or ""
     tail = " ".join(doc.split("\n\n")[-1].split())  # the module docstring's last paragraph: what is computed
-    return ["### `[analysis]`", "", f"{_md_cell(_first_line(plan.AnalysisPlan))} Source: "
-            f"`{_qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
+    return ["### `[analysis]`", "", f"{_md_cell(first_line(plan.AnalysisPlan))} Source: "
+            f"`{qualname(plan.AnalysisPlan)}`. The store keeps the plan with the run; the report computes it "
             "in its Confirmatory section and marks every other number exploratory; a plan changed after "
             "trials were stored is refused.", "", *_md_table(field_docs(plan.AnalysisPlan, skip=("comparisons",))),
-            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(_first_line(plan.Comparison))} Source: "
-            f"`{_qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
+            "", "### `[[analysis.comparisons]]`", "", f"{_md_cell(first_line(plan.Comparison))} Source: "
+            f"`{qualname(plan.Comparison)}`.", "", *_md_table(field_docs(plan.Comparison)), "", _md_cell(tail), ""]
 
 
 def render_reference() -> str:
@@ -333,7 +333,11 @@ def render_reference() -> str:
         "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
         "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
         "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
-        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "soil; a soil map with `[[soil.regions]]`, each a `soil` and conditions among `slope_min_deg`, "
+        "`slope_max_deg`, `height_min_m`, `height_max_m`, `in_crater` (with `crater_radius_fraction`, "
+        "`crater_min_diameter_m`), a disc `centre_m` + `radius_m` or a rectangle `x_range_m` + "
+        "`y_range_m`, and/or `raster` (a PNG of soil indices, one pixel per height sample) with "
+        "`raster_soils`: offroadbench.terrain.soil_map) tables. A layer table holds its generator's keys below; a key that is itself a table "
         "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
         "",
     ]

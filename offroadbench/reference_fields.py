@@ -212,10 +212,10 @@ def field_docs(cls: type, *, skip: tuple[str, ...] = (), defaults: Any = None) -
     return tuple(out)
 
 
-def _qualname(cls: type) -> str:
+def qualname(cls: type) -> str:
     return f"{cls.__module__}.{cls.__qualname__}"
 
 
-def _first_line(obj: Any) -> str:
+def first_line(obj: Any) -> str:
     doc = inspect.getdoc(obj) or ""
     return " ".join(doc.split("\n\n")[0].split())

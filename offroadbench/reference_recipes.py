@@ -6,21 +6,21 @@ from __future__ import annotations
 import dataclasses
 import typing
 
-from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, _first_line, _qualname, field_docs
+from offroadbench.reference_fields import REQUIRED, FieldDoc, SectionDoc, first_line, qualname, field_docs
 
 
 # ---------------------------------------------------------------------------- terrain recipes
-def _nested_sections(key: str, cls: type, summary: str, generator: str) -> list[SectionDoc]:
+def nested_sections(key: str, cls: type, summary: str, generator: str) -> list[SectionDoc]:
     """``key``'s table and, recursively, the tables of its fields that are configs themselves."""
-    from offroadbench.config import _dataclass_type
+    from offroadbench.config import dataclass_type
 
     fields = field_docs(cls)
-    out = [SectionDoc(key, _qualname(cls), summary, fields, generator=generator)]
+    out = [SectionDoc(key, qualname(cls), summary, fields, generator=generator)]
     hints = typing.get_type_hints(cls)
     for f in fields:
-        sub = _dataclass_type(hints.get(f.name))
+        sub = dataclass_type(hints.get(f.name))
         if sub is not None and sub.__name__.endswith(("Config", "Options")):  # not data (a crater table, a DEM)
-            out += _nested_sections(f"{key}.{f.name}", sub, _first_line(sub), generator)
+            out += nested_sections(f"{key}.{f.name}", sub, first_line(sub), generator)
     return out
 
 
@@ -51,7 +51,7 @@ def recipe_sections() -> list[SectionDoc]:
     from offroadbench.terrain.recipe import COMBINE_MODES
     from offroadbench.terrain.registry import TERRAIN_REGISTRY
 
-    out = [SectionDoc("grid", _qualname(GridConfig), _first_line(GridConfig), field_docs(GridConfig))]
+    out = [SectionDoc("grid", qualname(GridConfig), first_line(GridConfig), field_docs(GridConfig))]
     names = sorted(n for n, spec in TERRAIN_REGISTRY.items() if spec.config_cls.__module__.startswith("offroadbench."))
     layer = (
         FieldDoc("generator", "str", REQUIRED, "", "one of " + ", ".join(f'"{n}"' for n in names),
@@ -65,7 +65,7 @@ def recipe_sections() -> list[SectionDoc]:
                           layer))
     for name in names:
         spec = TERRAIN_REGISTRY.get(name)
-        tables = _nested_sections("layers.NAME", spec.config_cls, f"{spec.kind} `{name}`: {spec.summary}", name)
+        tables = nested_sections("layers.NAME", spec.config_cls, f"{spec.kind} `{name}`: {spec.summary}", name)
         if name in FILE_KEYS:  # the file's keys stand where the data field they fill would
             data, keys = FILE_KEYS[name]
             top = tables[0]

@@ -6,10 +6,12 @@ installed wheel works from any directory:
 * ``offroadbench.data.terrains``: terrain presets (``<name>.toml``) and ``data/sample-dem.npy``;
 * ``offroadbench.data.vehicles``: one folder per vehicle, holding ``vehicle.toml`` and its URDF;
 * ``offroadbench.data.experiments``: study TOMLs (``smoke.toml``, ``majhor2023.toml``, ...);
-* ``offroadbench.data.soils``: soil parameter sets (``<name>.toml``, offroadbench.sim.tyre_laws.terramechanics).
+* ``offroadbench.data.soils``: soil parameter sets (``<name>.toml``, offroadbench.sim.tyre_laws.terramechanics);
+* ``offroadbench.data.suites``: task suites (``<name>.toml``, offroadbench.suite) and the shipped
+  baselines' score cards (``scores/<suite>/<tier>/<planner>/score.json``).
 
 In the repository these are the top-level folders ``terrains/``, ``vehicles/``,
-``experiments/`` and ``soils/``; ``setup.py`` maps them into the package at build time (editable installs too).
+``experiments/``, ``soils/`` and ``suites/``; ``setup.py`` maps them into the package at build time (editable installs too).
 
 **Search path.** The environment variable ``OFFROADBENCH_PATH`` adds user folders: a list of
 directories separated by ``os.pathsep`` (``:`` on Linux and macOS, ``;`` on Windows), each holding
@@ -36,6 +38,8 @@ __all__ = [
     "vehicle_files",
     "study_files",
     "soil_files",
+    "suite_files",
+    "suite_scores_dir",
     "sample_dem",
     "matplotlib_sample",
     "package_dir",
@@ -44,7 +48,7 @@ __all__ = [
 #: environment variable holding the user search path (os.pathsep-separated directories)
 ENV_VAR = "OFFROADBENCH_PATH"
 #: the kinds of data, each a sub-folder of a search-path directory and a package under offroadbench.data
-KINDS = ("terrains", "vehicles", "experiments", "soils")
+KINDS = ("terrains", "vehicles", "experiments", "soils", "suites")
 
 
 def _as_path(resource, what: str) -> Path:
@@ -120,6 +124,16 @@ def study_files() -> dict[str, Path]:
 def soil_files() -> dict[str, Path]:
     """{soil name: TOML path} of every ``soils/<name>.toml`` (``lunar-regolith``, ``lete-sand``, ...)."""
     return _first_found("soils", "*.toml")
+
+
+def suite_files() -> dict[str, Path]:
+    """{suite name: TOML path} of every ``suites/<name>.toml`` (``offroadbench-v1``, ...)."""
+    return _first_found("suites", "*.toml")
+
+
+def suite_scores_dir() -> Path:
+    """The shipped folder of the baselines' committed score cards, ``suites/scores``."""
+    return shipped("suites") / "scores"
 
 
 def matplotlib_sample(name: str) -> Path:

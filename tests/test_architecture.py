@@ -334,3 +334,83 @@ def test_the_module_length_check_sees_a_long_module(tmp_path):
     (pkg / "sub" / "long.py").write_text("x = 1\n" * (MAX_MODULE_LINES + 1))
     (pkg / "ok.py").write_text("x = 1\n" * MAX_MODULE_LINES)
     assert _long_modules(pkg, MAX_MODULE_LINES) == [f"offroadbench/sub/long.py: {MAX_MODULE_LINES + 1} lines"]
+
+
+#: the storage package: the only place in the package that talks SQL (issue 43)
+STORE_PACKAGE = "offroadbench.study.store"
+_SQL = __import__("re").compile(r"^\s*(SELECT|INSERT|UPDATE|DELETE|CREATE|ALTER|DROP|PRAGMA|BEGIN|COMMIT|ROLLBACK)\b")
+
+
+def _sql_uses(tree: ast.AST) -> list[str]:
+    """Where ``tree`` talks SQL: imports sqlite3, calls ``execute``/``executemany``/``executescript``,
+    or holds a string that starts with an SQL statement."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import) and any(a.name == "sqlite3" for a in node.names):
+            found.append(f"line {node.lineno}: imports sqlite3")
+        elif isinstance(node, ast.ImportFrom) and node.module == "sqlite3":
+            found.append(f"line {node.lineno}: imports sqlite3")
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in (
+                "execute", "executemany", "executescript"):
+            found.append(f"line {node.lineno}: .{node.func.attr}()")
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and _SQL.match(node.value):
+            found.append(f"line {node.lineno}: SQL text {node.value.strip()[:30]!r}")
+    return found
+
+
+def test_sql_only_in_the_store_package():
+    """Every table of a run directory is read and written through the store's own functions: no
+    module outside offroadbench.study.store talks SQL (the search's table included)."""
+    offenders = [f"{m}: {what}" for m, path in _modules().items()
+                 if not (m == STORE_PACKAGE or m.startswith(STORE_PACKAGE + "."))
+                 for what in _sql_uses(ast.parse(path.read_text()))]
+    assert offenders == []
+
+
+def test_the_sql_check_sees_sql():
+    code = ("import sqlite3\n"
+            "def f(store):\n"
+            "    store.con.execute('SELECT 1')\n"
+            "    q = '''\n    CREATE TABLE IF NOT EXISTS t (a);'''\n")
+    assert {w.split(": ", 1)[1] for w in _sql_uses(ast.parse(code))} == {
+        "imports sqlite3", ".execute()", "SQL text 'SELECT 1'", "SQL text 'CREATE TABLE IF NOT EXISTS t ('"}
+    assert _sql_uses(ast.parse("x = 'Select the cells'\nprint('selects')\n")) == []
+
+
+def _private_names_imported(tree: ast.AST, module: str, package: str, known: set[str]) -> list[str]:
+    """Private names (``_x``, not dunders and not submodules) that ``module`` imports from another
+    module, at any level: ``from offroadbench.a import _helper`` in ``offroadbench.b``."""
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        base = node.module or ""
+        if node.level:
+            anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+            base = ".".join([*anchor, base] if base else anchor)
+        if not base.startswith("offroadbench") or base == module:
+            continue
+        found += [f"{module} imports {base}.{a.name}" for a in node.names
+                  if a.name.startswith("_") and not a.name.startswith("__") and f"{base}.{a.name}" not in known]
+    return found
+
+
+def test_no_module_imports_another_modules_private_name():
+    """What one module lets others use is public (and exported by its package's ``__init__`` where
+    others outside the package use it); a private name is the module's own (issue 43)."""
+    mods = _modules()
+    offenders = []
+    for m, p in mods.items():
+        package = m if p.name == "__init__.py" else m.rpartition(".")[0]
+        offenders += _private_names_imported(ast.parse(p.read_text()), m, package, set(mods))
+    assert offenders == []
+
+
+def test_the_private_name_check_sees_private_names():
+    known = {"offroadbench", "offroadbench.a", "offroadbench.a._impl", "offroadbench.b"}
+    code = ("from offroadbench.a import _helper, public, __version__, _impl\n"
+            "def f():\n    from .a import _other\n")
+    assert _private_names_imported(ast.parse(code), "offroadbench.b", "offroadbench", known) == [
+        "offroadbench.b imports offroadbench.a._helper", "offroadbench.b imports offroadbench.a._other"]
+    assert _private_names_imported(ast.parse("from offroadbench.b import _x\n"), "offroadbench.b", "offroadbench",
+                                   known) == []

@@ -9,12 +9,13 @@ import errno
 import importlib
 import logging
 import os
+import signal
 import sys
 
-from offroadbench.errors import InputError, PluginError, StudyError
+from offroadbench.errors import InputError, PluginError, StudyError, TrialFault
 
 #: command modules under offroadbench.cli, each with register(subparsers)
-COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config")
+COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config", "suite")
 
 EXIT_BAD_INPUT = 2
 EXIT_FAILED = 1
@@ -69,9 +70,15 @@ def main(argv: list[str] | None = None) -> int:
     except PluginError as exc:
         sys.stderr.write(f"offroadbench: plug-in fault: {_one_line(exc)}\n")
         return EXIT_FAILED
-    except KeyboardInterrupt:
-        sys.stderr.write("offroadbench: interrupted\n")
-        return 130
+    except TrialFault as exc:  # a trial outside a study (drive, checks): thrown while settling, past its limit
+        sys.stderr.write(f"offroadbench: trial fault: {_one_line(exc)}\n")
+        return EXIT_FAILED
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM during a run (errors.Stopped): the same one line
+        signum = getattr(exc, "signum", signal.SIGINT)
+        word = "terminated" if signum == signal.SIGTERM else "interrupted"
+        detail = f"; {_one_line(exc)}" if str(exc) else ""
+        sys.stderr.write(f"offroadbench: {word}{detail}\n")
+        return 128 + signum
     except MemoryError as exc:  # past the up-front estimate (--force, or an estimate too low)
         sys.stderr.write(f"offroadbench: error: out of memory ({_one_line(exc) or 'MemoryError'}); make the work "
                          "smaller or give it more memory\n")

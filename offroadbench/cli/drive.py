@@ -100,7 +100,7 @@ def drive_record(run, label: str = "", options: dict | None = None) -> dict:
     and seeds, every setting the missions were driven with (the TrialSettings, the terrain's gravity
     and soil filled in), the platform (offroadbench.study.fingerprint) and the code version."""
     from offroadbench.study.fingerprint import platform_fingerprint
-    from offroadbench.study.runner import code_version
+    from offroadbench.study.session import code_version
 
     return {
         "options": _plain(options or {}),
@@ -220,6 +220,15 @@ def drive_settings(args: argparse.Namespace, tables: dict):
     }, where="drive (--vehicle, --planner, --border-m, --set)")
 
 
+def _png_seed(path: str) -> int | None:
+    """A PNG heightmap's own terrain seed, as ``generate --seed N`` recorded it in the sidecar (None:
+    a PNG from elsewhere, or with no seed)."""
+    from offroadbench.io.png16 import read_png16_metadata
+
+    seed = read_png16_metadata(path).get("seed")
+    return seed if isinstance(seed, int) and not isinstance(seed, bool) else None
+
+
 def cmd_drive(args: argparse.Namespace) -> int:
     from offroadbench.seeding import terrain_seed
     from offroadbench.sim import drive_missions
@@ -251,9 +260,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
         warn_relief_tails(hm, label, CLIP_ELSEWHERE)
     gravity, soil = terrain_body(args.terrain, recipe)  # where --gravity / --set sim.* leave them open
+    from offroadbench.terrain.soil_map import soil_map_for
+
+    soil_map = soil_map_for(recipe, hm, tseed) if recipe is not None else None  # the recipe's [[soil.regions]]
     with bar("missions", unit="mission") as progress:
-        run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else None,
-                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress)
+        run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else _png_seed(args.terrain),
+                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress,
+                             soil_map=soil_map)
     print(format_drive_run(run, label))
     written = []
     if out is not None:
@@ -277,7 +290,7 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("drive", help="drive random straight-line missions on one terrain (PyBullet)",
+    p = sub.add_parser("drive", help="drive random straight-line missions on one terrain (PyBullet or MuJoCo: --engine)",
                        description="Sample missions on one terrain (paper Sec. 2.3), drive them with the "
                        "vehicle and print a per-mission table and a summary.")
     p.add_argument("terrain", help="a 16-bit PNG heightmap (with its .json sidecar) or a preset / recipe TOML")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from offroadbench.errors import InputError
@@ -27,7 +26,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
     run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: stop the search when one trial runs longer than this, s")
+                     help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
+                          "replaced) and the search goes on (default: generous against the trials' nominal time)")
+    run.add_argument("--retry-faults", action="store_true",
+                     help="run the proposals stored as faults (past their limit, thrown while settling) once more; "
+                          "a resume skips them otherwise")
     run.add_argument("--no-report", action="store_true", help="do not write the report at the end")
     run.add_argument("--force", action="store_true", help="skip the up-front memory check")
     run.set_defaults(func=cmd_run)
@@ -67,8 +70,16 @@ def write_search_report(run_dir: Path, out: Path, html: bool = False) -> Path:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    """``search run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
+    from offroadbench.cli._runs import stop_on_sigterm
+
+    with stop_on_sigterm():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
-    from offroadbench.cli.study import EXIT_TERMINATED, Terminated, _check_dir_name, _raise_terminated, _workers
+    from offroadbench.cli._runs import check_dir_name, fault_lines, run_workers
     from offroadbench.io.inputs import check_input_file
     from offroadbench.search import load_search, run_search
     from offroadbench.search.plan import trial_cell
@@ -80,27 +91,22 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
     plan = load_search(path)
     if not args.out:
-        _check_dir_name(plan.study.name, path)
+        check_dir_name(plan.study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / plan.study.name, "--out")
     hi = [p.high for p in plan.search.params]
-    workers = _workers(args, [trial_cell(plan, g, 0, hi) for g in plan.groups])
+    workers = run_workers(args, [trial_cell(plan, g, 0, hi) for g in plan.groups])
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
-    import signal
-
-    old = signal.signal(signal.SIGTERM, _raise_terminated)
-    try:
-        with bar(plan.study.name, unit="trial") as progress:
-            summary = run_search(plan, out, budget=args.budget, executor=args.executor, workers=workers,
-                                 scheduler=args.scheduler, executor_options=options, source_text=path.read_text(),
-                                 progress=progress)
-    except Terminated:
-        sys.stderr.write("offroadbench: terminated; finished trials are saved, run the same command again to resume\n")
-        return EXIT_TERMINATED
-    finally:
-        signal.signal(signal.SIGTERM, old)
-    print(f"{summary.done} / {summary.total} trials in {out} ({summary.failures} failed); "
-          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
-    if summary.done >= summary.total and not args.no_report:
+    with bar(plan.study.name, unit="trial") as progress:
+        summary = run_search(plan, out, budget=args.budget, executor=args.executor, workers=workers,
+                             scheduler=args.scheduler, executor_options=options, source_text=path.read_text(),
+                             progress=progress, retry_faults=args.retry_faults)
+    lines = fault_lines(summary, out)  # every trial of this run faulted: one line, exit 1
+    faults = f", {summary.faults} fault(s) without an outcome" if summary.faults else ""
+    print(f"{summary.done} / {summary.total} trials in {out} ({summary.failures} failed{faults}); "
+          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s ({summary.trials_per_s:.2f} trials/s)")
+    for line in lines:
+        print(line)
+    if summary.done + summary.faults >= summary.total and summary.done and not args.no_report:
         print(f"report: {write_search_report(out, out / 'report')}")
     return 0
 

@@ -10,17 +10,6 @@ from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path, atomic_paths
 
 EXPORT_FORMATS = ("parquet", "csv")
-#: exit status of a run ended by SIGTERM (128 + 15, as a shell reports it)
-EXIT_TERMINATED = 143
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM during ``study run``: it ends the run as Ctrl-C does (workers stopped, the session
-    recorded as ``interrupted``, every committed trial kept)."""
-
-
-def _raise_terminated(signum, frame) -> None:
-    raise Terminated()
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -44,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           "replaced) and the study goes on (default: generous against the trials' nominal time; "
                           "at most 30 days)")
     run.add_argument("--retry-faults", action="store_true",
-                     help="run the trials stored as faults (past their limit, thrown while settling) again; "
+                     help="run the trials stored as faults (past their limit, thrown while settling) once more; "
                           "a resume skips them otherwise")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
@@ -94,29 +83,6 @@ def _run_dir(path: str) -> Path:
     return p
 
 
-def _check_dir_name(name: str, path: Path) -> None:
-    """The study name names the default run directory runs/NAME: it must be one plain path
-    component (not empty, ``.`` or ``..``, no slash, NUL or control character)."""
-    bad = name in ("", ".", "..") or any(c in name for c in "/\\") or any(ord(c) < 32 or ord(c) == 127 for c in name)
-    if bad:
-        raise InputError(f"{path}: [study] name = {name!r} cannot name the run directory runs/NAME (it must be one "
-                         "plain file name: no slash, control character, '.' or '..'); rename the study or give --out")
-
-
-def _workers(args: argparse.Namespace, plans) -> int | None:
-    """--workers, or as many as both the cores and the memory allow; refuse what cannot fit."""
-    from offroadbench.memory import check_memory, format_bytes, workers_that_fit
-    from offroadbench.study.runner import worker_memory_bytes
-
-    if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
-        return args.workers  # one process here, or a cluster whose memory is not ours to judge
-    per_worker = worker_memory_bytes(plans)
-    workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
-    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force,
-                 per_process_bytes=per_worker)
-    return workers
-
-
 def apply_sets(data: dict, sets: list[str] | None) -> dict:
     """The study TOML dict with ``--set KEY=VALUE`` applied: ``study.FIELD`` into ``[study]``,
     ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
@@ -149,7 +115,16 @@ def _flat_keys(table: dict, prefix: str = "") -> list[str]:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    """``study run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
+    from offroadbench.cli._runs import stop_on_sigterm
+
+    with stop_on_sigterm():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
+    from offroadbench.cli._runs import check_dir_name, fault_lines, run_workers
     from offroadbench.io.inputs import check_input_file
     from offroadbench.config import load_toml
     from offroadbench.study import run_study
@@ -169,14 +144,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
+    from offroadbench.study.stats.power import check_power
+
+    check_power(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
     try:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     if not args.out:
-        _check_dir_name(study.name, path)
+        check_dir_name(study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
-    workers = _workers(args, plans)
+    workers = run_workers(args, plans)
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
     text = path.read_text() + "".join(f"\n# run with: study run --set {item}" for item in args.set or [])
     counts = {"new": 0, "ok": 0}
@@ -188,29 +166,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         counts["new"] += 1
         counts["ok"] += bool(row["success"])
 
-    import signal
-
-    old = signal.signal(signal.SIGTERM, _raise_terminated)
-    try:
-        with bar(study.name, unit="trial", postfix=success) as progress:
-            summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                                executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
-                                retry_faults=args.retry_faults)
-    except Terminated:
-        from offroadbench.study.store.store import Store
-
-        with Store(out) as store:
-            stored = store.counts()[0]
-        sys.stderr.write(f"offroadbench: terminated; {counts['new']} trial(s) of this run saved, {stored} of "
-                         f"{study.n_trials} stored in {out}; "
-                         "run the same command again to resume\n")
-        return EXIT_TERMINATED
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    with bar(study.name, unit="trial", postfix=success) as progress:
+        summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
+                            executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
+                            retry_faults=args.retry_faults)
+    lines = fault_lines(summary, out)  # every trial of this run faulted: one line, exit 1
     faults = (f"; {summary.faults} fault(s), excluded from the statistics (see the report; --retry-faults runs "
               "them again)") if summary.faults else ""
     print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
-          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s")
+          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s ({summary.trials_per_s:.2f} trials/s)")
+    for line in lines:
+        print(line)
     if summary.complete and summary.done and not args.no_report:  # (a study of faults only has no statistics)
         path = write_report(out, out / "report")
         print(f"report: {path}")
@@ -305,7 +271,7 @@ def _platform_note(run_dir: Path, cell: int, terrain: int, mission: int, quantis
     bit-identity is promised here (offroadbench.study.fingerprint); "" when it ran on this one."""
     from offroadbench.study.fingerprint import describe, identity_promise, platform_fingerprint
     from offroadbench.study.store.results import trial_platform
-    from offroadbench.study.runner import code_version
+    from offroadbench.study.session import code_version
 
     stored, stored_version = trial_platform(run_dir, cell, terrain, mission)
     here, version = platform_fingerprint(), code_version()

@@ -51,10 +51,32 @@ def cmd_check(args: argparse.Namespace) -> int:
     return 0 if all(r.ok for r in rows) else EXIT_CHECK_FAILED
 
 
+def cmd_list(args: argparse.Namespace) -> int:
+    """Every known vehicle (search path, shipped, installed packages) with its drive and size."""
+    from offroadbench.errors import InputError
+    from offroadbench.sim import load_vehicle
+    from offroadbench.sim.trial.vehicle import vehicle_files
+
+    rows = []
+    for name, path in vehicle_files().items():
+        try:
+            v = load_vehicle(path)
+        except InputError as exc:  # a broken user vehicle is named, the others still listed
+            rows.append((name, f"invalid: {' '.join(str(exc).split())}", "", "", "", str(path)))
+            continue
+        wheels = len(v.left_wheel_joints) + len(v.right_wheel_joints)
+        rows.append((name, v.steering + (" (tracks)" if v.belt_drive else ""), f"{wheels}", f"{v.wheel_radius_m:.3f}", f"{v.max_speed_m_s:g}", str(path)))
+    header = ("vehicle", "steering", "wheels", "wheel radius, m", "top speed, m/s", "file")
+    widths = [max(len(r[i]) for r in (header, *rows)) for i in range(len(header) - 1)]
+    for r in (header, *rows):
+        print("  ".join(c.ljust(w) for c, w in zip(r[:-1], widths, strict=True)) + "  " + r[-1])
+    return 0
+
+
 def register(sub) -> None:
     from offroadbench.sim.config import TYRE_MODELS
 
-    p = sub.add_parser("vehicle", help="vehicle tools: check a vehicle model against its own physics",
+    p = sub.add_parser("vehicle", help="vehicle tools: list the vehicles, check a vehicle model against its own physics",
                        description="Vehicle tools.")
     vsub = p.add_subparsers(dest="vehicle_command", required=True, parser_class=sub._parser_class)
     c = vsub.add_parser("check", help="measure a vehicle on small test worlds against its own physics",
@@ -72,3 +94,5 @@ def register(sub) -> None:
                    help="physics engine (SimConfig.engine: pybullet, the default, or mujoco)")
     c.add_argument("--physics-rate-hz", type=int, default=None, help="override SimConfig.physics_rate_hz")
     c.set_defaults(func=cmd_check)
+    ls = vsub.add_parser("list", help="the known vehicles (shipped, OFFROADBENCH_PATH, installed packages)")
+    ls.set_defaults(func=cmd_list)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from offroadbench.errors import InputError
 
-__all__ = ["check_input_file"]
+__all__ = ["check_input_file", "file_kind"]
 
 
 def check_input_file(path: str | Path, what: str = "input file") -> Path:
@@ -37,3 +37,37 @@ def check_input_file(path: str | Path, what: str = "input file") -> Path:
     if st.st_size == 0:
         raise InputError(f"{what} {p}: is empty")
     return p
+
+
+#: leading bytes -> what a file is (the formats a user may hand a terrain command by mistake)
+_MAGIC = (
+    (b"\xff\xd8\xff", "a JPEG image"),
+    (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+    (b"GIF87a", "a GIF image"),
+    (b"GIF89a", "a GIF image"),
+    (b"II*\x00", "a TIFF image"),
+    (b"MM\x00*", "a TIFF image"),
+    (b"BM", "a BMP image"),
+    (b"\x93NUMPY", "a NumPy array (.npy)"),
+    (b"PK\x03\x04", "a zip archive (or .npz)"),
+    (b"%PDF", "a PDF document"),
+    (b"SQLite format 3\x00", "an SQLite database"),
+    (b"\x1f\x8b", "a gzip archive"),
+)
+
+
+def file_kind(path: str | Path) -> str | None:
+    """What a file is, from its first bytes: ``"a JPEG image"``, ``"a JSON file"``, ... (None:
+    not recognised, e.g. text that may be TOML). Reads at most 64 bytes."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return None
+    for magic, kind in _MAGIC:
+        if head.startswith(magic):
+            return kind
+    text = head.lstrip(b"\xef\xbb\xbf \t\r\n")
+    if text[:1] in (b"{", b"["):
+        return "a JSON file" if text[:1] == b"{" or text[1:2] in (b"{", b"[", b'"', b"\n", b" ", b"]") else None
+    return None

@@ -20,7 +20,7 @@ from offroadbench.config import check_choice, check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 
-__all__ = ["MissionConfig", "Mission", "NoMissionError", "sample_missions", "sample_mission"]
+__all__ = ["MissionConfig", "Mission", "NoMissionError", "map_too_small", "sample_missions", "sample_mission"]
 
 #: candidates drawn per vectorised batch while sampling
 _BATCH = 256
@@ -89,6 +89,19 @@ def _class_mask(classes: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     return np.isin(classes, [CLASS_NAMES.index(n) for n in names])
 
 
+def map_too_small(width_m: float, height_m: float, cfg: MissionConfig) -> str | None:
+    """Why a map of ``width_m`` x ``height_m`` (first to last sample, metres) cannot hold missions of
+    ``cfg.length_m`` inside its ``cfg.border_m`` (the diagonal of what the border leaves is shorter),
+    in one line; None when it can. A setting, not a property of a drawn terrain: a study refuses it
+    as bad input (a failure search stores such a proposal as holding no mission)."""
+    usable_w = width_m - 2 * cfg.border_m
+    usable_h = height_m - 2 * cfg.border_m
+    if usable_w < 0 or usable_h < 0 or math.hypot(usable_w, usable_h) < cfg.length_m:
+        return (f"map {width_m:g} x {height_m:g} m with a {cfg.border_m:g} m border leaves "
+                f"{max(usable_w, 0):g} x {max(usable_h, 0):g} m: too small for {cfg.length_m:g} m missions")
+    return None
+
+
 def sample_missions(
     hm: Heightmap, closed_classes: np.ndarray, cfg: MissionConfig, rng: np.random.Generator
 ) -> list[Mission]:
@@ -103,13 +116,9 @@ def sample_missions(
     if classes.shape != hm.shape:
         raise InputError(f"class map shape {classes.shape} does not match the heightmap's {hm.shape}")
     cell = hm.cell_size_m
-    usable_w = hm.width_m - 2 * cfg.border_m
-    usable_h = hm.height_m - 2 * cfg.border_m
-    if usable_w < 0 or usable_h < 0 or math.hypot(usable_w, usable_h) < cfg.length_m:
-        raise InputError(
-            f"map {hm.width_m:g} x {hm.height_m:g} m with a {cfg.border_m:g} m border leaves "
-            f"{max(usable_w, 0):g} x {max(usable_h, 0):g} m: too small for {cfg.length_m:g} m missions"
-        )
+    too_small = map_too_small(hm.width_m, hm.height_m, cfg)
+    if too_small:
+        raise InputError(too_small)
     inside = border_mask(hm.shape, cfg.border_m, cell)
     starts = np.flatnonzero(_class_mask(classes, cfg.start_classes) & inside)
     if starts.size == 0:

@@ -24,7 +24,7 @@ __all__ = ["fig_class_areas", "fig_success", "fig_metrics", "fig_missions", "fig
 SHOW_POINTS_BELOW = 10
 
 
-def _bxp(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -> None:
+def box_plot(ax, groups: Mapping[str, Mapping[str, Any]], ylabel: str, title: str) -> None:
     """Box plots from box statistics (``median``, ``q1``, ``q3``, ``whislo``, ``whishi``, ``fliers``,
     ``n``, ``values``), one per group label, each labelled with its n; a group of fewer than
     SHOW_POINTS_BELOW samples also shows its samples (spread sideways by rank, not at random)."""
@@ -85,7 +85,7 @@ def fig_success(boxes: Mapping[str, Mapping[str, Any]]):
     """Fig. 6: box plots of the per-terrain success rate, given per group label as box statistics
     (offroadbench.study.stats.terrain.success_boxes)."""
     fig, ax = new_figure(figsize=(5, 3.6))
-    _bxp(ax, boxes, "success rate per terrain (%)", "Success rate (Eq. 5)")
+    box_plot(ax, boxes, "success rate per terrain (%)", "Success rate (Eq. 5)")
     ax.set_ylim(-3, 103)
     return fig
 
@@ -97,7 +97,7 @@ def fig_metrics(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: M
     many = max((len(b) for b in boxes.values()), default=0) > 4  # rotated labels need room
     fig, axes = new_figure(2, 2, figsize=(11, 10) if many else (9, 6.4))
     for ax, (metric, (title, unit)) in zip(axes.ravel(), metrics.items(), strict=True):
-        _bxp(ax, boxes[metric], f"{title} ({unit})", title)
+        box_plot(ax, boxes[metric], f"{title} ({unit})", title)
     fig.suptitle("Successful trials only", fontsize=10)
     return fig
 

@@ -83,8 +83,9 @@ def plot_trajectories(hm: Heightmap, closed_classes: np.ndarray, missions, telem
             ax.plot(tel["x_m"], tel["y_m"], color="k", linewidth=1.2)
             ax.plot(tel["x_m"][-1], tel["y_m"][-1], "X", color=_OUTCOME_COLOURS[r.failure_reason],
                     markeredgecolor="k", markersize=8)
+    happened = {r.failure_reason for m, r in zip(missions, results, strict=True) if telemetry.get(m.index) is not None}
     handles = [Line2D([], [], marker="X", linestyle="", color=c, markeredgecolor="k",
-                          label=k or "success") for k, c in _OUTCOME_COLOURS.items()]
+                      label=k or "success") for k, c in _OUTCOME_COLOURS.items() if k in happened]  # only outcomes drawn
     handles += [Line2D([], [], color="k", linewidth=0.7, linestyle=":", label="planned"),
                 Line2D([], [], color="k", linewidth=1.2, label="driven")]
     if beliefs:

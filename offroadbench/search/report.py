@@ -79,17 +79,14 @@ def provenance(meta: dict[str, Any]) -> str:
 
 def search_table(run_dir: str | Path) -> tuple[pd.DataFrame, SearchPlan]:
     """One row per stored proposal (run or not) and the search it belongs to."""
+    from offroadbench.study.store.search import search_rows
     from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
         meta = store.meta()
         if meta.get("kind") != "search":
             raise InputError(f"{run_dir}: holds a study, not a search (see `study report`)")
-        cur = store.con.execute(
-            "SELECT s.cell, s.grp, s.method, s.batch, s.slot, s.stage, s.x, s.log_w, t.row, t.terrain_seed, "
-            "t.mission_seed FROM search_trials s LEFT JOIN trials t ON t.cell = s.cell "
-            "ORDER BY s.grp, s.method, s.batch, s.slot")
-        raw = cur.fetchall()
+        raw = search_rows(store)
     plan = _plan_from_meta(meta)
     cfg = plan.search
     records = []
@@ -264,7 +261,8 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
             pos = ev.mc_position(g, cfg, ref)
             if pos is not None:
                 e = pos["estimate"]
-                side = (f"below {ref.boundary.low:.4g}" if ref.boundary.sign > 0 else f"above {-ref.boundary.low:.4g}")
+                b = ref.boundary
+                side = "" if b is None else (f"below {b.low:.4g}" if b.sign > 0 else f"above {-b.low:.4g}")
                 why = (f" Of its {e.n} nominal draws, {pos['below']} fell {side}, where every "
                        f"trial fails, against {pos['expected_below']:.1f} the nominal puts there: the estimate sits "
                        f"{'above' if e.p > ref.p else 'below'} the reference by that chance "

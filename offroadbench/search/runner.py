@@ -2,20 +2,20 @@
 
 A search's run directory is a study's: the same ``study.sqlite`` (offroadbench.study.store.store), in
 which every trial is a study cell of its own (cell c, terrain 0, mission 0; its recipe and
-settings in the meta data, so ``study replay`` and ``study export`` work on it), plus one table
-of the search's own::
-
-    search_trials(cell, grp, method, batch, slot, stage, x, z, log_w)
-
-which says which stream (grid cell ``grp``, ``method``) and batch each cell belongs to, where it
-lies in the parameter space (``x`` and the standard-normal ``z``, JSON lists) and its log
-likelihood ratio for the estimators (NULL for the falsifier).
+settings in the meta data, so ``study replay`` and ``study export`` work on it), plus a table of the
+search's own (offroadbench.study.store.search) saying which stream and batch each proposal belongs
+to and where it lies in the parameter space. The run directory is owned by one
+:class:`~offroadbench.study.session.RunSession` per call, as a study's.
 
 A proposal whose terrain holds no mission (no low-roughness start cell, no goal: the mission rules
 of Majhor & Bos 2023, Sec. 2.3, cannot be met) is stored with ``failure_reason = "no_mission"``:
 it is outside what a mission is, not a failure of the vehicle, so the falsifier is not told it,
 the cross-entropy levels rank it last, and the estimators count it as no failure (the report
 counts these trials apart).
+
+A proposal whose trial faults (the vehicle thrown while it settles, past the per-trial limit) is
+done: it is stored as a fault, it has no margin (as one whose terrain holds no mission), and it is
+run again only when a call asks for it (``retry_faults``: once more per call).
 
 Crash safety and resumption. A batch's proposals and cells are committed in one transaction
 before any of its trials runs; each trial is committed the moment it ends (the study store's
@@ -29,10 +29,7 @@ proposals as one that never stopped.
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
-import math
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,26 +40,21 @@ import numpy as np
 from offroadbench import seeding
 from offroadbench.config import to_dict
 from offroadbench.errors import InputError, StudyError
-from offroadbench.progress import ProgressFn, report
+from offroadbench.progress import ProgressFn
 from offroadbench.search.falsifier import Batch, plan_batch, propose, stream_seed
 from offroadbench.search.objective import failure_margin
+from offroadbench.navigation.missions import map_too_small
 from offroadbench.search.plan import SearchPlan, trial_cell
+from offroadbench.study.execution.executors import get_executor
+from offroadbench.study.execution.tasks import NO_MISSION_FAULT, NO_MISSION_KIND, TerrainTask, TrialFaulted, TrialFn
+from offroadbench.study.runner import default_trial_timeout_s
+from offroadbench.study.session import RunSession, code_version
 from offroadbench.study.spec.config import CellPlan
-from offroadbench.study.store.store import RunLock, Store, remove_stale_temp_files
-from offroadbench.study.execution.tasks import NO_MISSION_FAULT, TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn
+from offroadbench.study.store.search import add_search_batch, ensure_search_table, next_search_cell, stream_trials
 
 log = logging.getLogger(__name__)
 
-__all__ = ["NO_MISSION", "SearchSummary", "SEARCH_TABLE", "infeasible_cell", "margin_of", "no_mission_row", "run_search",
-           "stream_trials"]
-
-SEARCH_TABLE = """
-CREATE TABLE IF NOT EXISTS search_trials (
-    cell INTEGER PRIMARY KEY, grp INTEGER NOT NULL, method TEXT NOT NULL, batch INTEGER NOT NULL,
-    slot INTEGER NOT NULL, stage TEXT NOT NULL, x TEXT NOT NULL, z TEXT NOT NULL, log_w REAL,
-    UNIQUE (grp, method, batch, slot));
-"""
-
+__all__ = ["NO_MISSION", "SearchSummary", "cell_meta", "margin_of", "no_mission_row", "run_search", "search_meta"]
 
 @dataclass(frozen=True)
 class SearchSummary:
@@ -78,6 +70,20 @@ class SearchSummary:
     failures: int
     """Failed trials stored after this call."""
     wall_s: float
+    faults: int = 0
+    """Proposals stored as faults after this call (no outcome, no margin)."""
+    new_faults: tuple = ()
+    """The faults this call stored, per kind (offroadbench.study.session.FaultCount)."""
+
+    @property
+    def faulted(self) -> int:
+        """Proposals this call stored as faults."""
+        return sum(f.count for f in self.new_faults)
+
+    @property
+    def trials_per_s(self) -> float:
+        """Trials this call stored (outcomes and faults) per wall second."""
+        return (self.ran + self.faulted) / self.wall_s if self.wall_s > 0 else float("nan")
 
 
 def _columns(plan: SearchPlan) -> dict[str, str]:
@@ -86,7 +92,7 @@ def _columns(plan: SearchPlan) -> dict[str, str]:
     return {k: (last if lasts.count(last) == 1 else k) for k, last in zip(keys, lasts, strict=True)}
 
 
-def _cell_meta(c: CellPlan) -> dict[str, Any]:
+def cell_meta(c: CellPlan) -> dict[str, Any]:
     return {"index": c.index, "values": dict(c.values), "seed_key": c.key, "recipe": dict(c.recipe_data),
             "settings": {k: dict(v) for k, v in c.settings.items()}}
 
@@ -99,7 +105,7 @@ def search_meta(plan: SearchPlan, budget: int | None, source_text: str, version:
         "study": to_dict(plan.study),
         "study_toml": source_text,
         "search": to_dict(plan.search),
-        "groups": [_cell_meta(g) for g in plan.groups],
+        "groups": [cell_meta(g) for g in plan.groups],
         "columns": _columns(plan),
         "cells": [],
         "n_trials": len(plan.groups) * sum(plan.search.method_budget(m, budget) for m in plan.search.methods),
@@ -111,19 +117,6 @@ def search_meta(plan: SearchPlan, budget: int | None, source_text: str, version:
 #: failure_reason of a proposal whose terrain holds no mission (no start or goal cell of the
 #: mission rules): not a vehicle failure, so the search leaves it out (margin NaN, not counted as failed)
 NO_MISSION = "no_mission"
-_MISSION_ERRORS = re.compile(r"^(cell (\d+), terrain 0: )?(no start cell|could not place mission|map [^:]* leaves)")
-
-
-def infeasible_cell(exc: InputError, cells: list[int]) -> int | None:
-    """The cell of a study error saying that its terrain holds no mission (the mission sampler's
-    InputError as the process executors report it, ``cell C, terrain 0: no start cell ...``, or
-    bare from the inline executor, which runs ``cells`` in order: then the first of them), if it
-    is one of ``cells``."""
-    m = _MISSION_ERRORS.match(str(exc))
-    if m is None or not cells:
-        return None
-    cell = int(m.group(2)) if m.group(2) else cells[0]
-    return cell if cell in cells else None
 
 
 def no_mission_row(message: str) -> dict[str, Any]:
@@ -131,6 +124,15 @@ def no_mission_row(message: str) -> dict[str, Any]:
     nan = float("nan")
     return {"mission_index": 0, "success": False, "failure_reason": NO_MISSION, "error": " ".join(message.split()),
             "start_x_m": nan, "start_y_m": nan, "goal_x_m": nan, "goal_y_m": nan, "final_distance_to_goal_m": nan}
+
+
+def _no_mission_trial(msg: TrialFaulted) -> dict[str, Any] | None:
+    """A fault's stored row instead (RunSession's ``fault_row``): a proposal whose terrain holds no
+    mission is a trial of the search (a row saying so); any other fault stays a fault."""
+    if msg.kind != NO_MISSION_KIND:
+        return None
+    log.info("cell %d: %s; stored as %s", msg.cell, msg.reason, NO_MISSION)
+    return no_mission_row(msg.reason.removeprefix(NO_MISSION_FAULT))
 
 
 def margin_of(plan: SearchPlan, group: CellPlan, values: Mapping[str, Any], row: Mapping[str, Any]) -> float:
@@ -150,18 +152,9 @@ def margin_of(plan: SearchPlan, group: CellPlan, values: Mapping[str, Any], row:
                           speed_m_s=speed)
 
 
-def stream_trials(store: Store, grp: int, method: str) -> list[dict[str, Any]]:
-    """The stored proposals of one stream in order, each with its trial row (None if not run yet)."""
-    cur = store.con.execute(
-        "SELECT s.cell, s.batch, s.slot, s.stage, s.x, s.z, s.log_w, t.row, t.terrain_seed, t.mission_seed "
-        "FROM search_trials s LEFT JOIN trials t ON t.cell = s.cell AND t.terrain = 0 AND t.mission = 0 "
-        "WHERE s.grp = ? AND s.method = ? ORDER BY s.batch, s.slot", (grp, method))
-    out = []
-    for cell, batch, slot, stage, x, z, log_w, row, tseed, mseed in cur.fetchall():
-        out.append({"cell": cell, "batch": batch, "slot": slot, "stage": stage, "x": json.loads(x), "z": json.loads(z),
-                    "log_w": float("nan") if log_w is None else log_w,
-                    "row": None if row is None else json.loads(row), "terrain_seed": tseed, "mission_seed": mseed})
-    return out
+def _ended(entry: Mapping[str, Any]) -> bool:
+    """Whether a stored proposal is done: its trial stored, as a row or as a fault."""
+    return entry["row"] is not None or entry.get("fault") is not None
 
 
 def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) -> tuple[list[Batch], list[list[dict]]]:
@@ -172,10 +165,12 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
     ordered = [batches[b] for b in sorted(batches)]
     done = []
     for entries in ordered:
-        if any(e["row"] is None for e in entries):
+        if not all(_ended(e) for e in entries):
             break
         x = np.array([e["x"] for e in entries], dtype=float)
-        m = np.array([margin_of(plan, group, plan.search.values(e["x"]), e["row"]) for e in entries])
+        # a faulted trial gave no outcome: no margin (as a proposal whose terrain holds no mission)
+        m = np.array([float("nan") if e["row"] is None else margin_of(plan, group, plan.search.values(e["x"]), e["row"])
+                      for e in entries])
         seeds = tuple(None if e["terrain_seed"] is None else (int(e["terrain_seed"]), int(e["mission_seed"]))
                       for e in entries)
         done.append(Batch(entries[0]["stage"], x, np.array([e["z"] for e in entries], dtype=float), m, seeds))
@@ -205,174 +200,109 @@ def _same_seeds(seeds: tuple, entries: list[dict[str, Any]]) -> bool:
     """Whether the stored trials of a re-proposed batch drove the seeds the proposal names (where it names them)."""
     for i, e in enumerate(entries):
         chosen = seeds[i] if i < len(seeds) else None
-        if chosen is not None and e["row"] is not None and (int(e["terrain_seed"]), int(e["mission_seed"])) != chosen:
+        if chosen is not None and _ended(e) and (int(e["terrain_seed"]), int(e["mission_seed"])) != chosen:
             return False
     return True
 
 
-def _json_list(a: np.ndarray) -> str:
-    return json.dumps([float(v) for v in np.asarray(a, dtype=float).ravel()])
+def _executor(plan: SearchPlan, executor: str, workers: int | None, scheduler: str | None,
+              options: Mapping[str, Any] | None):
+    """The executor of a search; the per-trial limit by default generous for the slowest corner of the ranges."""
+    options = dict(options or {})
+    if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
+        lo = np.array([p.low for p in plan.search.params])
+        hi = np.array([p.high for p in plan.search.params])
+        corners = [trial_cell(plan, g, 0, x) for g in plan.groups for x in (lo, hi)]
+        options["trial_timeout_s"] = default_trial_timeout_s(corners)
+    return get_executor(executor, workers, scheduler, **options)
 
 
 def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = None, executor: str = "local",
                workers: int | None = None, scheduler: str | None = None,
                executor_options: Mapping[str, Any] | None = None, trial_fn: TrialFn | None = None,
-               source_text: str = "", progress: ProgressFn | None = None) -> SearchSummary:
+               source_text: str = "", progress: ProgressFn | None = None,
+               retry_faults: bool = False) -> SearchSummary:
     """Run (or resume) the search ``plan`` into ``run_dir``, ``budget`` trials per method and group
-    (every method alike; default the ``[search]`` table's ``budget``, ``mc_budget`` and ``ce_budget``). ``progress(done, total)`` counts stored trials. Ctrl-C stops the
-    workers and re-raises; every committed trial stays and the next call goes on from there."""
-    from offroadbench.study.execution.executors import get_executor
-    from offroadbench.study.fingerprint import platform_fingerprint
-    from offroadbench.study.runner import code_version, default_trial_timeout_s
-
+    (every method alike; default the ``[search]`` table's ``budget``, ``mc_budget`` and ``ce_budget``).
+    ``progress(stored, total)`` counts stored trials and faults. A proposal whose trial faults is
+    stored as a fault and the search goes on; ``retry_faults`` runs the stored faults once more.
+    Ctrl-C stops the workers and raises :class:`~offroadbench.errors.RunInterrupted`; every
+    committed trial stays and the next call goes on from there."""
     cfg = plan.search
     if budget is not None and (isinstance(budget, bool) or not isinstance(budget, int) or budget < 1):
         raise InputError(f"--budget = {budget!r}; must be an integer >= 1")
-    options = dict(executor_options or {})
-    if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
-        lo = np.array([p.low for p in cfg.params])
-        hi = np.array([p.high for p in cfg.params])
-        corners = [trial_cell(plan, g, 0, x) for g in plan.groups for x in (lo, hi)]
-        options["trial_timeout_s"] = default_trial_timeout_s(corners)
-    ex = get_executor(executor, workers, scheduler, **options)
-    version = code_version()
-    t0 = time.perf_counter()
-    run_dir = Path(run_dir)
-    lock = RunLock(run_dir).acquire()
-    try:
-        remove_stale_temp_files(run_dir)
-        store = Store(run_dir, create=True)
-    except BaseException:
-        lock.release()
-        raise
-    ran = 0
+    ex = _executor(plan, executor, workers, scheduler, executor_options)
     total = len(plan.groups) * sum(cfg.method_budget(m, budget) for m in cfg.methods)
-    try:
-        store.con.executescript(SEARCH_TABLE)
-        meta = store.meta()
-        if meta and meta.get("kind") != "search":
-            raise InputError(f"{run_dir} holds a study, not a search; use another --out directory")
-        store.init_meta(search_meta(plan, budget, source_text, version))
-        done, _ = store.counts()
-        report(progress, done, total)
-        run_id = store.start_run(executor, ex.workers, version, platform_fingerprint())
-        status, error = "interrupted", None
-        try:
-            for gi, group in enumerate(plan.groups):
-                for method in cfg.methods:
-                    ran += _run_stream(plan, store, run_dir, gi, group, method, cfg.method_budget(method, budget), ex,
-                                       trial_fn, run_id,
-                                       lambda: report(progress, store.counts()[0], total))
-            status = "finished"
-        except KeyboardInterrupt:
-            raise
-        except BaseException as exc:
-            status, error = "failed", f"{type(exc).__name__}: {exc}"
-            raise
-        finally:
-            store.finish_run(run_id, status, error)
-        done, successes = store.counts()
-    finally:
-        store.close()
-        lock.release()
-    return SearchSummary(run_dir=run_dir, total=total, done=done, ran=ran, failures=done - successes,
-                         wall_s=time.perf_counter() - t0)
+    meta = search_meta(plan, budget, source_text, code_version())
+    with RunSession(run_dir, meta, kind="search", total=total, executor=ex, executor_name=executor,
+                    telemetry=plan.study.telemetry, retry_faults=retry_faults, progress=progress,
+                    fault_row=_no_mission_trial) as session:
+        ensure_search_table(session.store)
+        for gi, group in enumerate(plan.groups):
+            for method in cfg.methods:
+                _run_stream(plan, session, gi, group, method, cfg.method_budget(method, budget), trial_fn)
+    s = session.summary()
+    return SearchSummary(run_dir=s.run_dir, total=total, done=s.done, ran=s.ran, failures=s.done - s.successes,
+                         wall_s=s.wall_s, faults=s.faults, new_faults=s.new_faults)
 
 
-def _run_stream(plan: SearchPlan, store: Store, run_dir: Path, gi: int, group: CellPlan, method: str, budget: int,
-                ex, trial_fn: TrialFn | None, run_id: int, tick) -> int:
-    """Run one stream up to ``budget`` trials; returns the trials this call ran."""
-    from offroadbench.study.runner import save_trial_telemetry
-
+def _next_batch(plan: SearchPlan, session: RunSession, gi: int, group: CellPlan, method: str, budget: int):
+    """The stream's next batch to run: (index, proposal, its stored entries, its cells), or None when
+    the stream has spent its budget. A stored batch whose trials did not all run is proposed again
+    and checked to be the same as stored; a new batch is proposed and stored before it runs."""
     cfg = plan.search
     seed = stream_seed(plan.study.root_seed, gi, method, cfg.replicate)
-    ran = 0
-    while True:
-        history, stored = _history(plan, group, stream_trials(store, gi, method))
-        b = len(history)
-        if b < len(stored):  # a stored batch whose trials did not all run: propose it again, check, finish it
-            entries = stored[b]
-            stage, n = entries[0]["stage"], len(entries)
-            prop = propose(method, stage, n, cfg, seed, b, history)
-            old = np.array([e["x"] for e in entries], dtype=float)
-            if not np.array_equal(old, prop.x) or not _same_seeds(prop.seeds, entries):
-                raise StudyError(f"{run_dir}: the stored batch {b} of {method} in group {gi} differs from what this "
-                                 "code proposes (another offroadbench version?); use another --out directory")
-            cells = [trial_cell(plan, group, e["cell"], np.asarray(e["x"])) for e in entries]
-        else:
-            stage, n = plan_batch(method, cfg, history, budget)
-            if n == 0:
-                return ran
-            prop = propose(method, stage, n, cfg, seed, b, history)
-            start = store.con.execute("SELECT COALESCE(MAX(cell) + 1, 0) FROM search_trials").fetchone()[0]
-            cells = [trial_cell(plan, group, start + i, prop.x[i]) for i in range(n)]
-            entries = [{"cell": c.index, "row": None} for c in cells]
-            _store_batch(store, gi, method, b, prop, cells)
+    history, stored = _history(plan, group, stream_trials(session.store, gi, method))
+    b = len(history)
+    if b < len(stored):  # a stored batch whose trials did not all run: propose it again, check, finish it
+        entries = stored[b]
+        prop = propose(method, entries[0]["stage"], len(entries), cfg, seed, b, history)
+        old = np.array([e["x"] for e in entries], dtype=float)
+        if not np.array_equal(old, prop.x) or not _same_seeds(prop.seeds, entries):
+            raise StudyError(f"{session.run_dir}: the stored batch {b} of {method} in group {gi} differs from what "
+                             "this code proposes (another offroadbench version?); use another --out directory")
+        cells = [trial_cell(plan, group, e["cell"], np.asarray(e["x"])) for e in entries]
+        return b, prop, history, entries, cells
+    stage, n = plan_batch(method, cfg, history, budget)
+    if n == 0:
+        return None
+    prop = propose(method, stage, n, cfg, seed, b, history)
+    start = next_search_cell(session.store)
+    cells = [trial_cell(plan, group, start + i, prop.x[i]) for i in range(n)]
+    add_search_batch(session.store, gi, method, b, prop.stage,
+                     [(prop.x[i], prop.z[i], prop.log_w[i]) for i in range(n)], [cell_meta(c) for c in cells])
+    return b, prop, history, [{"cell": c.index, "row": None} for c in cells], cells
+
+
+def _too_small(cell: CellPlan) -> str | None:
+    """Why a proposal's map cannot hold its missions (offroadbench.navigation.missions.map_too_small),
+    or None: such a proposal holds no mission, as one whose drawn terrain has no start or goal cell."""
+    grid = cell.recipe().grid
+    size = grid.cell_size_m
+    return map_too_small((grid.cols - 1) * size, (grid.rows - 1) * size, cell.section("missions"))
+
+
+def _run_stream(plan: SearchPlan, session: RunSession, gi: int, group: CellPlan, method: str, budget: int,
+                trial_fn: TrialFn | None) -> None:
+    """Run one stream, batch after batch, up to ``budget`` trials."""
+    while (batch := _next_batch(plan, session, gi, group, method, budget)) is not None:
+        b, prop, history, entries, cells = batch
         k0 = sum(len(h.margin) for h in history)
         tasks = []
         for i, (e, c) in enumerate(zip(entries, cells, strict=True)):
-            if e["row"] is None:
+            if not _ended(e):
                 chosen = prop.seeds[i] if i < len(prop.seeds) else None
                 tseed, mseed = _nuisance(plan, group, k0 + i, method) if chosen is None else chosen
                 tasks.append(TerrainTask(cell=c, terrain=0, terrain_seed=tseed, missions=((0, mseed),),
                                          telemetry=plan.study.telemetry))
-
-        def handle(msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
-            nonlocal ran
-            if isinstance(msg, TerrainBuilt):
-                store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
-                return
-            if isinstance(msg, TrialFaulted):
-                if msg.reason.startswith(NO_MISSION_FAULT):  # the proposal's terrain holds no mission
-                    log.info("cell %d: %s; stored as %s", msg.cell, msg.reason, NO_MISSION)
-                    store.add_trial(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed,
-                                    no_mission_row(msg.reason.removeprefix(NO_MISSION_FAULT)), run_id=run_id)
-                else:
-                    store.add_fault(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed,
-                                    msg.reason, run_id=run_id)
-                return
-            files: list[str] = []
-            if msg.kept is not None and not store.has_trial(msg.cell, msg.terrain, msg.mission):
-                files = save_trial_telemetry(run_dir, msg.cell, msg.terrain, msg.mission, msg.kept)
-            if store.add_trial(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed, msg.row,
-                               run_id=run_id, telemetry=files):
-                ran += 1
-                tick()
-
-        while tasks:
-            try:
-                ex.run(tasks, trial_fn, handle)
-                break
-            except InputError as exc:  # a proposal whose terrain holds no mission: record it, run the rest
-                tasks = [t for t in tasks if not store.has_trial(t.cell.index, 0, 0)]
-                cell = infeasible_cell(exc, [t.cell.index for t in tasks])
-                if cell is None:
-                    raise
-                task = next(t for t in tasks if t.cell.index == cell)
-                log.info("cell %d: no mission can be drawn on its terrain (%s); stored as %s", cell, exc, NO_MISSION)
-                store.add_trial(cell, 0, 0, task.terrain_seed, task.missions[0][1], no_mission_row(str(exc)),
-                                run_id=run_id)
-                tasks = [t for t in tasks if not store.has_trial(t.cell.index, 0, 0)]
-        log.info("group %d %s batch %d (%s) done", gi, method, b, stage)
-
-
-def _store_batch(store: Store, gi: int, method: str, b: int, prop, cells: list[CellPlan]) -> None:
-    """Commit a batch's proposals and its cells (meta ``cells``) in one transaction."""
-    (text,) = store.con.execute("SELECT value FROM meta WHERE key = 'cells'").fetchone()
-    all_cells = json.loads(text)
-    if len(all_cells) != cells[0].index:
-        raise StudyError(f"{store.run_dir}: the store's cells ({len(all_cells)}) and search trials disagree")
-    all_cells.extend(_cell_meta(c) for c in cells)
-    store.con.execute("BEGIN IMMEDIATE")
-    try:
-        for i, c in enumerate(cells):
-            lw = float(prop.log_w[i])
-            store.con.execute(
-                "INSERT INTO search_trials (cell, grp, method, batch, slot, stage, x, z, log_w) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                (c.index, gi, method, b, i, prop.stage, _json_list(prop.x[i]), _json_list(prop.z[i]),
-                 None if math.isnan(lw) else lw))
-        store.con.execute("UPDATE meta SET value = ? WHERE key = 'cells'", (json.dumps(all_cells, sort_keys=True),))
-        store.con.execute("COMMIT")
-    except BaseException:
-        store.con.execute("ROLLBACK")
-        raise
+        small = {t.cell.index: _too_small(t.cell) for t in tasks}
+        for task in tasks:
+            if small[task.cell.index]:  # no mission fits its map: nothing to run
+                session.handle(TrialFaulted(task.cell.index, 0, 0, task.terrain_seed, task.missions[0][1],
+                                            NO_MISSION_FAULT + small[task.cell.index], NO_MISSION_KIND))
+        session.run([t for t in tasks if not small[t.cell.index]], trial_fn)
+        stored = session.stored_keys()
+        if any((c.index, 0, 0) not in stored for c in cells):  # never propose and run a batch again in a loop
+            raise StudyError(f"{session.run_dir}: batch {b} of {method} in group {gi} ran, but not every trial of it "
+                             "was stored as a row or a fault (a trial function that stops early?)")
+        log.info("group %d %s batch %d (%s) done", gi, method, b, prop.stage)

@@ -6,9 +6,10 @@ exits, below everything the program printed). :func:`import_pybullet_quietly` im
 with file descriptors 1 and 2 pointed at /dev/null and flushes C stdio before it restores them,
 so the banner goes nowhere whichever stream a build uses.
 
-Only application entry points call this (as ``offroadbench.sim.import_pybullet_quietly``): the
+Application entry points call this (as ``offroadbench.sim.import_pybullet_quietly``): the
 CLI's ``main`` and the study workers' bootstrap
-(``offroadbench.study.execution.executors``). A library import never touches the process's descriptors.
+(``offroadbench.study.execution.executors``); so does the PyBullet engine's own first import of pybullet
+(``offroadbench.sim.engines.pybullet._pb``), so a program using the library sees no banner either.
 """
 
 from __future__ import annotations

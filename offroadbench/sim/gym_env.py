@@ -121,6 +121,7 @@ from offroadbench.sim.trial.runner import (
     TrialRecord,
     body_velocity,
     clamp_action,
+    control_steps,
     plan_within_limits,
     vehicle_envelope,
 )
@@ -169,13 +170,14 @@ class TraverseConfig:
 
 
 def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None):
-    """(Heightmap, its gravity, its soil) of what the env was given (terrain_body)."""
+    """(Heightmap, its gravity, its soil, its soil map) of what the env was given (terrain_body, soil_map_for)."""
     from offroadbench.terrain.recipe import load_terrain
+    from offroadbench.terrain.soil_map import soil_map_for
 
     if overrides is None and not isinstance(terrain, Heightmap) and not str(terrain).lower().endswith(".png"):
         overrides = DEFAULT_OVERRIDES
     hm, recipe = load_terrain(terrain, seed, overrides)
-    return (hm, *terrain_body(terrain, recipe))
+    return (hm, *terrain_body(terrain, recipe), soil_map_for(recipe, hm, seed) if recipe is not None else None)
 
 
 def _settings(config: TraverseConfig, vehicle, sim: SimConfig, rules: FailureRules,
@@ -239,11 +241,7 @@ class TraverseEnv(gym.Env):
                 config, control_rate_hz=settings.controller.control_rate_hz,
                 mission_length_m=settings.missions.length_m, border_m=settings.missions.border_m,
                 patch_cells=settings.observation.patch_cells, patch_spacing_m=settings.observation.patch_spacing_m)
-        if settings.sim.physics_rate_hz % config.control_rate_hz:
-            raise InputError(
-                f"TraverseConfig.control_rate_hz = {config.control_rate_hz} must divide "
-                f"SimConfig.physics_rate_hz = {settings.sim.physics_rate_hz}"
-            )
+        control_steps(settings.sim.physics_rate_hz, config.control_rate_hz, "TraverseConfig.control_rate_hz")
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
         self.perception = _perception(settings.planner.perception if perception is None else perception)
@@ -253,13 +251,14 @@ class TraverseEnv(gym.Env):
         self.cfg = config
         self.settings = settings
         self.rules = settings.rules
-        hm, gravity, soil = _terrain(terrain, terrain_seed, overrides)
-        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil)
+        hm, gravity, soil, soil_map = _terrain(terrain, terrain_seed, overrides)
+        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil, soil_map=soil_map)
         self.hm = hm
         self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
         self._mission_cfg = dataclasses.replace(settings.missions, count=1)
         self._sensing = None  # the episode's Oracle or MastSensor (offroadbench.navigation.sensor)
-        self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim))
+        self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim),
+                                                    soil_map=self.terrain.soil_map_for(settings.sim))
         spec = self._world.spec
         self.vehicle = spec
         self.sim = self._world.sim

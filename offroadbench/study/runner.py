@@ -8,99 +8,28 @@ its pending missions). Tasks are ordered terrain-major (terrain 0 of every cell,
 
 from __future__ import annotations
 
-import errno
 import logging
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from offroadbench import resources
-from offroadbench.config import to_dict
-from offroadbench.progress import ProgressFn, report
 from offroadbench import seeding
-from offroadbench.study.report.header import driver_files
-from offroadbench.study.store.results import telemetry_paths
-from offroadbench.study.spec.config import CellPlan, StudyConfig, study_id
+from offroadbench.config import to_dict
 from offroadbench.errors import InputError
-from offroadbench.io.outputs import missing_dirs
 from offroadbench.memory import world_bytes
-from offroadbench.study.execution.executors import StudyError, get_executor
-from offroadbench.study.fingerprint import platform_fingerprint
-from offroadbench.study.store.store import RunLock, Store, remove_stale_temp_files, remove_store
-from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, keeps_telemetry
+from offroadbench.progress import ProgressFn
+from offroadbench.study.execution.executors import get_executor
+from offroadbench.study.execution.tasks import TerrainTask, TrialFn
+from offroadbench.study.report.header import driver_files
+from offroadbench.study.session import RunSession, RunSummary, code_version
+from offroadbench.study.spec.config import CellPlan, StudyConfig, study_id
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s", "estimate_study", "plan_tasks", "repair_telemetry", "run_study", "study_meta",
-           "save_trial_telemetry", "worker_memory_bytes"]
+__all__ = ["RunSummary", "StudyEstimate", "check_drive_size", "check_study_size", "default_trial_timeout_s",
+           "estimate_study", "plan_tasks", "run_study", "study_meta", "worker_memory_bytes"]
 
-
-
-def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> list[str]:
-    """Write a kept trial's 20 Hz telemetry and planned path (atomic Parquet files); returns
-    their paths relative to ``run_dir``, as the trial's row in the store names them. A file that
-    cannot be written (a full disk) is a StudyError naming it; the trial is then not stored."""
-    from offroadbench.io.telemetry import save_telemetry
-
-    tel_path, path_path = telemetry_paths(run_dir, cell, terrain, mission)
-    try:
-        tel_path.parent.mkdir(exist_ok=True)
-        save_telemetry(kept["telemetry"], tel_path, sweep=False)  # the run swept its directory at the start
-        xy = kept["path_xy"]
-        save_telemetry({"x_m": xy[:, 0], "y_m": xy[:, 1]}, path_path, sweep=False)
-    except (OSError, InputError) as exc:
-        if isinstance(exc, InputError):
-            why = str(exc)
-        else:
-            why = "no space left on the device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
-        raise StudyError(f"cannot write the telemetry of cell {cell}, terrain {terrain}, mission {mission} "
-                         f"in {tel_path.parent} ({why})") from None
-    return [str(q.relative_to(run_dir)) for q in (tel_path, path_path)]
-
-
-def repair_telemetry(store: Store, run_dir: Path, setting: str) -> list[tuple[int, int, int]]:
-    """Drop the stored trials whose telemetry files are missing, so this run does them again.
-
-    A row names its files (schema 2); a row of a schema-1 store (which committed the row before
-    writing the files) is expected to have them when ``setting`` keeps its telemetry. Returns the
-    (cell, terrain, mission) keys dropped."""
-    missing = []
-    for cell, terrain, mission, success, files, run_id in store.trial_telemetry():
-        if files is None:
-            files = ([str(q.relative_to(run_dir)) for q in telemetry_paths(run_dir, cell, terrain, mission)]
-                     if keeps_telemetry(setting, success) else [])
-        if any(not (run_dir / f).is_file() for f in files):
-            missing.append((cell, terrain, mission, run_id))
-    if missing:
-        log.warning("%s: %d stored trial(s) have no telemetry files; running them again", run_dir, len(missing))
-        store.drop_trials(missing)
-    return [k[:3] for k in missing]
-
-
-@dataclass(frozen=True)
-class RunSummary:
-    """What one ``run_study`` call did."""
-
-    run_dir: Path
-    total: int
-    """Trials in the whole study."""
-    done: int
-    """Trials stored after this call."""
-    ran: int
-    """Trials run by this call."""
-    successes: int
-    """Successful trials stored after this call."""
-    wall_s: float
-    """Wall time of this call, seconds."""
-    faults: int = 0
-    """Trials stored as faults after this call (no outcome: past their limit, thrown while
-    settling; excluded from every statistic; a resume skips them unless ``retry_faults``)."""
-
-    @property
-    def complete(self) -> bool:
-        """Whether every trial of the study is stored, as a trial or as a fault."""
-        return self.done + self.faults >= self.total
 
 
 def plan_tasks(study: StudyConfig, plans: list[CellPlan], done: set[tuple[int, int, int]]) -> list[TerrainTask]:
@@ -229,30 +158,6 @@ def _world_bytes(plan: CellPlan) -> int:
     return world_bytes(grid["rows"], grid["cols"], plan.section("sim").heightfield_tile_cells)
 
 
-def code_version() -> str:
-    """The package version, plus the git commit (and ``-dirty``) when the package is a git checkout."""
-    import subprocess
-
-    from offroadbench import __version__
-
-    src = resources.package_dir()
-
-    def git(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run(["git", "-C", str(src), *args], capture_output=True, text=True, timeout=10)
-
-    try:
-        # an installed copy inside some other checkout (e.g. a .venv in it) is not that checkout's code
-        if git("ls-files", "--error-unmatch", "__init__.py").returncode != 0:
-            return __version__
-        head = git("rev-parse", "--short", "HEAD")
-        if head.returncode != 0:
-            return __version__
-        dirty = git("status", "--porcelain", "--untracked-files=no", "--", ".")
-        return f"{__version__}+git.{head.stdout.strip()}{'-dirty' if dirty.stdout.strip() else ''}"
-    except (OSError, subprocess.SubprocessError):
-        return __version__
-
-
 def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "", version: str = "") -> dict[str, Any]:
     """What the store records about the study (config, cells, seeds' root, version)."""
     from offroadbench.study.spec.inputs import trial_inputs
@@ -299,130 +204,29 @@ def run_study(
 ) -> RunSummary:
     """Run (or resume) ``study`` into ``run_dir``; every finished trial is committed at once.
 
-    ``progress(done, total)`` counts stored trials of the whole study; ``on_trial(row)`` sees
-    every new trial's row (e.g. for a success-rate display). Ctrl-C stops the workers and
-    re-raises KeyboardInterrupt; what was committed stays. A run that fails before its first
-    trial removes the store (and the directories) it created; one that fails later keeps every
-    committed trial and its error says how to resume. ``executor_options`` go to the executor
+    ``progress(stored, total)`` counts stored trials (and faults) of the whole study; ``on_trial(row)``
+    sees every new trial's row (e.g. for a success-rate display). Ctrl-C stops the workers and
+    raises :class:`~offroadbench.errors.RunInterrupted` (a KeyboardInterrupt saying what was saved);
+    what was committed stays. A run that fails before its first trial removes the store (and the
+    directories) it created; one that fails later keeps every committed trial and its error says how
+    to resume (offroadbench.study.session.RunSession). ``executor_options`` go to the executor
     (``trial_timeout_s``: the per-trial wall-clock limit of the ``local`` and ``dask`` executors,
     default :func:`default_trial_timeout_s`). A trial past that limit, or one whose vehicle was
     thrown while settling, is stored as a fault (``faults`` table) and the study goes on; a
-    resume skips faulted trials unless ``retry_faults``. A resume whose resolved inputs
-    (:mod:`offroadbench.study.spec.inputs`) differ from the stored ones is refused, naming the change.
+    resume skips faulted trials unless ``retry_faults`` (then each is run once more). A resume whose
+    resolved inputs (:mod:`offroadbench.study.spec.inputs`) differ from the stored ones is refused,
+    naming the change.
     """
     options = dict(executor_options or {})
     if executor in ("local", "dask") and options.get("trial_timeout_s") is None:
         options["trial_timeout_s"] = default_trial_timeout_s(plans)
     ex = get_executor(executor, workers, scheduler, **options)
-    version = code_version()
-    fingerprint = platform_fingerprint()
-    t0 = time.perf_counter()
-    run_dir = Path(run_dir)
-    made_dirs = missing_dirs(run_dir)  # the output-path policy (offroadbench.io.outputs)
-    try:
-        lock = RunLock(run_dir).acquire()  # "a study is running in DIR (pid N)" while another run holds it
-    except BaseException:
-        _remove_dirs(made_dirs)
-        raise
-    try:
-        remove_stale_temp_files(run_dir)
-        store = Store(run_dir, create=True)
-    except BaseException:
-        lock.release()
-        _remove_dirs(made_dirs)
-        raise
-    ran = 0
-    running = False
-    try:
-        store.init_meta(study_meta(study, plans, source_text, version))
-        store.mark_killed_sessions()  # we hold the lock: a session still "running" was killed
-        store.ensure_faults_table()
-        if retry_faults:
-            n = store.clear_faults()
-            if n:
-                log.info("%s: trying %d faulted trial(s) again", run_dir, n)
-        repair_telemetry(store, run_dir, study.telemetry)
-        tasks = plan_tasks(study, plans, store.done_trials() | store.faulted_trials())
-        total = study.n_trials
-        done, _ = store.counts()
-        faults = len(store.faulted_trials())
-        report(progress, done + faults, total)
-        run_id = store.start_run(executor, ex.workers, version, fingerprint)
-        log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, done, total, len(tasks))
-
-        def handle(msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
-            nonlocal ran, done, faults
-            if isinstance(msg, TerrainBuilt):
-                store.add_terrain(msg.cell, msg.terrain, msg.terrain_seed, msg.stats)
-                return
-            if isinstance(msg, TrialFaulted):
-                if store.add_fault(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed, msg.reason,
-                                   run_id=run_id):
-                    faults += 1
-                    log.warning("cell %d, terrain %d, mission %d: stored as a fault (%s)", msg.cell, msg.terrain,
-                                msg.mission, msg.reason)
-                    report(progress, done + faults, total)
-                return
-            cell, terrain, mission, row = msg.cell, msg.terrain, msg.mission, msg.row
-            files: list[str] = []
-            if msg.kept is not None and not store.has_trial(cell, terrain, mission):
-                # the files first, then the row that names them: a stored trial has its telemetry
-                files = save_trial_telemetry(run_dir, cell, terrain, mission, msg.kept)
-            if store.add_trial(cell, terrain, mission, msg.terrain_seed, msg.mission_seed, row, run_id=run_id,
-                               telemetry=files):
-                ran += 1
-                done += 1
-                if on_trial is not None:
-                    on_trial(row)
-                report(progress, done + faults, total)
-
-        status, error = "interrupted", None
-        running = True
-        try:
-            ex.run(tasks, trial_fn, handle)
-            status = "finished"
-        except KeyboardInterrupt:
-            raise
-        except BaseException as exc:
-            status, error = "failed", f"{type(exc).__name__}: {exc}"
-            raise
-        finally:
-            store.finish_run(run_id, status, error)
-        done, successes = store.counts()
-        faults = len(store.faulted_trials())
-    except BaseException as exc:
-        stored = store.counts()[0] + len(store.faulted_trials())
-        store.close()
-        if store.created and stored == 0:
-            # failed before any trial: leave no store (and no directory) behind
-            remove_store(run_dir)
-            lock.release()
-            _remove_dirs(made_dirs)
-            raise
-        lock.release()
-        if running and isinstance(exc, (StudyError, InputError)) and stored:
-            # keep every finished trial and say how to go on
-            hint = (f"{stored} of {study.n_trials} trials are saved in {run_dir}; "
-                    "fix the cause and run the same command again to resume")
-            raise type(exc)(f"{exc}; {hint}") from None
-        raise
-    store.close()
-    lock.release()
-    return RunSummary(
-        run_dir=run_dir, total=total, done=done, ran=ran, successes=successes, wall_s=time.perf_counter() - t0,
-        faults=faults)
-
-
-def _remove_dirs(made: list[Path]) -> None:
-    """Remove the (empty) directories a failed run created, deepest first."""
-    for d in made:
-        try:
-            (d / "telemetry").rmdir()
-        except OSError:
-            pass
-        try:
-            d.rmdir()
-        except OSError:
-            break
-
-
+    meta = study_meta(study, plans, source_text, code_version())
+    with RunSession(run_dir, meta, kind="study", total=study.n_trials, executor=ex, executor_name=executor,
+                    telemetry=study.telemetry, retry_faults=retry_faults, progress=progress,
+                    on_trial=on_trial) as session:
+        tasks = plan_tasks(study, plans, session.stored_keys())
+        log.info("%s: %d of %d trials stored, %d terrain tasks to run", run_dir, session.stored, study.n_trials,
+                 len(tasks))
+        session.run(tasks, trial_fn)
+    return session.summary()

@@ -247,3 +247,58 @@ def test_a_replicate_draws_other_proposals_and_nuisance_on_the_same_domain(refer
     else:
         terrains0 = {r[3] for r in r0}
         assert len(terrains1) == len(terrains0) > 24 and not terrains1 & terrains0
+
+
+def always_faulting(calls):
+    """A trial function whose every trial faults (the vehicle thrown while it settles), counting its calls."""
+    from offroadbench.errors import TrialFault
+
+    def trials(prepared, settings):
+        calls.append(prepared.missions[0].index)
+        raise TrialFault("the vehicle was thrown while it settled")
+        yield  # pragma: no cover - a generator that faults at its first trial
+
+    return trials
+
+
+def _search_faults(run_dir) -> list[tuple]:
+    con = sqlite3.connect(f"file:{run_dir / 'study.sqlite'}?mode=ro", uri=True)
+    try:
+        return con.execute("SELECT f.cell, f.reason FROM faults f JOIN search_trials s ON s.cell = f.cell "
+                           "ORDER BY f.cell").fetchall()
+    finally:
+        con.close()
+
+
+@pytest.mark.timeout(120)
+def test_a_search_whose_trials_always_fault_ends_with_its_faults_stored(tmp_path):
+    """Issue 43: a faulted proposal is done (stored as a fault, no margin), not proposed again forever;
+    a second call runs nothing."""
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["random", "falsify"], budget=8)
+    plan = search_from_data(data)
+    calls: list = []
+    summary = run_search(plan, tmp_path, executor="inline", trial_fn=always_faulting(calls))
+    assert len(calls) == 16  # each proposal driven once
+    faults = _search_faults(tmp_path)
+    assert [c for c, _ in faults] == list(range(16))
+    assert all("thrown while it settled" in reason for _, reason in faults)
+    assert _table(tmp_path)[1] == [] and summary.ran == 0
+    again = run_search(plan, tmp_path, executor="inline", trial_fn=always_faulting(calls))
+    assert len(calls) == 16 and again.ran == 0
+
+
+def test_a_killed_search_session_is_recorded_as_killed_by_the_next_run(reference, tmp_path):
+    plan, _, _ = reference
+    with pytest.raises(KeyboardInterrupt):
+        run_search(plan, tmp_path, executor="inline", trial_fn=interrupting(5))
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    con.execute("UPDATE runs SET status='running', finished=NULL")  # as a SIGKILLed run leaves it
+    con.commit()
+    con.close()
+    run_search(plan, tmp_path, budget=4, executor="inline", trial_fn=stand_in_trials)
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    try:
+        assert [s for (s,) in con.execute("SELECT status FROM runs ORDER BY id")] == ["killed", "finished"]
+    finally:
+        con.close()

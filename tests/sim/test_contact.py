@@ -7,7 +7,7 @@ import pytest
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim import SimConfig, World
-from offroadbench.sim.rigs.vehicle_check import _mean_yaw_rate, _set_gravity
+from offroadbench.sim.rigs.vehicle_check import mean_yaw_rate, set_tilted_gravity
 from offroadbench.sim.trial.skid_steer import achievable_twist
 
 
@@ -15,7 +15,7 @@ from offroadbench.sim.trial.skid_steer import achievable_twist
 def test_turn_in_place_follows_the_command_at_every_heading(model):
     with World(Heightmap.flat(81, 81, 0.1), "husky", SimConfig(tyre_model=model, settle_time_s=0.5)) as world:
         for heading in (0.0, 22.5, 45.0):
-            got = _mean_yaw_rate(world, 0.0, 1.0, math.radians(heading))
+            got = mean_yaw_rate(world, 0.0, 1.0, math.radians(heading))
             assert 0.85 <= got / achievable_twist(0.0, 1.0, world.spec)[1] <= 1.1, (heading, got)
 
 
@@ -24,7 +24,7 @@ def test_coulomb_tyres_hold_a_parked_vehicle_on_a_slope_without_creep():
     grade = math.atan(0.6 * mu)  # well inside the grip
     with World(Heightmap.flat(81, 81, 0.1), "husky", SimConfig(tyre_model="coulomb")) as world:
         world.spawn(4.0, 4.0, 0.0)
-        _set_gravity(world, grade, "y")
+        set_tilted_gravity(world, grade, "y")
         for _ in range(30):
             world.step()
         x0 = world.base_state()[0][0]
@@ -36,7 +36,7 @@ def test_coulomb_tyres_hold_a_parked_vehicle_on_a_slope_without_creep():
 def test_coulomb_tyres_slide_beyond_the_grip():
     with World(Heightmap.flat(81, 81, 0.1), "husky", SimConfig(tyre_model="coulomb")) as world:
         world.spawn(6.0, 4.0, 0.0)
-        _set_gravity(world, math.atan(1.3 * 0.8), "y")  # 30 % beyond tan(grade) = mu
+        set_tilted_gravity(world, math.atan(1.3 * 0.8), "y")  # 30 % beyond tan(grade) = mu
         x0 = world.base_state()[0][0]
         for _ in range(2 * 60):
             world.step()

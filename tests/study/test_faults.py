@@ -243,13 +243,13 @@ def test_a_limit_beyond_the_sane_range_is_refused(value):
 def test_a_dask_task_waits_in_slices_so_no_limit_overflows(limit):
     """A limit past ``threading.TIMEOUT_MAX`` made every Dask task fail with OverflowError; the task
     now waits in short slices (1e10 s is refused by the CLI, but the task would cope)."""
-    from offroadbench.study.execution.executors import _dask_task
+    from offroadbench.study.execution.executors import dask_task
     from offroadbench.study.runner import plan_tasks
     from offroadbench.study.execution.tasks import TerrainBuilt, TrialDone
 
     study, cells = cells_of(small())
     task = plan_tasks(study, cells, set())[0]
-    msgs = _dask_task(task, fake_trials, limit)
+    msgs = dask_task(task, fake_trials, limit)
     assert isinstance(msgs[0], TerrainBuilt) and [type(m) for m in msgs[1:]] == [TrialDone] * 3
 
 

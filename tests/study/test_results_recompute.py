@@ -136,12 +136,40 @@ def _planner_stress_plan(folder: Path) -> list[list[float]]:
 
 
 def _planner_stress_sensor_cost(folder: Path) -> list[float]:
-    """The sensor's cost (oracle - mast, points) to astar and lattice on the aliased surface at 2.95 / 2.99,
-    mean per-terrain differences on the same missions."""
+    """The sensor's cost (mast - oracle, points, as the README names it: mast against the oracle) to astar and
+    lattice on the aliased surface at 2.95 / 2.99: the mean per-terrain difference on the same missions and
+    its terrain-bootstrap interval (as the report draws it: a generator of the row's own, keyed_rng)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
+
     t = trial_table(folder)
     rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
-    return [float((rate[(p, "oracle", False, lv)] - rate[(p, "mast", False, lv)]).dropna().mean())
-            for p in ("astar", "lattice") for lv in (2.95, 2.99)]
+    out = []
+    for p in ("astar", "lattice"):
+        for lv in (2.95, 2.99):
+            d = (rate[(p, "mast", False, lv)] - rate[(p, "oracle", False, lv)]).dropna().to_numpy(float)
+            b = cluster_bootstrap(d, np.mean, keyed_rng(0, "arm_table", "sensor", "mast", "oracle", p, False, lv))
+            out += [float(d.mean()), b.low, b.high]
+    return out
+
+
+def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
+    """vehicle-planner: the Husky's successes, rates and terrain-bootstrap intervals (%) per planner, oracle then
+    mast, at ``level``, as the report computes them (stress.success_by_level over the report's strata: a
+    generator per cell)."""
+    def compute(folder: Path) -> list[float]:
+        from experiments.rerender import folder_meta
+        from offroadbench.study.report.planners import _stress_axes
+        from offroadbench.study.stats.stress import success_by_level
+
+        group, lv, strata = _stress_axes(folder_meta(folder))
+        by = success_by_level(trial_table(folder), group, lv, by=strata).set_index([group, "vehicle", "sensor", lv])
+        out = []
+        for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo"):
+            for sensor in ("oracle", "mast"):
+                r = by.loc[(p, "husky", sensor, level)]
+                out += [float(r["successes"]), 100 * r["success_rate"], 100 * r["ci95_low"], 100 * r["ci95_high"]]
+        return out
+    return compute
 
 
 def _shared_missions(folder: Path) -> list[float]:
@@ -265,6 +293,13 @@ def _crater_density_rows(folder: Path) -> list[float]:
 def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
     counts = trial_table(folder).query(where)["failure_reason"].value_counts()
     return [float(counts.get(r, 0)) for r in reasons]
+
+
+SOIL_MAP_SNOW = "soil-map/mare-floors-snow.toml"
+SOIL_MAP_SIMULANT = "soil-map/mare-floors-simulant.toml"
+SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on the simulant": SOIL_MAP_SIMULANT,
+                 "crater interiors on the soft deposit": SOIL_MAP_SNOW}
+"""The soil-map README table's rows: (row label regex, recipe)."""
 
 
 LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
@@ -474,6 +509,9 @@ SAMPLES = [
     Sample("failure-search-site P(failure), straight", "failure-search-site", rf"\| straight \| {_FS_ROW}",
            _failure_search_estimates("straight", 1)),
     # failure-search-site's reference, repeats, modes and baselines (issue 45): tests/search/test_results_site.py
+    Sample("failure-search-site distance left by the failures", "failure-search-site",
+           rf"a median {_NUM} m of the 6 m route left",
+           lambda f: [float(trial_table(f).query("not success")["final_distance_to_goal_m"].median())]),
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
            rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
            rf"\(on {_NUM}\)", _failure_search_first_k),
@@ -495,6 +533,21 @@ SAMPLES = [
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
+    Sample("soil-map planned effects", "soil-map",
+           rf"Soft crater interiors against one soil: \*\*{_NUM} points\*\*[^\n]*\n[^\n]*simulant crater interiors "
+           rf"against one soil: \*\*{_NUM} points\*\*",
+           lambda f: (_pooled_success_effect("recipe", SOIL_MAP_SNOW, "lunar-mare")(f)
+                      + _pooled_success_effect("recipe", SOIL_MAP_SIMULANT, "lunar-mare")(f))),
+    Sample("soil-map outcomes per soil layout", "soil-map",
+           "".join(rf"\| {label} \| {_NUM} \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for label in SOIL_MAP_ROWS),
+           lambda f: [v for r in SOIL_MAP_ROWS.values()
+                      for v in [float(trial_table(f).query("recipe == @r")["success"].sum())]
+                      + _failure_counts(f, f"recipe == '{r}'", ("entrapped", "stuck", "timeout"))]),
+    Sample("soil-map deposit trials outside the model", "soil-map",
+           rf"Outside the soil model: {_NUM} of the 48 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
+           lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
+                                 100 * float(t["outside_model_fraction"].max())])(
+                                     trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",
@@ -571,7 +624,7 @@ SAMPLES = [
                                        ("the line (oracle arm), band-limited against aliased surface", 2.99)]),
            lambda f: [v for row in _planner_stress_plan(f) for v in row]),
     Sample("planner-stress the sensor's cost to the planners", "planner-stress",
-           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \["
+           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\]"
                               for p in ("astar", "lattice") for lv in (2.95, 2.99)),
            _planner_stress_sensor_cost),
     Sample("planner-stress shared missions", "planner-stress",
@@ -628,6 +681,12 @@ SAMPLES = [
                          for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
                           trial_table(f).query("D_high == 2.6"))),
+    *[Sample(f"vehicle-planner the Husky's success intervals at {lv}", "vehicle-planner",
+             rf"{head}[\s\S]*?" + "".join(rf"\| husky \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| "
+                                           rf"{_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
+                                           for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
+             _vp_success_intervals(lv))
+      for lv, head in ((2.95, "## Success per vehicle, planner and sensor at D_high 2.95"), (2.6, "## D_high 2.6"))],
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),

@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 
 from offroadbench.study import load, load_meta, run_study, study_from_dict
-from offroadbench.study import runner as runner_mod
+from offroadbench.study import session as runner_mod
 from offroadbench.study.store.results import telemetry_paths
 from offroadbench.study.spec.config import plan_cells
 from offroadbench.study.store.store import Store

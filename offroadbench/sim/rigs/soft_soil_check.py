@@ -17,7 +17,7 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.steering import drive_twist
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.rigs.vehicle_measure import CheckResult, _FLAT_CELL_M, _abs_row, _bisect, _climbs, _ratio_row
+from offroadbench.sim.rigs.vehicle_measure import CheckResult, FLAT_CELL_M, abs_row, bisect_threshold, climbs_grade, ratio_row
 
 
 #: soil and gravity of the soft-soil rows
@@ -60,6 +60,34 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
         if driven < n_wheels:
             pull += (n_wheels - driven) * towed_pull_n(soil, radius_m, width_m, load)
         return pull - mass_kg * g * math.sin(theta)
+
+    lo, hi = 0.0, 0.5 * math.pi
+    if margin(lo) < 0.0:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float, g: float, slip: float,
+                          com_height_m: float = 0.0) -> float:
+    """Steepest grade on which two belts (b x L each) at ``slip`` pull the vehicle's weight component,
+    degrees: ``2 (F(i) - R_c) = m g sin(theta)`` with each belt carrying ``m g cos(theta) / 2``
+    (offroadbench.sim.tyre_laws.track_patch). Load transfer: the weight's component along the grade,
+    acting at the centre of mass ``com_height_m`` above the belts, moves the centre of pressure back by
+    ``e = h tan(theta)``; a linear pressure keeps the whole belt on the ground while ``e <= L / 6`` and
+    shortens the contact to ``3 (L / 2 - e)`` beyond (the front lifts; Wong 2008, ch. 2, eccentric
+    load), and the thrust is the belt's over that contact."""
+    from offroadbench.sim.tyre_laws.track_patch import compaction_resistance_n, track_sinkage_m, track_thrust_n
+
+    def margin(theta: float) -> float:
+        w = mass_kg * g * math.cos(theta) / 2.0
+        e = com_height_m * math.tan(theta)
+        contact = length_m if e <= length_m / 6.0 else max(1e-9, 3.0 * (length_m / 2.0 - e))
+        pull = track_thrust_n(soil, width_m, contact, w, slip) - compaction_resistance_n(
+            soil, width_m, track_sinkage_m(soil, width_m, length_m, w))
+        return 2.0 * pull - mass_kg * g * math.sin(theta)
 
     lo, hi = 0.0, 0.5 * math.pi
     if margin(lo) < 0.0:
@@ -122,11 +150,13 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     if spec.wheel_width_m is None:
         return []
+    if spec.track_contact_length_m is not None:
+        return _track_rows(spec, sim)
     g = SOFT_SOIL_GRAVITY_M_S2
     soil = load_soil(SOFT_SOIL)
     soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
                                settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
     r, b = spec.wheel_radius_m, spec.wheel_width_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
     with open_world(flat, spec, soft) as world:
@@ -139,7 +169,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         load = mass * g / n
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
-        grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
         pull = _tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
     expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
@@ -150,13 +180,55 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     limit = soil_climb_limit_deg(soil, r, b, mass, g, 0.75, n, n_driven)
     mu = spec.wheel_friction * sim.terrain_friction
     return [
-        _ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
+        ratio_row("soft soil: sinkage at rest", sink, expected_sink, "m", 0.85, 1.15,
                    f"{where}; Wong-Reece sinkage carrying {load:.1f} N per wheel"),
-        _abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
                  f"{where}; quasi-static soil limit at slip 0.75; on rigid ground grip alone allows "
                  f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
         CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
                     bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
                     "within 10 % or 1 % of the weight",
                     f"{where}; {n_driven}{towed} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+    ]
+
+
+def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
+    """The soft-soil rows of a tracked vehicle with a track patch: its belts against the Bekker / Wong
+    track relations (offroadbench.sim.tyre_laws.track_patch), each belt carrying half the weight. The
+    belts' slip settles more slowly than a wheel's (their relaxation length is longer), so the tow rig
+    runs 16 s."""
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil
+    from offroadbench.sim.tyre_laws.track_patch import drawbar_pull_n, track_sinkage_m
+
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soil = load_soil(SOFT_SOIL)
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
+    b, length = spec.wheel_width_m, spec.track_contact_length_m
+    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity); belts {length:g} x {b:g} m"
+    with open_world(flat, spec, soft) as world:
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        _come_to_rest(world)
+        mass = world.geometry.mass_kg
+        sink = world.wheel_penetration_m()
+        com_height = world.centre_of_mass_m()[2] - (flat.z_min_m - sink)  # above the belts' bottom
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
+        pull = _tow_pull(world, 0.2, seconds=16.0)
+    w = mass * g / 2.0
+    expected_pull = 2.0 * drawbar_pull_n(soil, b, length, w, 0.2)
+    limit = track_climb_limit_deg(soil, b, length, mass, g, 0.75, com_height)
+    mu = spec.wheel_friction * sim.terrain_friction
+    return [
+        ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
+                   f"{where}; Bekker sinkage of a belt carrying {w:.1f} N"),
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+                 f"{where}; quasi-static belt limit at slip 0.75 with the load moved back (centre of mass "
+                 f"{com_height:.3f} m above the belts); on rigid ground grip alone allows "
+                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
+        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
+                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
+                    "within 10 % or 1 % of the weight",
+                    f"{where}; 2 x a belt's thrust less its compaction resistance, weight {mass * g:.1f} N"),
     ]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from offroadbench.sim.engines.base import read_urdf, unsprung_kg
-from offroadbench.sim.rigs.vehicle_measure import _bisect
+from offroadbench.sim.rigs.vehicle_measure import bisect_threshold
 from offroadbench.sim.trial.vehicle import VehicleSpec
 
 __all__ = ["sprung_tip_angle_deg", "suspension_of", "track_step_bound_m"]
@@ -50,7 +50,7 @@ def track_step_bound_m(wheel_radius_m: float, mu: float, lift_share: float, face
         push = n * (math.cos(phi) - mu * math.sin(phi))
         return push <= mu * (1.0 - lift_share) and mu * n + max(0.0, push) <= torque_ratio
 
-    return _bisect(climbs, wheel_radius_m, 20.0 * wheel_radius_m, 1e-5)
+    return bisect_threshold(climbs, wheel_radius_m, 20.0 * wheel_radius_m, 1e-5)
 
 
 def sprung_tip_angle_deg(mass_kg: float, unsprung_kg: float, com_height_m: float, wheel_radius_m: float,

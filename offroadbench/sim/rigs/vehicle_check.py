@@ -88,9 +88,9 @@ from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engine import TrialWorld, engine_capabilities, open_world
 from offroadbench.sim.trial.steering import achievable, drive_twist, min_turn_radius_m, reference_layout
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.rigs.vehicle_measure import (CheckResult, _FLAT_CELL_M, _STEP_CELL_M, _abs_row, _bisect, _climbs,
-                                                   _com_height, _left_load, _mean_yaw_rate, _ramp_tilt, _ratio_row,
-                                                   _run, _set_gravity)
+from offroadbench.sim.rigs.vehicle_measure import (CheckResult, FLAT_CELL_M, STEP_CELL_M, abs_row, bisect_threshold, climbs_grade,
+                                                   com_height, left_load, mean_yaw_rate, ramp_tilt, ratio_row,
+                                                   run_for, set_tilted_gravity)
 from offroadbench.sim.rigs.vehicle_bounds import sprung_tip_angle_deg, suspension_of, track_step_bound_m
 from offroadbench.sim.rigs.soft_soil_check import (SOFT_SOIL, SOFT_SOIL_GRAVITY_M_S2, soft_soil_checks,
                                                    soil_climb_limit_deg)
@@ -118,12 +118,12 @@ def _yaw_tracking(world: TrialWorld, headings_deg, commands) -> list[CheckResult
             for w in commands:
                 w = min(w, spec.max_yaw_rate_rad_s)
                 _, w_ach = achievable(v, w, spec, layout)
-                got = _mean_yaw_rate(world, v, w, math.radians(h))
+                got = mean_yaw_rate(world, v, w, math.radians(h))
                 note = "" if math.isclose(w_ach, w, rel_tol=1e-9) else (
                     f"command {w:g} rad/s, wheel speeds saturated at {spec.max_speed_m_s:g} m/s" if r_min == 0.0 else
                     f"command {w:g} rad/s, limited by the minimum turning radius {r_min:.2f} m "
                     f"(steering limit {spec.max_steer_angle_deg:g} deg)")
-                rows.append(_ratio_row(f"yaw rate {mode}, heading {h:g} deg, command {w:g} rad/s",
+                rows.append(ratio_row(f"yaw rate {mode}, heading {h:g} deg, command {w:g} rad/s",
                                        got, w_ach, "rad/s", 0.85, 1.1, note))
     return rows
 
@@ -144,7 +144,7 @@ def _drift(world: TrialWorld) -> CheckResult:
         if along >= 10.0:
             break
     lateral = -(pos[0] - x0) * math.sin(heading) + (pos[1] - y0) * math.cos(heading)
-    return _abs_row("straight-line drift over 10 m", abs(lateral), 0.0, "m", 0.2,
+    return abs_row("straight-line drift over 10 m", abs(lateral), 0.0, "m", 0.2,
                     f"open loop at {v:g} m/s, heading 22.5 deg; {along:.1f} m driven")
 
 
@@ -153,7 +153,7 @@ def _stopping(world: TrialWorld) -> CheckResult:
     v = spec.max_speed_m_s
     world.spawn(2.0, world.hm.height_m / 2.0, 0.0)
     drive_twist(world, v, 0.0)
-    _run(world, 2.0 + 3.0 * v / spec.max_accel_m_s2)
+    run_for(world, 2.0 + 3.0 * v / spec.max_accel_m_s2)
     speed = math.hypot(*world.base_state()[2][:2])
     # the whole vehicle's centre of mass (a suspended body swings on its rockers as the wheels stop)
     start = world.centre_of_mass_m()
@@ -175,7 +175,7 @@ def _stopping(world: TrialWorld) -> CheckResult:
     motors = n * spec.wheel_torque_limit_nm / (spec.wheel_radius_m * m_eff)
     decel = min(spec.max_accel_m_s2, share * mu * world.sim.gravity_m_s2, motors)
     expected = speed * speed / (2.0 * decel)
-    return _ratio_row("stopping distance from top speed", dist, expected, "m", 0.5, 1.5,
+    return ratio_row("stopping distance from top speed", dist, expected, "m", 0.5, 1.5,
                       f"from {speed:.2f} m/s; v^2 / (2 a), a = min(max_accel, mu g, n tau / (r m_eff)) = "
                       f"{decel:.2f} m/s^2, m_eff = m + sum(I_spin) / r^2 = {m_eff:.1f} kg")
 
@@ -189,8 +189,8 @@ def _tilt_and_settle(world: TrialWorld, start_deg: float) -> None:
     :data:`TILT_SETTLE_S` before the slow ramp: a sprung vehicle rolls on its springs when the table
     jumps to the first angle and overshoots (a damping ratio of 0.3 overshoots by 37 %), which
     unloaded the uphill wheels of the HUNTER at once and read as a tip or a slide at the first angle."""
-    _set_gravity(world, math.radians(start_deg), "x")
-    _run(world, TILT_SETTLE_S)
+    set_tilted_gravity(world, math.radians(start_deg), "x")
+    run_for(world, TILT_SETTLE_S)
 
 
 #: how long the uphill wheels must stay off the tilt table to count as lifted, s (a sprung wheel hanging on
@@ -203,7 +203,7 @@ def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckR
     with open_world(hm, spec, grippy) as world:
         c = hm.width_m / 2.0
         world.spawn(c, c, 0.0)
-        h = _com_height(world)
+        h = com_height(world)
         note = f"geometric atan((track/2) / h), centre of mass h = {h:.3f} m above ground"
         expected = math.degrees(math.atan2(spec.track_m / 2.0, h))
         if spec.suspension_joints:
@@ -220,11 +220,11 @@ def _tip_angle(spec: VehicleSpec, sim: SimConfig, hm: Heightmap) -> tuple[CheckR
         run, need = [0], int(round(TIP_LIFT_S * world.sim.physics_rate_hz))
 
         def lifted() -> bool:
-            run[0] = run[0] + 1 if _left_load(world) <= 0.0 else 0
+            run[0] = run[0] + 1 if left_load(world) <= 0.0 else 0
             return run[0] >= need
 
-        angle = _ramp_tilt(world, 1.0, lifted, start_deg=start) - (need - 1) / world.sim.physics_rate_hz
-    row = _abs_row("static tip angle (tilt table)", angle, expected, "deg", 2.0,
+        angle = ramp_tilt(world, 1.0, lifted, start_deg=start) - (need - 1) / world.sim.physics_rate_hz
+    row = abs_row("static tip angle (tilt table)", angle, expected, "deg", 2.0,
                    f"{note}; grippy table so the vehicle cannot slide; tip: the uphill wheels off the table for "
                    f"{TIP_LIFT_S:g} s")
     return row, expected, h
@@ -242,10 +242,10 @@ def _side_slope(world: TrialWorld, tip_deg: float) -> CheckResult:
     y0 = world.base_state()[0][1]
 
     def moved() -> bool:
-        return abs(world.base_state()[0][1] - y0) > 0.02 or _left_load(world) <= 0.0
+        return abs(world.base_state()[0][1] - y0) > 0.02 or left_load(world) <= 0.0
 
-    angle = _ramp_tilt(world, 1.0, moved, start_deg=start)
-    _set_gravity(world, 0.0, "x")
+    angle = ramp_tilt(world, 1.0, moved, start_deg=start)
+    set_tilted_gravity(world, 0.0, "x")
     note = f"slides at atan(mu) = {slide:.1f} deg (mu = {mu:g}) or tips at {tip_deg:.1f} deg"
     rated = spec.rated_side_slope_deg
     if rated is not None and rated > expected + 2.0:
@@ -253,7 +253,7 @@ def _side_slope(world: TrialWorld, tip_deg: float) -> CheckResult:
                  else f"; the sheet's {rated:g} deg is past this model's tip angle")
     elif rated is not None:
         note += f"; the sheet's {rated:g} deg is within this model's limit"
-    return dataclasses.replace(_abs_row("side slope held, parked", angle, expected, "deg", 2.0, note), sheet=rated)
+    return dataclasses.replace(abs_row("side slope held, parked", angle, expected, "deg", 2.0, note), sheet=rated)
 
 
 def _stability(tip_deg: float, mu: float) -> CheckResult:
@@ -301,7 +301,7 @@ def _climb(world: TrialWorld, com_height_m: float) -> CheckResult:
     """``com_height_m``: the centre of mass over the ground of the settled vehicle (a failed climb
     may leave the vehicle on its back)."""
     spec = world.spec
-    grade = _bisect(lambda a: _climbs(world, a), 0.0, 60.0, 0.5)
+    grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
     mu = spec.wheel_friction * world.sim.terrain_friction
     half_base = 0.5 * world.geometry.wheelbase_m
     per_axle = len(spec.wheel_joints) // 2
@@ -324,16 +324,16 @@ def _climb(world: TrialWorld, com_height_m: float) -> CheckResult:
                      "tyres and the rear motors reach their torque limit)")
     elif rated is not None:
         note += f"; the sheet's {rated:g} deg is within this model's limit"
-    return dataclasses.replace(_abs_row("steepest grade climbed from rest", grade, expected, "deg", 4.0, note),
+    return dataclasses.replace(abs_row("steepest grade climbed from rest", grade, expected, "deg", 4.0, note),
                                sheet=rated)
 
 
 def _step_world(height_m: float, spec: VehicleSpec) -> Heightmap:
     length = 8.0
     width = max(2.0, 4.0 * spec.track_m)
-    x = np.arange(int(round(length / _STEP_CELL_M)) + 1) * _STEP_CELL_M
+    x = np.arange(int(round(length / STEP_CELL_M)) + 1) * STEP_CELL_M
     z = np.where(x >= 4.0, height_m, 0.0)
-    return Heightmap(np.tile(z, (int(round(width / _STEP_CELL_M)) + 1, 1)), _STEP_CELL_M)
+    return Heightmap(np.tile(z, (int(round(width / STEP_CELL_M)) + 1, 1)), STEP_CELL_M)
 
 
 def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float, speed_m_s: float | None = None) -> bool:
@@ -369,7 +369,7 @@ def step_bound_m(wheel_radius_m: float, belly_m: float, wheelbase_m: float, over
         d = math.sqrt(max(0.0, 2.0 * wheel_radius_m * h - h * h))
         return belly_m + h * d / wheelbase_m >= h
 
-    return _bisect(clears, 0.0, wheel_radius_m, 1e-4)
+    return bisect_threshold(clears, 0.0, wheel_radius_m, 1e-4)
 
 
 #: the approach speed of a belt-driven track's step row, m/s: its kinetic energy lifts the centre of
@@ -385,10 +385,10 @@ def _track_step(world_geometry, spec: VehicleSpec, sim: SimConfig) -> tuple[floa
     mu = spec.wheel_friction * sim.terrain_friction
     torque = len(spec.wheel_joints) * spec.wheel_torque_limit_nm / (spec.wheel_radius_m * world_geometry.mass_kg
                                                                       * sim.for_terrain().gravity_m_s2)
-    expected = track_step_bound_m(spec.wheel_radius_m, mu, share, _STEP_CELL_M, torque)
+    expected = track_step_bound_m(spec.wheel_radius_m, mu, share, STEP_CELL_M, torque)
     why = (f"belt-driven track, approached at {TRACK_STEP_SPEED_M_S:g} m/s (quasi-static): the front road wheel "
            f"climbs by geometry to its centre, above it by the belt's friction (mu = {mu:g}) on the step's face "
-           f"(one {_STEP_CELL_M:g} m cell), the hull pivoting on its rear road wheel ({share:.2f} of the weight on "
+           f"(one {STEP_CELL_M:g} m cell), the hull pivoting on its rear road wheel ({share:.2f} of the weight on "
            "the front)")
     return expected, why
 
@@ -413,12 +413,12 @@ def _step(spec: VehicleSpec, sim: SimConfig, belly_m: float, wheelbase_m: float,
         why = ("the chassis nose reaches past the tyres and strikes a step higher than the belly" if overhang
                else "the tilted belly must clear the step edge between the axles")
     top = 1.2 * max(spec.wheel_radius_m, expected)
-    height = _bisect(lambda h: _climbs_step(spec, sim, h, speed), 0.0, top, 0.01)
+    height = bisect_threshold(lambda h: _climbs_step(spec, sim, h, speed), 0.0, top, 0.01)
     kind = "geometric" if speed is None else "quasi-static"
     note = f"{kind} bound (wheel radius {spec.wheel_radius_m:g} m, belly {belly_m:.3f} m): {why}"
     if spec.rated_step_m is not None:
         note += f"; the sheet's {spec.rated_step_m:g} m is set beside it"
-    return dataclasses.replace(_ratio_row(name, height, expected, "m", lo, hi, note), sheet=spec.rated_step_m)
+    return dataclasses.replace(ratio_row(name, height, expected, "m", lo, hi, note), sheet=spec.rated_step_m)
 
 
 def check_vehicle(
@@ -432,7 +432,7 @@ def check_vehicle(
     """Measure the vehicle on small test worlds; one :class:`CheckResult` per figure (module docstring)."""
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     quick = dataclasses.replace(sim, settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, _FLAT_CELL_M)
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
     rows: list[CheckResult] = []
     total = 7
     tip_row, tip_deg, com_h = _tip_angle(spec, quick, flat)

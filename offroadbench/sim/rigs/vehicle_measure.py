@@ -15,10 +15,10 @@ from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.trial.steering import drive_twist
 
 
-_FLAT_CELL_M = 0.1
+FLAT_CELL_M = 0.1
 
 
-_STEP_CELL_M = 0.02
+STEP_CELL_M = 0.02
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class CheckResult:
 
 
 # ---------------------------------------------------------------------------- helpers
-def _set_gravity(world: TrialWorld, tilt_rad: float, about: str) -> None:
+def set_tilted_gravity(world: TrialWorld, tilt_rad: float, about: str) -> None:
     """Gravity turned by ``tilt_rad`` about the world x (``about="x"``, downhill toward -y) or y
     axis (downhill toward -x): a flat world becomes a uniform slope of that angle."""
     g = world.sim.gravity_m_s2
@@ -64,51 +64,51 @@ def _yaw(world: TrialWorld) -> float:
     return math.atan2(r[3], r[0])
 
 
-def _run(world: TrialWorld, seconds: float, each: Callable[[], None] | None = None) -> None:
+def run_for(world: TrialWorld, seconds: float, each: Callable[[], None] | None = None) -> None:
     for _ in range(int(round(seconds * world.sim.physics_rate_hz))):
         world.step()
         if each is not None:
             each()
 
 
-def _mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, seconds: float = 3.0,
+def mean_yaw_rate(world: TrialWorld, v: float, omega: float, heading: float, seconds: float = 3.0,
                    at: tuple[float, float] | None = None) -> float:
     """Yaw rate (rad/s) averaged over the second half of ``seconds`` of a constant (v, omega),
     started at rest at ``at`` (default: the middle of the map)."""
     c = world.hm.width_m / 2.0
     world.spawn(*(at or (c, c)), heading)
     drive_twist(world, v, omega)
-    _run(world, seconds / 2.0)
+    run_for(world, seconds / 2.0)
     yaws = []
-    _run(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
+    run_for(world, seconds / 2.0, lambda: yaws.append(_yaw(world)))
     y = np.unwrap(yaws)
     return float((y[-1] - y[0]) / ((len(y) - 1) / world.sim.physics_rate_hz))
 
 
-def _com_height(world: TrialWorld) -> float:
+def com_height(world: TrialWorld) -> float:
     """Height of the whole vehicle's centre of mass above the ground (flat map, z = 0), metres."""
     return world.centre_of_mass_m()[2] - world.hm.z_max_m
 
 
-def _left_load(world: TrialWorld) -> float:
+def left_load(world: TrialWorld) -> float:
     """Summed normal force on the left wheels in the last step, N."""
     return sum(world.wheel_loads_n()[: len(world.spec.left_wheel_joints)])
 
 
-def _ramp_tilt(world: TrialWorld, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
+def ramp_tilt(world: TrialWorld, rate_deg_s: float, stop: Callable[[], bool], start_deg: float = 0.0,
                end_deg: float = 80.0) -> float:
     """Tilt gravity about x from ``start_deg`` at ``rate_deg_s`` until ``stop()``; the angle, deg."""
     n = int(round((end_deg - start_deg) / rate_deg_s * world.sim.physics_rate_hz))
     for k in range(n):
         angle = start_deg + rate_deg_s * k / world.sim.physics_rate_hz
-        _set_gravity(world, math.radians(angle), "x")
+        set_tilted_gravity(world, math.radians(angle), "x")
         world.step()
         if stop():
             return angle
     return end_deg
 
 
-def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> float:
+def bisect_threshold(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> float:
     """Largest value in [lo, hi] for which ``ok`` holds (``ok(lo)`` assumed), to ``tol``."""
     if ok(hi):
         return hi
@@ -121,22 +121,22 @@ def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> fl
     return lo
 
 
-def _ratio_row(name, measured, expected, unit, lo, hi, note="") -> CheckResult:
+def ratio_row(name, measured, expected, unit, lo, hi, note="") -> CheckResult:
     ok = expected > 0 and lo <= measured / expected <= hi
     return CheckResult(name, measured, expected, unit, bool(ok), f"{lo:g}-{hi:g} x expected", note)
 
 
-def _abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
+def abs_row(name, measured, expected, unit, tol, note="") -> CheckResult:
     return CheckResult(name, measured, expected, unit, bool(abs(measured - expected) <= tol), f"within {tol:g} {unit}", note)
 
 
-def _climbs(world: TrialWorld, grade_deg: float) -> bool:
+def climbs_grade(world: TrialWorld, grade_deg: float) -> bool:
     """True if the vehicle, at rest on a uniform grade, gains 1 m uphill within 10 s when its wheel
     speed is ramped gently (0.5 m/s^2 at the tyre, to 0.5 m/s), as a driver would start on a hill."""
     spec = world.spec
     c = world.hm.width_m / 2.0
     world.spawn(c - 3.0, c, 0.0)
-    _set_gravity(world, math.radians(grade_deg), "y")
+    set_tilted_gravity(world, math.radians(grade_deg), "y")
     x0 = world.base_state()[0][0]
     rate = world.sim.physics_rate_hz
     climbed = False
@@ -147,5 +147,5 @@ def _climbs(world: TrialWorld, grade_deg: float) -> bool:
         if world.base_state()[0][0] - x0 >= 1.0:
             climbed = True
             break
-    _set_gravity(world, 0.0, "y")
+    set_tilted_gravity(world, 0.0, "y")
     return climbed

@@ -43,11 +43,24 @@ from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, m
 from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
-from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, _result
+from offroadbench.sim.trial.result import TELEMETRY_COLUMNS, TrialResult, make_result
 from offroadbench.sim.trial.settings import TrialSettings
 
 __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEMETRY_COLUMNS", "drive_mission",
-           "run_mission", "settings_of", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame"]
+           "run_mission", "settings_of", "clamp_action", "vehicle_envelope", "body_velocity", "body_frame",
+           "control_steps"]
+
+#: where the commands (v, omega) sit in a telemetry row: by name (TELEMETRY_COLUMNS), not by position
+_CMD_V, _CMD_OMEGA = TELEMETRY_COLUMNS.index("cmd_v_m_s"), TELEMETRY_COLUMNS.index("cmd_omega_rad_s")
+
+
+def control_steps(sim_physics_rate_hz: int, control_rate_hz: int,
+                  name: str = "ControllerConfig.control_rate_hz") -> int:
+    """Physics steps per control tick; the control rate (``name``, Hz) must divide the physics rate
+    (Hz), else one InputError naming both."""
+    if sim_physics_rate_hz % control_rate_hz:
+        raise InputError(f"{name} = {control_rate_hz} must divide SimConfig.physics_rate_hz = {sim_physics_rate_hz}")
+    return sim_physics_rate_hz // control_rate_hz
 
 
 def body_frame(world: TrialWorld, quat: tuple, ang_world: tuple) -> tuple[float, float, float, float, float, float]:
@@ -120,16 +133,11 @@ class TrialLoop:
     def __init__(self, world: TrialWorld, mission: Mission, settings: TrialSettings, *, length_m: float,
                  name: str = "agent", spawn_roll_rad: float = 0.0) -> None:
         sim, controller, rules = world.sim, settings.controller, settings.rules
-        if sim.physics_rate_hz % controller.control_rate_hz:
-            raise InputError(
-                f"ControllerConfig.control_rate_hz = {controller.control_rate_hz} must divide "
-                f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
-            )
         hm, spec = world.hm, world.spec
         self.world = world
         self.mission = mission
         self.name = name
-        self.ctrl_every = sim.physics_rate_hz // controller.control_rate_hz
+        self.ctrl_every = control_steps(sim.physics_rate_hz, controller.control_rate_hz)
         self.tel_every = sim.physics_rate_hz // sim.telemetry_rate_hz
         self.goal = np.asarray(mission.goal_xy_m, dtype=float)
         self.timeout_s = trial_timeout_s(rules, length_m, controller.cruise_speed_m_s, spec.max_speed_m_s)
@@ -140,6 +148,9 @@ class TrialLoop:
         self.rows: list[tuple] = []
         self._row_k = -1  # the tick of the last row
         self.slips: list[float] = []
+        self.outside: list[float] = []
+        """Per telemetry row: 1 where a wheel bottomed out (outside the soil model), 0 where not, NaN
+        where the engine or the tyre model has no soil."""
         self.cmd_v = self.cmd_w = 0.0
         self.reason: str | None = None
         """None while the trial runs, then "" (success) or its failure reason."""
@@ -176,8 +187,9 @@ class TrialLoop:
         self.cmd_v, self.cmd_w = v_m_s, omega_rad_s
         drive_twist(self.world, v_m_s, omega_rad_s)
         if self._row_k == self.k:
-            row = self.rows[-1]
-            self.rows[-1] = (*row[:17], v_m_s, omega_rad_s, *row[19:])
+            row = list(self.rows[-1])
+            row[_CMD_V], row[_CMD_OMEGA] = v_m_s, omega_rad_s
+            self.rows[-1] = tuple(row)
 
     def record(self, progress_m) -> bool:
         """At a telemetry tick, the row and the failure rules; then the timeout. True when the trial
@@ -191,6 +203,8 @@ class TrialLoop:
             self._row_k = k
             slip = world.wheel_slip()
             self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
+            outside = getattr(world, "wheel_outside_model", lambda: None)()
+            self.outside.append(math.nan if outside is None else float(outside))
             done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
             if done is not None:
                 self.reason = done
@@ -222,7 +236,7 @@ class TrialLoop:
         """The trial's row (:class:`TrialResult`), once it has ended."""
         tel = self.telemetry()
         reason = "timeout" if self.reason is None else self.reason
-        result = _result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
+        result = make_result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
                          1.0 / self.world.sim.telemetry_rate_hz, self.goal)
         if any(map(math.isfinite, self.slips)):  # on soil: slip and sinkage over the moving samples
             moving = metrics.moving_samples(tel["cmd_v_m_s"], tel["vx_m_s"], tel["vy_m_s"])
@@ -230,6 +244,8 @@ class TrialLoop:
             median, p95 = metrics.sinkage_summary(tel["penetration_m"], on_soil)
             result = dataclasses.replace(result, mean_slip=metrics.mean_where(self.slips, on_soil),
                                          sinkage_median_m=median, sinkage_p95_m=p95)
+        if any(map(math.isfinite, self.outside)):  # the fraction of the whole trial, every tick
+            result = dataclasses.replace(result, outside_model_fraction=float(np.nanmean(self.outside)))
         return result
 
     def telemetry(self) -> dict[str, np.ndarray]:
@@ -276,11 +292,7 @@ def drive_mission(
     planner, controller, observation = settings.planner, settings.controller, settings.observation
     border_m = settings.missions.border_m
     sim = world.sim
-    if sim.physics_rate_hz % controller.control_rate_hz:
-        raise InputError(
-            f"ControllerConfig.control_rate_hz = {controller.control_rate_hz} must divide "
-            f"SimConfig.physics_rate_hz = {sim.physics_rate_hz}"
-        )
+    control_steps(sim.physics_rate_hz, controller.control_rate_hz)
     hm = world.hm
     spec = world.spec
     goal = np.asarray(mission.goal_xy_m, dtype=float)

@@ -10,7 +10,7 @@ import sys
 from typing import Callable
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.execution.tasks import TerrainTask, TrialFaulted, remaining_task
+from offroadbench.study.execution.tasks import TIMEOUT_KIND, TerrainTask, TrialFaulted, remaining_task
 
 log = logging.getLogger(__name__)
 
@@ -19,7 +19,7 @@ Handle = Callable[[tuple], None]
 
 
 # ---------------------------------------------------------------------------- local processes
-def _die_with_parent(parent_pid: int) -> None:
+def die_with_parent(parent_pid: int) -> None:
     """Ask Linux to SIGKILL this process when its parent dies; exit if it already has."""
     if sys.platform.startswith("linux"):
         try:
@@ -33,14 +33,14 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(1)
 
 
-def _worker_bootstrap() -> None:
+def worker_bootstrap() -> None:
     """What every worker process does first: import pybullet without its banner."""
     from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
 
 
-def _error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
+def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
     """An ("error", ...) message that survives pickling, whatever the exception."""
     import pickle
 
@@ -86,7 +86,8 @@ def timeout_faults(task: TerrainTask, hung: int | None, finished: set, limit_s: 
     cell, terrain = task.cell.index, task.terrain
     if hung is None:  # the build hung: none of the task's missions can run
         reason = f"the terrain build ran longer than {limit_s:g} s, the per-trial limit{where}"
-        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason)
+        return [TrialFaulted(cell, terrain, k, task.terrain_seed, s, reason, TIMEOUT_KIND)
                 for k, s in task.missions if k not in finished], None
     reason = f"the trial ran longer than {limit_s:g} s, the per-trial limit{where}"
-    return [TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason)], remaining_task(task, hung)
+    return ([TrialFaulted(cell, terrain, hung, task.terrain_seed, seeds[hung], reason, TIMEOUT_KIND)],
+            remaining_task(task, hung))

@@ -27,7 +27,7 @@ from typing import Sequence
 from offroadbench.errors import InputError, StudyError
 from offroadbench.registry import Registry
 from offroadbench.study.execution.tasks import TerrainTask, TrialFn, run_terrain
-from offroadbench.study.execution.dask import DaskExecutor, TrialTimeout, _dask_task  # noqa: F401  (_dask_task re-exported)
+from offroadbench.study.execution.dask import DaskExecutor, TrialTimeout, dask_task  # noqa: F401  (dask_task re-exported)
 from offroadbench.study.execution.common import Handle, MAX_TRIAL_TIMEOUT_S, check_trial_timeout
 from offroadbench.study.execution.local import LocalExecutor
 

@@ -13,7 +13,7 @@ from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
 from offroadbench.study.execution.tasks import TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, run_terrain
-from offroadbench.study.execution.common import (Handle, _die_with_parent, _error_message, _worker_bootstrap,
+from offroadbench.study.execution.common import (Handle, die_with_parent, error_message, worker_bootstrap,
                                                 check_trial_timeout, task_failure, timeout_faults)
 
 log = logging.getLogger(__name__)
@@ -22,10 +22,10 @@ log = logging.getLogger(__name__)
 def _worker(task_q, conn, trial_fn: TrialFn | None, parent_pid: int) -> None:
     """A worker process: pull tasks, send every message through its own pipe ``conn`` (a worker
     killed for a hung trial takes only its own pipe with it)."""
-    _die_with_parent(parent_pid)
+    die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the coordinator's SIGTERM handler is not the worker's
-    _worker_bootstrap()
+    worker_bootstrap()
     while True:
         task = task_q.get()
         if task is None:
@@ -38,7 +38,7 @@ def _worker(task_q, conn, trial_fn: TrialFn | None, parent_pid: int) -> None:
                     os._exit(1)
                 conn.send(msg)
         except BaseException as exc:  # report and stop: the coordinator decides
-            conn.send(_error_message(key, exc, traceback.format_exc()))
+            conn.send(error_message(key, exc, traceback.format_exc()))
             return
         conn.send(("done", key))
 
@@ -88,8 +88,9 @@ class LocalExecutor:
             return
         ctx = mp.get_context("fork")
         task_q = ctx.Queue()
-        for task in tasks:
-            task_q.put(task)
+        # at once, before its feeder thread exists: a stop may leave that thread blocked writing tasks
+        # to workers that are gone, and the interpreter must not wait for it at exit (issue 43)
+        task_q.cancel_join_thread()
         procs: dict = {}  # reading end of a worker's pipe -> its process
         serial = iter(range(10**9))
         by_key = {(t.cell.index, t.terrain): t for t in tasks}
@@ -150,7 +151,7 @@ class LocalExecutor:
                     return
             del running[key]
             hung = r.hung_mission()
-            log.warning("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
+            log.info("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
                         key[0], key[1], "the terrain build" if hung is None else f"mission {hung}",
                         self.trial_timeout_s)
             if reader is not None and reader in procs:
@@ -165,10 +166,12 @@ class LocalExecutor:
                 state["pending"] -= 1
             start()
 
-        for _ in range(min(self.workers, len(tasks))):
-            start()
         finished = False
         try:
+            for task in tasks:
+                task_q.put(task)
+            for _ in range(min(self.workers, len(tasks))):
+                start()
             while state["pending"]:
                 if self.trial_timeout_s is not None:
                     now = time.monotonic()
@@ -192,5 +195,4 @@ class LocalExecutor:
                     p.terminate()
                     p.join(timeout=5)
                 stop(reader)
-            task_q.cancel_join_thread()
             task_q.close()

@@ -53,7 +53,7 @@ from offroadbench.navigation.problem import PlannerRefusal
 from offroadbench.sim.trial.pipeline import PreparedTerrain, TrialSettings, drive_terrain, prepare_terrain
 from offroadbench.study.spec.config import CellPlan
 
-__all__ = ["NO_MISSION_FAULT", "REFUSED_FAULT", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
+__all__ = ["NO_MISSION_FAULT", "NO_MISSION_KIND", "REFUSED_FAULT", "REFUSED_KIND", "TIMEOUT_KIND", "TRIAL_FAULT_KIND", "prepare_cell", "unexplained_variance", "TerrainTask", "TerrainBuilt", "TrialDone", "TrialFaulted", "TrialFn",
            "remaining_task", "run_terrain", "collect_terrain", "keeps_telemetry",
            "Replay", "replay_trial"]
 
@@ -61,6 +61,15 @@ __all__ = ["NO_MISSION_FAULT", "REFUSED_FAULT", "prepare_cell", "unexplained_var
 NO_MISSION_FAULT = "no mission can be drawn on this terrain: "
 #: the reason of a trial whose planner or policy refuses the cell's vehicle (PlannerRefusal)
 REFUSED_FAULT = "the planner refuses this vehicle: "
+
+#: :attr:`TrialFaulted.kind` of a trial on a terrain that admits no mission (NoMissionError)
+NO_MISSION_KIND = "no_mission"
+#: ... of a trial whose planner or policy refuses the cell's vehicle (PlannerRefusal)
+REFUSED_KIND = "refused"
+#: ... of a trial (or its terrain build) past the per-trial wall-clock limit (the executors)
+TIMEOUT_KIND = "timeout"
+#: ... of a trial that gave no outcome (offroadbench.errors.TrialFault: thrown while it settled)
+TRIAL_FAULT_KIND = "trial_fault"
 
 #: ``trial_fn(prepared, settings) -> iterator of TrialRecords or TrialResult.as_row() dicts, one per
 #: prepared mission, in order`` (see :func:`offroadbench.sim.trial.pipeline.drive_terrain`)
@@ -126,6 +135,10 @@ class TrialFaulted:
     mission_seed: int
     reason: str
     """One line: why (e.g. "ran longer than 60 s, the per-trial limit")."""
+    kind: str = TRIAL_FAULT_KIND
+    """What kind of fault: :data:`NO_MISSION_KIND`, :data:`REFUSED_KIND`, :data:`TIMEOUT_KIND` or
+    :data:`TRIAL_FAULT_KIND` (repeated faults are summarised per kind; a search stores a trial on a
+    terrain without a mission as a row of its own)."""
 
     @property
     def key(self) -> tuple[int, int]:
@@ -185,7 +198,7 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
         # study goes on (the design: a terrain is never redrawn, so no seed is picked after the fact)
         reason = NO_MISSION_FAULT + " ".join(str(exc).split())
         for k, seed in task.missions:
-            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason)
+            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason, NO_MISSION_KIND)
         return
     stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
     stats["build_s"] = time.perf_counter() - t0
@@ -222,7 +235,8 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
             # pairs): every pending trial is a fault naming the refusal, and the study goes on
             reason = REFUSED_FAULT + " ".join(str(exc).split())
             for mission in pending:
-                yield TrialFaulted(cell.index, task.terrain, mission.index, task.terrain_seed, seeds[mission.index], reason)
+                yield TrialFaulted(cell.index, task.terrain, mission.index, task.terrain_seed, seeds[mission.index], reason,
+                                   REFUSED_KIND)
             return
 
 
@@ -278,17 +292,15 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
 
     with Store(run_dir) as store:
         meta = store.meta()
-        hit = store.con.execute("SELECT terrain_seed, mission_seed, row FROM trials WHERE cell=? AND terrain=? AND mission=?",
-                                (cell, terrain, mission)).fetchone()
+        hit = store.trial(cell, terrain, mission)
     if hit is None:
         raise InputError(f"{run_dir}: no stored trial cell {cell}, terrain {terrain}, mission {mission} "
                          f"(cells 0-{len(meta.get('cells', [])) - 1}; see `study export` for the stored keys)")
-    tseed, mseed, text = hit
+    tseed, mseed, stored = hit
     plan = CellPlan.from_meta(meta, cell)
     settings = plan.trial_settings
     prepared, _ = prepare_cell(plan, tseed, [(mission, mseed)])
     rec = next(iter(drive_terrain(prepared, settings)))
-    stored = json.loads(text)
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too
     identical = set(new) == set(stored) and all(_same(new[k], stored[k]) for k in new)
     return Replay(record=rec, stored=stored, identical=identical, prepared=prepared, cell=plan)

@@ -79,8 +79,11 @@ def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
     def source(key: str, terrain_value: Any) -> str:
         return "study" if raw.get(key) is not None else "terrain" if terrain_value is not None else "default"
 
+    table = (info.get("recipe") or {}).get("soil") or {}
+    mapped = raw.get("soil") is None and bool(table.get("regions") or table.get("raster"))  # a soil map applies
     return {"soil": getattr(sim, "soil", None), "soil_source": source("soil", soil),
-            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity)}
+            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity),
+            "soil_map": mapped}
 
 
 @functools.lru_cache(maxsize=None)
@@ -119,6 +122,30 @@ def _stuck_window_text(rules: Any, secs: dict[str, Any]) -> str:
             f"{timeout:.3g} s timeout of a {_fmt(missions.length_m)} m mission)")
 
 
+#: the caveat beside soft-soil results in a gravity other than Earth's
+SOFT_SOIL_CAVEAT = ("not validated in this gravity: the Wong-Reece model and the soil's parameters were measured in "
+                    "1 g (on Earth soils or lunar simulants; the soil file gives its sources)")
+
+
+def _body_note(meta: dict[str, Any], field: str, sim: Any, note: str) -> str:
+    """The note of the gravity or soil row: the terrain's own body named as such (not "not the
+    default"), and soft soil in a gravity other than Earth's given its caveat."""
+    from offroadbench.bodies import terrain_gravity_and_soil
+
+    set_in_study = field in meta["study"].get("settings", {}).get("sim", {})
+    recipe = meta["cells"][0].get("recipe") if meta.get("cells") else None
+    gravity, _ = terrain_gravity_and_soil(recipe)
+    earth = _default("sim").gravity_m_s2
+    if field == "gravity_m_s2":
+        if not set_in_study and gravity is not None and gravity == sim.gravity_m_s2 and gravity != earth:
+            body = recipe.get("body", {}).get("name", "its [body]")
+            return f"the terrain's own: {body} (a recipe's [body]; Earth's is {_fmt(earth)})"
+        return note
+    if getattr(sim, "tyre_model", "") == "terramechanics" and sim.gravity_m_s2 != earth:
+        return "; ".join(n for n in (note, SOFT_SOIL_CAVEAT) if n)
+    return note
+
+
 def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
     """One row per setting: ``setting``, ``value`` (of the first cell, or ``grid axis``) and
     ``note`` (``not the default (D)`` where it differs from the package default)."""
@@ -155,6 +182,8 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
             continue  # the soil acts only through the terramechanics tyres
         if dataclasses.is_dataclass(cfg) and hasattr(cfg, field):
             add(label, f"{table}.{field}", getattr(cfg, field), getattr(_default(table), field))
+            if (table, field) in (("sim", "gravity_m_s2"), ("sim", "soil")) and f"{table}.{field}" not in axes:
+                rows[-1]["note"] = _body_note(meta, field, cfg, rows[-1]["note"])
     rules = secs["rules"]
     if dataclasses.is_dataclass(rules):
         default = _default("rules")

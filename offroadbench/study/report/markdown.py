@@ -50,13 +50,13 @@ from offroadbench.plots.study import fig_class_areas, fig_metrics, fig_missions,
 from offroadbench.study.stats import terrain as stats
 from offroadbench.study.report.format import markdown_table
 from offroadbench.study.report.paper import (
-    _axis_effects_section,
-    _confirmatory_section,
-    _mark_exploratory,
-    _reference_sections,
-    _terrain_changes_section,
+    axis_effects_section,
+    confirmatory_section,
+    mark_exploratory,
+    reference_sections,
+    terrain_changes_section,
 )
-from offroadbench.study.report.planners import _numeric, planner_sections
+from offroadbench.study.report.planners import all_numeric, planner_sections
 from offroadbench.study.store.results import load, load_meta, load_terrains
 
 __all__ = ["Report", "build_report", "markdown_table"]
@@ -190,6 +190,19 @@ def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> lis
             markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
 
 
+
+def _outside_model_line(trials: pd.DataFrame) -> str:
+    """One line: how many soil trials had a wheel outside the soil model (bottomed out) and for what
+    share of their time (TrialResult.outside_model_fraction; runs from before the column: not recorded)."""
+    frac = trials["outside_model_fraction"].astype(float) if "outside_model_fraction" in trials else pd.Series([], dtype=float)
+    frac = frac[np.isfinite(frac)]
+    if frac.empty:
+        return "Outside the soil model (a wheel bottomed out): not recorded in this run."
+    some = frac[frac > 0.0]
+    return (f"Outside the soil model (a wheel bottomed out at the tables' sinkage cap, its forces not the "
+            f"Wong-Reece model's): {len(some)} of {len(frac)} soil trials"
+            + (f", for {100 * float(some.median()):.1f} % of their time (median)." if len(some) else "."))
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -235,9 +248,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     tables["held_fixed.csv"] = fixed
     faults = _faults_section(run_dir, tables)
     n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(run_dir)])
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
+        if "engine_verdicts" in confirm.attrs:
+            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
     lines = [
         f"# {report_title(meta)}",
         "",
@@ -251,7 +266,10 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
         + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
-        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
+        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']} "
+        + ("(**blind**: the hash of the `[analysis]` plan and the design, so no terrain of this study existed "
+           "before its plan was fixed)" if study.get("blind_seed") else "(chosen by hand: **not blind**)")
+        + f"; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
         f"- code: {_provenance(meta)}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",
@@ -289,7 +307,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(tabs["metrics"]),
         "",
     ]
-    if len(labels) > 1 and len(study["grid"]) == 1 and _numeric(study["grid"][0]["values"]):
+    if len(labels) > 1 and len(study["grid"]) == 1 and all_numeric(study["grid"][0]["values"]):
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
         changes = stats.median_changes(summary, names)
@@ -308,18 +326,18 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
                   "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
                   markdown_table(changes), ""]
-        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(trials, terrains, labels, names, study)
+        terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(trials, terrains, labels, names, study)
         lines += terrain_lines
-    elif len(labels) > 1 and study["grid"] and all(_numeric(a["values"]) for a in study["grid"]):
+    elif len(labels) > 1 and study["grid"] and all(all_numeric(a["values"]) for a in study["grid"]):
         # several numeric axes (a sensitivity study): every cell against the first
         names = ["success_rate_pct", *stats.METRICS]
         first = min(labels)
-        terrain_lines, tables["terrain_changes.csv"] = _terrain_changes_section(
+        terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(
             trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
         lines += terrain_lines
     elif len(labels) > 1 and "planner.name" not in meta["columns"] and bool(study.get("paired_terrains", True)):
         # a grid with a categorical axis (engine, tyre model): each axis's effect within the others
-        terrain_lines, tables["terrain_changes.csv"] = _axis_effects_section(trials, terrains, labels, meta)
+        terrain_lines, tables["terrain_changes.csv"] = axis_effects_section(trials, terrains, labels, meta)
         lines += terrain_lines
     lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
     soil = stats.soil_boxes(trials, labels)
@@ -338,7 +356,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
                   "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
                   "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
-                  markdown_table(pd.DataFrame(rows)), ""]
+                  markdown_table(pd.DataFrame(rows)), "", _outside_model_line(trials), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",
@@ -351,11 +369,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = _reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
+    ref_lines, ref_tables = reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
                                                 tables.get("median_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
-    lines = _mark_exploratory(lines)
+    lines = mark_exploratory(lines)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
 
 

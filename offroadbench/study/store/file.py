@@ -30,7 +30,7 @@ _TABLES = ("meta", "terrains", "trials", "runs")
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
-_SCHEMA = """
+SCHEMA_SQL = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS terrains (
     cell INTEGER NOT NULL, terrain INTEGER NOT NULL, terrain_seed INTEGER NOT NULL,
@@ -51,11 +51,19 @@ CREATE TABLE IF NOT EXISTS faults (
 
 
 #: the faults table (issue 30), made by a run in a store that lacks it (older stores are read without it)
-_FAULTS_SQL = _SCHEMA[_SCHEMA.index("CREATE TABLE IF NOT EXISTS faults"):]
+FAULTS_SQL = SCHEMA_SQL[SCHEMA_SQL.index("CREATE TABLE IF NOT EXISTS faults"):]
+
+#: the table a failure search adds to a study's store (offroadbench.study.store.search)
+SEARCH_TABLE = """
+CREATE TABLE IF NOT EXISTS search_trials (
+    cell INTEGER PRIMARY KEY, grp INTEGER NOT NULL, method TEXT NOT NULL, batch INTEGER NOT NULL,
+    slot INTEGER NOT NULL, stage TEXT NOT NULL, x TEXT NOT NULL, z TEXT NOT NULL, log_w REAL,
+    UNIQUE (grp, method, batch, slot));
+"""
 
 
 #: columns added by schema 2, per table: (name, SQL type)
-_SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
+SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
                     "runs": (("platform", "TEXT"), ("error", "TEXT"))}
 
 
@@ -63,7 +71,7 @@ def store_path(run_dir: str | Path) -> Path:
     return Path(run_dir) / STORE_NAME
 
 
-def _nearly_full(directory: Path, margin: int = 1 << 20) -> bool:
+def nearly_full(directory: Path, margin: int = 1 << 20) -> bool:
     """Whether the device of ``directory`` has less than ``margin`` bytes free (1 MiB)."""
     try:
         st = os.statvfs(directory)
@@ -90,7 +98,7 @@ def remove_stale_temp_files(run_dir: str | Path) -> list[Path]:
     return removed
 
 
-def _check_existing(path: Path) -> None:
+def check_existing(path: Path) -> None:
     """Refuse, without writing to it, a ``study.sqlite`` that is not a readable store of ours.
 
     The schema version and application id are read from the file header (SQLite file format:

@@ -15,7 +15,7 @@ from offroadbench.errors import InputError
 LOCK_NAME = "study.lock"
 
 
-def _lock_holder_alive(run_dir: Path) -> bool:
+def lock_holder_alive(run_dir: Path) -> bool:
     """Whether the run directory's lock file names a live process (a run removes the file as it
     ends; a killed one leaves it behind with its dead pid)."""
     try:
@@ -31,7 +31,7 @@ def _lock_holder_alive(run_dir: Path) -> bool:
     return True
 
 
-def _reason(exc: OSError) -> str:
+def error_reason(exc: OSError) -> str:
     if exc.errno == errno.ENOSPC:
         return "no space left on the device"
     return exc.strerror or str(exc)
@@ -67,7 +67,7 @@ class RunLock:
             except FileNotFoundError:  # the directory was removed by a run that failed meanwhile
                 continue
             except OSError as exc:
-                raise InputError(f"{self.path}: cannot create the run directory's lock file ({_reason(exc)})") from None
+                raise InputError(f"{self.path}: cannot create the run directory's lock file ({error_reason(exc)})") from None
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
@@ -88,7 +88,7 @@ class RunLock:
             except OSError as exc:  # a full disk: leave no lock file behind
                 self.path.unlink(missing_ok=True)
                 os.close(fd)
-                raise InputError(f"{self.path}: cannot write the run directory's lock file ({_reason(exc)})") from None
+                raise InputError(f"{self.path}: cannot write the run directory's lock file ({error_reason(exc)})") from None
             self.fd = fd
             return self
         raise RunDirLocked(f"{self.run_dir}: could not lock the run directory (other runs keep starting and stopping)")

@@ -55,9 +55,10 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, _lock_holder_alive, _reason
-from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, _FAULTS_SQL, _SCHEMA,
-                                           _SCHEMA2_COLUMNS, _check_existing, _nearly_full, remove_stale_temp_files,
+from offroadbench.study.store.integrity import TRUSTED_SCHEMA_OFF, check_store
+from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, lock_holder_alive, error_reason
+from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, FAULTS_SQL, SCHEMA_SQL,
+                                           SCHEMA2_COLUMNS, check_existing, nearly_full, remove_stale_temp_files,
                                            remove_store, store_path)
 
 log = logging.getLogger(__name__)
@@ -95,11 +96,13 @@ class Store:
             self.run_dir.mkdir(parents=True, exist_ok=True)
             self.created = _create_store(path)
             if not self.created:  # another process linked its store in first
-                _check_existing(path)
+                check_existing(path)
         else:
-            _check_existing(path)
+            check_existing(path)
+        check_store(path)  # data only, every value decodes (issue 44); read-only, before any write
         try:
             self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+            self.con.execute(TRUSTED_SCHEMA_OFF)
             self.con.execute("PRAGMA synchronous=NORMAL")
             if create:
                 self._migrate()
@@ -111,7 +114,7 @@ class Store:
                     with contextlib.suppress(sqlite3.Error):
                         con.close()
                 remove_store(self.run_dir)
-                why = "no space left on the device" if _nearly_full(self.run_dir) else str(exc)
+                why = "no space left on the device" if nearly_full(self.run_dir) else str(exc)
                 raise InputError(f"{path}: cannot create the study store ({why})") from None
             raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
 
@@ -122,7 +125,7 @@ class Store:
             return
         self.con.execute("BEGIN IMMEDIATE")
         try:
-            for table, columns in _SCHEMA2_COLUMNS.items():
+            for table, columns in SCHEMA2_COLUMNS.items():
                 have = {r[1] for r in self.con.execute(f"PRAGMA table_info({table})")}
                 for name, kind in columns:
                     if name not in have:
@@ -219,6 +222,17 @@ class Store:
         self._write("INSERT OR IGNORE INTO terrains (cell, terrain, terrain_seed, stats) VALUES (?, ?, ?, ?)",
                     (cell, terrain, terrain_seed, json.dumps(dict(stats), sort_keys=True)))
 
+    @contextlib.contextmanager
+    def transaction(self):
+        """``with store.transaction() as con:`` the statements run on ``con`` commit together, or none
+        does (rolled back on any error; a full disk is an OSError naming the store)."""
+        self.con.execute("BEGIN IMMEDIATE")
+        try:
+            yield self.con
+            self.con.execute("COMMIT")
+        except BaseException as exc:
+            _rollback(self.con, exc, self.path)
+
     def _write(self, sql: str, params: tuple = ()) -> sqlite3.Cursor:
         """One statement in its own transaction; a full disk is an OSError naming the store."""
         try:
@@ -258,6 +272,12 @@ class Store:
                 log.warning("trial (%d, %d, %d) ran twice with different results", cell, terrain, mission)
             return False
         return True
+
+    def trial(self, cell: int, terrain: int, mission: int) -> tuple[int, int, dict[str, Any]] | None:
+        """(terrain seed, mission seed, row) of one stored trial; None if it is not stored."""
+        hit = self.con.execute("SELECT terrain_seed, mission_seed, row FROM trials WHERE cell=? AND terrain=? AND "
+                               "mission=?", (cell, terrain, mission)).fetchone()
+        return None if hit is None else (hit[0], hit[1], json.loads(hit[2]))
 
     def has_trial(self, cell: int, terrain: int, mission: int) -> bool:
         return self.con.execute("SELECT 1 FROM trials WHERE cell=? AND terrain=? AND mission=?",
@@ -346,14 +366,14 @@ class Store:
             r["platform"] = json.loads(r["platform"]) if r.get("platform") else None
         for i, r in enumerate(out):
             if r.get("status") == "running" and (i < len(out) - 1 or (r.get("host") == platform.node()
-                                                                     and not _lock_holder_alive(self.run_dir))):
+                                                                     and not lock_holder_alive(self.run_dir))):
                 r["status"] = "killed"
         return out
 
     # ------------------------------------------------------------------ faults (issue 30)
     def ensure_faults_table(self) -> None:
         """Add the ``faults`` table to a store made before it existed (a run does this)."""
-        self._write(_FAULTS_SQL.strip().rstrip(";"))
+        self._write(FAULTS_SQL.strip().rstrip(";"))
 
     def add_fault(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, reason: str,
                   run_id: int | None = None) -> bool:
@@ -423,7 +443,7 @@ def _create_store(path: Path) -> bool:
             con.execute(f"PRAGMA application_id={APPLICATION_ID}")
             con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
             con.execute("PRAGMA journal_mode=WAL")  # kept in the file header
-            con.executescript(_SCHEMA)
+            con.executescript(SCHEMA_SQL)
         finally:
             con.close()  # checkpoints and removes the temporary -wal/-shm
         os.chmod(tmp, 0o666 & ~_umask())
@@ -433,7 +453,7 @@ def _create_store(path: Path) -> bool:
             return False
         return True
     except OSError as exc:
-        raise InputError(f"{path}: cannot create the study store ({_reason(exc)})") from None
+        raise InputError(f"{path}: cannot create the study store ({error_reason(exc)})") from None
     except sqlite3.DatabaseError as exc:
         if "full" in str(exc).lower():
             raise InputError(f"{path}: cannot create the study store (no space left on the device)") from None

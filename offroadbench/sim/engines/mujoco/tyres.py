@@ -13,7 +13,9 @@ class MuJoCoTyres:
 
     def _step_compiled(self) -> None:
         """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
-        sequence, the contacts read and the forces applied outside the interpreter."""
+        sequence, the contacts read and the forces applied outside the interpreter; where MuJoCo's
+        struct layout checks out, the whole trial step, MuJoCo's calls included, in one compiled call
+        (``_tyres_c.step_trial``)."""
         m, d = self.model, self.data
         tc, f, ist = self._fast
         each = self.contact.tyres_each_substep
@@ -23,7 +25,14 @@ class MuJoCoTyres:
         if pushed is not None:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
-        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        qvel, xmat, xipos, xfrc = self._step_arrays
+        whole = self._fast_step
+        if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
+            tc.STEP(whole[0], whole[1], whole[2], whole[3], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
+            if pushed is not None:
+                self._base_force = None
+                f[push + 3] = 0.0
+            return
         step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.APPLY, tc.READ
         for k in range(self.substeps):
             if each or k == 0:

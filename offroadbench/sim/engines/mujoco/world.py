@@ -23,7 +23,13 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
-  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin).
+  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
+  the compiled coulomb loop a whole trial step is one compiled call (``_tyres_c.step_trial``: MuJoCo's
+  ``mj_step1`` / ``mj_step2`` called through their C addresses, no Python between them; the same bits).
+- **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
+  the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
+  MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
+  the box's early-out alone (``exact``: MuJoCo's own contacts to the bit); or MuJoCo's own (``mujoco``).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
@@ -85,6 +91,37 @@ def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
     return module
 
 
+def _whole_step(model, data):
+    """What the compiled tyre loop needs to run a whole trial step in one call
+    (offroadbench.sim.engines.mujoco._tyres_c.step_trial): the model's and data's addresses, MuJoCo's
+    ``mj_step``, ``mj_step1``, ``mj_step2`` and where the contacts are; None where MuJoCo's layout does
+    not check out (offroadbench.sim.engines.mujoco._layout: the loop then runs its kernels between
+    the bindings' MuJoCo calls)."""
+    from offroadbench.sim.engines.mujoco import _layout
+
+    lay = _layout.step_layout()
+    if lay is None:
+        return None
+    return model._address, data._address, _layout.step_functions(), lay.as_tuple()
+
+
+def _hfield_functions(mode: str, model, data):
+    """The world's height-field collision functions for ``[sim.mujoco] hfield_collision = mode``
+    (offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision), or None for MuJoCo's own: mode
+    ``mujoco``, or numba missing or unable to build them (logged)."""
+    if mode == "mujoco":
+        return None
+    try:
+        from offroadbench.sim.engines.mujoco import _hfield_c
+    except ImportError:
+        log.warning("MuJoCoConfig.hfield_collision = %r needs numba (pip install 'offroadbench[fast]'): "
+                    "MuJoCo's own height-field collision", mode)
+        return None
+    except RuntimeError as exc:  # numba installed but unable to compile or cache
+        log.warning("the compiled height-field collision is unavailable (%s): MuJoCo's own", exc)
+        return None
+    return _hfield_c.HFieldCollision.for_world(mode, model, data)
+
 
 # ---------------------------------------------------------------------------- the world
 class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
@@ -109,10 +146,12 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._write_heights()
         self.data = mujoco.MjData(self.model)
         self._index()
+        self._hfield = _hfield_functions(contact.hfield_collision, self.model, self.data)
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        self._fast_step = None  # (mjModel and mjData addresses, MuJoCo's step functions, StepLayout tuple)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -129,6 +168,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
+            self._fast_step = _whole_step(self.model, d)
+            self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         if sim.tyre_model == "terramechanics":
@@ -137,7 +178,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             n = len(self._wheel_bodies)
             setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
-            sc = self._loop_kernels(contact.tyre_loop, "_soil_c")
+            # the compiled loop holds wheel tables: a track's belt segments run in the Python loop
+            sc = None if self.spec.track_contact_length_m else self._loop_kernels(contact.tyre_loop, "_soil_c")
             if sc is not None:
                 f, ist, tab = sc.new_state(self._soil, hm, self._wheel_bodies, self._wheel_qvel, self._wheel_axis,
                                            self._chassis)
@@ -174,11 +216,18 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _write_heights(self) -> None:
+    def _write_heights(self, block_rows: int = 64) -> None:
+        """The map's heights into the model's height field, normalised to its relief (float32), in
+        blocks of ``block_rows`` rows (elementwise, so the same bits as at once, without a float64
+        copy of the whole map: offroadbench.memory.MUJOCO_BYTES_PER_CELL)."""
         hm = self.hm
-        relief = hm.relief_m
-        data = (hm.z - hm.z_min_m) / relief if relief > 0 else np.zeros_like(hm.z)
-        self.model.hfield_data[:] = data.astype(np.float32).ravel()
+        relief, z_min = hm.relief_m, hm.z_min_m
+        out = self.model.hfield_data
+        cols = hm.cols
+        for r0 in range(0, hm.rows, block_rows):
+            z = hm.z[r0:r0 + block_rows]
+            block = (z - z_min) / relief if relief > 0 else np.zeros_like(z)
+            out[r0 * cols:r0 * cols + block.size] = block.astype(np.float32).ravel()
 
     def _index(self) -> None:
         m = self.model
@@ -281,7 +330,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         bottom = base[2] - min(lows)
         d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
                                    self.sim.spawn_clearance_m)
-        mujoco.mj_forward(m, d)
+        self._forward()
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0
         if self._tyres is not None:
@@ -316,9 +365,34 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         n = len(self._wheel_bodies)
         self.data.ctrl[n : n + len(angles_rad)] = angles_rad
 
+    def _forward(self) -> None:
+        """``mj_forward`` with this world's height-field collision functions."""
+        hf = self._hfield
+        if hf is None:
+            mujoco.mj_forward(self.model, self.data)
+            return
+        hf.install()
+        try:
+            mujoco.mj_forward(self.model, self.data)
+        finally:
+            hf.restore()
+
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
-        ``xfrc_applied``, ``mj_step2``, then the contacts."""
+        ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
+        functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
+        hf = self._hfield
+        if hf is None:
+            self._advance()
+            return
+        hf.install()
+        try:
+            self._advance()
+        finally:
+            hf.restore()
+
+    def _advance(self) -> None:
+        """:meth:`step`'s MuJoCo calls and force loops."""
         if self._fast is not None:
             self._step_compiled()
             return
@@ -375,6 +449,23 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         if self._soil is not None:
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
+
+    def use_soil_map(self, soil_map) -> None:
+        """Each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap), read at its contact
+        every step: the Python soil loop (the compiled loop holds one soil's tables)."""
+        if self._soil is None:
+            return
+        n = len(self._wheel_bodies)
+        setup = soil_setup(self.spec, self.sim.soil, self._mass_kg, n, self.sim.gravity_m_s2, self.dt_s, soil_map)
+        self._soil = setup.wheels(n, self.hm, self.dt_s, self._dt_mj if self.contact.tyres_each_substep else self.dt_s)
+        self._fast_soil = None
+
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
+        without the ``terramechanics`` tyre model."""
+        if self._fast_soil is not None:
+            return self._fast_soil[0].outside(self._fast_soil[1], self._fast_soil[2], len(self._loads))
+        return None if self._soil is None else self._soil.outside_model()
 
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),

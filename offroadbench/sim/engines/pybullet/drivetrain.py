@@ -34,7 +34,7 @@ bear on it.
 
 from __future__ import annotations
 
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 __all__ = ["Flywheels", "apply_springs", "attach_flywheels", "belt_motor_forces", "couple_belts"]
 

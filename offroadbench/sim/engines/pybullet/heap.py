@@ -12,7 +12,7 @@ from contextlib import contextmanager
 import numpy as np
 
 
-def _empty_heights(n: int, z_min_m: float, z_max_m: float) -> np.ndarray:
+def empty_heights(n: int, z_min_m: float, z_max_m: float) -> np.ndarray:
     """``n`` heights for an 'empty' heightfield with the height range (z_min_m, z_max_m).
 
     Bullet scans the data for its min and max with ``a < b ? a : b``, which a NaN restarts, so
@@ -54,7 +54,7 @@ def _glibc():
 
 
 @contextmanager
-def _lean_heap():
+def lean_heap():
     """Around the heightfield replace: hand the heap's free memory back to the OS, and map every
     large block on its own so that the replace's growing arrays leave nothing behind in the heap.
 

@@ -7,7 +7,7 @@ wheel (revolute joint) of one multibody, the soil acting through the shared forc
 
 from __future__ import annotations
 
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.sim.engines.pybullet.soil import SoilTyres
 from offroadbench.sim.tyre_laws.soil_wheels import SoilWheels

@@ -55,7 +55,7 @@ switched off and Wong-Reece soil forces replace both the normal contact and the 
 
 from __future__ import annotations
 
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.sim.tyre_laws.coulomb import CoulombBristles
 

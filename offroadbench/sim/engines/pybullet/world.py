@@ -24,7 +24,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
 - Building a heightfield from data walks every triangle into a render mesh that the shape keeps
   (about 2-3 s and 600 MB for 1009^2, even in DIRECT mode). The walk skips triangles outside the
   shape's height range, so the shape is first created empty with the map's height range
-  (:func:`_empty_heights`: almost no walk), and the heights are then written in place with
+  (:func:`empty_heights`: almost no walk), and the heights are then written in place with
   ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept). Replacing
   never updates a shape's height range, so the range is set at creation. The shape, and so
   every result, is bit for bit the one built from the data directly.
@@ -36,7 +36,7 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   and 3 int indices to arrays that double in capacity, and Bullet's allocator zero-fills every
   allocation (capacity, not size, is resident); then one position and one normal ``btVector3``
   (32 B, double precision) per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the
-  heights. :func:`_lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
+  heights. :func:`lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
 - So the map is built as tiles (``SimConfig.heightfield_tile_cells``, :func:`tile_spans`), one
   heightfield body each, written one after the other: the transient is one tile's (~45 MiB for
   the default 256-cell tiles of a 1009^2 map: peak RSS of a build 0.24 GB instead of 0.88 GB, in
@@ -71,7 +71,7 @@ import math
 import time
 
 import numpy as np
-import pybullet as pb
+from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
@@ -82,7 +82,7 @@ from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.engines.pybullet.heap import _empty_heights, _lean_heap
+from offroadbench.sim.engines.pybullet.heap import empty_heights, lean_heap
 
 __all__ = ["World"]
 
@@ -171,14 +171,16 @@ class World:
         for r0, r1 in rows:
             for c0, c1 in cols:
                 z = hm.z[r0 : r1 + 1, c0 : c1 + 1]
-                shape = self._heightfield(_empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
-                with _lean_heap():
+                shape = self._heightfield(empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
+                with lean_heap():
                     self._heightfield(z.ravel(), z.shape, replace=shape)
                 centre = [(c0 + c1) / 2.0 * hm.cell_size_m, (r0 + r1) / 2.0 * hm.cell_size_m, z_centre]
                 body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=cid)
                 pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=cid)
                 lo, hi = pb.getAABB(body, physicsClientId=cid)
-                if abs(lo[2] - hm.z_min_m) > 1e-5 or abs(hi[2] - hm.z_max_m) > 1e-5:  # pragma: no cover - a pybullet change
+                # Bullet keeps the range in float32: a few ulps of the heights (2e-5 m at a DEM's 320 m)
+                tol_m = max(1e-5, 8 * float(np.finfo(np.float32).eps) * max(abs(hm.z_min_m), abs(hm.z_max_m)))
+                if abs(lo[2] - hm.z_min_m) > tol_m or abs(hi[2] - hm.z_max_m) > tol_m:  # pragma: no cover - a pybullet change
                     raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
                                        f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
                 bodies.append(body)
@@ -468,6 +470,14 @@ class World:
                 worst = -c[8]
         return worst
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model); None without soil."""
+        return self._tyres.core.outside_model() if self.sim.tyre_model == "terramechanics" else None
+
+    def use_soil_map(self, soil_map) -> None:
+        """From the next spawn, each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap)."""
+        self.soil_map, self._soil_setup = soil_map, None
+
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
@@ -489,5 +499,3 @@ class World:
             if hit[0] in self._terrain_set:
                 return float(hit[3][2])
         return float("nan")
-
-

@@ -1,0 +1,126 @@
+"""Stopping well (issue 43, Deliver 4): Ctrl-C ends ``study run`` within seconds every time with
+one line saying what was saved and how to resume; a run whose every trial faulted exits 1 with
+one line; faults are summarised per kind, not a line each."""
+
+from __future__ import annotations
+
+import random
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from offroadbench.study import load_meta
+from offroadbench.study.store.store import LOCK_NAME, Store
+
+CLI = [sys.executable, "-c", "import sys; from offroadbench.cli import main; sys.exit(main())"]
+
+
+def _run(study, out, *extra) -> subprocess.Popen:
+    return subprocess.Popen([*CLI, "study", "run", str(study), "--out", str(out), "--workers", "2", "--no-report",
+                             *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.timeout(600)
+def test_ctrl_c_at_random_moments_ends_the_run_within_10_s_with_one_line(tmp_path, write_tiny_study, stored_trials):
+    """SIGINT at a random moment of the run (from the lock's taking to a few seconds into the
+    trials), several times on the same run directory: every time the process is gone within 10 s,
+    says one line (the trials saved, how to resume) and records the session as interrupted."""
+    study = write_tiny_study(tmp_path, name="ctrl-c", root_seed=5, terrains=3, missions=4)  # 24 trials
+    out = tmp_path / "run"
+    rng = random.Random(43)
+    interrupted = 0
+    for attempt in range(6):
+        proc = _run(study, out)
+        t0 = time.monotonic()
+        while not (out / LOCK_NAME).exists() and proc.poll() is None and time.monotonic() - t0 < 120:
+            time.sleep(0.01)
+        time.sleep(rng.uniform(0.0, 3.0))
+        proc.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        try:
+            stdout, err = proc.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+            raise AssertionError(f"try {attempt}: still running 10 s after SIGINT") from None
+        assert time.monotonic() - sent < 10
+        if proc.returncode == 0:  # it finished before the signal came
+            assert "24 / 24 trials" in stdout
+            break
+        assert proc.returncode == 130, err
+        lines = err.splitlines()
+        assert len(lines) == 1 and lines[0].startswith("offroadbench: interrupted; "), err
+        assert "run the same command again to" in lines[0]
+        if stored_trials(out):
+            assert f"of 24 stored in {out};" in lines[0]
+            assert load_meta(out)["runs"][-1]["status"] == "interrupted"
+        assert not (out / LOCK_NAME).exists()
+        interrupted += 1
+    assert interrupted >= 3
+
+
+#: a [roughness] line that makes every pixel rougher than "low": no start cell anywhere
+ROUGH_EVERYWHERE = "low_max_slope = 1e-09\n"
+
+
+def _no_mission_study(tmp_path) -> "object":
+    """A study whose terrains hold no start cell: every cell of the class map is high roughness (a
+    threshold of 0 m), so no mission can be drawn on any terrain."""
+    from tests.conftest import TINY_STUDY_TOML
+
+    path = tmp_path / "study.toml"
+    text = TINY_STUDY_TOML.format(name="no-mission", root_seed=3, terrains=2, missions=3)
+    path.write_text(text.replace("border_m = 1.0\n", "border_m = 1.0\n" + ROUGH_EVERYWHERE, 1))
+    return path
+
+
+@pytest.mark.timeout(300)
+def test_a_study_without_a_drawable_mission_exits_1_with_one_line_and_stores_its_faults(tmp_path):
+    study = _no_mission_study(tmp_path)
+    out = tmp_path / "run"
+    r = subprocess.run([*CLI, "study", "run", str(study), "--out", str(out), "--workers", "2", "--no-report"],
+                       capture_output=True, text=True, timeout=240)
+    assert r.returncode == 1, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) <= 2, r.stderr
+    assert "every trial of this run faulted" in r.stderr and "12 x no mission can be drawn" in r.stderr
+    with Store(out) as store:
+        assert len(store.fault_rows()) == 12 and store.counts()[0] == 0
+    # a resume has nothing to run: it says so and exits 0; --retry-faults runs them once more
+    again = subprocess.run([*CLI, "study", "run", str(study), "--out", str(out), "--no-report"],
+                           capture_output=True, text=True, timeout=240)
+    assert again.returncode == 0 and "0 / 12 trials" in again.stdout and "12 fault(s)" in again.stdout, again.stderr
+    retry = subprocess.run([*CLI, "study", "run", str(study), "--out", str(out), "--no-report", "--retry-faults"],
+                           capture_output=True, text=True, timeout=240)
+    assert retry.returncode == 1 and len(retry.stderr.splitlines()) <= 2, retry.stderr
+    with Store(out) as store:
+        assert len(store.fault_rows()) == 12
+
+
+def test_faults_are_summarised_one_line_per_kind(tmp_path, capsys, monkeypatch):
+    """Some trials fault, others run: the run says one line per kind of fault with its count."""
+    from offroadbench.cli import main
+    from offroadbench.errors import TrialFault
+    from tests.study.test_run import fake_trials
+
+    def thrown_on_mission_1(prepared, settings):
+        for row in fake_trials(prepared, settings):
+            if row["mission_index"] == 1:
+                raise TrialFault("the vehicle was thrown while it settled")
+            yield row
+
+    monkeypatch.setattr("offroadbench.study.execution.tasks.drive_terrain", thrown_on_mission_1)
+    from tests.conftest import TINY_STUDY_TOML
+
+    path = tmp_path / "study.toml"
+    path.write_text(TINY_STUDY_TOML.format(name="some-faults", root_seed=3, terrains=2, missions=3))
+    assert main(["study", "run", str(path), "--out", str(tmp_path / "run"), "--executor", "inline",
+                 "--no-report"]) == 0
+    out = capsys.readouterr()
+    assert "8 / 12 trials" in out.out and "4 fault(s)" in out.out and "trials/s)" in out.out
+    assert [line for line in out.out.splitlines() if line.startswith("faults of this run")] == [
+        "faults of this run: 4 x the vehicle was thrown while it settled"]
+    assert "thrown" not in out.err
