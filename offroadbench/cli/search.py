@@ -94,6 +94,10 @@ def _run(args: argparse.Namespace) -> int:
         check_dir_name(plan.study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / plan.study.name, "--out")
     hi = [p.high for p in plan.search.params]
+    from offroadbench.study.execution.common import check_trial_floor
+
+    lo = [p.low for p in plan.search.params]  # the floor at either end of every searched range
+    check_trial_floor(args.trial_timeout_s, [trial_cell(plan, g, 0, x) for g in plan.groups for x in (lo, hi)])
     workers = run_workers(args, [trial_cell(plan, g, 0, hi) for g in plan.groups])
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
     with bar(plan.study.name, unit="trial") as progress:

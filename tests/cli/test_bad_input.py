@@ -130,6 +130,7 @@ def base(tmp_path_factory) -> Path:
     _png16(b / "cell1e-6.png", sidecar={**meta, "cell_size_m": 1e-6})
     _png16(b / "cell5e-324.png", sidecar={**meta, "cell_size_m": 5e-324})
     _png16(b / "spike.png", sidecar={**meta, "z_max_m": 1e12})
+    _png16(b / "range1e308.png", sidecar={**meta, "z_min_m": -1e308, "z_max_m": 1e308})  # issue 44: no RuntimeWarning
     from offroadbench import resources
 
     soil = resources.soil_files()["lunar-regolith"].read_text()
@@ -276,6 +277,14 @@ CASES = [
     ("ana-sidecar-deep", ["analyze", "deepjson.png"]),
     ("ana-sidecar-digits", ["analyze", "digits.png"]),
     ("ana-sidecar-of-another-png", ["analyze", "mixed.png"]),
+    ("ana-sidecar-range-1e308", ["analyze", "range1e308.png"]),
+    ("drive-sidecar-range-1e308", ["drive", "range1e308.png", "--out", "d"]),
+    # issue 44: a per-trial limit below the study's shortest possible trial
+    ("run-timeout-0.001", ["study", "run", "study.toml", "--trial-timeout-s", "0.001", "--out", "r"]),
+    ("run-timeout-1e-9", ["study", "run", "study.toml", "--trial-timeout-s", "1e-9", "--out", "r"]),
+    ("run-timeout-dask-0.001", ["study", "run", "study.toml", "--executor", "dask", "--trial-timeout-s", "0.001",
+                                "--out", "r"]),
+    ("search-timeout-0.001", ["search", "run", "search.toml", "--trial-timeout-s", "0.001", "--out", "s"]),
     # issue 44: the vehicle's URDF outside physical bounds, or not a URDF
     *[case for stem in ("mass-0", "mass-1e9", "mass-nan", "not-xml", "svg") for case in (
         (f"drive-urdf-{stem}", ["drive", "good.png", "--vehicle", f"{stem}/vehicle.toml", "--out", "d"]),
@@ -313,6 +322,8 @@ def _check(case_id: str, res: dict) -> None:
     assert "pybullet" not in err + res["stdout"], f"{case_id}: banner"
     for key in ("added", "removed", "changed"):
         assert not res.get(key), f"{case_id}: files {key}: {res[key]}"
+    if "-timeout-" in case_id and "1e10" not in case_id and "inline" not in case_id:
+        assert "shortest possible trial" in err, f"{case_id}:\n{err}"
     if "-store-" in case_id:  # the line names the store and what is wrong with it
         stem = case_id.split("-store-")[1]
         assert f"{stem}/study.sqlite: " in err, f"{case_id}: the store is not named:\n{err}"

@@ -9,7 +9,7 @@ import pytest
 from scipy import integrate
 
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.tyre_laws.soil_wheels import _belt_segment
+from offroadbench.sim.tyre_laws.soil_wheels import belt_segment
 from offroadbench.sim.tyre_laws.terramechanics import load_soil
 from offroadbench.sim.tyre_laws.track_patch import (TrackPatch, compaction_resistance_n, drawbar_pull_n, segment_table,
                                                     shear_development, track_sinkage_m, track_thrust_n)
@@ -59,7 +59,7 @@ def test_the_segments_of_a_uniformly_loaded_belt_sum_to_the_closed_forms(soil_na
     for _ in range(80):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if table.lookup(mid)[1] < w / 5 else (lo, mid)
-    segs = [_belt_segment(table, hi, 0.25, 0.1, 1.0, 0.0, 0.075) for _ in range(5)]
+    segs = [belt_segment(table, hi, 0.25, 0.1, 1.0, 0.0, 0.075) for _ in range(5)]
     assert sum(s[1] for s in segs) == pytest.approx(w, rel=1e-6)
     assert sum(s[0] for s in segs) / 5 == pytest.approx(track_sinkage_m(soil, B, L, w), rel=1e-3)
     assert sum(s[2] for s in segs) == pytest.approx(drawbar_pull_n(soil, B, L, w, 0.25), rel=1e-3)
@@ -80,11 +80,11 @@ def _talon_world(engine: str, gravity: float):
 def test_the_talon_settles_at_the_belts_closed_form_sinkage(engine, gravity):
     """On flat lunar regolith the belts' sinkage is Bekker's z0 = (W / (b L k))^(1/n) for W = m g / 2 a
     track (0.37 mm in lunar, 2.25 mm in Earth gravity; the rows of wheels sank 10 mm and more)."""
-    from offroadbench.sim.rigs.soft_soil_check import _come_to_rest
+    from offroadbench.sim.rigs.soft_soil_check import come_to_rest
 
     with _talon_world(engine, gravity) as world:
         world.spawn(2.0, 3.0, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         z0 = track_sinkage_m(load_soil("lunar-regolith"), B, L, world.geometry.mass_kg * gravity / 2)
         assert world.wheel_penetration_m() == pytest.approx(z0, rel=0.01)
         assert not world.wheel_outside_model()
@@ -94,11 +94,11 @@ def test_the_talon_settles_at_the_belts_closed_form_sinkage(engine, gravity):
 def test_the_talons_drawbar_pull_is_the_belts_thrust_less_its_resistance(engine):
     """A drag on the chassis fed back to hold the belts at 20 % slip (16 s, as the vehicle check's tow
     rig): the drag the TALON holds is 2 (F(i) - R_c) at the slip it runs at, within 2 %."""
-    from offroadbench.sim.rigs.soft_soil_check import _tow_pull
+    from offroadbench.sim.rigs.soft_soil_check import tow_pull
 
     g = 9.81
     with _talon_world(engine, g) as world:
-        pull = _tow_pull(world, 0.2, seconds=16.0)
+        pull = tow_pull(world, 0.2, seconds=16.0)
         slip = world.wheel_slip()
         m = world.geometry.mass_kg
     want = 2 * drawbar_pull_n(load_soil("lunar-regolith"), B, L, m * g / 2, slip)

@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from offroadbench.study.stats.plan import confirmatory_table, engine_table, plan_from_dict
+from offroadbench.study.stats.engines import engine_table
+from offroadbench.study.stats.plan import confirmatory_table, plan_from_dict
 
 PLAN = plan_from_dict({"comparisons": [{"name": "astar against the line", "treatment": {"planner.name": "astar"},
                                         "control": {"planner.name": "straight"}}]})

@@ -172,6 +172,26 @@ def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
     return compute
 
 
+def _majhor_engine_rows(folder: Path) -> list[float]:
+    """majhor2023 on both engines (exploratory): per planned success step, each engine's mean per-terrain change
+    (independently, from the two trial tables), its interval and Holm p over the 16 tests, and the engine
+    difference with its interval (experiments/engine_agreement.py, the library's engine_table)."""
+    from experiments.engine_agreement import agreement
+
+    _, eng = agreement(folder, folder.parent / "majhor2023-mujoco")
+    rates = {e: per_terrain_rate(trial_table(f), "D_high")
+             for e, f in (("pybullet", folder), ("mujoco", folder.parent / "majhor2023-mujoco"))}
+    out = []
+    for name, (lo, hi) in (("D 2.3 -> 2.45", (2.3, 2.45)), ("D 2.45 -> 2.6", (2.45, 2.6))):
+        rows = eng[eng["comparison"] == name].set_index("engine")
+        for e in ("pybullet", "mujoco"):
+            out += [float((rates[e][hi] - rates[e][lo]).mean()), rows.loc[e, "ci_low"], rows.loc[e, "ci_high"],
+                    rows.loc[e, "p_adjusted"]]
+        d = (rates["mujoco"][hi] - rates["mujoco"][lo]) - (rates["pybullet"][hi] - rates["pybullet"][lo])
+        out += [float(d.mean()), rows["engine_difference_low"].iloc[0], rows["engine_difference_high"].iloc[0]]
+    return out
+
+
 def _shared_missions(folder: Path) -> list[float]:
     """Band-limited trials whose start and goal equal those of the aliased trial of the same planner,
     level, sensor, terrain and mission."""
@@ -687,6 +707,10 @@ SAMPLES = [
                                            for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
              _vp_success_intervals(lv))
       for lv, head in ((2.95, "## Success per vehicle, planner and sensor at D_high 2.95"), (2.6, "## D_high 2.6"))],
+    Sample("majhor2023 success steps on both engines", "majhor2023",
+           "".join(rf"\| {name} \| holds on neither \| {_NUM} \[{_NUM}, {_NUM}\], Holm {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\], "
+                   rf"Holm {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \|\n" for name in ("D 2.3 -> 2.45", "D 2.45 -> 2.6")),
+           _majhor_engine_rows),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),

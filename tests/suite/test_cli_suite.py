@@ -119,3 +119,13 @@ def test_score_rewrites_a_card_against_later_baselines_running_nothing(scored, c
     (cmp,) = card["comparisons"]
     assert cmp["baseline"] == "astar" and cmp["score_diff"] == pytest.approx(-astar["comparisons"][0]["score_diff"], abs=1e-6)
     assert card["tasks"] == read_card(tmp / "scores" / "tiny-v1" / "quick" / "straight")["tasks"]
+
+
+def test_the_suite_runs_on_dask_with_the_same_rows(scored, capsys):
+    pytest.importorskip("distributed")
+    tmp, _ = scored
+    rc, out, err = _run(tmp, capsys, "run", "--suite", str(tmp / "tiny-v1.toml"), "--planner", "straight",
+                        "--out", str(tmp / "dask"), "--executor", "dask", "--workers", "1", "--baselines", str(tmp / "scores"))
+    assert rc == 0, err
+    local = read_card(tmp / "scores" / "tiny-v1" / "quick" / "straight")
+    assert read_card(tmp / "dask")["tasks"] == local["tasks"]

@@ -98,7 +98,7 @@ def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float,
     return math.degrees(lo)
 
 
-def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
+def tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N. With undriven
     wheels the slip fed back is the driven wheels' ``1 - v / (omega r)`` from the chassis's forward
     speed ``v`` and their commanded tyre speed ``omega r`` (the engines' mean slip counts the towed
@@ -128,7 +128,7 @@ def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     return sum(pulls) / len(pulls)
 
 
-def _come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
+def come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
     """Step a vehicle still moving after its spawn's settle until its vertical speed has stayed under
     ``speed_m_s`` for ``hold_s`` (at most ``limit_s``); a vehicle already still is left as it is. A sprung
     vehicle (the HUNTER's struts) landing on the soil in lunar gravity still bounced after the settle's
@@ -162,7 +162,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         mass = world.geometry.mass_kg
         n = len(spec.wheel_joints)
         n_driven = sum(spec.is_driven(w) for w in spec.wheel_joints)
@@ -170,7 +170,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
         grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2)
+        pull = tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
     expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
     towed = ""
@@ -210,12 +210,12 @@ def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         mass = world.geometry.mass_kg
         sink = world.wheel_penetration_m()
         com_height = world.centre_of_mass_m()[2] - (flat.z_min_m - sink)  # above the belts' bottom
         grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2, seconds=16.0)
+        pull = tow_pull(world, 0.2, seconds=16.0)
     w = mass * g / 2.0
     expected_pull = 2.0 * drawbar_pull_n(soil, b, length, w, 0.2)
     limit = track_climb_limit_deg(soil, b, length, mass, g, 0.75, com_height)

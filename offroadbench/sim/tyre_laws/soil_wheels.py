@@ -48,7 +48,7 @@ from offroadbench.sim.tyre_laws.terramechanics import MAX_SINKAGE_FRACTION, Soil
 from offroadbench.sim.tyre_laws.track_patch import (SegmentTable, TrackPatch, compaction_resistance_n, segment_table,
                                                     shear_development)
 
-__all__ = ["MAX_LATERAL_SLIP", "RESISTANCE_FADE_M_S", "SoilSetup", "SoilWheels", "soil_setup"]
+__all__ = ["MAX_LATERAL_SLIP", "RESISTANCE_FADE_M_S", "SoilSetup", "SoilWheels", "belt_segment", "soil_setup"]
 
 #: speed over which the compaction resistance fades in, m/s
 RESISTANCE_FADE_M_S = 0.05
@@ -137,7 +137,7 @@ def _one_soil(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2:
                      lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
 
 
-def _belt_segment(table: SegmentTable, delta: float, s_m: float, lam: float, direction: float, fade: float,
+def belt_segment(table: SegmentTable, delta: float, s_m: float, lam: float, direction: float, fade: float,
                   radius_m: float) -> tuple[float, float, float, float, float]:
     """(sinkage m, normal N, pull along the rolling direction N, resistance torque N m, side force
     magnitude N) of a belt segment at penetration ``delta``, signed slip ``s_m`` (in the direction of
@@ -302,7 +302,7 @@ class SoilWheels:
         s_m = direction * slip
         fade = 1.0 - min(1.0, abs(v_f) / RESISTANCE_FADE_M_S)
         if isinstance(tables, SegmentTable):  # a track's belt segment (offroadbench.sim.tyre_laws.track_patch)
-            sink, f_n, f_x, torque, f_y = _belt_segment(tables, delta, s_m, lam, direction, fade, self._r)
+            sink, f_n, f_x, torque, f_y = belt_segment(tables, delta, s_m, lam, direction, fade, self._r)
         else:
             sink, f_n, f_x, torque = tables.lookup(delta, s_m)
             _, _, f_x0, torque0 = tables.lookup(delta, 0.0)

@@ -171,6 +171,14 @@ class _DropWhileDisconnected(logging.Filter):
         return self.client.status == "running"
 
 
+class _DropRestartLines(logging.Filter):
+    """Drop a nanny's "Restarting worker" warning: in this executor's LocalCluster that is the
+    nanny replacing a worker the executor killed (one that stopped answering), already reported."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith("Restarting worker")
+
+
 class DaskExecutor:
     """One Dask task per terrain on a ``distributed`` cluster (``pip install offroadbench[dask]``).
 
@@ -238,6 +246,9 @@ class DaskExecutor:
         # tracebacks; the study reports a lost scheduler itself, in one line
         quiet = _DropWhileDisconnected(client)
         logging.getLogger("distributed.client").addFilter(quiet)
+        restarts = _DropRestartLines()
+        if logging.getLogger("distributed").getEffectiveLevel() > logging.INFO:  # shown with -v
+            logging.getLogger("distributed.nanny").addFilter(restarts)
         progress: dict[str, _Progress] = {}  # a running task's key -> what its worker last said
         topic = None
         if self.trial_timeout_s is not None:
@@ -302,6 +313,7 @@ class DaskExecutor:
         finally:
             self._close(client, cluster, list(futures), failed)
             logging.getLogger("distributed.client").removeFilter(quiet)
+            logging.getLogger("distributed.nanny").removeFilter(restarts)
 
     def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> list[TerrainTask]:
         """Hand a finished task's messages to ``handle``; returns the tasks to submit next (the
@@ -356,6 +368,9 @@ class DaskExecutor:
         for address in list(heartbeats):
             if address not in workers:
                 del heartbeats[address]
+        for key, p in list(progress.items()):  # a task whose worker died: Dask runs it again elsewhere,
+            if p.worker not in workers:          # whose first event starts its clock anew
+                progress.pop(key, None)
         busy = {p.worker for p in progress.values()}
         silent = []
         for address, info in workers.items():

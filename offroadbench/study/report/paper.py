@@ -192,9 +192,9 @@ def confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: p
 
 def _engine_lines(plan: Any, meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame,
                   tab: pd.DataFrame) -> list[str]:
-    """The plan's tests on each engine with the cross-engine verdict (stats.plan.engine_table), stored in
+    """The plan's tests on each engine with the cross-engine verdict (stats.engines.engine_table), stored in
     ``tab.attrs["engine_verdicts"]``; nothing for a study on one engine."""
-    from offroadbench.study.stats.plan import engine_table
+    from offroadbench.study.stats.engines import engine_table
 
     eng = engine_table(plan, meta, trials, terrains, tab)
     if eng is None:

@@ -71,8 +71,8 @@ from offroadbench.config import check_choice, check_int, check_range, to_dict
 from offroadbench.errors import InputError
 
 __all__ = ["TESTS", "MULTIPLICITY", "Comparison", "AnalysisPlan", "plan_from_dict", "check_plan", "expand",
-           "terrain_metric", "confirmatory_table", "check_unchanged", "min_p", "stored_plan", "engine_table",
-           "ENGINE_KEY"]
+           "terrain_metric", "confirmatory_table", "check_unchanged", "min_p", "stored_plan",
+           "cell_label", "terrain_differences"]
 
 #: tests a comparison may use
 TESTS = ("sign_flip", "wilcoxon", "permutation")
@@ -346,11 +346,11 @@ def _permutation_test(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_
     return float(min(1.0, res.pvalue))
 
 
-def _label(values: Mapping[str, Any], columns: Mapping[str, str]) -> str:
+def cell_label(values: Mapping[str, Any], columns: Mapping[str, str]) -> str:
     return ", ".join(f"{columns.get(k, k)} = {v}" for k, v in values.items()) or "all"
 
 
-def _differences(vals: pd.Series, ti: Sequence[int], ci: Sequence[int]) -> tuple[pd.DataFrame, np.ndarray]:
+def terrain_differences(vals: pd.Series, ti: Sequence[int], ci: Sequence[int]) -> tuple[pd.DataFrame, np.ndarray]:
     """Per terrain the treatment's and the control's (pooled) values and their difference."""
     have = set(vals.index.get_level_values(0)) if len(vals) else set()
     kept = [(t, c) for t, c in zip(ti, ci, strict=True) if t in have and c in have] if len(ti) > 1 else list(zip(ti, ci, strict=True))
@@ -390,8 +390,8 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
         a, b = _pooled(vals, [t for t, _ in kept]), _pooled(vals, [c for _, c in kept])
         pooled = f"; pooled over {', '.join(columns.get(k, k) for k in comp.pool)}" if comp.pool else ""
         row: dict[str, Any] = {"comparison": comp.name, "metric": comp.metric,
-                               "treatment": _label(comp.treatment, columns), "control": _label(comp.control, columns),
-                               "stratum": _label(stratum, columns) + pooled, "test": comp.test}
+                               "treatment": cell_label(comp.treatment, columns), "control": cell_label(comp.control, columns),
+                               "stratum": cell_label(stratum, columns) + pooled, "test": comp.test}
         if comp.test == "permutation":
             x, y = a.dropna().to_numpy(float), b.dropna().to_numpy(float)
             diffs = (x[rng.integers(0, x.size, (plan.n_boot, x.size))].mean(axis=1)
@@ -413,7 +413,7 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
                        ci_low=boot.low, ci_high=boot.high, p=p, min_p=min_p(comp.test, int(d.size)))
         other = next((v for (m, sm), v in cache.items() if m == comp.metric and sm != comp.summary), None)
         if other is not None and comp.test != "permutation":  # the other per-terrain summary, exploratory
-            _, d2 = _differences(other, ti, ci)
+            _, d2 = terrain_differences(other, ti, ci)
             orng = keyed_rng(plan.seed, "other summary", comp.name, row["stratum"])
             row.update(summary=comp.summary, effect_other=float(d2.mean()) if d2.size else math.nan,
                        p_other=((sign_flip_test(d2, rng=orng) if comp.test == "sign_flip" else wilcoxon_test(d2))
@@ -461,72 +461,3 @@ def check_unchanged(old_meta: Mapping[str, Any], new_meta: Mapping[str, Any], tr
         raise InputError(f"{where}: the [analysis] plan differs from the one stored with its {trials_stored} trials; "
                          "a plan is fixed before the run (restore it, or run the new plan into another --out)")
     return changed
-
-
-#: the grid key of the physics engine
-ENGINE_KEY = "sim.engine"
-
-
-def engine_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame | None,
-                 confirm: pd.DataFrame) -> pd.DataFrame | None:
-    """Each planned test on each engine of a study with a ``sim.engine`` grid axis (the same terrains and
-    missions on both: terrain j of every cell has one seed), with the cross-engine verdict and the engine
-    difference; None without such an axis (or with one engine).
-
-    ``confirm`` is :func:`confirmatory_table` of the same plan (one Holm family over every engine's tests).
-    One row per (comparison, stratum without the engine, engine): effect, ci_low, ci_high, p_adjusted,
-    reject; ``verdict`` (the same in the test's rows): ``holds on both`` (rejected on every engine, in one
-    direction), ``holds on <engine> only``, ``holds on neither``, or ``opposite directions``;
-    ``engine_difference`` (per terrain, the effect's difference on the second engine minus the first,
-    averaged over the terrains both have; ``engines`` names the order) with its terrain-bootstrap interval
-    (Efron & Tibshirani 1993; a generator of the test's own). Comparisons of the engine itself are left out
-    (they are the engine difference)."""
-    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
-
-    columns = meta.get("columns", {})
-    axes = {a["key"]: list(a["values"]) for a in meta["study"]["grid"]}
-    engines = axes.get(ENGINE_KEY, [])
-    if len(engines) < 2:
-        return None
-    cells = [c["values"] for c in sorted(meta["cells"], key=lambda c: c["index"])]
-    groups: dict[tuple[str, str], list[tuple[Any, int, list[int], list[int], Comparison]]] = {}
-    for i, (comp, stratum, ti, ci) in enumerate(expand(plan, cells)):
-        if ENGINE_KEY not in stratum:
-            continue
-        rest = {k: v for k, v in stratum.items() if k != ENGINE_KEY}
-        pooled = f"; pooled over {', '.join(columns.get(k, k) for k in comp.pool)}" if comp.pool else ""
-        groups.setdefault((comp.name, _label(rest, columns) + pooled), []).append((stratum[ENGINE_KEY], i, ti, ci, comp))
-    rows = []
-    for (name, label), members in groups.items():
-        members.sort(key=lambda m: engines.index(m[0]))
-        comp = members[0][4]
-        vals = terrain_metric(trials, terrains, comp.metric, comp.summary)
-        per = {}
-        for eng, _, ti, ci, _ in members:
-            both, d = _differences(vals, ti, ci)
-            per[eng] = pd.Series(d, index=both.index)
-        first, last = members[0][0], members[-1][0]
-        common = per[first].index.intersection(per[last].index)
-        dd = (per[last].reindex(common) - per[first].reindex(common)).to_numpy(float)
-        boot = cluster_bootstrap(dd, np.mean, keyed_rng(plan.seed, "engine difference", name, label), plan.n_boot,
-                                 level=plan.confidence)
-        rej = {eng: bool(confirm.iloc[i]["reject"]) for eng, i, *_ in members}
-        sign = {eng: np.sign(confirm.iloc[i]["effect"]) for eng, i, *_ in members}
-        held = [e for e in rej if rej[e]]
-        if len(held) == len(rej) and len({sign[e] for e in held}) == 1:
-            verdict = "holds on both" if len(rej) == 2 else "holds on every engine"
-        elif len(held) > 1 and len({sign[e] for e in held}) > 1:
-            verdict = "opposite directions"
-        elif held:
-            verdict = f"holds on {' and '.join(held)} only"
-        else:
-            verdict = "holds on neither"
-        for eng, i, *_ in members:
-            r = confirm.iloc[i]
-            rows.append({"comparison": name, "stratum": label, "metric": comp.metric, "engine": eng,
-                         "terrains": r["terrains"], "effect": r["effect"], "ci_low": r["ci_low"], "ci_high": r["ci_high"],
-                         "p_adjusted": r["p_adjusted"], "reject": r["reject"], "verdict": verdict,
-                         "engines": f"{last} - {first}", "engine_difference": boot.estimate,
-                         "engine_difference_low": boot.low, "engine_difference_high": boot.high,
-                         "engine_difference_terrains": int(dd.size)})
-    return pd.DataFrame(rows) if rows else None

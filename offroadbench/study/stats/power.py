@@ -214,7 +214,7 @@ def plan_power(plan: Any, cells: Sequence[Mapping[str, Any]], columns: Mapping[s
     plan's), pilot_terrains, pilot_mean, pilot_sd (of the pilot's per-terrain differences), terrains, power.
     """
     from offroadbench.study.stats.clustered import keyed_rng
-    from offroadbench.study.stats.plan import _label, expand
+    from offroadbench.study.stats.plan import cell_label, expand
 
     for col, v in plan.pilot_select.items():
         if col not in pilot:
@@ -229,7 +229,7 @@ def plan_power(plan: Any, cells: Sequence[Mapping[str, Any]], columns: Mapping[s
         effects.append(comp.effect)
         tests.append(comp.test)
         groups.append("pilot")
-        rows.append({"comparison": comp.name, "stratum": _label(stratum, columns), "exploratory": comp.exploratory,
+        rows.append({"comparison": comp.name, "stratum": cell_label(stratum, columns), "exploratory": comp.exploratory,
                      "effect": comp.effect if comp.effect is not None else math.nan, "pilot_terrains": int(d.size),
                      "pilot_mean": float(d.mean()), "pilot_sd": float(d.std(ddof=1)) if d.size > 1 else math.nan,
                      "terrains": int(n_terrains)})

@@ -125,8 +125,8 @@ def _check_objects(con: sqlite3.Connection, path: Path) -> None:
     try:
         allowed = _objects(ref)
         # a store's tables are ours or missing (older stores lack faults, a study lacks a search's)
-        stray = [(kind, name) for name, (kind, _, _) in have.items()
-                 if name not in allowed or allowed[name][0] != kind]
+        stray = [(kind, name) for name, (kind, table, _) in have.items()
+                 if name not in allowed or allowed[name][:2] != (kind, table)]
         if stray:
             what = ", ".join(f"{k} {n!r}" for k, n in sorted(stray)[:3]) + (
                 f" and {len(stray) - 3} more" if len(stray) > 3 else "")

@@ -4,7 +4,9 @@ offsets (offroadbench.sim.engines.mujoco._layout), and calls of MuJoCo's C funct
 addresses (``mjfCollision``; ``mj_step1`` and its kin, ``void (const mjModel*, mjData*)``).
 
 The addresses are run-time arguments, never compiled in, so the kernels that use these stay in
-numba's on-disk cache across processes (and address-space layouts)."""
+numba's on-disk cache across processes (and address-space layouts). numba's cache checks only the
+calling kernel's own source file: after editing this module, clear the ``__pycache__`` ``*.nbi`` /
+``*.nbc`` files of ``_hfield_c`` and ``_tyres_c`` (an installed release rewrites them all)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 __all__ = ["as_address", "as_pointer", "call_collision", "call_step", "f64_field", "i32_field", "int_at",
-           "pointer_at"]
+           "pointer_at", "swap_entry"]
 
 
 @intrinsic
@@ -84,3 +86,15 @@ def f64_field(base, offset, n):  # pragma: no cover - compiled
 def i32_field(base, offset, n):  # pragma: no cover - compiled
     """The first ``n`` ints of the array that the pointer field at ``base + offset`` points to."""
     return carray(as_pointer(pointer_at(base, offset)), (n,), np.int32)
+
+
+@njit(cache=True)
+def swap_entry(slot, fn):  # pragma: no cover - compiled
+    """Write function address ``fn`` into the collision-table entry at address ``slot`` and return
+    what was there (``fn`` 0: leave it, return 0)."""
+    if fn == 0:
+        return 0
+    entry = carray(as_pointer(slot), (1,), np.int64)
+    old = entry[0]
+    entry[0] = fn
+    return old

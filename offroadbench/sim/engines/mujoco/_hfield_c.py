@@ -308,6 +308,10 @@ def sphere_hfield(m, d, con, g1, g2, margin, lay):  # pragma: no cover - compile
         for col in range(cmin + 1, cmax + 1):
             x1 = dx * col - size0
             z01, z11 = hdata[row * ncol + col] * size2, hdata[(row + 1) * ncol + col] * size2
+            # MuJoCo's prism-height test: prism 0 spans z10, z00, z11; prism 1 z00, z11, z01
+            if z00 < zmin and z11 < zmin and z10 < zmin and z01 < zmin:
+                x0, z00, z10 = x1, z01, z11
+                continue
             zlow = _lowest_over_cell(px, py, pz, r, x0, x1, y0, y1)
             for i in range(2):
                 _set_prism(t, i, x0, x1, y0, y1, z00, z01, z10, z11)
@@ -406,6 +410,13 @@ class HFieldCollision:
                mo["hfield_ncol"], mo["hfield_adr"], mo["hfield_data"], da["geom_xpos"], da["geom_xmat"])
         sphere, box = _wrappers(lay, sphere0, box0)
         return cls(slots, (sphere.address if mode == "closed_form" else None, box.address))
+
+    def entries(self) -> tuple[int, int, int, int]:
+        """(table entry address, this world's function address or 0) for the sphere and the box:
+        for a compiled trial step that writes them itself (offroadbench.sim.engines.mujoco._tyres_c.
+        step_trial)."""
+        ours = [0 if f is None else int(f) for f in self._ours]
+        return ctypes.addressof(self._slots[0]), ours[0], ctypes.addressof(self._slots[1]), ours[1]
 
     def install(self) -> None:
         """Point the table's hfield-sphere and hfield-box entries at this world's functions."""

@@ -139,7 +139,7 @@ def _libmujoco():
     """The MuJoCo library the bindings loaded (dlopen of the same file returns the same handle)."""
     import mujoco
 
-    folder = os.path.dirname(mujoco.__file__)
+    folder = list(mujoco.__path__)[0]  # the package folder, where the wheel puts libmujoco
     path = os.path.join(folder, f"libmujoco.so.{mujoco.__version__}")
     if not os.path.exists(path):  # other platforms' names
         names = [n for n in os.listdir(folder) if n.startswith(("libmujoco", "mujoco.dll"))]

@@ -66,8 +66,8 @@ class MuJoCoConfig:
     under it reaches its lowest point, else MuJoCo's own call: the same contacts to the bit, so the
     same trials as ``mujoco``); ``closed_form`` (``exact`` plus the sphere wheels' prisms in closed
     form: MuJoCo's contacts to ~1e-15 m and normals to ~1e-10 at driving depths, so trials within
-    run-to-run chaos, not to the bit: 1.5x the trials' speed on 36 paper missions with no outcome
-    flipped, benchmarks/RESULTS.md 'Issue 41'). ``exact`` and ``closed_form`` need numba; without it
+    run-to-run chaos, not to the bit: 1.5-1.7x the trials' speed on 36 paired paper missions with
+    no outcome flipped, benchmarks/RESULTS.md 'Issue 41'). ``exact`` and ``closed_form`` need numba; without it
     the world uses ``mujoco`` (logged), which gives ``exact``'s trials, not ``closed_form``'s.
     Studies run before this setting existed (MuJoCo's own collision) are reproduced by ``exact``."""
 

@@ -28,7 +28,7 @@ class MuJoCoTyres:
         qvel, xmat, xipos, xfrc = self._step_arrays
         whole = self._fast_step
         if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
-            tc.STEP(whole[0], whole[1], whole[2], whole[3], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
+            tc.STEP(whole[0], whole[1], whole[2], whole[3], whole[4], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
             if pushed is not None:
                 self._base_force = None
                 f[push + 3] = 0.0
@@ -52,7 +52,8 @@ class MuJoCoTyres:
         """:meth:`step` with the compiled soil loop (offroadbench.sim.engines.mujoco._soil_c): the same
         sequence, the soil forces applied outside the interpreter. No contact is read: the wheels
         do not collide under the soil model (their loads stay zero, as the Python loop reads them),
-        and the soil's sinkage and slip come from the loop's state."""
+        and the soil's sinkage and slip come from the loop's state. The whole trial step, MuJoCo's
+        calls included, in one compiled call (``_soil_step_c.step_trial_soil``)."""
         m, d = self.model, self.data
         sc, f, ist, tab = self._fast_soil
         each = self.contact.tyres_each_substep
@@ -61,6 +62,14 @@ class MuJoCoTyres:
         if pushed is not None:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
+        whole = self._fast_soil_step
+        if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
+            qvel, xmat, xipos, xfrc = self._step_arrays
+            whole[0](whole[1], whole[2], whole[3], whole[4], qvel, xmat, xipos, xfrc, f, ist, tab, self.substeps, each)
+            if pushed is not None:
+                self._base_force = None
+                f[push + 3] = 0.0
+            return
         qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
         step1, step2, apply = mujoco.mj_step1, mujoco.mj_step2, sc.APPLY
         for k in range(self.substeps):

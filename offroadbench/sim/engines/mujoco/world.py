@@ -24,8 +24,9 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
   loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
-  the compiled coulomb loop a whole trial step is one compiled call (``_tyres_c.step_trial``: MuJoCo's
-  ``mj_step1`` / ``mj_step2`` called through their C addresses, no Python between them; the same bits).
+  the compiled loops a whole trial step is one compiled call (``_tyres_c.step_trial``,
+  ``_soil_step_c.step_trial_soil``: MuJoCo's ``mj_step1`` / ``mj_step2`` called through their C
+  addresses, no Python between them; the same bits).
 - **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
   the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
   MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
@@ -47,7 +48,6 @@ as the two halves of :class:`MuJoCoWorld`.
 
 from __future__ import annotations
 
-import importlib
 import logging
 import math
 import time
@@ -64,63 +64,13 @@ from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.engines.mujoco.kernels import compiled_loop, hfield_functions, soil_step, whole_step
 from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
 from offroadbench.sim.engines.mujoco.tyres import MuJoCoTyres
 
 __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 
 log = logging.getLogger(__name__)
-
-
-def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
-    """offroadbench.sim.engines.mujoco._tyres_c (coulomb) or ``_soil_c`` (terramechanics) for
-    ``[sim.mujoco] tyre_loop = choice``, or None for the Python loop (``auto`` without numba)."""
-    if choice == "python":
-        return None
-    try:
-        module = importlib.import_module(f"offroadbench.sim.engines.mujoco.{kernels}")
-    except ImportError:
-        if choice == "compiled":
-            raise InputError("MuJoCoConfig.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
-        return None
-    except RuntimeError as exc:  # numba installed but unable to compile or cache (e.g. no writable cache folder)
-        if choice == "compiled":
-            raise InputError(f"MuJoCoConfig.tyre_loop = 'compiled': numba cannot build the loop ({exc})") from None
-        log.warning("the compiled tyre loop is unavailable (%s); using the Python loop", exc)
-        return None
-    return module
-
-
-def _whole_step(model, data):
-    """What the compiled tyre loop needs to run a whole trial step in one call
-    (offroadbench.sim.engines.mujoco._tyres_c.step_trial): the model's and data's addresses, MuJoCo's
-    ``mj_step``, ``mj_step1``, ``mj_step2`` and where the contacts are; None where MuJoCo's layout does
-    not check out (offroadbench.sim.engines.mujoco._layout: the loop then runs its kernels between
-    the bindings' MuJoCo calls)."""
-    from offroadbench.sim.engines.mujoco import _layout
-
-    lay = _layout.step_layout()
-    if lay is None:
-        return None
-    return model._address, data._address, _layout.step_functions(), lay.as_tuple()
-
-
-def _hfield_functions(mode: str, model, data):
-    """The world's height-field collision functions for ``[sim.mujoco] hfield_collision = mode``
-    (offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision), or None for MuJoCo's own: mode
-    ``mujoco``, or numba missing or unable to build them (logged)."""
-    if mode == "mujoco":
-        return None
-    try:
-        from offroadbench.sim.engines.mujoco import _hfield_c
-    except ImportError:
-        log.warning("MuJoCoConfig.hfield_collision = %r needs numba (pip install 'offroadbench[fast]'): "
-                    "MuJoCo's own height-field collision", mode)
-        return None
-    except RuntimeError as exc:  # numba installed but unable to compile or cache
-        log.warning("the compiled height-field collision is unavailable (%s): MuJoCo's own", exc)
-        return None
-    return _hfield_c.HFieldCollision.for_world(mode, model, data)
 
 
 # ---------------------------------------------------------------------------- the world
@@ -146,12 +96,13 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._write_heights()
         self.data = mujoco.MjData(self.model)
         self._index()
-        self._hfield = _hfield_functions(contact.hfield_collision, self.model, self.data)
+        self._hfield = hfield_functions(contact.hfield_collision, self.model, self.data)
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
-        self._fast_step = None  # (mjModel and mjData addresses, MuJoCo's step functions, StepLayout tuple)
+        self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
+        self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -168,10 +119,11 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
-            self._fast_step = _whole_step(self.model, d)
+            self._fast_step = whole_step(self.model, d, self._hfield)
             self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
+        self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
             # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
@@ -186,6 +138,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
                 d = self.data
                 sc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied)
                 self._fast_soil = (sc, f, ist, tab)
+                self._fast_soil_step = soil_step(self.model, d, self._hfield)  # the whole step in one call
+                self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)
         self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
@@ -199,7 +153,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         choice``, or None for the Python loop: also for a vehicle whose wheels move with more than the
         chassis (steering, rockers, bogies): the kernels take each wheel's velocity from the chassis'
         rigid motion and its spin, the Python loop from MuJoCo (``mj_objectVelocity``)."""
-        module = _compiled_loop(choice, kernels)
+        module = compiled_loop(choice, kernels)
         if module is not None and self._articulated:
             log.info("vehicle %r has articulated wheels: the Python tyre loop", self.spec.name)
             return None
@@ -209,6 +163,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def close(self) -> None:
         """Drop the model and data (MuJoCo frees them with the objects). Safe to call twice."""
         self.data = None
+        self._fast_step = self._fast_soil_step = self._step_arrays = None  # the data's addresses and views
 
     def __enter__(self) -> MuJoCoWorld:
         return self
@@ -382,7 +337,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
         functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
         hf = self._hfield
-        if hf is None:
+        whole = (self._fast_step if self._fast is not None else
+                 self._fast_soil_step if self._fast_soil is not None else None)
+        if hf is None or whole is not None:  # none, or the compiled step installs them itself
             self._advance()
             return
         hf.install()

@@ -52,7 +52,6 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   results then differ in the last digits from a fresh World (solver and contact state carried
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
-
 - Under the ``coulomb`` tyre model Bullet's friction cone is off (``enableConeFriction = 0``,
   SimConfig.cone_friction): the wheels' Bullet friction is 0 there, so the cone's solver rows for
   their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
