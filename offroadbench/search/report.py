@@ -261,7 +261,8 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
             pos = ev.mc_position(g, cfg, ref)
             if pos is not None:
                 e = pos["estimate"]
-                side = (f"below {ref.boundary.low:.4g}" if ref.boundary.sign > 0 else f"above {-ref.boundary.low:.4g}")
+                b = ref.boundary
+                side = "" if b is None else (f"below {b.low:.4g}" if b.sign > 0 else f"above {-b.low:.4g}")
                 why = (f" Of its {e.n} nominal draws, {pos['below']} fell {side}, where every "
                        f"trial fails, against {pos['expected_below']:.1f} the nominal puts there: the estimate sits "
                        f"{'above' if e.p > ref.p else 'below'} the reference by that chance "

@@ -515,74 +515,6 @@ def _failure_search_first_k(folder: Path) -> list[float]:
     return out
 
 
-def _site_boundary_reference(group: int) -> Callable[[Path], list[float]]:
-    """failure-search-site: P(failure) from the friction boundary (every trial below the lowest passing
-    friction failed, every one above the highest failing one passed; the band between at its failure
-    fraction), with the Clopper-Pearson interval of that fraction carried through."""
-    def compute(folder: Path) -> list[float]:
-        from scipy import stats
-
-        from offroadbench.search import load_search
-
-        cfg = load_search(folder / "search.toml").search
-        df = pd.read_csv(folder / "trials.csv")
-        t = df[(df["group"] == group) & df["done"]]
-        f, failed = t["sim.terrain_friction"].to_numpy(float), t["failed"].to_numpy(bool)
-        lo, hi = f[~failed].min(), f[failed].max()
-        band = (f >= lo) & (f <= hi)
-        k, n = int(failed[band].sum()), int(band.sum())
-        f_lo, f_hi = cfg.params[0].cdf(np.array([lo, hi]))
-        frac = [k / n, stats.beta.ppf(0.025, k, n - k + 1), stats.beta.ppf(0.975, k + 1, n - k)]
-        return [float(f_lo + (f_hi - f_lo) * q) for q in frac]
-    return compute
-
-
-def _site_is_runs(folder: Path, planner: str, group: int) -> list:
-    """failure-search-site: the importance-sampling estimates of the run's stream (trials.csv) and of
-    the repeats (repeats.csv, ``[search] replicate`` 1-8), in that order."""
-    from offroadbench.search import load_search
-    from offroadbench.search.report import estimates
-
-    cfg = load_search(folder / "search.toml").search
-    run = pd.read_csv(folder / "trials.csv")
-    reps = pd.read_csv(folder / "repeats.csv")
-    streams = [run[run["group"] == group]]
-    streams += [r.assign(group=group) for _, r in reps[(reps["planner"] == planner) & (reps["method"] == "ce-is")]
-                .groupby("replicate")]
-    return [estimates(t[t["method"] == "ce-is"], cfg)[(group, "ce-is")] for t in streams]
-
-
-def _site_is_repeats(folder: Path) -> list[float]:
-    """The A* repeats' summary: mean estimate, spread about the boundary reference (% of it), the trials
-    ratio that spread gives, the median and range of the stated ratios, the intervals holding the
-    reference and Monte Carlo's estimate."""
-    from offroadbench.search.report import mc_trials_ratio
-
-    ests = _site_is_runs(folder, "astar", 0)
-    ref = _site_boundary_reference(0)(folder)[0]
-    ps = np.array([e.p for e in ests])
-    spread = float(np.sqrt(np.mean((ps - ref) ** 2)) / ref)
-    mc = _failure_search_estimates("astar", 0)(folder)[0]
-    stated = [mc_trials_ratio(type("MC", (), {"p": mc})(), e) for e in ests]
-    return [float(ps.mean()), 100 * spread, (1 - ref) / (ref * spread ** 2) / 200, float(np.median(stated)),
-            min(stated), max(stated), float(sum(e.covers(ref) for e in ests)), float(sum(e.covers(mc) for e in ests))]
-
-
-def _site_falsifier_repeats(folder: Path) -> list[float]:
-    """A*'s falsifier: trials to the 10th distinct failure, median, lowest and highest over the run's
-    stream and replicates 1-4."""
-    from offroadbench.search import load_search
-    from offroadbench.search.report import first_failures
-
-    cfg = load_search(folder / "search.toml").search
-    run = pd.read_csv(folder / "trials.csv")
-    reps = pd.read_csv(folder / "repeats.csv")
-    streams = [run[(run["group"] == 0) & (run["method"] == "falsify")]]
-    streams += [r for _, r in reps[(reps["planner"] == "astar") & (reps["method"] == "falsify")].groupby("replicate")]
-    n = [first_failures(cfg, s.reset_index(drop=True)) for s in streams]
-    return [float(np.median(n)), min(n), max(n)]
-
-
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
            rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
@@ -596,21 +528,10 @@ SAMPLES = [
            _failure_search_estimates("astar", 0)),
     Sample("failure-search-site P(failure), straight", "failure-search-site", rf"\| straight \| {_FS_ROW}",
            _failure_search_estimates("straight", 1)),
-    Sample("failure-search-site boundary reference", "failure-search-site",
-           rf"for A\* \*\*{_NUM}\*\* \(the band's 22 of 28 with its\s+Clopper-Pearson interval: {_NUM}-{_NUM}\), "
-           rf"for the line \*\*{_NUM}\*\* \({_NUM}-{_NUM}\)",
-           lambda f: _site_boundary_reference(0)(f) + _site_boundary_reference(1)(f)),
-    Sample("failure-search-site importance-sampling repeats", "failure-search-site",
-           rf"estimates average {_NUM} \(the boundary reference 0.0224: no sign of bias\)\s+and spread by {_NUM} % "
-           rf"of P[^*]*\*\*{_NUM}x\*\* fewer trials than plain\s+Monte Carlo \(by each run's stated error, a median "
-           rf"of \*\*{_NUM}x\*\*, {_NUM}-{_NUM}x\)\. \*\*{_NUM} of the 9 intervals\s+hold the boundary reference\*\*, "
-           rf"{_NUM} of 9",
-           _site_is_repeats),
+    # failure-search-site's reference, repeats, modes and baselines (issue 45): tests/search/test_results_site.py
     Sample("failure-search-site distance left by the failures", "failure-search-site",
            rf"a median {_NUM} m of the 6 m route left",
            lambda f: [float(trial_table(f).query("not success")["final_distance_to_goal_m"].median())]),
-    Sample("failure-search-site falsifier repeats", "failure-search-site",
-           rf"\| 20; 23, 27, 20, 27 \| \*\*{_NUM}\*\* \({_NUM}-{_NUM}\)", _site_falsifier_repeats),
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
            rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
            rf"\(on {_NUM}\)", _failure_search_first_k),
