@@ -62,7 +62,7 @@ def rerender(folder: Path) -> list[str]:
     """Re-render ``folder``'s confirmatory and planner sections; returns the files written."""
     from offroadbench.cli._common import save_figure
     from offroadbench.study.report.html import markdown_to_html
-    from offroadbench.study.report.paper import _confirmatory_section, _mark_exploratory
+    from offroadbench.study.report.paper import confirmatory_section, mark_exploratory
     from offroadbench.study.report.planners import planner_sections
 
     meta = folder_meta(folder)
@@ -70,7 +70,7 @@ def rerender(folder: Path) -> list[str]:
     terrains = pd.read_csv(folder / "terrains.csv")
     md = (folder / "report.md").read_text().rstrip("\n").split("\n")
     written = []
-    confirm_lines, confirm = _confirmatory_section(meta, trials, terrains, [Path(__file__).resolve().parent])
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(__file__).resolve().parent])
     if confirm is not None:
         a, b = _section(md, "## Confirmatory analysis")
         md[a:b] = confirm_lines
@@ -85,7 +85,7 @@ def rerender(folder: Path) -> list[str]:
         old = md[a:b]
         keep = next((i for i, line in enumerate(old) if line.startswith("### Planned and driven paths")), None)
         # the paths figure needs the run's telemetry: its subsection stays as committed
-        md[a:b] = _mark_exploratory(["## Confirmatory", *lines])[1:] + (old[keep:] if keep is not None else [])
+        md[a:b] = mark_exploratory(["## Confirmatory", *lines])[1:] + (old[keep:] if keep is not None else [])
         for name, df in tables.items():
             df.to_csv(folder / name, index=False)
             written.append(name)
