@@ -13,7 +13,7 @@ from setuptools import find_namespace_packages, find_packages, setup
 DATA = {
     "terrains": ["*.toml", "*.npy", "*.json", "*.png"],
     "vehicles": ["*.toml", "*.urdf", "*.sdf", "*.xml", "*.obj", "*.stl", "*.dae", "*.png"],
-    "experiments": ["*.toml"],
+    "experiments": ["*.toml", "*.csv"],  # the study TOMLs and their pilots (experiments/pilots/: a plan's power)
     "soils": ["*.toml", "*.csv"],
     "suites": ["*.toml", "*.json"],  # task suites and the baselines' score cards (scores/)
 }

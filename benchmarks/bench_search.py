@@ -37,6 +37,17 @@ search of the same domain (the committed study's Monte Carlo reference, the grou
   spent (offroadbench.search.report.mc_trials_ratio), and whether its interval holds the pool's
   P; then the median and range of the ratio over repeats and how many intervals cover.
 
+``--collect RUN_DIR ... --repeats-csv FILE``: append the streams of finished repeat run directories
+(each one method, one planner, one ``[search] replicate``, as the modes above keep them with
+``--keep``) to a results folder's repeats table (planner, replicate, method, then the search
+table's columns); a stream already in the table is refused.
+
+``--results FOLDER --study FILE``: the committed figures of a results folder (its trials.csv,
+repeats.csv and search.toml; the analysis plan of ``--study``) for every planner
+(offroadbench.search.evaluate.results_figures), printed and written to FOLDER as
+is_repeats.csv, falsifier_baselines.csv, falsifier_streams.csv, uniform_streams.csv,
+sensitivity.csv and modes.csv.
+
 ``--smoke``: one repeat, budgets 8, k = 1 (checks that the benchmark runs).
 """
 
@@ -209,6 +220,65 @@ def k_trials(k: int, p: float) -> float:
     return float(k + stats.nbinom(k, p).median()) if 0 < p < 1 else float("inf")
 
 
+def collect(run_dirs: list[str], repeats_csv: Path) -> None:
+    """Append the streams of finished repeat run directories to a repeats table (module docstring)."""
+    import pandas as pd
+
+    old = pd.read_csv(repeats_csv) if repeats_csv.is_file() else pd.DataFrame()
+    new = []
+    for d in run_dirs:
+        df, plan = search_table(d)
+        if not df["done"].all():
+            raise SystemExit(f"{d}: unfinished trials; finish the run first")
+        planner = plan.groups[0].settings.get("planner", {}).get("name", "straight")
+        rep = plan.search.replicate
+        for method in df["method"].unique():
+            if len(old) and ((old["planner"] == planner) & (old["replicate"] == rep) & (old["method"] == method)).any():
+                raise SystemExit(f"{d}: {planner} {method} replicate {rep} is already in {repeats_csv}")
+        new.append(df.drop(columns=["cell", "group"]).assign(planner=planner, replicate=rep))
+    out = pd.concat([old, *new], ignore_index=True)
+    cols = ["planner", "replicate", "method"] + [c for c in out.columns if c not in ("planner", "replicate", "method")]
+    out[cols].to_csv(repeats_csv, index=False)
+    print(f"{repeats_csv}: {len(out)} rows ({sum(len(n) for n in new)} new)")
+
+
+def results(folder: Path, study: Path) -> None:
+    """The committed figures of a results folder (module docstring)."""
+    import pandas as pd
+
+    from offroadbench.search import evaluate as ev
+    from offroadbench.search import load_search
+
+    cfg = load_search(folder / "search.toml").search
+    analysis = load_search(study).analysis
+    run = pd.read_csv(folder / "trials.csv")
+    repeats = pd.read_csv(folder / "repeats.csv")
+    plan = load_search(folder / "search.toml")
+    tables: dict[str, list] = {}
+    for grp, g in enumerate(plan.groups):
+        planner = g.values.get("planner.name", "straight")
+        fig = ev.results_figures(run, repeats, cfg, analysis, grp, planner)
+        ref = fig["reference"]
+        print(f"== {planner}: reference P {ref.p:.4f} (bracket {ref.low:.4f}-{ref.high:.4f}); {ref.how}")
+        if "is" in fig:
+            print(f"importance sampling over {fig['is_summary']['runs']} runs: {fig['is_summary']}")
+        print(fig["baselines"].to_string())
+        for name, key in (("is_repeats.csv", "is"), ("falsifier_baselines.csv", "baselines"),
+                          ("falsifier_streams.csv", "falsifier"), ("uniform_streams.csv", "uniform"),
+                          ("modes.csv", "modes")):
+            if key in fig and len(fig[key]):
+                tables.setdefault(name, []).append(fig[key].assign(planner=planner))
+        tables.setdefault("sensitivity.csv", []).append(
+            pd.DataFrame([{"parameter": x.key, "eta^2": x.eta2, "threshold": x.threshold, "p": x.p_value,
+                           "active": x.active, "draws": x.draws, "failures": x.failures, "source": x.source}
+                          for x in fig["sensitivity"]]).assign(planner=planner))
+        print(fig["modes"].to_string())
+    for name, parts in tables.items():
+        t = pd.concat(parts, ignore_index=True)
+        t[["planner"] + [c for c in t.columns if c != "planner"]].to_csv(folder / name, index=False)
+        print(f"wrote {folder / name}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--study", type=Path, default=DEFAULT_STUDY, help="the search study file (default: %(default)s)")
@@ -225,8 +295,19 @@ def main() -> None:
     ap.add_argument("--method", choices=("falsify", "ce-is"), default="falsify", help="ratio modes: what to repeat")
     ap.add_argument("--permutations", type=int, default=2000, help="ratio mode: random orders of the stored pool")
     ap.add_argument("--with-run", action="store_true", help="ratio modes: count the run's own stream as a repeat")
+    ap.add_argument("--collect", nargs="+", help="finished repeat run directories to append to --repeats-csv")
+    ap.add_argument("--repeats-csv", type=Path, help="--collect: a results folder's repeats.csv")
+    ap.add_argument("--results", type=Path, help="a results folder: print and write its committed figures")
     ap.add_argument("--smoke", action="store_true")
     args = ap.parse_args()
+    if args.collect:
+        if not args.repeats_csv:
+            raise SystemExit("--collect needs --repeats-csv")
+        collect(args.collect, args.repeats_csv)
+        return
+    if args.results:
+        results(args.results, args.study)
+        return
     if args.smoke:
         args.seeds, args.k, args.falsify_budget, args.random_budget = args.seeds[:1], 1, 8, 8
         args.replicates = args.replicates[:1] if args.replicates else None

@@ -47,6 +47,11 @@ against ``main`` and the median ratio of RMS vertical acceleration over the tria
 
     .venv/bin/python benchmarks/bench_sim.py --engines 'pybullet:;mujoco60:engine=mujoco;mujoco120:engine=mujoco,physics_rate_hz=120'
 
+MuJoCo's height-field collision modes against the chaos yardstick (issue 41: a 0.1 mm higher spawn
+is the reference's own run-to-run spread; ``closed_form`` should flip no more outcomes than it):
+
+    .venv/bin/python benchmarks/bench_sim.py --missions 12 --engines 'own:engine=mujoco,contact.hfield_collision=mujoco;own+0.1mm:engine=mujoco,spawn_clearance_m=0.0201,contact.hfield_collision=mujoco;exact:engine=mujoco,contact.hfield_collision=exact;closed_form:engine=mujoco,contact.hfield_collision=closed_form;pybullet:'
+
 ``--smoke`` runs every mode above once, with one mission on 201^2 maps and 6 m missions (seconds
 of work each; CI runs it so the script cannot rot); its figures mean nothing.
 """

@@ -25,7 +25,7 @@ children's ``ru_maxrss``) and a digest of the trial table, so variants that must
 results can be checked. A variant is ``NAME`` or ``NAME:k=v,k=v``: ``executor`` (local, dask,
 inline), ``workers``, ``tree`` (another checkout of offroadbench, e.g. a git worktree of an
 older commit, to compare with the old code), and dotted study keys such as
-``recipe.layers.base.wm.method=nufft`` or ``sim.solver_iterations=30``. Machines here are
+``recipe.layers.base.wm.method=nufft``, ``sim.solver_iterations=30`` or ``sim.mujoco.hfield_collision=exact``. Machines here are
 shared: compare the ratios of one run, not absolute figures across runs.
 """
 
@@ -248,8 +248,12 @@ def child(spec: dict) -> dict:
         target, _, rest = key.partition(".")
         if target == "recipe":
             overrides[rest] = value
-        else:
-            settings.setdefault(target, {})[rest] = value
+        else:  # a settings table's key, nested tables by dots (sim.mujoco.hfield_collision)
+            node = settings.setdefault(target, {})
+            *path, leaf = rest.split(".")
+            for part in path:
+                node = node.setdefault(part, {})
+            node[leaf] = value
     study = dataclasses.replace(study, terrains_per_cell=spec["terrains"], missions_per_terrain=spec["missions"],
                                 recipe_overrides=overrides, settings=settings)
     plans = plan_cells(study)

@@ -1,22 +1,17 @@
-"""Power of the planner-stress study's confirmatory tests, by simulation (issue 29).
+"""Power of a study's planned tests before its run, and its size (issue 42; issues 29 and 31 before it).
 
-The test is the one the study's plan uses: the exact two-sided sign-flip test of the mean per-terrain
-difference, at Holm's strictest level alpha / m (m = the plan's tests; the power of the first Holm
-step, a lower bound for the later ones). The effects are a pilot's per-terrain differences,
-resampled as the truth (offroadbench.study.stats.clustered.sign_flip_power). Two pilots, each kept as
-per-terrain success counts in experiments/pilots/ so that the design's justification does not change
-when a study is re-run:
+For a study TOML whose ``[analysis]`` plan names a ``pilot`` (an earlier run's trial table) and states
+each comparison's ``effect``, prints every expanded test's power at that effect with the exact test and
+the Holm step it will face (offroadbench.study.stats.power.plan_power: the pilot's per-terrain
+differences centred on the effect, resampled as the truth), at the study's terrains per cell and at
+the others given; then the design's size: trials and the runner's CPU estimate
+(offroadbench.study.runner.estimate_study), and the wall time on ``--cores`` cores at a measured
+seconds-per-trial when one is given (a committed run's sessions.csv wall time / its trials).
 
-- the planners against the line through the mast sensor: the vehicle-planner run of 2026-11-26
-  (root_seed 31), its Husky's ``mast`` arms at D_high 2.95 (8 terrains x 3 missions;
-  pilots/vehicle-planner-husky-2026-11-26.csv). It has no 2.99 level: its 2.95 differences stand in
-  for both levels (at 2.99 the line succeeds less, so there is more room above it; the planners
-  also fail more, so this is a guess, not a bound).
-- the line on the band-limited against the aliased surface: the planner-stress run of 2026-11-26
-  afternoon (root_seed 29, 20 terrains, 19 at 2.99, oracle map; pilots/planner-stress-2026-11-26.csv),
-  its first 4 missions per terrain (the design's 4; ``successes_first_4``).
+    python experiments/power.py experiments/vehicle-planner.toml [--terrains 16 20 24] [--s-per-trial 2.4]
 
-    python experiments/power.py [--n-sim 400]
+``study run`` computes the same power at the study's own terrains per cell and refuses a test under
+the plan's ``min_power`` unless the plan marks it exploratory.
 """
 
 from __future__ import annotations
@@ -24,73 +19,52 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from offroadbench.study.stats.clustered import sign_flip_power
-
-HERE = Path(__file__).resolve().parent
-PILOTS = {
-    "sensor": HERE / "pilots" / "vehicle-planner-husky-2026-11-26.csv",
-    "aliasing": HERE / "pilots" / "planner-stress-2026-11-26.csv",
-}
-#: the columns that name a cell in each pilot, and the column of successes (of ``missions`` or 4)
-COLS = {"sensor": ["planner", "sensor", "D_high"], "aliasing": ["planner", "D_high", "band_limited", "map_noise_m"]}
-SUCCESSES = {"sensor": ("successes", "missions"), "aliasing": ("successes_first_4", 4)}
-#: (name, pilot, treatment cell, control cell): the plan's tests, in its order
-TESTS = [
-    ("astar - straight, mast, 2.95", "sensor", ("astar", "mast", 2.95), ("straight", "mast", 2.95)),
-    ("astar - straight, mast, 2.99", "sensor", ("astar", "mast", 2.95), ("straight", "mast", 2.95)),
-    ("lattice - straight, mast, 2.95", "sensor", ("lattice", "mast", 2.95), ("straight", "mast", 2.95)),
-    ("lattice - straight, mast, 2.99", "sensor", ("lattice", "mast", 2.95), ("straight", "mast", 2.95)),
-    ("straight: band-limited - aliased, 2.95", "aliasing", ("straight", 2.95, True, 0.0), ("straight", 2.95, False, 0.0)),
-    ("straight: band-limited - aliased, 2.99", "aliasing", ("straight", 2.99, True, 0.0), ("straight", 2.99, False, 0.0)),
-]
-#: not in the plan (exploratory): the sensor's cost to A*, whose pilot effect is smaller and noisier
-NOT_PLANNED = [("astar: mast - oracle, 2.95", "sensor", ("astar", "mast", 2.95), ("astar", "oracle", 2.95))]
-SIZES = (8, 12, 16, 20, 24)
+from offroadbench.config import load_toml
+from offroadbench.study.runner import estimate_study
+from offroadbench.study.spec.config import study_from_dict
+from offroadbench.study.stats.power import load_pilot, plan_power, resolve_pilot
 
 
-def load_pilot(which: str) -> pd.DataFrame:
-    """A pilot's per-terrain table (``sensor`` or ``aliasing``): the axes, terrain, terrain_seed and
-    success counts."""
-    return pd.read_csv(PILOTS[which])
-
-
-def per_terrain(pilot: pd.DataFrame, which: str, cell: tuple) -> pd.Series:
-    """Success rate (percent) per terrain of one cell of a pilot."""
-    t = pilot
-    for col, v in zip(COLS[which], cell, strict=True):
-        t = t[np.isclose(t[col], v)] if isinstance(v, float) else t[t[col] == v]
-    t = t.set_index("terrain")
-    wins, of = SUCCESSES[which]
-    return 100.0 * t[wins] / (t[of] if isinstance(of, str) else of)
-
-
-def differences(pilots: dict[str, pd.DataFrame], test: tuple) -> np.ndarray:
-    """The per-terrain differences (points) treatment - control of one test in its pilot."""
-    _, which, tr, co = test
-    p = pilots[which]
-    return (per_terrain(p, which, tr) - per_terrain(p, which, co)).dropna().to_numpy()
+def power_table(toml: Path, terrains: list[int]) -> pd.DataFrame:
+    """One row per planned test, one ``power at K`` column per terrain count (the study's own first)."""
+    study = study_from_dict(load_toml(toml), where=str(toml))
+    plan = study.analysis
+    if plan is None or not plan.pilot:
+        raise SystemExit(f"{toml}: its [analysis] plan names no pilot")
+    path = resolve_pilot(plan.pilot, [toml.parent])
+    if path is None:
+        raise SystemExit(f"{toml}: pilot {plan.pilot} not found")
+    pilot = load_pilot(path)
+    out = None
+    for k in dict.fromkeys([study.terrains_per_cell, *terrains]):
+        t = plan_power(plan, study.cell_values(), study.column_names(), k, pilot)
+        if out is None:
+            out = t.drop(columns=["terrains", "power"])
+        out[f"power at {k}"] = t["power"].to_numpy()
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n-sim", type=int, default=400)
-    ap.add_argument("--alpha", type=float, default=0.05)
+    ap.add_argument("study", type=Path)
+    ap.add_argument("--terrains", type=int, nargs="*", default=[])
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--s-per-trial", type=float, default=None,
+                    help="measured worker seconds per trial of a comparable committed run")
     args = ap.parse_args()
-    pilots = {k: load_pilot(k) for k in PILOTS}
-    level = args.alpha / len(TESTS)
-    rng = np.random.default_rng(41)
-    print(f"exact sign-flip test at alpha / m = {args.alpha} / {len(TESTS)} = {level:.4f}")
-    print(f"{'test':42s} {'pilot':9s} {'K':>3s} {'mean':>6s} {'sd':>6s}  power at K = "
-          + " / ".join(str(k) for k in SIZES))
-    for test in TESTS + NOT_PLANNED:
-        d = differences(pilots, test)
-        powers = [sign_flip_power(d, k, level, rng, n_sim=args.n_sim) for k in SIZES]
-        note = "" if test in TESTS else "  (not in the plan)"
-        print(f"{test[0]:42s} {test[1]:9s} {d.size:3d} {d.mean():6.1f} {d.std(ddof=1):6.1f}  "
-              + " / ".join(f"{p:.2f}" for p in powers) + note)
+    study = study_from_dict(load_toml(args.study), where=str(args.study))
+    pd.set_option("display.width", 250)
+    pd.set_option("display.max_columns", 20)
+    pd.set_option("display.max_colwidth", 60)
+    print(power_table(args.study, args.terrains).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    est = estimate_study(study)
+    line = f"\n{study.name}: {est.describe()}; on {args.cores} cores about {est.cpu_s / args.cores / 3600:.2g} h"
+    if args.s_per_trial:
+        line += (f"; at the measured {args.s_per_trial:g} s per trial about "
+                 f"{est.trials * args.s_per_trial / args.cores / 3600:.2g} h")
+    print(line)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,12 @@ Keyed by config class name, then field name (:data:`BOUNDS`); :func:`check_bound
 the end of the configs' ``__post_init__``. Fields a table does not list are left to the config's
 own checks. The settings reference (``docs/reference.md``) prints every range with its source.
 
+The model file a ``vehicle.toml`` names (its URDF) is bounded too (:data:`URDF_BOUNDS`,
+:func:`check_urdf`, called when the vehicle is loaded: offroadbench.sim.trial.vehicle.load_vehicle):
+every link's mass, its inertia tensor (positive definite, a real body's, within range), its
+collision shapes' sizes, and the joints' origins, axes and limits. A chassis of mass 0 is not a
+vehicle (PyBullet pins a massless base to the world: every trial ``stuck``), nor one of 1e9 kg.
+
 A trial whose vehicle is thrown while it settles anyway (a combination of legal values) is a fault,
 not an outcome: :func:`check_settled` raises :class:`offroadbench.errors.TrialFault`.
 """
@@ -24,8 +30,8 @@ from typing import Any, Mapping
 
 from offroadbench.errors import InputError, TrialFault
 
-__all__ = ["BOUNDS", "CELL_SIZE", "HEIGHT_M", "Bound", "check_heights", "SETTLE_MAX_RISE_M", "SETTLE_MAX_SPEED_M_S", "check_bounds", "check_settled",
-           "reference_lines"]
+__all__ = ["BOUNDS", "CELL_SIZE", "HEIGHT_M", "URDF_BOUNDS", "Bound", "check_heights", "SETTLE_MAX_RISE_M",
+           "SETTLE_MAX_SPEED_M_S", "check_bounds", "check_settled", "check_urdf", "reference_lines"]
 
 _WONG = "Wong 2001, Theory of Ground Vehicles, 3rd ed., Table 2.3"
 
@@ -114,6 +120,113 @@ BOUNDS: Mapping[str, Mapping[str, Bound]] = {
 }
 
 
+#: a URDF's physical quantities (the model file of a vehicle.toml): name -> (unit, range and its source)
+URDF_BOUNDS: Mapping[str, tuple[str, Bound]] = {
+    "mass": ("kg", Bound(1e-6, 1e6, "a milligram (robot descriptions give bare frames 1e-5 to 1e-3 kg) to a "
+                                    "loaded haul truck's frame (CAT 797F: 623 t gross)")),
+    "principal moment of inertia": ("kg m^2", Bound(1e-12, 1e8, "positive (a body has extent in every direction): "
+                                                                "a milligram at a millimetre to a haul truck's body "
+                                                                "about its vertical axis (about 1e7 kg m^2)")),
+    "collision size": ("m", Bound(1e-4, 100.0, "a box side, sphere radius or cylinder radius or length: a tenth "
+                                               "of a millimetre to ten times the longest vehicles (about 15 m)")),
+    "origin offset": ("m", Bound(-100.0, 100.0, "a joint, centre of mass or shape within ten times the longest "
+                                                "vehicles (about 15 m) of its parent frame")),
+    "revolute limit": ("rad", Bound(-6.3, 6.3, "at most a turn either way (a joint that turns further is "
+                                               "continuous)")),
+    "prismatic limit": ("m", Bound(-10.0, 10.0, "suspension travel is below 1 m on any vehicle (haul trucks "
+                                                "about 0.3 m); ten times that")),
+}
+
+
+def _urdf_value(where: str, quantity: str, value: float) -> None:
+    unit, bound = URDF_BOUNDS[quantity]
+    if not (math.isfinite(value) and bound.holds(float(value))):
+        raise InputError(f"{where}: {quantity} {value:g} {unit} is outside the physical range {bound.text()} {unit} "
+                         f"({bound.source}); check the value and its unit")
+
+
+def _finite(where: str, what: str, values) -> None:
+    if not all(math.isfinite(v) for v in values):
+        raise InputError(f"{where}: {what} {' '.join(f'{v:g}' for v in values)} is not finite")
+
+
+def _written_sizes(kind: str, size) -> list[float]:
+    """The sizes a URDF writes for a shape read_urdf keeps as (half) extents, m: a box's sides, a
+    sphere's radius, a cylinder's radius and length."""
+    if kind == "box":
+        return [2.0 * v for v in size]
+    if kind == "cylinder":
+        return [size[0], 2.0 * size[1]]
+    return list(size)
+
+
+def check_urdf(path: Any, links: Mapping[str, Any], joints: Any) -> None:
+    """Refuse (InputError, one line naming the file and the link or joint) a URDF outside
+    physical bounds (:data:`URDF_BOUNDS`): ``links`` and ``joints`` as
+    offroadbench.sim.engines.base.read_urdf reads them. Every link needs an ``<inertial>``, a mass
+    and a positive definite inertia tensor (kg m^2) that a real body can have (its principal moments
+    meet the triangle inequality, as MuJoCo demands) within range; collision shapes and origins are
+    sized within range; a joint names links of the file, turns about a non-zero finite axis, and its
+    limits (rad or m) are ordered and within range; the links form one tree."""
+    import numpy as np
+
+    for name, link in links.items():
+        where = f"URDF {path}: link {name!r}"
+        if not link.has_inertial:
+            raise InputError(f"{where} has no <inertial> (mass and inertia): every link of a vehicle needs one "
+                             "(PyBullet would give it 1 kg, MuJoCo none)")
+        _urdf_value(where, "mass", link.mass)
+        _finite(where, "centre of mass", link.com)
+        for v in link.com:
+            _urdf_value(f"{where} centre of mass", "origin offset", v)
+        (ixx, iyy, izz), (ixy, ixz, iyz) = link.inertia, link.products
+        _finite(where, "inertia (ixx iyy izz ixy ixz iyz)", (ixx, iyy, izz, ixy, ixz, iyz))
+        moments = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float))
+        if moments[0] <= 0.0:
+            raise InputError(f"{where}: its inertia tensor (ixx {ixx:g}, iyy {iyy:g}, izz {izz:g}, ixy {ixy:g}, "
+                             f"ixz {ixz:g}, iyz {iyz:g} kg m^2) is not positive definite (smallest principal moment "
+                             f"{moments[0]:g}); a real body's is")
+        for m in moments:
+            _urdf_value(where, "principal moment of inertia", float(m))
+        if moments[0] + moments[1] < moments[2] * (1.0 - 1e-6):
+            raise InputError(f"{where}: its principal moments of inertia {moments[0]:g}, {moments[1]:g}, "
+                             f"{moments[2]:g} kg m^2 break the triangle inequality (the two smaller must sum to at "
+                             "least the largest): no real body has them")
+        for kind, size, pos, euler in link.shapes:
+            for v in _written_sizes(kind, size):
+                _urdf_value(f"{where} {kind}", "collision size", v)
+            _finite(f"{where} {kind}", "origin rpy", euler)
+            for v in pos:
+                _urdf_value(f"{where} {kind}", "origin offset", v)
+    children: set[str] = set()
+    for j in joints:
+        where = f"URDF {path}: joint {j.name!r}"
+        for role, link in (("parent", j.parent), ("child", j.child)):
+            if link not in links:
+                raise InputError(f"{where}: its {role} link {link!r} is not a link of the file")
+        if j.child in children:
+            raise InputError(f"{where}: link {j.child!r} is the child of two joints; the links must form a tree")
+        children.add(j.child)
+        _finite(where, "origin rpy", j.euler)
+        for v in j.pos:
+            _urdf_value(f"{where} origin", "origin offset", v)
+        _finite(where, "axis", j.axis)
+        if j.kind != "fixed" and not any(j.axis):
+            raise InputError(f"{where}: its axis is the zero vector; a joint turns or slides along a direction")
+        if j.limits is not None and j.kind in ("revolute", "prismatic"):
+            lo, hi = j.limits
+            for v in (lo, hi):
+                _urdf_value(f"{where} limit", f"{j.kind} limit", v)
+            if lo > hi:
+                raise InputError(f"{where}: limit lower {lo:g} is above upper {hi:g}")
+        for what, v in (("effort", j.effort), ("velocity", j.velocity)):
+            if v is not None and not (math.isfinite(v) and v >= 0):
+                raise InputError(f"{where}: limit {what} {v:g} must be a finite number >= 0")
+    roots = [name for name in links if name not in children]
+    if len(roots) != 1:
+        raise InputError(f"URDF {path}: the links must form one tree with one root; roots: {', '.join(roots) or 'none'}")
+
+
 def check_bounds(cfg: Any, where: str | None = None) -> None:
     """Refuse (InputError, one line) a field of ``cfg`` outside its physical range (:data:`BOUNDS`)."""
     table = BOUNDS.get(type(cfg).__name__)
@@ -164,4 +277,11 @@ def reference_lines() -> list[str]:
         lines += [f"| `{name}` | {b.text()} | {b.source} |" for name, b in table.items()]
         lines.append("")
     lines += [f"Terrain heights (`Heightmap.z`, every map read or generated): {HEIGHT_M.text()} m ({HEIGHT_M.source}).", ""]
+    lines += ["### The vehicle's URDF", "",
+              ("Every link of the model file a `vehicle.toml` names needs an `<inertial>`; its inertia tensor must "
+               "be positive definite and meet the triangle inequality; a joint's limits must be ordered "
+               "(offroadbench.bounds.check_urdf, when the vehicle is loaded)."), "",
+              "| quantity | unit | physical range | source |", "|---|---|---|---|"]
+    lines += [f"| {name} | {unit} | {b.text()} | {b.source} |" for name, (unit, b) in URDF_BOUNDS.items()]
+    lines.append("")
     return lines

@@ -5,8 +5,11 @@ Two estimates, both upper bounds of the measured peak (benchmarks/RESULTS.md):
 
 * :func:`grid_bytes`: generating and analysing a rows x cols terrain (``generate``, ``analyze``,
   ``roughness-study``, ``drive``, ``export``), :data:`GRID_BYTES_PER_CELL` per cell;
-* :func:`world_bytes`: a trial worker holding one terrain and its PyBullet world (``study run``),
-  the map's cells plus PyBullet's transient copy of one heightfield tile's triangles.
+* :func:`world_bytes`: a trial worker holding one terrain and its world (``study run``): on PyBullet
+  the map's cells plus PyBullet's transient copy of one heightfield tile's triangles; on MuJoCo the
+  map's cells, the model's float32 heights and its arena, plus numba and its compiled kernels where
+  numba is installed (the MuJoCo world's tyre loop and height-field collision run in numba: about
+  115 MB of a worker, more than MuJoCo itself).
 
 :func:`check_memory` refuses work whose estimate exceeds :func:`available_memory_bytes` with one
 line naming the estimate (``--force`` or ``OFFROADBENCH_NO_MEMORY_CHECK=1`` skips it);
@@ -22,9 +25,10 @@ from offroadbench.errors import InputError
 
 __all__ = [
     "GRID_BYTES_PER_CELL", "WORKER_BYTES_PER_CELL", "TILE_BUILD_BYTES_PER_CELL", "WORKER_BASE_BYTES",
+    "MUJOCO_WORKER_BASE_BYTES", "NUMBA_KERNELS_BYTES", "MUJOCO_BYTES_PER_CELL", "MUJOCO_ARENA_BYTES",
     "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
     "check_memory",
-    "check_recipe_memory", "workers_that_fit", "format_bytes",
+    "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES",
 ]
 
 
@@ -132,20 +136,48 @@ WORKER_BYTES_PER_CELL = 60
 #: PyBullet's transient triangle copy while one heightfield tile's heights are written, per cell of
 #: the tile (sim/world.py): ~700 MB for an untiled 1009^2 map, ~45 MB for a 256-cell tile
 TILE_BUILD_BYTES_PER_CELL = 690
-#: memory of a worker process before it builds a terrain (Python, numpy, pybullet), bytes.
+#: memory of a PyBullet worker process before it builds a terrain (Python, numpy, pybullet), bytes.
 #: With these, a 1009^2 worker is estimated at 266 MiB tiled (measured peak 203 MB) and 923 MiB
 #: untiled (860 MB; benchmarks/RESULTS.md, "Heightfield tiles")
 WORKER_BASE_BYTES = 160 * 2**20
 
 
-def world_bytes(rows: int, cols: int, tile_cells: int) -> int:
-    """Peak memory estimate of a trial worker on a rows x cols map built as heightfield tiles of at
-    most ``tile_cells`` cells (``SimConfig.heightfield_tile_cells``; 0: one heightfield), bytes."""
+#: memory of a MuJoCo trial worker before it builds a terrain, without numba (Python, numpy, scipy,
+#: pandas, offroadbench, mujoco: 126 MB measured), bytes
+MUJOCO_WORKER_BASE_BYTES = 140 * 2**20
+#: numba once the MuJoCo world's compiled kernels are loaded from its cache (``import numba`` 54 MB,
+#: the first kernel 61 MB: llvmlite's LLVM and numba's typing registry; the rest ~1 MB each), bytes
+NUMBA_KERNELS_BYTES = 120 * 2**20
+#: a MuJoCo world per cell of its map: the model's float32 heights (4 B) and their conversion
+#: (written in blocks of rows, offroadbench.sim.engines.mujoco.world), bytes
+MUJOCO_BYTES_PER_CELL = 5
+#: the MuJoCo world's arena (``<size memory>``, offroadbench.sim.engines.mujoco.mjcf: 16 MB for four
+#: wheels) and its compiled collision functions, bytes
+MUJOCO_ARENA_BYTES = 20 * 2**20
+#: engines :func:`world_bytes` knows (offroadbench.sim.engine.ENGINES)
+WORLD_ENGINES = ("pybullet", "mujoco")
+
+
+def world_bytes(rows: int, cols: int, tile_cells: int, engine: str = "pybullet", numba: bool | None = None) -> int:
+    """Peak memory estimate of a trial worker on a rows x cols map, bytes: on ``pybullet`` built as
+    heightfield tiles of at most ``tile_cells`` cells (``SimConfig.heightfield_tile_cells``; 0: one
+    heightfield); on ``mujoco`` (which has one height field whatever ``tile_cells``) with numba's
+    compiled kernels when ``numba`` (None: when numba is installed)."""
+    cells = int(rows) * int(cols)
+    if engine == "mujoco":
+        if numba is None:
+            import importlib.util
+
+            numba = importlib.util.find_spec("numba") is not None
+        return (MUJOCO_WORKER_BASE_BYTES + (NUMBA_KERNELS_BYTES if numba else 0) + MUJOCO_ARENA_BYTES
+                + (WORKER_BYTES_PER_CELL + MUJOCO_BYTES_PER_CELL) * cells)
+    if engine != "pybullet":
+        raise ValueError(f"world_bytes: engine {engine!r} is not one of {', '.join(WORLD_ENGINES)}")
     from offroadbench.sim.config import tile_spans  # pure config code: no pybullet
 
     tile_rows = max(b - a for a, b in tile_spans(int(rows) - 1, tile_cells)) + 1
     tile_cols = max(b - a for a, b in tile_spans(int(cols) - 1, tile_cells)) + 1
-    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * int(rows) * int(cols) + TILE_BUILD_BYTES_PER_CELL * tile_rows * tile_cols
+    return WORKER_BASE_BYTES + WORKER_BYTES_PER_CELL * cells + TILE_BUILD_BYTES_PER_CELL * tile_rows * tile_cols
 
 
 def workers_that_fit(per_worker_bytes: int) -> int:

@@ -62,7 +62,7 @@ def _builder_class(builder: Any) -> type | None:
 def _study_section() -> SectionDoc:
     from offroadbench.study.spec.config import StudyConfig
 
-    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis")
+    skip = ("grid", "recipe_overrides", "settings", "reference", "analysis", "blind_seed")  # blind_seed: set by root_seed = "blind"
     notes = (
         ("`[grid]`: axes of the parameter grid, `\"dotted.key\" = [values]`: `recipe` (preset names or paths), "
         "`recipe.<key of the recipe TOML>`, or `<table>.<key>` of any table below (`planner.name`, "
@@ -156,7 +156,8 @@ def study_sections() -> list[SectionDoc]:
 
 
 def search_sections() -> list[tuple[str, SectionDoc]]:
-    """(title, table) of the failure search's ``[search]`` and ``[[search.params]]`` tables."""
+    """(title, table) of the failure search's ``[search]``, ``[[search.params]]`` and ``[analysis]`` tables."""
+    from offroadbench.search.analysis import SearchAnalysis
     from offroadbench.search.space import SearchConfig, SearchParam
 
     notes = ("A search file is a study file plus these tables (`offroadbench search run SEARCH.toml`); "
@@ -167,7 +168,12 @@ def search_sections() -> list[tuple[str, SectionDoc]]:
                                       field_docs(SearchConfig, skip=("params",)), notes)),
             ("`[[search.params]]`", SectionDoc("search.params", qualname(SearchParam),
                                                "One searched key, with its range and nominal distribution "
-                                               "(one table per key)", field_docs(SearchParam)))]
+                                               "(one table per key)", field_docs(SearchParam))),
+            ("`[analysis]` of a search file", SectionDoc("analysis", qualname(SearchAnalysis),
+                                                         "A search's analysis plan, fixed before the run and stored with it",
+                                                         field_docs(SearchAnalysis),
+                                                         ("Source: `offroadbench.search.analysis`; the report computes "
+                                                          "these figures first (`offroadbench.search.evaluate`).",)))]
 
 
 def section_names() -> list[str]:
@@ -327,7 +333,11 @@ def render_reference() -> str:
         "`generate --set` / `drive --set` through dotted keys (e.g. `layers.base.D_high`). A recipe "
         "also has `[recipe]` (`name`, `description`, `relief_m`, `crs`), `[body]` (`name`: the "
         "trials' gravity, offroadbench.bodies) and `[soil]` (`name`: the terramechanics tyre model's "
-        "soil) tables. A layer table holds its generator's keys below; a key that is itself a table "
+        "soil; a soil map with `[[soil.regions]]`, each a `soil` and conditions among `slope_min_deg`, "
+        "`slope_max_deg`, `height_min_m`, `height_max_m`, `in_crater` (with `crater_radius_fraction`, "
+        "`crater_min_diameter_m`), a disc `centre_m` + `radius_m` or a rectangle `x_range_m` + "
+        "`y_range_m`, and/or `raster` (a PNG of soil indices, one pixel per height sample) with "
+        "`raster_soils`: offroadbench.terrain.soil_map) tables. A layer table holds its generator's keys below; a key that is itself a table "
         "(`layers.craters.population`) is written as `[layers.NAME.KEY]`.",
         "",
     ]

@@ -12,7 +12,7 @@ import os
 import signal
 import sys
 
-from offroadbench.errors import InputError, PluginError, StudyError
+from offroadbench.errors import InputError, PluginError, StudyError, TrialFault
 
 #: command modules under offroadbench.cli, each with register(subparsers)
 COMMAND_MODULES = ("terrain", "study", "search", "drive", "export", "vehicle", "soil", "config", "suite")
@@ -69,6 +69,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_FAILED
     except PluginError as exc:
         sys.stderr.write(f"offroadbench: plug-in fault: {_one_line(exc)}\n")
+        return EXIT_FAILED
+    except TrialFault as exc:  # a trial outside a study (drive, checks): thrown while settling, past its limit
+        sys.stderr.write(f"offroadbench: trial fault: {_one_line(exc)}\n")
         return EXIT_FAILED
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM during a run (errors.Stopped): the same one line
         signum = getattr(exc, "signum", signal.SIGINT)

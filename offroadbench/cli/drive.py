@@ -260,9 +260,13 @@ def cmd_drive(args: argparse.Namespace) -> int:
 
         warn_relief_tails(hm, label, CLIP_ELSEWHERE)
     gravity, soil = terrain_body(args.terrain, recipe)  # where --gravity / --set sim.* leave them open
+    from offroadbench.terrain.soil_map import soil_map_for
+
+    soil_map = soil_map_for(recipe, hm, tseed) if recipe is not None else None  # the recipe's [[soil.regions]]
     with bar("missions", unit="mission") as progress:
         run = drive_missions(hm, args.missions, args.seed, terrain_seed=tseed if recipe is not None else _png_seed(args.terrain),
-                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress)
+                             settings=settings, gravity_m_s2=gravity, soil=soil, progress=progress,
+                             soil_map=soil_map)
     print(format_drive_run(run, label))
     written = []
     if out is not None:

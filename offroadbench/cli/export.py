@@ -39,6 +39,11 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
+    soil_map = None
+    if recipe is not None:
+        from offroadbench.terrain.soil_map import soil_map_for
+
+        soil_map = soil_map_for(recipe, hm, args.seed)  # the recipe's [[soil.regions]]: a sidecar raster
     if args.clip_percentile:
         hm = clip_percentile(hm, args.clip_percentile)
     if recipe is not None:
@@ -60,7 +65,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     tails = tail_report(hm)  # a spike that sets the 16-bit step of the image formats: exported as it is, said here
     if tails.dominated:
         log.warning("export %s: %s", args.format, tails.message())
-    result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, **options)
+    result = export_heightmap(hm, args.format, out, name=check_name(name), meta=meta, soil_map=soil_map, **options)
     print(
         f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m -> {args.format} "
         f"({time.perf_counter() - t0:.2f} s)"

@@ -38,11 +38,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     rep = sub.add_parser("report", help="write the Markdown report with figures of a search run directory")
     rep.add_argument("run_dir", help="run directory of a search")
     rep.add_argument("--out", help="report folder (default: RUN_DIR/report)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write report.html: one self-contained file (figures inline, the sortable per-trial "
+                          "table with each failure's replay command)")
     rep.set_defaults(func=cmd_report)
 
 
-def write_search_report(run_dir: Path, out: Path) -> Path:
-    """Build the report of a search run directory and write it whole (Markdown, PNGs, CSVs, the TOML)."""
+def write_search_report(run_dir: Path, out: Path, html: bool = False) -> Path:
+    """Build the report of a search run directory and write it whole (Markdown, PNGs, CSVs, the TOML;
+    ``html`` also the self-contained report.html)."""
     from offroadbench.cli._common import created_dirs, save_figure
     from offroadbench.io.export import staged_dir
     from offroadbench.search.report import build_search_report
@@ -58,7 +62,11 @@ def write_search_report(run_dir: Path, out: Path) -> Path:
         if toml:
             (stage / "search.toml").write_text(toml)
         (stage / "report.md").write_text(report.markdown)
-    return out / "report.md"
+        if html:
+            from offroadbench.search.report import search_report_html
+
+            (stage / "report.html").write_text(search_report_html(run_dir, report), encoding="utf-8")
+    return out / ("report.html" if html else "report.md")
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -86,6 +94,10 @@ def _run(args: argparse.Namespace) -> int:
         check_dir_name(plan.study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / plan.study.name, "--out")
     hi = [p.high for p in plan.search.params]
+    from offroadbench.study.execution.common import check_trial_floor
+
+    lo = [p.low for p in plan.search.params]  # the floor at either end of every searched range
+    check_trial_floor(args.trial_timeout_s, [trial_cell(plan, g, 0, x) for g in plan.groups for x in (lo, hi)])
     workers = run_workers(args, [trial_cell(plan, g, 0, hi) for g in plan.groups])
     options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
     with bar(plan.study.name, unit="trial") as progress:
@@ -110,5 +122,5 @@ def cmd_report(args: argparse.Namespace) -> int:
     if not (run_dir / "study.sqlite").is_file():
         raise InputError(f"{run_dir}: not a search run directory (no study.sqlite)")
     out = check_output_dir(args.out if args.out else run_dir / "report", "--out")
-    print(f"report: {write_search_report(run_dir, out)}")
+    print(f"report: {write_search_report(run_dir, out, html=args.html)}")
     return 0

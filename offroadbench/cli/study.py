@@ -30,8 +30,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
     run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
                      help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
-                          "replaced) and the study goes on (default: generous against the trials' nominal time; "
-                          "at most 30 days)")
+                          "replaced where the trial cannot be stopped; on dask a worker silent for this plus 10 s "
+                          "too) and the study goes on (default: generous against the trials' nominal time; at "
+                          "most 30 days; at least the study's shortest possible trial)")
     run.add_argument("--retry-faults", action="store_true",
                      help="run the trials stored as faults (past their limit, thrown while settling) once more; "
                           "a resume skips them otherwise")
@@ -144,10 +145,16 @@ def _run(args: argparse.Namespace) -> int:
         raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
+    from offroadbench.study.stats.power import check_power
+
+    check_power(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
     try:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    from offroadbench.study.execution.common import check_trial_floor
+
+    check_trial_floor(args.trial_timeout_s, plans)  # a limit no trial can meet (issue 44)
     if not args.out:
         check_dir_name(study.name, path)
     out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")

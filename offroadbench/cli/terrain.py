@@ -164,6 +164,11 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     warn_relief_tails(hm, label)
     rep = describe_terrain(hm, rcfg, crater_diameters_m=crater_diameters(recipe, args.seed))
     print(format_terrain_report(rep, label))
+    from offroadbench.terrain.soil_map import soil_map_for
+
+    soil_map = soil_map_for(recipe, hm, args.seed) if recipe is not None else None
+    if soil_map is not None:
+        print("Soil map: " + ", ".join(f"{s} {100 * f:.1f} %" for s, f in soil_map.fractions().items()))
     if plot is not None:
         from offroadbench.plots.surface import plot_surface_analysis
         from offroadbench.plots.terrain import plot_terrain_classes
@@ -173,6 +178,11 @@ def cmd_analyze(args: argparse.Namespace) -> int:
             print(f"wrote {save_figure(fig, plot)}")
             fig = plot_surface_analysis(hm, crater_diameters_m=rep.crater_diameters_m, title=label)
             print(f"wrote {save_figure(fig, _surface_plot_path(plot))}")
+            if soil_map is not None:  # the recipe's [[soil.regions]] / raster
+                from offroadbench.plots.soil import plot_soil_map
+
+                fig = plot_soil_map(hm, soil_map, title=f"{label}: soil map")
+                print(f"wrote {save_figure(fig, plot.with_name(plot.stem + '_soil' + plot.suffix))}")
     return 0
 
 

@@ -274,6 +274,9 @@ def read_png16(
         z_min, z_max = _number(meta, "z_min_m", source), _number(meta, "z_max_m", source)
         if z_max < z_min:
             raise InputError(f"{source}: z_max_m = {z_max} is below z_min_m = {z_min}; allowed: z_max_m >= z_min_m")
+        from offroadbench.bounds import check_heights
+
+        check_heights(z_min, z_max, where=source)  # before decoding: a range of +-1e308 overflows (inf * 0)
         for key, n in (("rows", height), ("cols", width)):
             if key in meta and meta[key] != n:
                 raise InputError(f"{source}: {key} = {meta[key]!r} does not match the PNG's {n}")

@@ -51,7 +51,7 @@ def load_telemetry(path: str | Path) -> dict[str, np.ndarray]:
     if not p.is_file():
         raise InputError(f"telemetry file {p}: no such file")
     if kind == ".npz":
-        with np.load(p) as data:
+        with np.load(p, allow_pickle=False) as data:  # data only, never a pickle
             return {k: data[k] for k in data.files}
     import pyarrow.parquet as pq
 

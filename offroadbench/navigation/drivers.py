@@ -231,6 +231,11 @@ def planner_from_table(table: Mapping[str, Any], where: str = "[planner]") -> Pl
         cfg = from_dict(spec.config, data, where=f"{where} ({name})")
     except TypeError as exc:
         raise InputError(f"{where} ({name}): {exc}") from None
+    # the default limits ("sheet") matter only to a driver that plans with the vehicle: for one that does not
+    # (the straight line), the truth stays None, so its trials and settings are what they were before the default
+    only_limits = perception.active and not dataclasses.replace(perception, limits="measured").active
+    if only_limits and "limits" not in table and "vehicle" not in spec.needs:
+        return PlannerChoice(name, cfg, kind, None)
     return PlannerChoice(name, cfg, kind, perception if perception.active else None)
 
 

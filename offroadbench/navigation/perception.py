@@ -28,8 +28,11 @@ seen) or policies (a policy observes the true height patch under them); the clas
 ``hazard = "classes"`` cost) is always the true closed class map. The ``mast`` sensor
 (``sensor = "mast"``, offroadbench.navigation.sensor) models occlusion, range-dependent height noise
 and localisation drift, for planners and policies alike; it replaces the map-error keys (which must
-then be 0). ``limits = "sheet"`` has the planners and policies plan with the vehicle's published
-limits (offroadbench.navigation.sensor.sheet_envelope).
+then be 0). ``limits = "sheet"`` (the default since issue 42) has the planners and policies plan with
+the vehicle's published limits (offroadbench.navigation.sensor.sheet_envelope); ``"measured"`` with the
+simulated vehicle's own. A trial without a perception config (``PlannerChoice.perception`` None: the
+true map and pose, stored so by runs before issue 42 and by planners that need no vehicle) plans with
+the measured limits, so a stored trial replays as it ran.
 """
 
 from __future__ import annotations
@@ -100,10 +103,11 @@ class PerceptionConfig:
     odometry_drift: float = 0.01
     """``mast``: odometry drift: the standard deviation of the per-trial distance scale error and of
     the heading error's random walk per square-root metre travelled (rad)."""
-    limits: str = "measured"
-    """The vehicle limits the planners and policies plan with: ``measured`` (from the simulated
-    vehicle) or ``sheet`` (the maker's published grade and step limits where its vehicle.toml gives
-    them, offroadbench.navigation.sensor.sheet_envelope)."""
+    limits: str = "sheet"
+    """The vehicle limits the planners and policies plan with: ``sheet`` (the default: the maker's
+    published grade and step limits where its vehicle.toml gives them,
+    offroadbench.navigation.sensor.sheet_envelope) or ``measured`` (from the simulated vehicle's own
+    failure thresholds). A planner that needs no vehicle (the straight line) ignores it."""
 
     def __post_init__(self) -> None:
         for name in ("map_noise_m", "map_noise_corr_m", "map_cell_m", "sensing_radius_m",

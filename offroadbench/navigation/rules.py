@@ -35,9 +35,12 @@ Entrapment thresholds, from single-wheel tests and the soil model (offroadbench.
   gravity; ``offroadbench soil check``), so more slip buys little more traction, and single-wheel tests find the sinkage several
   times the static one there (Ding et al. 2010: 3-7x at slip 0.6 for lugged wheels on a lunar
   simulant).
-* ``entrap_sinkage_ratio = 1.5``: the soil model with slip-sinkage gives 1.8-2.2x the static
-  sinkage at slip 0.6 (lunar and Earth gravity, ``soils/lunar-regolith.toml``'s ``n1``), so 1.5x
-  is crossed by any wheel held at slip 0.6 or more, and not by load transfer alone on flat ground.
+* ``entrap_sinkage_ratio = 1.5``: the soil model with slip-sinkage ``n1 = 0.4`` gave 1.8-2.2x the
+  static sinkage at slip 0.6 (lunar and Earth gravity), so 1.5x was crossed by any wheel held at
+  slip 0.6 or more, and not by load transfer alone on flat ground. That ``n1`` had no published
+  source and the shipped soils now have ``n1 = 0`` (issue 47), under which the sinkage at slip 0.6
+  is about 1.05x the static one: the rule then fires only where the wheels sink on their own (soft
+  ground, load transfer), and a vehicle spinning in place on firm regolith ends ``stuck`` instead.
   In this model the sinkage follows the slip quasi-statically (no excavation that accumulates over
   time), so "sinkage rising" is measured against the settled sinkage, not as a trend within the
   window; on a soil without slip-sinkage (``n1 = 0``) only load transfer raises it.
@@ -104,7 +107,8 @@ class FailureRules:
     at 1 m/s of wheel rim: a slip above 0.96) ..."""
     entrap_sinkage_ratio: float = 1.5
     """... with the window's median deepest-wheel sinkage at least this many times the settled
-    sinkage (at the trial's first sample; the soil model gives 1.8-2.2x at slip 0.6) ..."""
+    sinkage (at the trial's first sample; chosen when the soils had an unsourced slip-sinkage; with
+    the shipped soils' n1 = 0 the model gives about 1.05x at slip 0.6: see the module docstring) ..."""
     entrap_window_s: float = 5.0
     """... over this long, seconds (several wheel revolutions at 1 m/s)."""
 

@@ -1,6 +1,7 @@
 """Soil figures: the single-wheel soil check (sinkage, drawbar pull / load and torque / (load x
 radius) against slip, the engine rig beside the Wong-Reece integrals and the published slip-sinkage
-bands), and a study's soft-soil box plots with the soil and gravity of each group."""
+bands), a study's soft-soil box plots with the soil and gravity of each group, and a terrain's soil
+map over its hillshade."""
 
 from __future__ import annotations
 
@@ -11,7 +12,35 @@ import numpy as np
 
 from offroadbench.plots.style import new_figure
 
-__all__ = ["plot_soil_check", "fig_soil", "conditions_text"]
+__all__ = ["plot_soil_check", "plot_soil_map", "fig_soil", "conditions_text"]
+
+#: soil map colours, by the map's index (index 0, the default soil, first)
+SOIL_COLOURS = ("#d9d9d9", "#e6550d", "#3182bd", "#31a354", "#756bb1", "#fdae6b", "#9ecae1", "#a1d99b")
+
+
+def plot_soil_map(hm, soil_map, title: str = ""):
+    """The soil map (offroadbench.terrain.soil_map.SoilMap) over the terrain's hillshade: one colour per
+    soil, the legend with each soil's share of the map."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    from offroadbench.plots.terrain import hillshade
+
+    n = len(soil_map.soils)
+    colours = [SOIL_COLOURS[k % len(SOIL_COLOURS)] for k in range(n)]
+    fig, axes = new_figure(1, 1, figsize=(7.0, 6.0))
+    ax = np.ravel(axes)[0]
+    ax.imshow(hillshade(hm), cmap="gray", origin="lower", extent=hm.extent_m, vmin=0, vmax=1)
+    ax.imshow(soil_map.index, cmap=ListedColormap(colours), origin="lower", extent=hm.extent_m, alpha=0.55,
+              vmin=-0.5, vmax=n - 0.5, interpolation="nearest")
+    shares = soil_map.fractions()
+    ax.legend(handles=[Patch(color=c, label=f"{s} ({100 * shares[s]:.1f} %)") for s, c in zip(soil_map.soils, colours,
+                                                                                             strict=True)],
+              loc="upper right", fontsize=8, framealpha=0.9)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title or "soil map")
+    return fig
 
 
 def conditions_text(c: Mapping[str, Any]) -> str:
@@ -19,7 +48,10 @@ def conditions_text(c: Mapping[str, Any]) -> str:
     offroadbench.study.report.header.soil_conditions."""
     g = c.get("gravity_m_s2")
     g_text = f"{g:g} m/s^2" if isinstance(g, (int, float)) else "?"
-    return f"soil {c.get('soil')} ({c.get('soil_source')}), gravity {g_text} ({c.get('gravity_source')})"
+    soil = f"soil {c.get('soil')} ({c.get('soil_source')})"
+    if c.get("soil_map"):
+        soil += " with the recipe's soil map ([[soil.regions]] / raster; the soil named is its default)"
+    return f"{soil}, gravity {g_text} ({c.get('gravity_source')})"
 
 
 def fig_soil(boxes: Mapping[str, Mapping[str, Mapping[str, Any]]], metrics: Mapping[str, tuple[str, str]],
@@ -66,6 +98,15 @@ def plot_soil_check(rig, model, title: str = "", bands=(), gravity_m_s2: float |
                          elinewidth=2.5, capsize=4,
                          label=f"{band.source.split(' (')[0]}: {band.ratio_low:g}-{band.ratio_high:g}x static, "
                                f"{band.wheel}" if k == 0 else None)
+    outside = np.zeros(len(rig.slip), dtype=bool)
+    for check in (rig, model):
+        if getattr(check, "outside_model", None) is not None:
+            outside |= np.asarray(check.outside_model, dtype=bool)
+    if outside.any():  # the wheel bottomed out there: outside the model, not agreement
+        for ax, _, _ in panels:
+            for k, s in enumerate(rig.slip[outside]):
+                ax.axvspan(s - 0.05, s + 0.05, color="#d62728", alpha=0.12, lw=0,
+                           label="outside the model (bottomed out)" if k == 0 else None)
     axes[0].legend(fontsize=7, loc="upper left")
     g = f", gravity {gravity_m_s2:g} m/s^2" if gravity_m_s2 is not None else ""
     fig.suptitle(title or f"{rig.soil}: wheel r = {rig.radius_m:g} m, b = {rig.width_m:g} m, load {load:.1f} N{g}",

@@ -60,10 +60,38 @@ deterministic function of theta.
 
 Efficiency. Plain MC needs n_MC(r) = (1 - p) / (p r^2) draws for relative error r; IS needs
 its adaptive stages plus var(1{m <= 0} w) / (p^2 r^2) final draws (:func:`trials_for_rel_error`).
+
+**The gain of importance sampling** (:func:`is_gain`) is the standard work-normalised variance
+ratio, the relative efficiency of IS against plain Monte Carlo (Hammersley & Handscomb 1964,
+Sec. 5.1; Glynn & Whitt 1992, the efficiency 1 / (variance x work); Owen 2013, Sec. 8.1), at one
+common p for both:
+
+    gain = (p (1 - p) / N_MC x N_MC) / (V_IS x N_IS) = p (1 - p) / (N_IS V_IS),
+
+p (1 - p) / N_MC the variance of plain Monte Carlo on N_MC trials (so the product is p (1 - p)
+whatever N_MC), V_IS the variance of the IS estimate and N_IS every trial it spent, adaptive
+stages included. A trial costs the same in both (a simulation run). V_IS is either one run's
+stated se^2 (a single run's figure, optimistic where its weights are skewed) or the mean squared
+error of repeated runs about the reference (the honest figure); p is a reference both are judged
+at (never plain Monte Carlo's own noisy estimate against IS's relative error, which mixes two
+probabilities).
+
+**A skew-aware interval** (:func:`bootstrap_t_interval`). With few failures among the final draws
+the terms y = 1{fail} w are skewed and the normal interval's ends are off on both sides. The
+studentized (bootstrap-t) interval (Efron 1982; Hall 1988; Davison & Hinkley 1997, Sec. 5.2.1,
+Eq. 5.7) resamples the final draws B times, computes t* = (ybar* - ybar) / se* on each and
+takes
+
+    [ybar - t*_(1 - a/2) se, ybar - t*_(a/2) se],
+
+second-order accurate for a mean (its coverage error O(1/n) against the normal interval's
+O(1/sqrt(n)), Hall 1988), and it follows the skew: the upper end moves out when a few heavy
+terms carry the estimate.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -73,7 +101,7 @@ from scipy import special, stats
 
 __all__ = ["Estimate", "GaussianProposal", "POOL_WEIGHTS", "mixture_log_weight", "ce_update", "ce_update_pooled", "ce_adapt", "initial_proposal", "mc_estimate", "is_estimate", "ce_is",
            "CEResult", "trials_for_rel_error", "distinct_failures", "best_is_gain", "binned_failure_rate",
-           "Z_BIN_EDGES"]
+           "Z_BIN_EDGES", "is_gain", "bootstrap_t_interval", "N_BOOT"]
 
 _LOG_2PI = math.log(2 * math.pi)
 
@@ -143,6 +171,46 @@ def is_estimate(failed: np.ndarray, log_w: np.ndarray, trials: int | None = None
     if f.sum() == 0:
         return Estimate(0.0, float("nan"), 0.0, float("nan"), n, 0, trials or n, var, "ce-is", level)
     return Estimate(p, se / p, max(p - zq * se, 0.0), p + zq * se, n, int(f.sum()), trials or n, var, "ce-is", level)
+
+
+#: bootstrap resamples of :func:`bootstrap_t_interval`
+N_BOOT = 2000
+
+
+def is_gain(p: float, var_is: float, trials_is: int) -> float:
+    """The work-normalised variance ratio of importance sampling over plain Monte Carlo at the common
+    probability ``p``: p (1 - p) / (trials_is var_is) (module docstring); NaN without a variance."""
+    if not (0 < p < 1 and var_is > 0 and trials_is > 0):
+        return float("nan")
+    return p * (1 - p) / (trials_is * var_is)
+
+
+def bootstrap_t_interval(failed: np.ndarray, log_w: np.ndarray, level: float = 0.95, n_boot: int = N_BOOT,
+                         seed: int = 0) -> tuple[float, float]:
+    """The studentized bootstrap interval of the importance-sampling estimate mean(1{fail} w) over
+    its final draws (module docstring), clipped at 0; deterministic (``seed``). (NaN, NaN) when
+    fewer than two draws failed (the resampled standard error is then 0 too often to studentize)."""
+    f = np.asarray(failed, dtype=bool).ravel()
+    y = np.where(f, np.exp(np.asarray(log_w, dtype=float).ravel()), 0.0)
+    n = len(y)
+    if int(f.sum()) < 2:
+        return float("nan"), float("nan")
+    mean, se = float(y.mean()), float(y.std(ddof=1)) / math.sqrt(n)
+    if se == 0:  # every term equal (every draw failed, weights 1): no spread to resample
+        return mean, mean
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, n, size=(n_boot, n))
+    yb = y[idx]
+    mb = yb.mean(axis=1)
+    sb = yb.std(axis=1, ddof=1) / math.sqrt(n)
+    # a resample without a failure has mean 0 and se 0: t = -inf (below every other), which the
+    # order-statistic quantile keeps (a few such resamples push the upper end out, as they should)
+    t = np.full(n_boot, -np.inf)
+    ok = sb > 0
+    t[ok] = (mb[ok] - mean) / sb[ok]
+    a = 1 - level
+    t_lo, t_hi = np.quantile(t, [a / 2, 1 - a / 2], method="inverted_cdf")
+    return max(mean - float(t_hi) * se, 0.0), mean - float(t_lo) * se
 
 
 def trials_for_rel_error(est: Estimate, rel_error: float) -> float:
@@ -296,6 +364,10 @@ class CEResult:
     estimate: Estimate
     proposals: tuple[GaussianProposal, ...]
     """The proposal of every adaptive stage, then the final (defensive) one."""
+    final_failed: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=bool))
+    """Whether each final draw failed (the estimate's terms, for :func:`bootstrap_t_interval`)."""
+    final_log_w: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    """The final draws' log likelihood ratios."""
 
 
 def ce_is(margin_fn: Callable[[np.ndarray], np.ndarray], d: int, budget: int, rng: np.random.Generator, *,
@@ -321,8 +393,9 @@ def ce_is(margin_fn: Callable[[np.ndarray], np.ndarray], d: int, budget: int, rn
     props.append(final)
     z = final.sample(budget - used, rng)
     failed = margin_fn(z) <= 0
-    est = is_estimate(failed, final.log_weight(z), trials=budget, level=level)
-    return CEResult(est, tuple(props))
+    log_w = final.log_weight(z)
+    est = is_estimate(failed, log_w, trials=budget, level=level)
+    return CEResult(est, tuple(props), np.asarray(failed, dtype=bool), log_w)
 
 
 # ---------------------------------------------------------------------------- what IS can gain at best

@@ -24,6 +24,10 @@ trials and gives the same proposals again (tests/search/test_runner.py kills and
   trials). A neighbour closer than ``distinct_distance`` to a point already tried on the same
   terrain is skipped, so a neighbour that fails is distinct from every failure on its terrain.
 * ``random``: nominal draws (plain Monte Carlo).
+* ``uniform``: uniform draws on the parameters' ranges, the falsifier's own search box: the naive
+  search it is measured against (offroadbench.search.baselines). Its log likelihood ratios are
+  those of the nominal against the uniform density, so its trials also estimate P(failure) by
+  importance sampling, though nothing reports that estimate.
 * ``ce-is``: cross-entropy stages, then importance sampling from the defensive mixture
   (offroadbench.search.estimators).
 """
@@ -129,6 +133,12 @@ def propose(method: str, stage: str, n: int, cfg: SearchConfig, seed: int, batch
     if stage == "random":
         z = rng.standard_normal((n, d))
         return Proposal(stage, cfg.from_z(z), z, np.zeros(n))
+    if stage == "uniform":
+        lo = np.array([p.low for p in cfg.params])
+        hi = np.array([p.high for p in cfg.params])
+        x = lo + rng.random((n, d)) * (hi - lo)
+        log_w = sum(np.log(p.pdf(x[:, i]) * (p.high - p.low)) for i, p in enumerate(cfg.params))
+        return Proposal(stage, x, cfg.to_z(x), np.asarray(log_w, dtype=float))
     if stage in ("ce-stage", "ce-final"):
         prop, _ = _ce_state(cfg, history)
         if stage == "ce-final":

@@ -14,7 +14,8 @@ from offroadbench.search.space import SearchConfig
 
 __all__ = ["fig_failures_vs_trials", "fig_pairwise"]
 
-_METHOD_STYLE = {"falsify": ("tab:red", "-"), "random": ("tab:blue", "--"), "ce-is": ("tab:green", ":")}
+_METHOD_STYLE = {"falsify": ("tab:red", "-"), "random": ("tab:blue", "--"), "ce-is": ("tab:green", ":"),
+                 "uniform": ("tab:purple", "-.")}
 
 
 def fig_failures_vs_trials(df: pd.DataFrame, cfg: SearchConfig, labels: Mapping[int, str]):

@@ -17,6 +17,7 @@ import numpy as np
 
 from offroadbench.config import config_id, load_toml, to_dict
 from offroadbench.errors import InputError
+from offroadbench.search.analysis import SearchAnalysis, analysis_from_dict
 from offroadbench.search.space import SearchConfig, search_from_dict
 from offroadbench.study.spec.config import CellPlan, StudyConfig, plan_cells, study_from_dict
 
@@ -34,12 +35,19 @@ class SearchPlan:
     study: StudyConfig
     groups: tuple[CellPlan, ...]
     """The study's grid cells (one when there is no ``[grid]``); each is searched on its own."""
+    analysis: SearchAnalysis | None = None
+    """The ``[analysis]`` plan (offroadbench.search.analysis), or None."""
 
     @property
     def search_id(self) -> str:
-        """Stable id of the search: its config, the study part and every group's resolved recipe."""
-        return config_id({"search": to_dict(self.search), "study": to_dict(self.study),
-                          "recipes": [dict(g.recipe_data) for g in self.groups]})
+        """Stable id of the search: its config, the study part, every group's resolved recipe and
+        the analysis plan where there is one (so a plan changed after trials were stored is refused
+        like a changed search)."""
+        data = {"search": to_dict(self.search), "study": to_dict(self.study),
+                "recipes": [dict(g.recipe_data) for g in self.groups]}
+        if self.analysis is not None:
+            data["analysis"] = to_dict(self.analysis)
+        return config_id(data)
 
 
 def search_from_data(data: Mapping[str, Any], where: str = "search", base_dir: Path | None = None) -> SearchPlan:
@@ -48,9 +56,8 @@ def search_from_data(data: Mapping[str, Any], where: str = "search", base_dir: P
     if not isinstance(data, Mapping) or "search" not in data:
         raise InputError(f"{where}: no [search] table (a search file is a study file with a [search] table)")
     data = dict(data)
-    if "analysis" in data:
-        raise InputError(f"{where}: [analysis] is a study's analysis plan; a search reports its own estimates")
     search = search_from_dict(data.pop("search"), where=f"{where}: [search]")
+    analysis = analysis_from_dict(data.pop("analysis", None), search.keys, where=f"{where}: [analysis]")
     head = data.get("study", {})
     if isinstance(head, Mapping):
         bad = [k for k in _STUDY_ONLY if k in head]
@@ -67,7 +74,7 @@ def search_from_data(data: Mapping[str, Any], where: str = "search", base_dir: P
     clash = sorted(grid_keys & set(search.keys))
     if clash:
         raise InputError(f"{where}: {', '.join(clash)} is both a [grid] axis and a searched key")
-    plan = SearchPlan(search=search, study=study, groups=tuple(groups))
+    plan = SearchPlan(search=search, study=study, groups=tuple(groups), analysis=analysis)
     lo = np.array([p.low for p in search.params])
     hi = np.array([p.high for p in search.params])
     for g in plan.groups:

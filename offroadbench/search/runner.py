@@ -15,7 +15,10 @@ counts these trials apart).
 
 A proposal whose trial faults (the vehicle thrown while it settles, past the per-trial limit) is
 done: it is stored as a fault, it has no margin (as one whose terrain holds no mission), and it is
-run again only when a call asks for it (``retry_faults``: once more per call).
+run again only when a call asks for it (``retry_faults``: once more per call). A retried trial's row
+says so (``retried_fault``, the fault's reason): the report and the estimators count its outcome,
+the history the proposals are made from keeps it without a margin, as the later proposals saw it,
+so a resume still makes the same proposals.
 
 Crash safety and resumption. A batch's proposals and cells are committed in one transaction
 before any of its trials runs; each trial is committed the moment it ends (the study store's
@@ -54,7 +57,7 @@ from offroadbench.study.store.search import add_search_batch, ensure_search_tabl
 
 log = logging.getLogger(__name__)
 
-__all__ = ["NO_MISSION", "SearchSummary", "cell_meta", "margin_of", "no_mission_row", "run_search", "search_meta"]
+__all__ = ["NO_MISSION", "RETRIED", "SearchSummary", "cell_meta", "margin_of", "no_mission_row", "run_search", "search_meta"]
 
 @dataclass(frozen=True)
 class SearchSummary:
@@ -117,6 +120,8 @@ def search_meta(plan: SearchPlan, budget: int | None, source_text: str, version:
 #: failure_reason of a proposal whose terrain holds no mission (no start or goal cell of the
 #: mission rules): not a vehicle failure, so the search leaves it out (margin NaN, not counted as failed)
 NO_MISSION = "no_mission"
+#: key of a stored row whose trial faulted before and was run again (--retry-faults): the fault's reason
+RETRIED = "retried_fault"
 
 
 def no_mission_row(message: str) -> dict[str, Any]:
@@ -168,9 +173,10 @@ def _history(plan: SearchPlan, group: CellPlan, stored: list[dict[str, Any]]) ->
         if not all(_ended(e) for e in entries):
             break
         x = np.array([e["x"] for e in entries], dtype=float)
-        # a faulted trial gave no outcome: no margin (as a proposal whose terrain holds no mission)
-        m = np.array([float("nan") if e["row"] is None else margin_of(plan, group, plan.search.values(e["x"]), e["row"])
-                      for e in entries])
+        # a faulted trial gave no outcome: no margin (as a proposal whose terrain holds no mission); one
+        # run again (--retry-faults) keeps none in the history, which stays as the later proposals saw it
+        m = np.array([float("nan") if e["row"] is None or RETRIED in e["row"]
+                      else margin_of(plan, group, plan.search.values(e["x"]), e["row"]) for e in entries])
         seeds = tuple(None if e["terrain_seed"] is None else (int(e["terrain_seed"]), int(e["mission_seed"]))
                       for e in entries)
         done.append(Batch(entries[0]["stage"], x, np.array([e["z"] for e in entries], dtype=float), m, seeds))
@@ -236,7 +242,7 @@ def run_search(plan: SearchPlan, run_dir: str | Path, *, budget: int | None = No
     meta = search_meta(plan, budget, source_text, code_version())
     with RunSession(run_dir, meta, kind="search", total=total, executor=ex, executor_name=executor,
                     telemetry=plan.study.telemetry, retry_faults=retry_faults, progress=progress,
-                    fault_row=_no_mission_trial) as session:
+                    fault_row=_no_mission_trial, retry_mark=RETRIED) as session:
         ensure_search_table(session.store)
         for gi, group in enumerate(plan.groups):
             for method in cfg.methods:

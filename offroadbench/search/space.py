@@ -45,9 +45,10 @@ from offroadbench.search.estimators import POOL_WEIGHTS
 
 __all__ = ["METHODS", "SAMPLERS", "NOMINALS", "SearchParam", "SearchConfig", "search_from_dict"]
 
-#: what a search runs, per grid cell: the falsifier, nominal (plain Monte Carlo) sampling, and the
-#: cross-entropy importance-sampling estimate of P(failure)
-METHODS = ("falsify", "random", "ce-is")
+#: what a search runs, per grid cell: the falsifier, nominal (plain Monte Carlo) sampling, the
+#: cross-entropy importance-sampling estimate of P(failure), and uniform sampling of the falsifier's
+#: own search box (the naive search: the falsifier's baseline, offroadbench.search.baselines)
+METHODS = ("falsify", "random", "ce-is", "uniform")
 #: the falsifier's optimiser: optuna's TPE, or CMA-ES (the ``cmaes`` package)
 SAMPLERS = ("tpe", "cmaes")
 #: nominal distributions of a parameter on its range
@@ -115,6 +116,16 @@ class SearchParam:
         pa, pb = self._trunc()
         return np.clip((special.ndtr((x - self.mean) / self.sd) - pa) / (pb - pa), 0.0, 1.0)
 
+    def pdf(self, x: np.ndarray) -> np.ndarray:
+        """Nominal density on the range (0 outside it): 1 / (high - low), or the truncated normal's."""
+        x = np.asarray(x, dtype=float)
+        inside = (x >= self.low) & (x <= self.high)
+        if self.nominal == "uniform":
+            return np.where(inside, 1.0 / (self.high - self.low), 0.0)
+        pa, pb = self._trunc()
+        dens = np.exp(-0.5 * ((x - self.mean) / self.sd) ** 2) / (math.sqrt(2 * math.pi) * self.sd * (pb - pa))
+        return np.where(inside, dens, 0.0)
+
     def ppf(self, u: np.ndarray) -> np.ndarray:
         """Inverse of :meth:`cdf`: the value at nominal probability ``u`` (clipped to the range)."""
         u = np.asarray(u, dtype=float)
@@ -144,9 +155,10 @@ class SearchConfig:
 
     params: tuple[SearchParam, ...]
     """The searched keys (``[[search.params]]``), each with its range and nominal distribution."""
-    methods: tuple[str, ...] = METHODS
+    methods: tuple[str, ...] = METHODS[:3]
     """What to run in every grid cell, one after another: ``falsify`` (the optimiser), ``random``
-    (nominal sampling: plain Monte Carlo) and ``ce-is`` (cross-entropy importance sampling)."""
+    (nominal sampling: plain Monte Carlo), ``ce-is`` (cross-entropy importance sampling) and
+    ``uniform`` (uniform draws on the ranges: the naive search the falsifier is measured against)."""
     budget: int = 200
     """Trials per method and grid cell (``search run --budget`` overrides it, ``mc_budget`` and ``ce_budget`` too)."""
     mc_budget: int | None = None

@@ -132,6 +132,11 @@ class TrialWorld(Protocol):
         """Mean longitudinal slip of the wheels on soft soil in the last step (1: spinning in place),
         or None where the tyre model has no soil (every model but ``terramechanics``)."""
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model:
+        offroadbench.sim.tyre_laws.soil_wheels.SoilWheels.outside_model), or None where the tyre
+        model has no soil. Optional: the trial runner treats an engine without it as None."""
+
     def wheel_loads_n(self) -> tuple[float, ...]:
         """Each wheel's summed normal contact force from the terrain in the last step, N (spec
         order: left wheels, then right)."""
@@ -213,6 +218,16 @@ def engine_capabilities(name: str) -> EngineCapabilities:
     return caps if isinstance(caps, EngineCapabilities) else EngineCapabilities(tyre_models=TYRE_MODELS)
 
 
-def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig) -> TrialWorld:
-    """Build the world of ``sim.engine`` for terrain ``hm`` and ``vehicle`` (a spec or a name)."""
-    return ENGINES.get(sim.engine)(hm, vehicle, sim)
+def open_world(hm: Heightmap, vehicle: VehicleSpec | str, sim: SimConfig, soil_map=None) -> TrialWorld:
+    """Build the world of ``sim.engine`` for terrain ``hm`` and ``vehicle`` (a spec or a name); with a
+    ``soil_map`` (offroadbench.terrain.soil_map.SoilMap) and the ``terramechanics`` tyre model, each
+    wheel reads its soil from the map (the engine's ``use_soil_map``; an InputError for an engine
+    without one)."""
+    world = ENGINES.get(sim.engine)(hm, vehicle, sim)
+    if soil_map is not None and sim.tyre_model == "terramechanics":
+        use = getattr(world, "use_soil_map", None)
+        if use is None:
+            world.close()
+            raise InputError(f"engine {sim.engine!r} cannot read a soil map (no use_soil_map)")
+        use(soil_map)
+    return world

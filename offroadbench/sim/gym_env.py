@@ -127,6 +127,8 @@ from offroadbench.sim.trial.runner import (
 )
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
+from offroadbench.sim.topdown import top_down_image  # noqa: E402  (the env's public name, kept)
+
 __all__ = ["TraverseConfig", "TraverseEnv", "height_patch", "top_down_image", "DEFAULT_TERRAIN", "DEFAULT_OVERRIDES",
            "STATE_FIELDS", "UNKNOWN_FILL_M"]
 
@@ -170,24 +172,41 @@ class TraverseConfig:
 
 
 def _terrain(terrain: str | Heightmap, seed: int, overrides: Mapping[str, Any] | None):
-    """(Heightmap, its gravity, its soil) of what the env was given (terrain_body)."""
+    """(Heightmap, its gravity, its soil, its soil map) of what the env was given (terrain_body, soil_map_for)."""
     from offroadbench.terrain.recipe import load_terrain
+    from offroadbench.terrain.soil_map import soil_map_for
 
     if overrides is None and not isinstance(terrain, Heightmap) and not str(terrain).lower().endswith(".png"):
         overrides = DEFAULT_OVERRIDES
     hm, recipe = load_terrain(terrain, seed, overrides)
-    return (hm, *terrain_body(terrain, recipe))
+    return (hm, *terrain_body(terrain, recipe), soil_map_for(recipe, hm, seed) if recipe is not None else None)
+
+
+#: the TraverseConfig fields that are the trial settings' own, field -> (TrialSettings section, its
+#: field): one table for both ways (the env's settings from its config, its config from given settings)
+SETTINGS_FIELDS: Mapping[str, tuple[str, str]] = {
+    "mission_length_m": ("missions", "length_m"), "border_m": ("missions", "border_m"),
+    "control_rate_hz": ("controller", "control_rate_hz"),
+    "patch_cells": ("observation", "patch_cells"), "patch_spacing_m": ("observation", "patch_spacing_m")}
 
 
 def _settings(config: TraverseConfig, vehicle, sim: SimConfig, rules: FailureRules,
               roughness: RoughnessConfig) -> TrialSettings:
-    """The trial settings of the env's own arguments."""
+    """The trial settings of the env's own arguments (one mission per episode)."""
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
-    return TrialSettings(vehicle=spec, sim=sim, controller=ControllerConfig(control_rate_hz=config.control_rate_hz),
-                         rules=rules, roughness=roughness,
-                         missions=MissionConfig(count=1, length_m=config.mission_length_m, border_m=config.border_m),
-                         observation=ObservationConfig(patch_cells=config.patch_cells,
-                                                       patch_spacing_m=config.patch_spacing_m))
+    sections: dict[str, dict[str, Any]] = {"controller": {}, "missions": {"count": 1}, "observation": {}}
+    for field, (section, name) in SETTINGS_FIELDS.items():
+        sections[section][name] = getattr(config, field)
+    return TrialSettings(vehicle=spec, sim=sim, rules=rules, roughness=roughness,
+                         controller=ControllerConfig(**sections["controller"]),
+                         missions=MissionConfig(**sections["missions"]),
+                         observation=ObservationConfig(**sections["observation"]))
+
+
+def _config_of(config: TraverseConfig, settings: TrialSettings) -> TraverseConfig:
+    """``config`` with the fields that are the settings' taken from ``settings`` (its reward kept)."""
+    return dataclasses.replace(config, **{field: getattr(getattr(settings, section), name)
+                                          for field, (section, name) in SETTINGS_FIELDS.items()})
 
 
 class TraverseEnv(gym.Env):
@@ -236,10 +255,7 @@ class TraverseEnv(gym.Env):
                      if v is not None]
             if given:
                 raise InputError(f"TraverseEnv: give {', '.join(given)} inside settings, not beside it")
-            config = dataclasses.replace(
-                config, control_rate_hz=settings.controller.control_rate_hz,
-                mission_length_m=settings.missions.length_m, border_m=settings.missions.border_m,
-                patch_cells=settings.observation.patch_cells, patch_spacing_m=settings.observation.patch_spacing_m)
+            config = _config_of(config, settings)
         control_steps(settings.sim.physics_rate_hz, config.control_rate_hz, "TraverseConfig.control_rate_hz")
         if isinstance(planner, str):
             planner = PlannerChoice(planner, PLANNERS.get(planner).config())
@@ -250,13 +266,14 @@ class TraverseEnv(gym.Env):
         self.cfg = config
         self.settings = settings
         self.rules = settings.rules
-        hm, gravity, soil = _terrain(terrain, terrain_seed, overrides)
-        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil)
+        hm, gravity, soil, soil_map = _terrain(terrain, terrain_seed, overrides)
+        self.terrain = prepare_terrain(hm, terrain_seed, settings, [], gravity_m_s2=gravity, soil=soil, soil_map=soil_map)
         self.hm = hm
         self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
         self._mission_cfg = dataclasses.replace(settings.missions, count=1)
         self._sensing = None  # the episode's Oracle or MastSensor (offroadbench.navigation.sensor)
-        self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim))
+        self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim),
+                                                    soil_map=self.terrain.soil_map_for(settings.sim))
         spec = self._world.spec
         self.vehicle = spec
         self.sim = self._world.sim
@@ -458,38 +475,3 @@ def _perception(given: PerceptionConfig | str | None) -> PerceptionConfig | None
     if isinstance(given, str):
         return _perception(PerceptionConfig(sensor=given))
     raise InputError(f"TraverseEnv perception: expected 'oracle', 'mast' or a PerceptionConfig, got {given!r}")
-
-
-_CLASS_RGB = np.array([[0x1F, 0x5F, 0xBF], [0xF0, 0x8C, 0x1A], [0xF5, 0xE5, 0x2A]], dtype=np.uint8)  # plots.style
-
-
-def top_down_image(classes: np.ndarray, cell_m: float, pos, yaw: float, length_m: float, width_m: float, goal_xy,
-                   path_xy: np.ndarray | None = None, max_side: int = 256) -> np.ndarray:
-    """Class map (north up: row 0 of the image is the largest y) with the path, goal and vehicle,
-    as uint8 RGB, at most ``max_side`` pixels a side."""
-    step = max(1, int(math.ceil(max(classes.shape) / max_side)))
-    img = _CLASS_RGB[np.asarray(classes)[::step, ::step]].copy()
-    px = cell_m * step
-    rows, cols = img.shape[:2]
-
-    def paint(xy: np.ndarray, colour) -> None:
-        c = np.rint(xy[:, 0] / px).astype(int)
-        r = np.rint(xy[:, 1] / px).astype(int)
-        ok = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-        img[r[ok], c[ok]] = colour
-
-    if path_xy is not None and len(path_xy) > 1:
-        seg = [a + (b - a) * t for a, b in zip(path_xy[:-1], path_xy[1:], strict=True)
-               for t in np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / px) + 1))[:, None]]
-        paint(np.vstack(seg).reshape(-1, 2), (255, 255, 255))
-    gy, gx = np.mgrid[-2:3, -2:3]
-    paint(np.column_stack([goal_xy[0] + gx.ravel() * px, goal_xy[1] + gy.ravel() * px]), (220, 20, 20))
-    u = np.linspace(-0.5, 0.5, max(3, int(length_m / px) * 2))
-    v = np.linspace(-0.5, 0.5, max(3, int(width_m / px) * 2))
-    uu, vv = np.meshgrid(u * length_m, v * width_m)
-    cos, sin = math.cos(yaw), math.sin(yaw)
-    body = np.column_stack([pos[0] + cos * uu.ravel() - sin * vv.ravel(), pos[1] + sin * uu.ravel() + cos * vv.ravel()])
-    paint(body, (0, 0, 0))
-    front = uu.ravel() > 0.3 * length_m
-    paint(body[front], (255, 255, 255))
-    return np.ascontiguousarray(img[::-1])

@@ -10,7 +10,8 @@ Typical use::
 
 from offroadbench.study.spec.config import CellPlan, GridAxis, StudyConfig, load_study, study_from_dict
 from offroadbench.study.store.results import load, load_meta, load_terrains
-from offroadbench.study.runner import RunSummary, run_study
+from offroadbench.study.runner import run_study
+from offroadbench.study.session import RunSession, RunSummary
 
 __all__ = [
     "StudyConfig",
@@ -20,6 +21,7 @@ __all__ = [
     "study_from_dict",
     "run_study",
     "RunSummary",
+    "RunSession",
     "load",
     "load_terrains",
     "load_meta",

@@ -155,7 +155,8 @@ def worker_memory_bytes(plans: list[CellPlan]) -> int:
 
 def _world_bytes(plan: CellPlan) -> int:
     grid = plan.recipe_data["grid"]
-    return world_bytes(grid["rows"], grid["cols"], plan.section("sim").heightfield_tile_cells)
+    sim = plan.section("sim")
+    return world_bytes(grid["rows"], grid["cols"], sim.heightfield_tile_cells, engine=sim.engine)
 
 
 def study_meta(study: StudyConfig, plans: list[CellPlan], source_text: str = "", version: str = "") -> dict[str, Any]:

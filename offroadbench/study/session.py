@@ -185,17 +185,22 @@ class RunSession:
     ``workers`` and ``run``) and ``executor_name`` its name in the session row. ``telemetry`` is
     the study's telemetry setting (for a schema-1 store's repair). ``progress(stored, total)``
     counts stored trials and faults; ``on_trial(row)`` sees each new trial's row; ``fault_row``
-    may turn a fault into a stored trial row (a search's proposal whose terrain holds no mission)."""
+    may turn a fault into a stored trial row (a search's proposal whose terrain holds no mission).
+    With ``retry_faults`` every stored fault is run once more; with ``retry_mark`` too, a retried
+    trial's row records the fault it follows under that key (a search keeps its history as its
+    proposals saw it)."""
 
     def __init__(self, run_dir: str | Path, meta: Mapping[str, Any], *, kind: str, total: int, executor: Any,
                  executor_name: str, telemetry: str = "failed", retry_faults: bool = False,
                  progress: ProgressFn | None = None, on_trial: Callable[[Mapping[str, Any]], None] | None = None,
-                 fault_row: FaultRow | None = None) -> None:
+                 fault_row: FaultRow | None = None, retry_mark: str | None = None) -> None:
         self.run_dir = Path(run_dir)
         self.meta, self.kind, self.total = meta, kind, total
         self.executor, self.executor_name = executor, executor_name
         self.telemetry, self.retry_faults = telemetry, retry_faults
         self.progress, self.on_trial, self.fault_row = progress, on_trial, fault_row
+        self.retry_mark = retry_mark
+        self._retried: dict[tuple[int, int, int], str] = {}  # with retry_mark: key -> the fault's reason
         self.store: Store | None = None
         self.run_id: int | None = None
         self.ran = 0
@@ -252,6 +257,8 @@ class RunSession:
         store.mark_killed_sessions()  # we hold the lock: a session still "running" was killed
         store.ensure_faults_table()
         if self.retry_faults:
+            if self.retry_mark is not None:
+                self._retried = {(r[0], r[1], r[2]): r[5] for r in store.fault_rows()}
             n = store.clear_faults()
             if n:
                 log.info("%s: trying %d faulted trial(s) again", self.run_dir, n)
@@ -300,7 +307,11 @@ class RunSession:
         if msg.kept is not None and not self.store.has_trial(msg.cell, msg.terrain, msg.mission):
             # the files first, then the row that names them: a stored trial has its telemetry
             files = save_trial_telemetry(self.run_dir, msg.cell, msg.terrain, msg.mission, msg.kept)
-        self._add_trial(msg, msg.row, files)
+        row = msg.row
+        retried = self._retried.get((msg.cell, msg.terrain, msg.mission))
+        if retried is not None:  # the row says which fault it follows (retry_mark)
+            row = {**row, self.retry_mark: retried}
+        self._add_trial(msg, row, files)
 
     def _add_trial(self, msg: TrialDone | TrialFaulted, row: Mapping[str, Any], files: list[str]) -> None:
         if self.store.add_trial(msg.cell, msg.terrain, msg.mission, msg.terrain_seed, msg.mission_seed, row,

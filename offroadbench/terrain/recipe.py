@@ -19,7 +19,7 @@ Format (``terrains/*.toml``)::
     D_high = 2.45            # every other key goes to the generator's frozen config
 
 Optional tables: ``[soil] name = "lunar-regolith"`` (the soil of the ``terramechanics`` tyre model,
-``soils/*.toml``) and ``[body] name = "moon"`` (``earth``, ``moon``, ``mars``) or
+``soils/*.toml``; with ``[[soil.regions]]`` or ``raster`` a soil map, offroadbench.terrain.soil_map) and ``[body] name = "moon"`` (``earth``, ``moon``, ``mars``) or
 ``[body] gravity_m_s2 = 1.62`` (offroadbench.bodies): trials on the terrain use them unless the
 study's ``[sim]`` sets ``soil`` or ``gravity_m_s2``.
 
@@ -111,6 +111,8 @@ class Recipe:
     """``[body]``: the body the terrain lies on (offroadbench.bodies)."""
     gravity_m_s2: float | None = None
     """Surface gravity of ``body``, m/s^2 (None: no ``[body]``; trials then use Earth's)."""
+    soil_map: Any = None
+    """The soil map of ``[soil]`` (offroadbench.terrain.soil_map.SoilMapConfig), None for one soil."""
 
     def terrain_id(self, seed: int | None) -> str:
         """Stable id of (recipe data, seed): same recipe and seed, same id."""
@@ -270,6 +272,7 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
     )
     name = str(meta.get("name", Path(source).stem if source else "recipe"))
     soil = _soil_name(data.get("soil"), where)
+    soil_map = _soil_map(data.get("soil"), where)
     body, gravity = body_gravity(data["body"], f"{where}: [body]") if "body" in data else ("earth", None)
     return Recipe(
         name=name,
@@ -282,6 +285,7 @@ def recipe_from_dict(data: Mapping[str, Any], source: str = "") -> Recipe:
         soil=soil,
         body=body,
         gravity_m_s2=gravity,
+        soil_map=soil_map,
     )
 
 
@@ -289,11 +293,23 @@ def _soil_name(table: Any, where: str) -> str | None:
     """The ``[soil] name`` of a recipe (a soil name or .toml path, checked when a trial loads it)."""
     if table is None:
         return None
-    _check_keys(table, ("name",), f"{where}: [soil]")
+    from offroadbench.terrain.soil_map import SOIL_KEYS
+
+    _check_keys(table, SOIL_KEYS, f"{where}: [soil]")
     name = table.get("name")
     if not isinstance(name, str) or not name:
         raise InputError(f"{where}: soil.name = {name!r}; must be a soil name (soils/*.toml) or a .toml path")
     return name
+
+
+def _soil_map(table: Any, where: str):
+    """The soil map of a recipe's ``[soil]`` (its raster read here, through offroadbench.io), or None."""
+    if table is None:
+        return None
+    from offroadbench.io.soil_raster import read_soil_raster
+    from offroadbench.terrain.soil_map import soil_map_config
+
+    return soil_map_config(table, where, read_raster=read_soil_raster)
 
 
 def apply_overrides(recipe: Recipe, overrides: Mapping[str, Any]) -> Recipe:

@@ -130,6 +130,7 @@ def base(tmp_path_factory) -> Path:
     _png16(b / "cell1e-6.png", sidecar={**meta, "cell_size_m": 1e-6})
     _png16(b / "cell5e-324.png", sidecar={**meta, "cell_size_m": 5e-324})
     _png16(b / "spike.png", sidecar={**meta, "z_max_m": 1e12})
+    _png16(b / "range1e308.png", sidecar={**meta, "z_min_m": -1e308, "z_max_m": 1e308})  # issue 44: no RuntimeWarning
     from offroadbench import resources
 
     soil = resources.soil_files()["lunar-regolith"].read_text()
@@ -142,6 +143,31 @@ def base(tmp_path_factory) -> Path:
             (b / "absurd-vehicle" / q.name).write_bytes(q.read_bytes())
     v = b / "absurd-vehicle" / "vehicle.toml"
     v.write_text(v.read_text().replace("wheel_torque_limit_nm = 28.0", "wheel_torque_limit_nm = 1e300"))
+    # issue 44: a model file outside physical bounds, or not a URDF at all
+    chassis = '<mass value="46.034"/>'
+    urdfs = {f"mass-{tag}": husky.with_name("husky.urdf").read_text().replace(chassis, f'<mass value="{value}"/>')
+             for tag, value in (("0", "0"), ("1e9", "1e9"), ("nan", "NaN"))}
+    urdfs["not-xml"] = "this is not a URDF\n"
+    urdfs["svg"] = '<svg xmlns="http://www.w3.org/2000/svg"><rect width="1" height="1"/></svg>\n'
+    for stem, text in urdfs.items():
+        (b / stem).mkdir()
+        (b / stem / "vehicle.toml").write_text(husky.read_text())
+        (b / stem / "husky.urdf").write_text(text)
+        (b / f"study-{stem}.toml").write_text(STUDY.format(length=2.0) + f'\n[vehicle]\nname = "{stem}/vehicle.toml"\n')
+        search = (Path(__file__).parents[1] / "search" / "small-search.toml").read_text()
+        (b / f"search-{stem}.toml").write_text(search + f'\n[vehicle]\nname = "{stem}/vehicle.toml"\n')
+    (b / "search.toml").write_text(search)
+    # issue 44: stores that carry code or do not decode
+    row = "INSERT INTO trials (cell, terrain, mission, terrain_seed, mission_seed, success, row) VALUES (0, 0, 0, 1, 2, 1, '{}')"
+    for stem, sql in (("trigger", "CREATE TRIGGER t AFTER INSERT ON trials BEGIN UPDATE trials SET success = 1; END"),
+                      ("view", "CREATE VIEW v AS SELECT * FROM trials"),
+                      ("meta-not-json", "UPDATE meta SET value = '{not json' WHERE key = 'study_id'"),
+                      ("deep-row", row.format("[" * 100_000 + "]" * 100_000))):
+        _store(b / stem)
+        con = sqlite3.connect(b / stem / "study.sqlite")
+        with con:
+            con.execute(sql)
+        con.close()
     return b
 
 
@@ -251,6 +277,27 @@ CASES = [
     ("ana-sidecar-deep", ["analyze", "deepjson.png"]),
     ("ana-sidecar-digits", ["analyze", "digits.png"]),
     ("ana-sidecar-of-another-png", ["analyze", "mixed.png"]),
+    ("ana-sidecar-range-1e308", ["analyze", "range1e308.png"]),
+    ("drive-sidecar-range-1e308", ["drive", "range1e308.png", "--out", "d"]),
+    # issue 44: a per-trial limit below the study's shortest possible trial
+    ("run-timeout-0.001", ["study", "run", "study.toml", "--trial-timeout-s", "0.001", "--out", "r"]),
+    ("run-timeout-1e-9", ["study", "run", "study.toml", "--trial-timeout-s", "1e-9", "--out", "r"]),
+    ("run-timeout-dask-0.001", ["study", "run", "study.toml", "--executor", "dask", "--trial-timeout-s", "0.001",
+                                "--out", "r"]),
+    ("search-timeout-0.001", ["search", "run", "search.toml", "--trial-timeout-s", "0.001", "--out", "s"]),
+    # issue 44: the vehicle's URDF outside physical bounds, or not a URDF
+    *[case for stem in ("mass-0", "mass-1e9", "mass-nan", "not-xml", "svg") for case in (
+        (f"drive-urdf-{stem}", ["drive", "good.png", "--vehicle", f"{stem}/vehicle.toml", "--out", "d"]),
+        (f"run-urdf-{stem}", ["study", "run", f"study-{stem}.toml", "--out", "r"]),
+        (f"vehicle-check-urdf-{stem}", ["vehicle", "check", f"{stem}/vehicle.toml"]),
+        (f"search-urdf-{stem}", ["search", "run", f"search-{stem}.toml", "--out", "s"]))],
+    # issue 44: a store that carries code, or whose values do not decode
+    *[case for stem in ("trigger", "view", "meta-not-json", "deep-row") for case in (
+        (f"run-store-{stem}", ["study", "run", "study.toml", "--out", stem]),
+        (f"rep-store-{stem}", ["study", "report", stem]),
+        (f"sexp-store-{stem}", ["study", "export", stem]),
+        (f"search-store-{stem}", ["search", "run", "search.toml", "--out", stem]),
+        (f"search-report-store-{stem}", ["search", "report", stem]))],
     # study export / report
     ("sexp-not-a-run", ["study", "export", "adir"]),
     ("sexp-corrupt", ["study", "export", "corrupt"]),
@@ -275,6 +322,17 @@ def _check(case_id: str, res: dict) -> None:
     assert "pybullet" not in err + res["stdout"], f"{case_id}: banner"
     for key in ("added", "removed", "changed"):
         assert not res.get(key), f"{case_id}: files {key}: {res[key]}"
+    if "-timeout-" in case_id and "1e10" not in case_id and "inline" not in case_id:
+        assert "shortest possible trial" in err, f"{case_id}:\n{err}"
+    if "-store-" in case_id:  # the line names the store and what is wrong with it
+        stem = case_id.split("-store-")[1]
+        assert f"{stem}/study.sqlite: " in err, f"{case_id}: the store is not named:\n{err}"
+        assert ("corrupt study store" if stem in ("meta-not-json", "deep-row") else "which no offroadbench store has") \
+            in err, f"{case_id}:\n{err}"
+    if "-urdf-" in case_id:  # the line names the model file, and the link where one is wrong
+        stem = case_id.split("-urdf-")[1]
+        assert f"/{stem}/husky.urdf" in err, f"{case_id}: the file is not named:\n{err}"
+        assert not stem.startswith("mass-") or "'base_link'" in err, f"{case_id}: the link is not named:\n{err}"
 
 
 def test_every_bad_input_is_one_line_exit_2_and_leaves_nothing(base, tmp_path):
@@ -371,6 +429,25 @@ def test_a_policy_raising_in_drive_is_one_line(base, tmp_path, monkeypatch, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1, err
     assert "policy 'raises-test' failed in act() at t = 0.00 s: ZeroDivisionError: division by zero" in err[0]
+
+
+def test_a_trial_fault_in_drive_is_one_line(tmp_path, monkeypatch, capsys):
+    """A vehicle thrown while it settles (legal values that combine badly) ends ``drive`` with one
+    line and exit 1, not a TrialFault traceback (issue 44), and writes no output folder."""
+    from offroadbench.cli import main
+    from offroadbench.errors import TrialFault
+    from offroadbench.sim.trial import runner
+
+    def thrown(*args, **kwargs):
+        raise TrialFault("the vehicle was thrown while it settled (test)")
+
+    monkeypatch.setattr(runner, "check_settled", thrown)
+    monkeypatch.chdir(tmp_path)
+    code = main(["drive", "paper-d2.45", "--set", "grid.rows=161", "--set", "grid.cols=161", "--border-m", "1",
+                 "--length-m", "3", "--missions", "1", "--out", "d"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err == ["offroadbench: trial fault: the vehicle was thrown while it settled (test)"]
+    assert not (tmp_path / "d").exists()
 
 
 def test_soil_list_names_an_invalid_user_soil_and_lists_the_others(base, tmp_path):

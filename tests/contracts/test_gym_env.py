@@ -411,3 +411,18 @@ def test_settings_and_their_parts_are_not_given_twice():
 
     with pytest.raises(InputError, match="inside settings"):
         TraverseEnv(FLAT, settings=TrialSettings(), sim=SimConfig())
+
+
+def test_the_env_config_and_the_trial_settings_share_their_fields_both_ways():
+    """The five TraverseConfig fields that are the settings' own map to them through one table
+    (gym_env.SETTINGS_FIELDS): settings made from a config give that config back."""
+    from offroadbench.analysis.roughness import RoughnessConfig
+    from offroadbench.navigation.rules import FailureRules
+    from offroadbench.sim import gym_env
+
+    cfg = TraverseConfig(mission_length_m=4.0, border_m=1.5, control_rate_hz=10, patch_cells=8, patch_spacing_m=0.2,
+                         success_bonus=3.0)
+    settings = gym_env._settings(cfg, "husky", SimConfig(), FailureRules(), RoughnessConfig())
+    assert (settings.missions.length_m, settings.missions.border_m, settings.controller.control_rate_hz,
+            settings.observation.patch_cells, settings.observation.patch_spacing_m) == (4.0, 1.5, 10, 8, 0.2)
+    assert gym_env._config_of(TraverseConfig(success_bonus=3.0), settings) == cfg

@@ -119,7 +119,12 @@ def test_the_planner_table_takes_the_map_keys():
     choice = planner_from_table({"name": "astar", "grid_m": 0.25, "map_noise_m": 0.02, "sensing_radius_m": 3.0})
     assert choice.perception == PerceptionConfig(map_noise_m=0.02, sensing_radius_m=3.0)
     assert choice.config.grid_m == 0.25
-    assert planner_from_table({"name": "astar", "map_noise_m": 0.0}).perception is None
+    # the default limits are the spec sheet's (issue 42): a planner that plans with the vehicle keeps them; the
+    # truth with the measured limits is None (as runs before the default stored it), and so is the straight line's
+    assert planner_from_table({"name": "astar", "map_noise_m": 0.0}).perception == PerceptionConfig(limits="sheet")
+    assert planner_from_table({"name": "astar", "limits": "measured"}).perception is None
+    assert planner_from_table({"name": "straight"}).perception is None
+    assert planner_from_table({"name": "straight", "limits": "sheet"}).perception == PerceptionConfig()
     with pytest.raises(InputError, match="map_noise_m"):
         planner_from_table({"name": "astar", "map_noise_m": -1.0})
     with pytest.raises(InputError):

@@ -7,6 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from offroadbench.navigation.perception import PerceptionConfig
+
 from offroadbench.analysis.roughness import HIGH, LOW, SEMI
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
@@ -79,7 +81,9 @@ def test_registry_and_the_planner_table():
     with pytest.raises(InputError, match=r"unknown planner or policy 'astra'; did you mean 'astar'.*policies: mppi, ppo, reactive"):
         planner_from_table({"name": "astra"})
     choice = planner_from_table({"name": "astar", "grid_m": 0.5})
-    assert choice == PlannerChoice("astar", AStarConfig(grid_m=0.5), "planner") and choice.params["grid_m"] == 0.5
+    # A* plans with the vehicle: the default limits (the spec sheet's, issue 42) come with it
+    assert choice == PlannerChoice("astar", AStarConfig(grid_m=0.5), "planner", PerceptionConfig(limits="sheet"))
+    assert choice.params["grid_m"] == 0.5
     with pytest.raises(InputError, match="turn_radius_m"):
         planner_from_table({"name": "astar", "turn_radius_m": 2.0})  # a lattice field
     assert planner_from_table({}).name == "straight"

@@ -110,7 +110,9 @@ def test_a_trials_sensing_replays_bit_for_bit():
 def test_perception_keys_are_validated_and_the_sheet_gives_published_limits():
     choice = planner_from_table({"name": "astar", "sensor": "mast", "sensor_range_m": 6.0, "limits": "sheet"})
     assert choice.perception.sensor == "mast" and choice.perception.limits == "sheet"
-    assert planner_from_table({"name": "astar", "sensor": "oracle"}).perception is None  # the default arm
+    # the default arm: the true map and pose, with the published limits (the default since issue 42)
+    assert planner_from_table({"name": "astar", "sensor": "oracle"}).perception == PerceptionConfig(limits="sheet")
+    assert planner_from_table({"name": "astar", "sensor": "oracle", "limits": "measured"}).perception is None
     with pytest.raises(InputError, match="sensor"):
         PerceptionConfig(sensor="lidar")
     with pytest.raises(InputError, match="map_noise_m"):

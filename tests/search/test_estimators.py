@@ -273,3 +273,71 @@ def test_the_site_study_uses_the_settings_tested_here_and_they_beat_the_first_on
     assert spread["site"] < spread["first"]
     # plain Monte Carlo needs (1 - p) / (p r^2) trials for the site scheme's spread r: over 5x its 200
     assert (1 - truth) / (truth * spread["site"] ** 2) > 5 * 200
+
+
+# ---------------------------------------------------------------- the standard gain and the skew-aware interval
+def test_the_gain_is_the_work_normalised_variance_ratio_at_a_common_p():
+    from offroadbench.search.estimators import is_gain
+
+    # plain Monte Carlo judged as an importance sampler (weights 1) gains nothing over itself
+    p, n = 0.02, 500
+    assert is_gain(p, p * (1 - p) / n, n) == pytest.approx(1.0)
+    # the committed site run's A* stream at the boundary reference 0.0224: se = 0.156 x 0.02326 on 200 trials
+    se = 0.15591928694133889 * 0.023255874292580917
+    assert is_gain(0.0224, se ** 2, 200) == pytest.approx(0.0224 * 0.9776 / (200 * se ** 2))
+    assert 8.2 < is_gain(0.0224, se ** 2, 200) < 8.4  # the reviewer's 8.3x, not the mixed-probability 6.8x
+    assert np.isnan(is_gain(0.0, 1e-6, 200)) and np.isnan(is_gain(0.02, 0.0, 200))
+
+
+#: analytic problems at small budgets, where the final draws' terms are skewed (few failures, weights
+#: up to 1 / defensive): (dimension, margin, p, ce_is settings, budget)
+SKEWED = {
+    "tail-1d, 300 trials": (1, PROBLEMS["tail-1d"][1], P, dict(stage_size=100), 300),
+    "plane-2d, 400 trials": (2, PROBLEMS["plane-2d"][1], P, dict(stage_size=100), 400),
+    "tail-1d, 150 trials": (1, PROBLEMS["tail-1d"][1], P, dict(stage_size=50), 150),
+}
+
+
+def _site_problem():
+    from pathlib import Path
+
+    from offroadbench.config import load_toml
+    from offroadbench.search import search_from_data
+
+    cfg = search_from_data(load_toml(Path(__file__).resolve().parents[2] / "experiments" / "failure-search-site.toml")).search
+    return (2, lambda z: cfg.from_z(z)[:, 0] - 0.23, float(cfg.params[0].cdf(np.array([0.23]))[0]), SITE_CE, 200)
+
+
+@pytest.mark.parametrize("name", [*SKEWED, "site model, 200 trials"])
+def test_the_bootstrap_t_interval_covers_at_its_stated_rate_where_the_terms_are_skewed(name):
+    """The studentized bootstrap over the final draws (estimators.bootstrap_t_interval) holds the
+    known p in 95 % of 300 runs (binomial check), on problems where the normal interval's ends are
+    off (measured on these seeds: the normal interval covers 91-93 %)."""
+    from offroadbench.search.estimators import bootstrap_t_interval
+
+    d, fn, p, kw, budget = SKEWED[name] if name in SKEWED else _site_problem()
+    runs = [ce_is(fn, d, budget, np.random.default_rng([d, budget, r]), **kw) for r in range(REPS)]
+    intervals = [bootstrap_t_interval(r.final_failed, r.final_log_w) for r in runs]
+    covered = sum(lo <= p <= hi for lo, hi in intervals)
+    assert binomial_ok(covered, REPS), f"{name}: {covered} of {REPS} bootstrap-t intervals hold p = {p}"
+    # it follows the skew: the upper end lies further from the estimate than the lower one, on the median run
+    ups = np.array([hi - r.estimate.p for r, (lo, hi) in zip(runs, intervals, strict=True)])
+    downs = np.array([r.estimate.p - lo for r, (lo, hi) in zip(runs, intervals, strict=True)])
+    assert np.median(ups / downs) > 1.0
+    # and the same check refuses the intervals shrunk to a third about the estimate
+    shrunk = sum(r.estimate.p - (r.estimate.p - lo) / 3 <= p <= r.estimate.p + (hi - r.estimate.p) / 3
+                 for r, (lo, hi) in zip(runs, intervals, strict=True))
+    assert not binomial_ok(shrunk, REPS)
+
+
+def test_the_bootstrap_t_interval_of_equal_terms_is_the_point_and_needs_two_failures():
+    from offroadbench.search.estimators import bootstrap_t_interval
+
+    lo, hi = bootstrap_t_interval(np.ones(50, bool), np.zeros(50))  # every term 1: no spread
+    assert lo == pytest.approx(1.0) and hi == pytest.approx(1.0)
+    assert all(np.isnan(bootstrap_t_interval(np.r_[True, np.zeros(99, bool)], np.zeros(100))))
+    # a symmetric case: nominal draws (weights 1) at p = 0.3 on 400 draws, close to the normal interval
+    f = np.random.default_rng(4).random(400) < 0.3
+    lo, hi = bootstrap_t_interval(f, np.zeros(400))
+    e = is_estimate(f, np.zeros(400))
+    assert lo == pytest.approx(e.low, abs=0.006) and hi == pytest.approx(e.high, abs=0.006)

@@ -118,3 +118,23 @@ def test_the_margin_is_negative_exactly_on_failure(row, sign):
         assert m == pytest.approx(-0.5)  # half the mission left
     else:
         assert m == pytest.approx(min(1 - 30 / 75, 1 - 9.0 / 18.0))  # tip 0.6, time 0.5
+
+
+def test_the_uniform_stream_draws_the_search_box_with_the_nominal_over_uniform_weights(tmp_path):
+    """The naive search (method ``uniform``): draws spread over the whole range (not the nominal's
+    centre), and stored log likelihood ratios log(nominal / uniform) that make its trials an unbiased
+    importance-sampling estimate of P too (checked against the known P within its error)."""
+    plan = _search(methods=["uniform"], budget=400, batch_size=50)
+    run_search(plan, tmp_path, executor="inline", trial_fn=speed_trials)
+    df, _ = search_table(tmp_path)
+    speed = df["controller.cruise_speed_m_s"].to_numpy()
+    assert len(df) == 400 and set(df["stage"]) == {"uniform"}
+    # uniform on [0.5, 2.0]: a quarter of the draws above 1.625 (the nominal puts 2 % there)
+    assert abs(np.mean(speed > 1.625) - 0.25) < 4 * np.sqrt(0.25 * 0.75 / 400)
+    p_param = plan.search.params[0]
+    expect = np.log(p_param.pdf(speed) * (p_param.high - p_param.low))
+    d_high = plan.search.params[1]  # uniform nominal: weight 1
+    assert np.allclose(df["log_w"], expect + np.log(d_high.pdf(df[d_high.key].to_numpy()) * (d_high.high - d_high.low)))
+    y = np.where(df["failed"], np.exp(df["log_w"]), 0.0)
+    assert abs(y.mean() - truth()) < 4 * y.std(ddof=1) / np.sqrt(len(y))
+    assert df["failed"].mean() > 5 * truth()  # the box finds failures far more often than the nominal

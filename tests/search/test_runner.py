@@ -288,6 +288,32 @@ def test_a_search_whose_trials_always_fault_ends_with_its_faults_stored(tmp_path
     assert len(calls) == 16 and again.ran == 0
 
 
+@pytest.mark.timeout(120)
+def test_retry_faults_runs_each_faulted_proposal_once_more_and_keeps_the_proposals(tmp_path):
+    """--retry-faults: every faulted proposal is driven once more in place (bounded: once per call), its
+    row says which fault it follows, the proposals stay as stored, and a later resume runs nothing."""
+    from offroadbench.search.runner import RETRIED
+
+    data = copy.deepcopy(SEARCH)
+    data["search"].update(methods=["random", "falsify"], budget=8)
+    plan = search_from_data(data)
+    calls: list = []
+    run_search(plan, tmp_path, executor="inline", trial_fn=always_faulting(calls))
+    proposals = _table(tmp_path)[0]
+    driven: list = []
+
+    def counted(prepared, settings):
+        driven.append(prepared.missions[0].index)
+        yield from stand_in_trials(prepared, settings)
+
+    summary = run_search(plan, tmp_path, executor="inline", trial_fn=counted, retry_faults=True)
+    assert len(driven) == 16 and summary.ran == 16 and summary.faults == 0
+    after, rows = _table(tmp_path)
+    assert after == proposals
+    assert all(f'"{RETRIED}": "the vehicle was thrown while it settled"' in r[5] for r in rows)
+    assert run_search(plan, tmp_path, executor="inline", trial_fn=counted).ran == 0 and len(driven) == 16
+
+
 def test_a_killed_search_session_is_recorded_as_killed_by_the_next_run(reference, tmp_path):
     plan, _, _ = reference
     with pytest.raises(KeyboardInterrupt):

@@ -37,56 +37,40 @@ def test_the_first_pilots_power_calculation_as_its_toml_stated_it():
     assert paired_power(12, m, s, alpha) < 0.1 and 120 <= terrains_needed(m, s, alpha, 0.8) <= 140
 
 
-def test_planner_stress_has_the_terrains_its_planned_tests_need():
-    """Issue 29: the plan's tests, their power by simulation of the exact sign-flip test actually
-    used (experiments/power.py), fresh terrains and missions shared between the surfaces; issue 31:
-    the planner tests are through the mast sensor, the oracle an explicit arm."""
-    import numpy as np
+#: the redesigned studies of issue 42: (TOML, terrains per cell, missions per terrain, planned tests, the power
+#: its comments state per expanded test at its own terrains, in plan order, one engine's tests then the next's)
+REDESIGNED = {
+    "planner-stress": (20, 4, 12, [0.95, 1.00, 0.98, 1.00, 1.00, 0.95]),
+    "vehicle-planner": (24, 3, 6, [0.95, 0.86, 0.99]),
+    "majhor2023-engines": (24, 20, 16, None),
+    "lunar-soil": (10, 6, 2, [1.00]),
+}
 
+
+@pytest.mark.parametrize("name", sorted(REDESIGNED))
+def test_the_redesigned_studies_are_blind_powered_and_on_both_engines(name):
+    """Issue 42: every redesigned study takes its seed from its plan, runs both engines over the same
+    terrains, and every planned test has power 0.8 or more at its stated effect (what `study run`
+    checks), as its TOML's comments state it."""
     from offroadbench.study import load_study
-    from offroadbench.study.stats.clustered import sign_flip_power
-    from offroadbench.study.stats.plan import expand
+    from offroadbench.study.stats.power import check_power
 
-    study, _ = load_study(ROOT / "experiments" / "planner-stress.toml", check_sections=False)
-    assert study.root_seed not in (11, 29, 31)  # not a pilot's terrains
-    assert study.missions_from == {"recipe.layers.base.wm.band_limited": False}
-    plan = study.analysis
-    tests = expand(plan, [dict(v) for v in study.cell_values()])
-    assert len(tests) == 6 and plan.multiplicity == "holm"
-    for c in plan.comparisons:
-        line_only = c.where.get("planner.name") == "straight"
-        assert c.where["planner.sensor"] == ("oracle" if line_only else "mast")
-
-    import sys
-
-    sys.path.insert(0, str(ROOT / "experiments"))
-    from power import NOT_PLANNED, TESTS, differences, load_pilot
-
-    pilots = {k: load_pilot(k) for k in ("sensor", "aliasing")}
-    # the sensor pilot: vehicle-planner's Husky, 8 terrains x 3 missions; the aliasing pilot: the
-    # root_seed-29 planner-stress run, 20 terrains x 8 missions (4 of them used)
-    s = pilots["sensor"]
-    assert s["terrain"].nunique() == 8 and (s["missions"] == 3).all() and (s["vehicle"] == "husky").all()
-    a = pilots["aliasing"]
-    assert a["terrain"].nunique() == 20 and (a["missions"] == 8).all()
-    assert (a["successes_first_4"] <= a["successes"]).all() and (a["successes_first_4"] <= 4).all()
-    assert len(TESTS) == len(tests)
-    # the pilots' effects as the toml states them (mean, sd of the per-terrain differences, points)
-    stated = {0: (29.2, 41.5), 2: (37.5, 37.5), 4: (31.2, 32.3), 5: (56.6, 29.9)}
-    for i, (mean, sd) in stated.items():
-        d = differences(pilots, TESTS[i])
-        assert d.mean() == pytest.approx(mean, abs=0.06) and d.std(ddof=1) == pytest.approx(sd, abs=0.06)
-    rng = np.random.default_rng(1)
-    level = plan.alpha / len(tests)
-    k = study.terrains_per_cell
-    power = [sign_flip_power(differences(pilots, t), k, level, rng, n_sim=300) for t in TESTS]
-    # every test but astar's through the sensor has 0.75 or more; astar's (about 0.57) stays in the
-    # plan because the toml says why, beside it
-    assert all(p >= 0.75 for i, p in enumerate(power) if i not in (0, 1))
-    assert all(0.35 <= power[i] <= 0.8 for i in (0, 1))
-    assert "LOW POWER, KEPT ON PURPOSE" in (ROOT / "experiments" / "planner-stress.toml").read_text()
-    # the sensor's cost to A* is exploratory: its pilot effect is negative
-    assert differences(pilots, NOT_PLANNED[0]).mean() < 0
+    terrains, missions, n_tests, stated = REDESIGNED[name]
+    path = ROOT / "experiments" / f"{name}.toml"
+    study, plans = load_study(path)
+    assert study.blind_seed and study.root_seed not in (41, 43, 2023, 2121)
+    assert {a.key: list(a.values) for a in study.grid}["sim.engine"] == ["pybullet", "mujoco"]
+    assert (study.terrains_per_cell, study.missions_per_terrain) == (terrains, missions) and study.paired_terrains
+    assert all(c.effect is not None and not c.exploratory for c in study.analysis.comparisons)
+    table = check_power(study, path.parent)
+    assert len(table) == n_tests and (table["power"] >= 0.8).all()
+    if stated is not None:  # the TOML's comment table, each engine alike (rounded to 2 decimals)
+        pyb = table[table["stratum"].str.contains("engine = pybullet")]["power"].to_numpy()
+        mjc = table[table["stratum"].str.contains("engine = mujoco")]["power"].to_numpy()
+        for got in (pyb, mjc):
+            assert [round(float(v), 2) for v in got] == pytest.approx(stated, abs=0.011)
+    if name == "vehicle-planner":  # >= 20 terrains and >= 3 missions per tested cell, 9 trials per terrain and arm
+        assert terrains >= 20 and missions >= 3 and len({p.values["vehicle.name"] for p in plans}) == 3
 
 
 def test_the_previous_designs_power_from_its_pilot():
@@ -111,7 +95,7 @@ def test_the_previous_designs_power_from_its_pilot():
     assert sign_flip_power(d, 20, 0.05 / 6, rng, n_sim=200) >= 0.75
 
 
-@pytest.mark.parametrize(("name", "cells", "trials"), [("planner-stress", 36, 2880), ("vehicle-sensitivity", 6, 1200)])
+@pytest.mark.parametrize(("name", "cells", "trials"), [("planner-stress", 72, 5760), ("vehicle-sensitivity", 6, 1200)])
 def test_the_designed_studies_load_with_every_cell_checked(name, cells, trials):
     from offroadbench.study import load_study
 
@@ -123,6 +107,7 @@ def test_the_designed_studies_load_with_every_cell_checked(name, cells, trials):
         assert all(q is not None and q.limits == "sheet" and q.map_noise_m == 0 for q in perception)
         assert sorted({q.sensor for q in perception}) == ["mast", "oracle"]
         assert sum(q.sensor == "mast" for q in perception) == cells // 2
+        assert sorted({p.section("sim").engine for p in plans}) == ["mujoco", "pybullet"]
     else:
         first = plans[0].section("vehicle")
         assert (first.wheel_torque_limit_nm, first.wheel_spin_inertia_kg_m2) == (28.0, 1.0)
@@ -134,8 +119,8 @@ def test_power_script_prints_every_planned_test(monkeypatch, capsys):
     sys.path.insert(0, str(ROOT / "experiments"))
     import power
 
-    monkeypatch.setattr(sys, "argv", ["power.py", "--n-sim", "5"])
+    monkeypatch.setattr(sys, "argv", ["power.py", str(ROOT / "experiments" / "lunar-soil.toml"), "--terrains", "6"])
     power.main()
     out = capsys.readouterr().out
-    assert "alpha / m = 0.05 / 6" in out
-    assert all(test[0] in out for test in power.TESTS + power.NOT_PLANNED)
+    assert out.count("regolith against rigid ground: success") == 2 and "power at 10" in out and "power at 6" in out
+    assert "lunar-soil: 24 grid cell(s), 1440 trial(s)" in out

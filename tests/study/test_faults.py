@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import errno
+import json
 import os
 import shutil
 import sqlite3
@@ -77,9 +78,90 @@ def test_a_resume_refuses_an_edited_vehicle_or_urdf(tmp_path, user_dir):
         run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
     _edit(toml, "wheel_torque_limit_nm = 12.0", "wheel_torque_limit_nm = 28.0")
     urdf = user_dir / "vehicles" / "my-husky" / "husky.urdf"
+    # a comment and a re-indentation are no change of the model (issue 44): the resume goes on
+    urdf.write_bytes(urdf.read_bytes().replace(b"<robot", b"<!-- edited -->\n  <robot", 1) + b"\n<!-- edited -->\n")
+    assert run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials).ran == 0
+    _edit(urdf, '<mass value="46.034"/>', '<mass value="40.0"/>')  # a real one is refused
+    with pytest.raises(InputError, match=r"vehicle .*urdf_content_sha256"):
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_store_without_the_urdf_content_hash_compares_the_bytes(tmp_path, user_dir):
+    """A store made before the content hash was recorded is resumed as before: by the file's bytes."""
+    data = small(vehicle={"name": "my-husky"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    con = sqlite3.connect(tmp_path / "run" / "study.sqlite")
+    with con:
+        (text,) = con.execute("SELECT value FROM meta WHERE key = 'trial_inputs'").fetchone()
+        old = json.loads(text)
+        for v in old["vehicle"]:
+            del v["urdf_content_sha256"]
+        con.execute("UPDATE meta SET value = ? WHERE key = 'trial_inputs'", (json.dumps(old, sort_keys=True),))
+    con.close()
+    assert run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials).ran == 0
+    urdf = user_dir / "vehicles" / "my-husky" / "husky.urdf"
     urdf.write_bytes(urdf.read_bytes() + b"\n<!-- edited -->\n")
     with pytest.raises(InputError, match=r"vehicle .*urdf_sha256"):
         run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+
+
+def test_a_soil_s_description_is_cosmetic(tmp_path, user_dir):
+    data = small(sim={"tyre_model": "terramechanics", "soil": "my-soil"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    soil = user_dir / "soils" / "my-soil.toml"
+    text = soil.read_text()
+    assert "description = " in text
+    soil.write_text(text.replace("description = \"", "description = \"Edited: ", 1) + "\n# a comment\n")
+    assert run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials).ran == 0
+
+
+PLUGIN = """
+class Policy:
+    def __init__(self, cfg, context):
+        pass
+
+    def reset(self, problem):
+        pass
+
+    def act(self, obs):
+        return 0.0, 0.0
+"""
+
+
+def test_a_plug_in_s_code_changed_without_a_version_bump_is_named(tmp_path, monkeypatch):
+    from offroadbench.navigation.drivers import POLICIES, PolicySpec
+    from offroadbench.study.spec import inputs
+
+    package = tmp_path / "plugin" / "offroadbench_code_test"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text(PLUGIN)
+    (package / "helpers.py").write_text("SPEED = 1.0\n")
+    monkeypatch.syspath_prepend(str(tmp_path / "plugin"))
+    import offroadbench_code_test
+
+    POLICIES.add("code-test", PolicySpec(offroadbench_code_test.Policy, summary="test policy"))
+    try:
+        data = small(planner={"name": "code-test"})
+        inputs._code_sha256.cache_clear()
+        run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+        stored = load_meta(tmp_path / "run")["trial_inputs"]["planner"][0]
+        assert len(stored["code_sha256"]) == 64
+        inputs._code_sha256.cache_clear()
+        assert run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials).ran == 0
+        (package / "helpers.py").write_text("SPEED = 2.0\n")  # another file of the package, no version bump
+        inputs._code_sha256.cache_clear()
+        with pytest.raises(InputError, match=r"planner or policy .*: \[0\].code_sha256 "):
+            run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    finally:
+        POLICIES._entries.pop("code-test", None)
+        inputs._code_sha256.cache_clear()
+
+
+def test_a_built_in_planner_records_no_code_hash(tmp_path):
+    from offroadbench.study.spec.inputs import trial_inputs
+
+    study, cells = cells_of(small())
+    assert "code_sha256" not in trial_inputs(study, cells)["planner"][0]
 
 
 def test_a_changed_engine_or_planner_version_is_named(tmp_path, monkeypatch):

@@ -121,3 +121,83 @@ def test_markdown_subset():
     assert "<ul><li>a</li><li>b</li></ul>" in html
     assert "<th>a</th><th>b</th>" in html and '<td class="num">1</td><td class="num">2</td>' in html
     assert 'src="data:image/png;base64,AA=="' in html
+
+
+#: link payloads a study description could carry into a page meant to be shared (issue 44)
+PAYLOADS = [
+    "[a](javascript:alert%281%29)",
+    "[b](JaVaScRiPt:alert(1))",
+    "[c](&#106;avascript:alert(1))",  # entity-encoded
+    "[d](&#x6A;&#x61;vascript:alert(1))",
+    "[e](data:text/html;base64,PHNjcmlwdD5hbGVydCgxKTwvc2NyaXB0Pg==)",
+    "[f](vbscript:msgbox(1))",
+    "[g](VBScript:msgbox(1))",
+    "[h](<java\tscript:alert(1)>)",  # a browser drops the tab
+    "[i](java%09script:alert(1))",
+    "[j](file:///etc/passwd)",
+    "[k][ref]\n\n[ref]: javascript:alert(1)",
+    "<javascript:alert(1)>",
+    "![l](javascript:alert(1))",
+    '<a href="javascript:alert(1)">m</a>',
+]
+SAFE = ["[ok1](https://example.org/a?b=1#c)", "[ok2](http://example.org)", "[ok3](report.md)", "[ok4](#replays)",
+        "[ok5](../other/report.html)"]
+
+
+class Targets(HTMLParser):
+    """Every URL attribute of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.urls = []
+
+    def handle_starttag(self, tag, attrs):
+        self.urls += [v for k, v in attrs if k in ("href", "src", "action", "formaction", "srcset") and v is not None]
+
+
+@pytest.mark.parametrize("payload", PAYLOADS)
+def test_a_link_to_an_unsafe_scheme_is_inert(payload):
+    from offroadbench.study.report.html import safe_url
+
+    page = markdown_to_html(f"# Study\n\nSee {payload} here.\n", {})
+    parser = Targets()
+    parser.feed(page)
+    assert parser.urls == [] or all(safe_url(u) and not u.startswith("data:") for u in parser.urls), page
+    for word in ("javascript:", "vbscript:", "data:text", "file:"):
+        assert f'href="{word}' not in page.lower() and f'src="{word}' not in page.lower(), page
+    assert "<script" not in page.lower()
+
+
+def test_safe_links_stay_links():
+    page = markdown_to_html("\n\n".join(SAFE), {})
+    parser = Targets()
+    parser.feed(page)
+    assert parser.urls == ["https://example.org/a?b=1#c", "http://example.org", "report.md", "#replays",
+                           "../other/report.html"]
+
+
+def test_safe_url_rules():
+    from offroadbench.study.report.html import safe_url
+
+    for url in ("https://x.org", "HTTP://x.org", "a/b.png", "#f", "?q=1", "", "./a:b", "a/b:c"):
+        assert safe_url(url), url
+    for url in ("javascript:x", " javascript:x", "jav\nascript:x", "\x01javascript:x", "data:image/png;base64,AA",
+                "vbscript:x", "mailto:a@b.c", "ftp://x", "java%09script:x", "a:b"):
+        assert not safe_url(url), url
+
+
+def test_report_html_of_a_study_whose_description_links_to_javascript(tmp_path):
+    """The issue's case end to end: the description's links are in report.md, none live in report.html."""
+    import copy
+
+    data = copy.deepcopy(STUDY)
+    data["study"]["description"] = "Read " + " and ".join(p.replace("\n", " ") for p in PAYLOADS[:7]) + "."
+    study = study_from_dict(data)
+    run = tmp_path / "run"
+    run_study(study, plan_cells(study), run, executor="inline", trial_fn=fake_trials)
+    path = cli_study.write_report(run, run / "report", html=True)
+    assert "javascript:alert%281%29" in (run / "report" / "report.md").read_text()
+    page = path.read_text(encoding="utf-8")
+    assert "javascript:alert" in page  # the text is kept, as text
+    assert 'href="javascript:' not in page.lower() and 'href="vbscript:' not in page.lower()
+    assert 'href="data:' not in page.lower()

@@ -102,3 +102,24 @@ def test_a_huge_grid_or_mission_is_refused_with_the_estimate_before_any_work(tmp
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "200000 grid cell(s)" in r.stderr, r.stderr
     assert time.monotonic() - t0 < 120
     assert not (tmp_path / "run").exists()
+
+
+def test_a_limit_below_the_shortest_possible_trial_is_refused_saying_why():
+    """Issue 44: a limit no trial can meet (every trial a fault) is refused, with the floor's derivation."""
+    from offroadbench.study.execution.common import MAX_STEPS_PER_S, check_trial_floor, shortest_trial_s
+
+    data = copy.deepcopy(STUDY)
+    data["grid"] = {"missions.length_m": [3.0, 2.0]}
+    data["sim"] = {"settle_time_s": 0.5, "physics_rate_hz": 120}
+    data["controller"] = {"cruise_speed_m_s": 0.5}
+    cells = plan_cells(study_from_dict(data))
+    floor, how = shortest_trial_s(cells)
+    # the shorter cell: (0.5 s settling + 2 m at 0.5 m/s) x 120 Hz = 540 steps
+    assert floor == pytest.approx(540 / MAX_STEPS_PER_S)
+    assert "(0.5 s)" in how and "2 m at 0.5 m/s" in how and "540 physics steps at 120 Hz" in how
+    for value in (1e-9, 0.001, 0.9 * floor):
+        with pytest.raises(InputError, match=r"^--trial-timeout-s .* is below this study's shortest possible trial, "
+                                             r"0.0054 s: a trial that reaches its goal"):
+            check_trial_floor(value, cells)
+    check_trial_floor(floor, cells)
+    check_trial_floor(None, cells)

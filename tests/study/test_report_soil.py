@@ -34,7 +34,7 @@ def fake_soil_trials(prepared, settings):
                "rms_vertical_accel_m_s2": 0.1, "rms_pitch_rate_deg_s": 1.0, "rms_roll_rate_deg_s": 2.0,
                "start_x_m": sx, "start_y_m": sy, "goal_x_m": gx, "goal_y_m": gy,
                "mean_slip": 0.1 * (m.index + 1), "sinkage_median_m": 0.01 * (m.index + 1),
-               "sinkage_p95_m": 0.02 * (m.index + 1)}
+               "sinkage_p95_m": 0.02 * (m.index + 1), "outside_model_fraction": 0.25 * (m.index % 2)}
 
 
 @pytest.fixture(scope="module")
@@ -49,8 +49,22 @@ def test_conditions_name_soil_gravity_and_their_sources(run):
     meta = load_meta(run)
     first, second = soil_conditions(meta, 0), soil_conditions(meta, 1)
     assert first == {"soil": "lete-sand", "soil_source": "study", "gravity_m_s2": pytest.approx(1.62, abs=0.01),
-                     "gravity_source": "terrain"}
+                     "gravity_source": "terrain", "soil_map": False}
     assert second["soil"] == "lunar-regolith" and second["soil_source"] == "study"
+
+
+def test_conditions_say_when_the_recipes_soil_map_applies(run):
+    """A cell whose recipe has [[soil.regions]] ran on the map unless the study named a soil."""
+    import copy
+
+    from offroadbench.plots.soil import conditions_text
+
+    meta = copy.deepcopy(load_meta(run))
+    meta["cells"][0]["recipe"]["soil"] = {"name": "lunar-regolith", "regions": [{"soil": "snow", "in_crater": True}]}
+    assert not soil_conditions(meta, 0)["soil_map"]  # this study's grid names the soil: it lies everywhere
+    meta["cells"][0]["settings"]["sim"].pop("soil", None)
+    c = soil_conditions(meta, 0)
+    assert c["soil_map"] and "soil map" in conditions_text(c)
 
 
 def test_soft_soil_section_reports_moving_sample_statistics_and_conditions(run):
@@ -61,4 +75,7 @@ def test_soft_soil_section_reports_moving_sample_statistics_and_conditions(run):
     assert "soil lunar-regolith (study)" in section
     assert "Median wheel sinkage (moving) (m)" in section and "95th percentile wheel sinkage" in section
     assert "fig8_soil.png" in rep.figures
+    # every other mission spent a quarter of its time bottomed out (fake rows): the line counts them
+    line = next(ln for ln in section.splitlines() if ln.startswith("Outside the soil model"))
+    assert " of " in line and "25.0 % of their time (median)" in line
     assert np.isfinite(rep.tables["summary.csv"].shape[0])

@@ -136,12 +136,60 @@ def _planner_stress_plan(folder: Path) -> list[list[float]]:
 
 
 def _planner_stress_sensor_cost(folder: Path) -> list[float]:
-    """The sensor's cost (oracle - mast, points) to astar and lattice on the aliased surface at 2.95 / 2.99,
-    mean per-terrain differences on the same missions."""
+    """The sensor's cost (mast - oracle, points, as the README names it: mast against the oracle) to astar and
+    lattice on the aliased surface at 2.95 / 2.99: the mean per-terrain difference on the same missions and
+    its terrain-bootstrap interval (as the report draws it: a generator of the row's own, keyed_rng)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
+
     t = trial_table(folder)
     rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
-    return [float((rate[(p, "oracle", False, lv)] - rate[(p, "mast", False, lv)]).dropna().mean())
-            for p in ("astar", "lattice") for lv in (2.95, 2.99)]
+    out = []
+    for p in ("astar", "lattice"):
+        for lv in (2.95, 2.99):
+            d = (rate[(p, "mast", False, lv)] - rate[(p, "oracle", False, lv)]).dropna().to_numpy(float)
+            b = cluster_bootstrap(d, np.mean, keyed_rng(0, "arm_table", "sensor", "mast", "oracle", p, False, lv))
+            out += [float(d.mean()), b.low, b.high]
+    return out
+
+
+def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
+    """vehicle-planner: the Husky's successes, rates and terrain-bootstrap intervals (%) per planner, oracle then
+    mast, at ``level``, as the report computes them (stress.success_by_level over the report's strata: a
+    generator per cell)."""
+    def compute(folder: Path) -> list[float]:
+        from experiments.rerender import folder_meta
+        from offroadbench.study.report.planners import _stress_axes
+        from offroadbench.study.stats.stress import success_by_level
+
+        group, lv, strata = _stress_axes(folder_meta(folder))
+        by = success_by_level(trial_table(folder), group, lv, by=strata).set_index([group, "vehicle", "sensor", lv])
+        out = []
+        for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo"):
+            for sensor in ("oracle", "mast"):
+                r = by.loc[(p, "husky", sensor, level)]
+                out += [float(r["successes"]), 100 * r["success_rate"], 100 * r["ci95_low"], 100 * r["ci95_high"]]
+        return out
+    return compute
+
+
+def _majhor_engine_rows(folder: Path) -> list[float]:
+    """majhor2023 on both engines (exploratory): per planned success step, each engine's mean per-terrain change
+    (independently, from the two trial tables), its interval and Holm p over the 16 tests, and the engine
+    difference with its interval (experiments/engine_agreement.py, the library's engine_table)."""
+    from experiments.engine_agreement import agreement
+
+    _, eng = agreement(folder, folder.parent / "majhor2023-mujoco")
+    rates = {e: per_terrain_rate(trial_table(f), "D_high")
+             for e, f in (("pybullet", folder), ("mujoco", folder.parent / "majhor2023-mujoco"))}
+    out = []
+    for name, (lo, hi) in (("D 2.3 -> 2.45", (2.3, 2.45)), ("D 2.45 -> 2.6", (2.45, 2.6))):
+        rows = eng[eng["comparison"] == name].set_index("engine")
+        for e in ("pybullet", "mujoco"):
+            out += [float((rates[e][hi] - rates[e][lo]).mean()), rows.loc[e, "ci_low"], rows.loc[e, "ci_high"],
+                    rows.loc[e, "p_adjusted"]]
+        d = (rates["mujoco"][hi] - rates["mujoco"][lo]) - (rates["pybullet"][hi] - rates["pybullet"][lo])
+        out += [float(d.mean()), rows["engine_difference_low"].iloc[0], rows["engine_difference_high"].iloc[0]]
+    return out
 
 
 def _shared_missions(folder: Path) -> list[float]:
@@ -265,6 +313,13 @@ def _crater_density_rows(folder: Path) -> list[float]:
 def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
     counts = trial_table(folder).query(where)["failure_reason"].value_counts()
     return [float(counts.get(r, 0)) for r in reasons]
+
+
+SOIL_MAP_SNOW = "soil-map/mare-floors-snow.toml"
+SOIL_MAP_SIMULANT = "soil-map/mare-floors-simulant.toml"
+SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on the simulant": SOIL_MAP_SIMULANT,
+                 "crater interiors on the soft deposit": SOIL_MAP_SNOW}
+"""The soil-map README table's rows: (row label regex, recipe)."""
 
 
 LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
@@ -551,6 +606,9 @@ SAMPLES = [
            rf"of \*\*{_NUM}x\*\*, {_NUM}-{_NUM}x\)\. \*\*{_NUM} of the 9 intervals\s+hold the boundary reference\*\*, "
            rf"{_NUM} of 9",
            _site_is_repeats),
+    Sample("failure-search-site distance left by the failures", "failure-search-site",
+           rf"a median {_NUM} m of the 6 m route left",
+           lambda f: [float(trial_table(f).query("not success")["final_distance_to_goal_m"].median())]),
     Sample("failure-search-site falsifier repeats", "failure-search-site",
            rf"\| 20; 23, 27, 20, 27 \| \*\*{_NUM}\*\* \({_NUM}-{_NUM}\)", _site_falsifier_repeats),
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
@@ -574,6 +632,21 @@ SAMPLES = [
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
+    Sample("soil-map planned effects", "soil-map",
+           rf"Soft crater interiors against one soil: \*\*{_NUM} points\*\*[^\n]*\n[^\n]*simulant crater interiors "
+           rf"against one soil: \*\*{_NUM} points\*\*",
+           lambda f: (_pooled_success_effect("recipe", SOIL_MAP_SNOW, "lunar-mare")(f)
+                      + _pooled_success_effect("recipe", SOIL_MAP_SIMULANT, "lunar-mare")(f))),
+    Sample("soil-map outcomes per soil layout", "soil-map",
+           "".join(rf"\| {label} \| {_NUM} \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for label in SOIL_MAP_ROWS),
+           lambda f: [v for r in SOIL_MAP_ROWS.values()
+                      for v in [float(trial_table(f).query("recipe == @r")["success"].sum())]
+                      + _failure_counts(f, f"recipe == '{r}'", ("entrapped", "stuck", "timeout"))]),
+    Sample("soil-map deposit trials outside the model", "soil-map",
+           rf"Outside the soil model: {_NUM} of the 48 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
+           lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
+                                 100 * float(t["outside_model_fraction"].max())])(
+                                     trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",
@@ -650,7 +723,7 @@ SAMPLES = [
                                        ("the line (oracle arm), band-limited against aliased surface", 2.99)]),
            lambda f: [v for row in _planner_stress_plan(f) for v in row]),
     Sample("planner-stress the sensor's cost to the planners", "planner-stress",
-           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \["
+           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\]"
                               for p in ("astar", "lattice") for lv in (2.95, 2.99)),
            _planner_stress_sensor_cost),
     Sample("planner-stress shared missions", "planner-stress",
@@ -707,6 +780,16 @@ SAMPLES = [
                          for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
                           trial_table(f).query("D_high == 2.6"))),
+    *[Sample(f"vehicle-planner the Husky's success intervals at {lv}", "vehicle-planner",
+             rf"{head}[\s\S]*?" + "".join(rf"\| husky \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| "
+                                           rf"{_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
+                                           for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
+             _vp_success_intervals(lv))
+      for lv, head in ((2.95, "## Success per vehicle, planner and sensor at D_high 2.95"), (2.6, "## D_high 2.6"))],
+    Sample("majhor2023 success steps on both engines", "majhor2023",
+           "".join(rf"\| {name} \| holds on neither \| {_NUM} \[{_NUM}, {_NUM}\], Holm {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\], "
+                   rf"Holm {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \|\n" for name in ("D 2.3 -> 2.45", "D 2.45 -> 2.6")),
+           _majhor_engine_rows),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),

@@ -124,3 +124,34 @@ def test_faults_are_summarised_one_line_per_kind(tmp_path, capsys, monkeypatch):
     assert [line for line in out.out.splitlines() if line.startswith("faults of this run")] == [
         "faults of this run: 4 x the vehicle was thrown while it settled"]
     assert "thrown" not in out.err
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize("signum, word", [(signal.SIGINT, "interrupted"), (signal.SIGTERM, "terminated")])
+def test_a_search_stops_within_10_s_with_the_same_one_line(tmp_path, stored_trials, signum, word):
+    """``search run`` through the same session: Ctrl-C and SIGTERM once trials are stored end it
+    within 10 s with the study's one line, and the session is recorded as interrupted."""
+    from pathlib import Path
+
+    small = Path(__file__).parents[1] / "search" / "small-search.toml"
+    out = tmp_path / "run"
+    proc = subprocess.Popen([*CLI, "search", "run", str(small), "--out", str(out), "--workers", "2", "--no-report"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while stored_trials(out) < 1 and proc.poll() is None and time.monotonic() - t0 < 300:
+        time.sleep(0.02)
+    assert proc.poll() is None, "the search ended before it could be stopped"
+    proc.send_signal(signum)
+    sent = time.monotonic()
+    try:
+        _, err = proc.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise AssertionError("still running 10 s after the signal") from None
+    assert time.monotonic() - sent < 10
+    assert proc.returncode == 128 + signum, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"offroadbench: {word}; "), err
+    assert "stored in" in lines[0] and "run the same command again to resume" in lines[0]
+    assert load_meta(out)["runs"][-1]["status"] == "interrupted"

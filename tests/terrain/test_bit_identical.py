@@ -30,6 +30,9 @@ PRESETS = {
     ("asteroid-regolith", 1): "b289b05c1213c337f828f63b795d426829c356de106c4c70a1928389bb41d36d",
     ("lunar-highland", 0): "b736a7e7008e3ebd6287c291ebc448c04b23f4793d623f57edab0c88ff24dbbe",
     ("lunar-highland", 1): "a53539fe18fa400073a94e53c044c00937950769cc50a3372d463c0335b7933e",
+    # lunar-highland's layers with a soil map: the same heights (the map changes no height)
+    ("lunar-highland-crater-floors", 0): "b736a7e7008e3ebd6287c291ebc448c04b23f4793d623f57edab0c88ff24dbbe",
+    ("lunar-highland-crater-floors", 1): "a53539fe18fa400073a94e53c044c00937950769cc50a3372d463c0335b7933e",
     ("lunar-mare", 0): "bec3e10a9364d20d641eab46005110a18739258d6b7e3e06ba5fa7b02bcc593d",
     ("lunar-mare", 1): "6f32b18524e3918b428b9de035914cd78e6693d529f3cc6d8e8af781aa281234",
     ("lunar-mare-3.5ga", 0): "d7006abb89e78146bd3742178fc0d7d591a6e4c52204d7bb8c7c1e716252ef7a",

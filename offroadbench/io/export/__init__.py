@@ -117,6 +117,7 @@ def export_heightmap(
     *,
     name: str = "terrain",
     meta: Mapping[str, Any] | None = None,
+    soil_map: Any = None,
     **options: Any,
 ) -> ExportResult:
     """Write ``hm`` in format ``fmt`` into ``out_dir`` (created with its missing parents).
@@ -126,6 +127,10 @@ def export_heightmap(
     left (nor a parent directory created for it). The heights are exported as they are; whether a
     spike dominates the relief (and so the 16-bit step of the image formats) is
     offroadbench.analysis.relief's question, which ``offroadbench export`` asks and reports.
+
+    A ``soil_map`` (offroadbench.terrain.soil_map.SoilMap: ``index`` aligned with ``hm``, ``soils``)
+    travels as a sidecar raster in every format: ``<name>_soil.png`` (8-bit soil indices, pixel (r, c)
+    at ``z[r, c]``) and ``<name>_soil.json`` (the soils by index; offroadbench.io.soil_raster).
     """
     exporter = EXPORTERS.get(fmt)
     check_name(name)
@@ -134,9 +139,17 @@ def export_heightmap(
         allowed = ", ".join(exporter.options) or "none"
         raise InputError(f"export format {fmt!r} takes no option {', '.join(unknown)}; its options: {allowed}")
     exporter.check_available()
+    if soil_map is not None and tuple(soil_map.index.shape) != hm.shape:
+        raise InputError(f"soil map of {soil_map.index.shape[0]} x {soil_map.index.shape[1]} samples; the terrain is "
+                         f"{hm.rows} x {hm.cols}")
     out = Path(out_dir)
     with staged_dir(out) as stage:
         notes = exporter.write(hm, stage, name, dict(meta or {}), **options)
+        if soil_map is not None:
+            from offroadbench.io.soil_raster import write_soil_raster
+
+            write_soil_raster(soil_map.index, soil_map.soils, hm.cell_size_m, stage / f"{name}_soil.png")
+            notes = [*notes, f"soil map: {name}_soil.png with {name}_soil.json ({len(soil_map.soils)} soils)"]
         rel = sorted(p.relative_to(stage) for p in stage.rglob("*") if p.is_file())
     files = tuple(out / p for p in rel)
     log.info("export %s: wrote %d file(s) to %s", fmt, len(files), out)

@@ -60,6 +60,11 @@ class UrdfLink:
     com: tuple[float, float, float]
     inertia: tuple[float, float, float]
     shapes: tuple  # (type, size tuple, pos, euler)
+    products: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The products of inertia (ixy, ixz, iyz), kg m^2 (the engines use the diagonal; the bounds
+    check the whole tensor: offroadbench.bounds.check_urdf)."""
+    has_inertial: bool = True
+    """Whether the link has an ``<inertial>`` (without one: mass and inertia 0 here)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +80,10 @@ class UrdfJoint:
     axis: tuple[float, float, float]
     limits: tuple[float, float] | None = None
     """(lower, upper) of the joint's ``<limit>`` (rad or m), None without one."""
+    effort: float | None = None
+    """The ``<limit>``'s effort (N or N m), None without one (no engine uses it)."""
+    velocity: float | None = None
+    """The ``<limit>``'s velocity (rad/s or m/s), None without one (no engine uses it)."""
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]:
@@ -86,14 +95,26 @@ def _floats(text: str | None, n: int, default: float = 0.0) -> tuple[float, ...]
     return vals
 
 
+def _opt_float(text: str | None) -> float | None:
+    return None if text is None else float(text)
+
+
 def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
-    """The links (mass, centre of mass, diagonal inertia, collision shapes) and joints of a URDF."""
+    """The links (mass, centre of mass, diagonal inertia, collision shapes) and joints of a URDF.
+
+    A file that is not XML, or whose root is not ``<robot>`` with at least one ``<link>``, is an
+    InputError naming it (one line)."""
     try:
         root = ET.parse(path).getroot()
+        if root.tag != "robot":
+            raise ValueError(f"its root element is <{root.tag}>, a URDF's is <robot>")
+        if root.find("link") is None:
+            raise ValueError("it has no <link>")
         links = {}
         for el in root.findall("link"):
             inertial = el.find("inertial")
             mass, com, inertia = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            products = (0.0, 0.0, 0.0)
             if inertial is not None:
                 origin = inertial.find("origin")
                 if origin is not None and any(_floats(origin.get("rpy"), 3)):
@@ -102,6 +123,7 @@ def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
                 mass = float(inertial.find("mass").get("value"))
                 i = inertial.find("inertia")
                 inertia = (float(i.get("ixx")), float(i.get("iyy")), float(i.get("izz")))
+                products = tuple(float(i.get(k, "0")) for k in ("ixy", "ixz", "iyz"))
             shapes = []
             for col in el.findall("collision"):
                 origin = col.find("origin")
@@ -116,23 +138,26 @@ def read_urdf(path: str) -> tuple[dict[str, UrdfLink], list[UrdfJoint]]:
                     shapes.append(("cylinder", (float(geo.get("radius")), 0.5 * float(geo.get("length"))), pos, euler))
                 else:
                     raise ValueError(f"link {el.get('name')}: collision geometry {geo.tag!r} is not supported")
-            links[el.get("name")] = UrdfLink(el.get("name"), mass, com, inertia, tuple(shapes))
+            links[el.get("name")] = UrdfLink(el.get("name"), mass, com, inertia, tuple(shapes), products,
+                                             inertial is not None)
         joints = []
         for el in root.findall("joint"):
             origin = el.find("origin")
             axis = el.find("axis")
             limit = el.find("limit")
-            bounds = None
+            bounds = effort = velocity = None
             if limit is not None and limit.get("lower") is not None and limit.get("upper") is not None:
                 bounds = (float(limit.get("lower")), float(limit.get("upper")))
+            if limit is not None:
+                effort, velocity = _opt_float(limit.get("effort")), _opt_float(limit.get("velocity"))
             joints.append(UrdfJoint(el.get("name"), el.get("type"), el.find("parent").get("link"),
                                  el.find("child").get("link"),
                                  _floats(origin.get("xyz") if origin is not None else None, 3),
                                  _floats(origin.get("rpy") if origin is not None else None, 3),
                                  _floats(axis.get("xyz") if axis is not None else None, 3) if axis is not None
-                                 else (1.0, 0.0, 0.0), bounds))
-    except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError) as exc:
-        raise InputError(f"URDF {path}: cannot read it ({exc})") from None
+                                 else (1.0, 0.0, 0.0), bounds, effort, velocity))
+    except (ET.ParseError, AttributeError, TypeError, ValueError, IndexError, OSError) as exc:
+        raise InputError(f"URDF {path}: not a URDF that can be read ({exc})") from None
     return links, joints
 
 

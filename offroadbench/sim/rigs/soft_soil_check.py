@@ -70,7 +70,35 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
     return math.degrees(lo)
 
 
-def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
+def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float, g: float, slip: float,
+                          com_height_m: float = 0.0) -> float:
+    """Steepest grade on which two belts (b x L each) at ``slip`` pull the vehicle's weight component,
+    degrees: ``2 (F(i) - R_c) = m g sin(theta)`` with each belt carrying ``m g cos(theta) / 2``
+    (offroadbench.sim.tyre_laws.track_patch). Load transfer: the weight's component along the grade,
+    acting at the centre of mass ``com_height_m`` above the belts, moves the centre of pressure back by
+    ``e = h tan(theta)``; a linear pressure keeps the whole belt on the ground while ``e <= L / 6`` and
+    shortens the contact to ``3 (L / 2 - e)`` beyond (the front lifts; Wong 2008, ch. 2, eccentric
+    load), and the thrust is the belt's over that contact."""
+    from offroadbench.sim.tyre_laws.track_patch import compaction_resistance_n, track_sinkage_m, track_thrust_n
+
+    def margin(theta: float) -> float:
+        w = mass_kg * g * math.cos(theta) / 2.0
+        e = com_height_m * math.tan(theta)
+        contact = length_m if e <= length_m / 6.0 else max(1e-9, 3.0 * (length_m / 2.0 - e))
+        pull = track_thrust_n(soil, width_m, contact, w, slip) - compaction_resistance_n(
+            soil, width_m, track_sinkage_m(soil, width_m, length_m, w))
+        return 2.0 * pull - mass_kg * g * math.sin(theta)
+
+    lo, hi = 0.0, 0.5 * math.pi
+    if margin(lo) < 0.0:
+        return 0.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
+    return math.degrees(lo)
+
+
+def tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     """Drawbar pull at ``slip``: a drag on the chassis fed back on the mean wheel slip, N. With undriven
     wheels the slip fed back is the driven wheels' ``1 - v / (omega r)`` from the chassis's forward
     speed ``v`` and their commanded tyre speed ``omega r`` (the engines' mean slip counts the towed
@@ -100,7 +128,7 @@ def _tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
     return sum(pulls) / len(pulls)
 
 
-def _come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
+def come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.25, limit_s: float = 3.0) -> None:
     """Step a vehicle still moving after its spawn's settle until its vertical speed has stayed under
     ``speed_m_s`` for ``hold_s`` (at most ``limit_s``); a vehicle already still is left as it is. A sprung
     vehicle (the HUNTER's struts) landing on the soil in lunar gravity still bounced after the settle's
@@ -122,6 +150,8 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     if spec.wheel_width_m is None:
         return []
+    if spec.track_contact_length_m is not None:
+        return _track_rows(spec, sim)
     g = SOFT_SOIL_GRAVITY_M_S2
     soil = load_soil(SOFT_SOIL)
     soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
@@ -132,7 +162,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
     with open_world(flat, spec, soft) as world:
         c = flat.width_m / 2.0
         world.spawn(c, c, 0.0)
-        _come_to_rest(world)
+        come_to_rest(world)
         mass = world.geometry.mass_kg
         n = len(spec.wheel_joints)
         n_driven = sum(spec.is_driven(w) for w in spec.wheel_joints)
@@ -140,7 +170,7 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
         sink = world.wheel_penetration_m()
         expected_sink = static_sinkage(soil, r, b, load)
         grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
-        pull = _tow_pull(world, 0.2)
+        pull = tow_pull(world, 0.2)
     h20 = static_sinkage(soil, r, b, load, 0.2)
     expected_pull = n_driven * float(wheel_forces(soil, r, b, h20, 0.2)[1])
     towed = ""
@@ -159,4 +189,46 @@ def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -
                     bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
                     "within 10 % or 1 % of the weight",
                     f"{where}; {n_driven}{towed} x a wheel's Wong-Reece pull at {load:.1f} N, weight {mass * g:.1f} N"),
+    ]
+
+
+def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
+    """The soft-soil rows of a tracked vehicle with a track patch: its belts against the Bekker / Wong
+    track relations (offroadbench.sim.tyre_laws.track_patch), each belt carrying half the weight. The
+    belts' slip settles more slowly than a wheel's (their relaxation length is longer), so the tow rig
+    runs 16 s."""
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil
+    from offroadbench.sim.tyre_laws.track_patch import drawbar_pull_n, track_sinkage_m
+
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soil = load_soil(SOFT_SOIL)
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
+    b, length = spec.wheel_width_m, spec.track_contact_length_m
+    where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity); belts {length:g} x {b:g} m"
+    with open_world(flat, spec, soft) as world:
+        c = flat.width_m / 2.0
+        world.spawn(c, c, 0.0)
+        come_to_rest(world)
+        mass = world.geometry.mass_kg
+        sink = world.wheel_penetration_m()
+        com_height = world.centre_of_mass_m()[2] - (flat.z_min_m - sink)  # above the belts' bottom
+        grade = bisect_threshold(lambda a: climbs_grade(world, a), 0.0, 60.0, 0.5)
+        pull = tow_pull(world, 0.2, seconds=16.0)
+    w = mass * g / 2.0
+    expected_pull = 2.0 * drawbar_pull_n(soil, b, length, w, 0.2)
+    limit = track_climb_limit_deg(soil, b, length, mass, g, 0.75, com_height)
+    mu = spec.wheel_friction * sim.terrain_friction
+    return [
+        ratio_row("soft soil: sinkage at rest", sink, track_sinkage_m(soil, b, length, w), "m", 0.85, 1.15,
+                   f"{where}; Bekker sinkage of a belt carrying {w:.1f} N"),
+        abs_row("soft soil: steepest grade climbed from rest", grade, limit, "deg", 3.0,
+                 f"{where}; quasi-static belt limit at slip 0.75 with the load moved back (centre of mass "
+                 f"{com_height:.3f} m above the belts); on rigid ground grip alone allows "
+                 f"atan(mu) = {math.degrees(math.atan(mu)):.1f} deg (mu = {mu:g})"),
+        CheckResult("soft soil: drawbar pull at 20 % slip", pull, expected_pull, "N",
+                    bool(abs(pull - expected_pull) <= max(0.1 * abs(expected_pull), 0.01 * mass * g)),
+                    "within 10 % or 1 % of the weight",
+                    f"{where}; 2 x a belt's thrust less its compaction resistance, weight {mass * g:.1f} N"),
     ]

@@ -17,6 +17,12 @@ steady, the rig reads:
 :func:`model_curve` gives the same quantities from the Wong-Reece integrals directly (the sinkage at
 which ``F_z`` carries the load, then ``F_x`` and ``T`` there), without the engine, the tables or
 the relaxation, so the rig tests the whole per-step path.
+
+Where the model ends. The tables stop at a soil sinkage of ``MAX_SINKAGE_FRACTION`` of the radius
+(0.75 r); a wheel whose load the soil cannot carry there bottoms out, and beyond it only the tyre's
+series spring holds it up. Such a row is outside the model (``SoilCheck.outside_model``): the rig
+and the integrals may still agree there (both hold the wheel at the cap), but that agreement says
+nothing about the soil, so ``soil check`` marks those rows and leaves them out of its agreement figure.
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ import numpy as np
 from offroadbench.heightmap import Heightmap
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.tyre_laws.soil_wheels import SoilWheels
-from offroadbench.sim.tyre_laws.terramechanics import SoilParams, build_tables, static_sinkage, wheel_forces
+from offroadbench.sim.tyre_laws.terramechanics import SoilParams, build_tables, capacity_n, static_sinkage, wheel_forces
 
 __all__ = ["SLIPS", "SoilCheck", "model_curve", "rig_curve", "wheel_load_n"]
 
@@ -50,6 +56,12 @@ class SoilCheck:
     sinkage_m: np.ndarray
     drawbar_pull_n: np.ndarray
     torque_nm: np.ndarray
+    outside_model: np.ndarray | None = None
+    """Per slip, True where the wheel bottoms out (outside the model): for the integrals, the soil at
+    the tables' sinkage cap carries less than the load (:func:`~offroadbench.sim.tyre_laws.terramechanics.
+    capacity_n`); for the rig, the wheel's penetration passed the tables' top at the end of the run."""
+    capacity_n: np.ndarray | None = None
+    """Per slip, the most the soil carries at the sinkage cap, N (the integrals only)."""
 
 
 def model_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float,
@@ -59,9 +71,10 @@ def model_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float
     for s in slips:
         h = static_sinkage(soil, radius_m, width_m, load_n, s)
         _, fx, t = wheel_forces(soil, radius_m, width_m, h, s)
-        out.append((h, float(fx), float(t)))
-    h, fx, t = (np.array(c) for c in zip(*out, strict=True))
-    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
+        out.append((h, float(fx), float(t), capacity_n(soil, radius_m, width_m, s)))
+    h, fx, t, cap = (np.array(c) for c in zip(*out, strict=True))
+    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t,
+                     outside_model=cap < load_n, capacity_n=cap)
 
 
 def wheel_load_n(spec, gravity_m_s2: float) -> float:
@@ -92,7 +105,7 @@ def rig_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float, 
     hm = Heightmap.flat(5, math.ceil(length_m / 0.05) + 1, 0.05)
     tables = build_tables(soil, radius_m, width_m, load_kg / dt**2)
     steps = round(seconds * physics_rate_hz)
-    rows = []
+    rows, outside = [], []
     for i, s in enumerate(slips):
         core = SoilWheels(1, hm, tables, dt, load_kg, damping_n_s_m=0.5 * load_kg / dt,
                           relaxation_m=max(soil.shear_modulus_m, 0.02),
@@ -100,6 +113,8 @@ def rig_curve(soil: SoilParams, radius_m: float, width_m: float, load_n: float, 
         rows.append(run(core, radius_m=radius_m, load_kg=load_kg, gravity_m_s2=gravity_m_s2,
                         carriage_m_s=wheel_speed_m_s * (1.0 - s), wheel_rad_s=wheel_speed_m_s / radius_m,
                         dt_s=dt, steps=steps))
+        outside.append(core.outside_model())  # the last step's contact
         report(progress, i + 1, len(slips))
     h, fx, t = (np.array(c) for c in zip(*rows, strict=True))
-    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t)
+    return SoilCheck(soil.name, radius_m, width_m, load_n, np.asarray(slips, dtype=float), h, fx, t,
+                     outside_model=np.array(outside, dtype=bool))

@@ -69,6 +69,12 @@ lunar gravity, offroadbench.sim.tyre_laws.terramechanics):
   drawbar pull, against four times a wheel's Wong-Reece pull at a quarter of the weight; pass:
   within 10 % of the expected pull or 1 % of the weight.
 
+A tracked vehicle with a track patch (``track_contact_length_m``) is checked against its belts'
+Bekker / Wong relations instead (offroadbench.sim.tyre_laws.track_patch): a belt's sinkage under
+half the weight, a climb limit with the load moved back by the grade
+(:func:`~offroadbench.sim.rigs.soft_soil_check.track_climb_limit_deg`), and twice a belt's thrust
+less its compaction resistance at 20 % slip (a 16 s tow: a belt's slip settles more slowly).
+
 All measurements are in SI units; angles are reported in degrees. The soft-soil rows are in
 :mod:`offroadbench.sim.rigs.soft_soil_check`, the row type and the measuring helpers in
 :mod:`offroadbench.sim.rigs.vehicle_measure`.

@@ -113,6 +113,7 @@ def drive_missions(
     gravity_m_s2: float | None = None,
     soil: str | None = None,
     progress: ProgressFn | None = None,
+    soil_map=None,
 ) -> DriveRun:
     """Sample ``n`` missions of ``length_m`` on ``hm`` from the root ``seed`` and drive them all.
 
@@ -129,7 +130,8 @@ def drive_missions(
     ``length_m``, ``vehicle``, ``sim``, ``controller``, ``rules``, ``roughness`` and ``planner``
     (its ``missions`` give the length and border; ``n`` the count). ``gravity_m_s2`` and ``soil``
     are the terrain's (offroadbench.sim.trial.pipeline.terrain_body), used where ``sim`` leaves
-    them open.
+    them open; so is ``soil_map`` (offroadbench.terrain.soil_map.soil_map_for), used where ``sim``
+    names no soil.
     """
     from offroadbench.navigation.planners import PlannerChoice, planner_from_table
     from offroadbench.sim.trial.pipeline import TrialSettings, drive_terrain, prepare_terrain
@@ -145,7 +147,7 @@ def drive_missions(
     settings = settings.replace(missions=dataclasses.replace(settings.missions, count=n))
     mseeds = tuple(mission_seed(seed, 0, k) for k in range(n))
     prepared = prepare_terrain(hm, terrain_seed, settings, list(enumerate(mseeds)), gravity_m_s2=gravity_m_s2,
-                               soil=soil)
+                               soil=soil, soil_map=soil_map)
     records = list(drive_terrain(prepared, settings, progress=progress))
     sim = prepared.sim_for(settings.sim)
     return DriveRun(

@@ -60,11 +60,17 @@ class PreparedTerrain:
     gravity_m_s2: float | None = None
     """The gravity of the terrain's body (``[body]`` of its recipe; None: not named)."""
     soil: str | None = None
-    """The terrain's soil (``[soil]`` of its recipe; None: not named)."""
+    """The terrain's soil (``[soil]`` of its recipe; None: not named); with a soil map, its default."""
+    soil_map: Any = None
+    """The terrain's soil map (offroadbench.terrain.soil_map.SoilMap; None: one soil everywhere)."""
 
     def sim_for(self, sim: SimConfig) -> SimConfig:
         """``sim`` with this terrain's gravity and soil where ``sim`` leaves them open (SimConfig.for_terrain)."""
         return sim.for_terrain(self.gravity_m_s2, self.soil)
+
+    def soil_map_for(self, sim: SimConfig) -> Any:
+        """The soil map the trials use: the terrain's, unless ``sim`` names a soil (which then lies everywhere)."""
+        return self.soil_map if sim.soil is None else None
 
 
 def terrain_body(terrain: Any = None, recipe: Any = None) -> tuple[float | None, str | None]:
@@ -89,11 +95,12 @@ def terrain_body(terrain: Any = None, recipe: Any = None) -> tuple[float | None,
 
 def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
                     missions: Sequence[tuple[int, int]] | Sequence[Mission], *,
-                    gravity_m_s2: float | None = None, soil: str | None = None) -> PreparedTerrain:
+                    gravity_m_s2: float | None = None, soil: str | None = None,
+                    soil_map: Any = None) -> PreparedTerrain:
     """The terrain, its class maps and its missions.
 
     ``terrain`` is a Heightmap (``seed`` is then only recorded; ``gravity_m_s2`` and ``soil`` say
-    its body's gravity and its soil, if known) or a recipe
+    its body's gravity and its soil, if known, and ``soil_map`` its soil map) or a recipe
     (:class:`offroadbench.terrain.recipe.Recipe`, generated with ``seed``; its ``[body]`` and
     ``[soil]`` give gravity and soil). ``missions`` are
     ``(index, mission_seed)`` pairs, each drawn alone on the closed class map (Majhor & Bos 2023,
@@ -103,9 +110,11 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
         hm = terrain
     else:
         from offroadbench.terrain.recipe import generate_terrain
+        from offroadbench.terrain.soil_map import soil_map_for
 
         hm = generate_terrain(terrain, seed)
         gravity_m_s2, soil = terrain_body(terrain)
+        soil_map = soil_map_for(terrain, hm, seed)
     maps = classify_terrain(hm, settings.roughness)
     items = list(missions)
     if items and isinstance(items[0], Mission):
@@ -114,7 +123,7 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
         drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s)) for k, s in items)
         seeds = tuple(int(s) for _, s in items)
     return PreparedTerrain(hm=hm, maps=maps, missions=drawn, terrain_seed=seed, mission_seeds=seeds,
-                           gravity_m_s2=gravity_m_s2, soil=soil)
+                           gravity_m_s2=gravity_m_s2, soil=soil, soil_map=soil_map)
 
 
 def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
@@ -128,7 +137,8 @@ def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
     classes = prepared.maps.closed if "classes" in needs else None
     n = len(prepared.missions)
-    with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim)) as world:
+    with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim),
+                    soil_map=prepared.soil_map_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):
             yield drive_mission(world, mission, settings=settings, classes=classes)
             report(progress, i + 1, n)

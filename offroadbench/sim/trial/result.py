@@ -75,6 +75,12 @@ class TrialResult:
     sinkage_p95_m: float = float("nan")
     """95th percentile of the deepest wheel's soil sinkage over the moving telemetry ticks, m (as
     ``sinkage_median_m``)."""
+    outside_model_fraction: float = float("nan")
+    """Fraction of the telemetry ticks at which a wheel had bottomed out, outside the soil model (its
+    penetration past the tables' top: the soil's sinkage cap of 0.75 r reached, the tyre spring
+    alone carrying it; offroadbench.sim.tyre_laws.terramechanics.SoilTables.outside), 0-1 (the
+    ``terramechanics`` tyre model; NaN with the other models). Above 0, the trial's soil forces
+    there are not the Wong-Reece model's."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)

@@ -148,6 +148,9 @@ class TrialLoop:
         self.rows: list[tuple] = []
         self._row_k = -1  # the tick of the last row
         self.slips: list[float] = []
+        self.outside: list[float] = []
+        """Per telemetry row: 1 where a wheel bottomed out (outside the soil model), 0 where not, NaN
+        where the engine or the tyre model has no soil."""
         self.cmd_v = self.cmd_w = 0.0
         self.reason: str | None = None
         """None while the trial runs, then "" (success) or its failure reason."""
@@ -200,6 +203,8 @@ class TrialLoop:
             self._row_k = k
             slip = world.wheel_slip()
             self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
+            outside = getattr(world, "wheel_outside_model", lambda: None)()
+            self.outside.append(math.nan if outside is None else float(outside))
             done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
             if done is not None:
                 self.reason = done
@@ -239,6 +244,8 @@ class TrialLoop:
             median, p95 = metrics.sinkage_summary(tel["penetration_m"], on_soil)
             result = dataclasses.replace(result, mean_slip=metrics.mean_where(self.slips, on_soil),
                                          sinkage_median_m=median, sinkage_p95_m=p95)
+        if any(map(math.isfinite, self.outside)):  # the fraction of the whole trial, every tick
+            result = dataclasses.replace(result, outside_model_fraction=float(np.nanmean(self.outside)))
         return result
 
     def telemetry(self) -> dict[str, np.ndarray]:

@@ -127,4 +127,19 @@ def settings_part(name: str, data: Mapping[str, Any], where: str = "settings") -
     cls = typing.get_type_hints(TrialSettings).get(name)
     if cls is None:
         raise InputError(f"{where}: unknown settings part {name!r}")
-    return from_dict(cls, dict(data), f"{where} [{name}]")
+    data = dict(data)
+    if name == "sim":
+        data = stored_sim_as_it_ran(data)
+    return from_dict(cls, data, f"{where} [{name}]")
+
+
+def stored_sim_as_it_ran(data: Mapping[str, Any]) -> dict[str, Any]:
+    """A stored ``[sim]`` table with the keys that later changed their default set as the run had
+    them, so a stored trial replays (and a stored study resumes) as it ran: a ``[sim.mujoco]`` table
+    stored before ``hfield_collision`` existed (issue 41) ran MuJoCo's own height-field collision,
+    which ``"exact"`` reproduces to the bit (the default is now ``"closed_form"``)."""
+    data = dict(data)
+    mujoco = data.get("mujoco")
+    if isinstance(mujoco, Mapping) and "hfield_collision" not in mujoco:
+        data["mujoco"] = {**mujoco, "hfield_collision": "exact"}
+    return data

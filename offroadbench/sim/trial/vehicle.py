@@ -20,7 +20,7 @@ from offroadbench.errors import InputError
 from offroadbench.bounds import check_bounds
 from offroadbench.registry import Registry, unknown_name
 
-__all__ = ["STEERING_KINDS", "VehicleSpec", "VEHICLES", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
+__all__ = ["STEERING_KINDS", "VehicleSpec", "VEHICLES", "check_model_file", "load_vehicle", "list_vehicles", "vehicle_files", "vehicle_from_table"]
 
 #: the steering kinds a vehicle.toml may name (VehicleSpec.steering)
 STEERING_KINDS = ("skid", "ackermann", "rocker_bogie")
@@ -50,6 +50,11 @@ class VehicleSpec:
     wheel_width_m: float | None = None
     """Width of the tyre's tread, metres (the ``terramechanics`` tyre model's b; None: that model
     cannot be used)."""
+    track_contact_length_m: float | None = None
+    """A tracked vehicle's belt ground contact length, m: with it, on the ``terramechanics`` tyre model
+    each side's road wheels are the segments of one belt of this length and ``wheel_width_m`` under the
+    Bekker / Wong track relations (offroadbench.sim.tyre_laws.track_patch); None: wheels (a track as a
+    row of wheels). Rigid-ground tyre models ignore it."""
     track_m: float
     """Lateral distance between left and right wheel centres, metres."""
     max_speed_m_s: float
@@ -139,6 +144,11 @@ class VehicleSpec:
                 check_range(self, name, getattr(self, name), lo=0, hi=90, lo_open=True)
         if self.wheel_width_m is not None:
             check_range(self, "wheel_width_m", self.wheel_width_m, lo=0, lo_open=True)
+        if self.track_contact_length_m is not None:
+            check_range(self, "track_contact_length_m", self.track_contact_length_m, lo=0, lo_open=True)
+            if self.wheel_width_m is None or self.steering != "skid":
+                raise InputError(f"vehicle {self.name!r}: track_contact_length_m needs wheel_width_m (the belt's "
+                                 "width) and steering = 'skid'")
         if self.rated_step_m is not None:
             check_range(self, "rated_step_m", self.rated_step_m, lo=0, lo_open=True)
         if self.wheel_spin_inertia_kg_m2 is not None:
@@ -240,7 +250,9 @@ def list_vehicles() -> list[str]:
 def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
     """Load a vehicle by name (``husky``) or by the path of its ``vehicle.toml``.
 
-    The URDF path is resolved against the TOML's folder and must exist.
+    The URDF path is resolved against the TOML's folder and must exist, be a URDF within physical
+    bounds (offroadbench.bounds.check_urdf: masses, inertias, shape sizes, joint limits) and have
+    the joints the TOML names; otherwise an InputError naming the file (one line).
     """
     text = str(name_or_path)
     path = Path(text)
@@ -258,7 +270,24 @@ def load_vehicle(name_or_path: str | Path) -> VehicleSpec:
         urdf = path.parent / urdf
     if not urdf.is_file():
         raise InputError(f"{path}: urdf {spec.urdf!r} not found at {urdf}")
-    return dataclasses.replace(spec, urdf=str(urdf.resolve()))
+    urdf = urdf.resolve()
+    check_model_file(spec, urdf)
+    return dataclasses.replace(spec, urdf=str(urdf))
+
+
+def check_model_file(spec: VehicleSpec, urdf: str | Path) -> None:
+    """Refuse (InputError, one line naming the file) a model file that is not a URDF, is outside
+    physical bounds (offroadbench.bounds.check_urdf), or lacks a joint ``spec`` names."""
+    from offroadbench.bounds import check_urdf
+    from offroadbench.sim.engines.base import read_urdf
+
+    links, joints = read_urdf(str(urdf))
+    check_urdf(urdf, links, joints)
+    names = {j.name for j in joints}
+    named = (spec.wheel_joints + spec.steer_joints + spec.differential_joints + spec.suspension_joints)
+    missing = [n for n in dict.fromkeys(named) if n not in names]
+    if missing:
+        raise InputError(f"vehicle {spec.name!r}: URDF {urdf} has no joint(s) {', '.join(missing)}")
 
 
 def vehicle_from_table(table: Mapping[str, Any], where: str = "[vehicle]"):

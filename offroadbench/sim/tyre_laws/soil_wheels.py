@@ -38,14 +38,17 @@ x86-64 CPU; README, "Reproducibility").
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.tyre_laws.terramechanics import SoilTables, build_tables, load_soil
+from offroadbench.sim.tyre_laws.terramechanics import MAX_SINKAGE_FRACTION, SoilTables, build_tables, load_soil
+from offroadbench.sim.tyre_laws.track_patch import (SegmentTable, TrackPatch, compaction_resistance_n, segment_table,
+                                                    shear_development)
 
-__all__ = ["MAX_LATERAL_SLIP", "RESISTANCE_FADE_M_S", "SoilSetup", "SoilWheels", "soil_setup"]
+__all__ = ["MAX_LATERAL_SLIP", "RESISTANCE_FADE_M_S", "SoilSetup", "SoilWheels", "belt_segment", "soil_setup"]
 
 #: speed over which the compaction resistance fades in, m/s
 RESISTANCE_FADE_M_S = 0.05
@@ -65,6 +68,10 @@ class SoilSetup:
     """Longitudinal slip relaxation length, m."""
     lateral_relaxation_m: float
     """Lateral slip relaxation length, m."""
+    soil_map: object = None
+    """A soil map (offroadbench.terrain.soil_map.SoilMap) whose index 0 is this setup's soil, or None."""
+    map_soils: tuple = ()
+    """For a soil map, (tables, relaxation m, lateral relaxation m) of each of its soils, index 0 first."""
 
     def wheels(self, n_wheels: int, hm: Heightmap, dt_s: float, step_dt_s: float | None = None) -> SoilWheels:
         """The per-wheel contact for ``n_wheels`` wheels on ``hm``, integrated at ``step_dt_s``
@@ -72,7 +79,8 @@ class SoilSetup:
         ``0.5 m / dt`` for a wheel's share ``m`` (as the Coulomb bristle's)."""
         return SoilWheels(n_wheels, hm, self.tables, dt_s if step_dt_s is None else step_dt_s, self.share_kg,
                           damping_n_s_m=0.5 * self.share_kg / dt_s, relaxation_m=self.relaxation_m,
-                          lateral_relaxation_m=self.lateral_relaxation_m)
+                          lateral_relaxation_m=self.lateral_relaxation_m, soil_map=self.soil_map,
+                          map_soils=self.map_soils)
 
 
 def _static_penetration(tables: SoilTables, load_n: float) -> float:
@@ -87,15 +95,28 @@ def _static_penetration(tables: SoilTables, load_n: float) -> float:
     return hi
 
 
-def soil_setup(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2: float, dt_s: float) -> SoilSetup:
+def soil_setup(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2: float, dt_s: float,
+               soil_map=None) -> SoilSetup:
     """The soil contact's tables and constants for a vehicle of ``mass_kg`` on ``n_wheels`` wheels
     at the trial step ``dt_s`` (any engine).
 
     The series spring is the vehicle's tyre stiffness capped at ``m / dt^2`` for a wheel's share
     ``m`` of the mass (the explicit step's stability); the slip relaxation lengths are the soil's K
     and K_y, lengthened so that the slip spring ``(dF/ds) / length`` at the static load stays below
-    ``0.25 m / dt^2``.
+    ``0.25 m / dt^2``. With a ``soil_map`` (offroadbench.terrain.soil_map.SoilMap) every soil of the
+    map gets its own tables and lengths, the same way; ``soil_name`` is then ignored for the map's
+    default, its index 0.
     """
+    if soil_map is not None:
+        parts = [_one_soil(spec, name, mass_kg, n_wheels, gravity_m_s2, dt_s) for name in soil_map.soils]
+        first = parts[0]
+        return dataclasses.replace(first, soil_map=soil_map,
+                                   map_soils=tuple((p.tables, p.relaxation_m, p.lateral_relaxation_m) for p in parts))
+    return _one_soil(spec, soil_name, mass_kg, n_wheels, gravity_m_s2, dt_s)
+
+
+def _one_soil(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2: float, dt_s: float) -> SoilSetup:
+    """:func:`soil_setup` for one soil everywhere."""
     if spec.wheel_width_m is None:
         raise InputError(f"vehicle {spec.name!r} has no wheel_width_m; the terramechanics tyre model needs it")
     soil = load_soil(soil_name)
@@ -103,6 +124,8 @@ def soil_setup(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2
     dt = dt_s
     k_cap = share / dt**2
     k_series = min(spec.tyre_stiffness_n_m or k_cap, k_cap)
+    if getattr(spec, "track_contact_length_m", None) is not None:
+        return _belt_setup(spec, soil, share, n_wheels, gravity_m_s2, dt, k_series)
     tables = build_tables(soil, spec.wheel_radius_m, spec.wheel_width_m, k_series)
     k_stab = 0.25 * share / dt**2
     delta = _static_penetration(tables, share * gravity_m_s2)
@@ -114,13 +137,51 @@ def soil_setup(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2
                      lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
 
 
+def belt_segment(table: SegmentTable, delta: float, s_m: float, lam: float, direction: float, fade: float,
+                  radius_m: float) -> tuple[float, float, float, float, float]:
+    """(sinkage m, normal N, pull along the rolling direction N, resistance torque N m, side force
+    magnitude N) of a belt segment at penetration ``delta``, signed slip ``s_m`` (in the direction of
+    motion) and lateral slip ratio ``lam`` (offroadbench.sim.tyre_laws.track_patch); the compaction
+    resistance fades in over the first ``RESISTANCE_FADE_M_S`` of speed, as a wheel's."""
+    soil, patch = table.soil, table.patch
+    sink, f_n = table.lookup(delta)
+    strength = patch.width_m * patch.segment_length_m * soil.cohesion_pa + f_n * math.tan(
+        math.radians(soil.friction_angle_deg))
+    thrust = math.copysign(strength * shear_development(s_m * patch.contact_length_m / soil.shear_modulus_m), s_m)
+    resistance = compaction_resistance_n(soil, patch.width_m, sink) / patch.segments
+    f_x = direction * (thrust - (1.0 - fade) * resistance)
+    torque = direction * radius_m * thrust
+    f_y = strength * shear_development(lam * patch.contact_length_m / soil.lateral_shear_modulus_m)
+    return sink, f_n, f_x, torque, f_y
+
+
+def _belt_setup(spec, soil, share: float, n_wheels: int, gravity_m_s2: float, dt: float, k_series: float) -> SoilSetup:
+    """:func:`soil_setup` for a tracked vehicle's belts: each road wheel a segment of its side's belt
+    (``n_wheels / 2`` a side), its table capped at the wheels' sinkage cap; the relaxation lengths as a
+    wheel's, from the segment's thrust and side-force slopes at the static load."""
+    patch = TrackPatch(contact_length_m=spec.track_contact_length_m, width_m=spec.wheel_width_m,
+                       segments=max(1, n_wheels // 2))
+    table = segment_table(soil, patch, spec.wheel_radius_m, k_series, MAX_SINKAGE_FRACTION * spec.wheel_radius_m)
+    k_stab = 0.25 * share / dt**2
+    strength = patch.width_m * patch.segment_length_m * soil.cohesion_pa + share * gravity_m_s2 * math.tan(
+        math.radians(soil.friction_angle_deg))
+    # the steepest slope of the thrust against slip is at slip 0: strength x d g(iL/K) / di = strength L / (2 K)
+    slope_x = strength * patch.contact_length_m / (2.0 * soil.shear_modulus_m)
+    slope_y = strength * patch.contact_length_m / (2.0 * soil.lateral_shear_modulus_m)
+    return SoilSetup(tables=table, share_kg=share, relaxation_m=max(soil.shear_modulus_m, slope_x / k_stab),
+                     lateral_relaxation_m=max(soil.lateral_shear_modulus_m, slope_y / k_stab))
+
+
 class SoilWheels:
     """Wong-Reece soil forces on ``n_wheels`` wheels (module docstring). ``share_kg`` is one wheel's
     share of the vehicle's mass; ``damping_n_s_m`` damps the penetration rate; ``dt_s`` is the step
-    the slip states are integrated at."""
+    the slip states are integrated at. With a ``soil_map`` (offroadbench.terrain.soil_map.SoilMap),
+    each wheel takes, every step, the tables and relaxation lengths (``map_soils``, by the map's
+    index) of the soil at the map sample nearest its contact point (the rim's lowest point)."""
 
     def __init__(self, n_wheels: int, hm: Heightmap, tables: SoilTables, dt_s: float, share_kg: float,
-                 damping_n_s_m: float, relaxation_m: float, lateral_relaxation_m: float) -> None:
+                 damping_n_s_m: float, relaxation_m: float, lateral_relaxation_m: float, soil_map=None,
+                 map_soils: tuple = ()) -> None:
         self.n = n_wheels
         self._z = hm.z
         self._cell = hm.cell_size_m
@@ -135,15 +196,29 @@ class SoilWheels:
         self._state: list[list[float] | None] = [None] * n_wheels
         #: per wheel in contact in the last step: (sinkage m, slip in the direction of motion, penetration m)
         self.last: dict[int, tuple[float, float, float]] = {}
+        self._map = soil_map
+        if soil_map is not None and len(map_soils) != len(soil_map.soils):
+            raise InputError(f"soil map of {len(soil_map.soils)} soils given tables for {len(map_soils)}")
+        self._soils = tuple(map_soils) if soil_map is not None else ((tables, relaxation_m, lateral_relaxation_m),)
+        #: per wheel in contact in the last step: the index of its soil (0 without a soil map)
+        self.last_soil: dict[int, int] = {}
 
     def reset(self) -> None:
         """Forget the slip states (after the vehicle is teleported)."""
         self._state = [None] * self.n
         self.last = {}
+        self.last_soil = {}
 
     def begin(self) -> None:
         """Start a step: forget the last step's contacts (:attr:`last`)."""
         self.last = {}
+        self.last_soil = {}
+
+    def outside_model(self) -> bool:
+        """True when a wheel in contact in the last step bottomed out: its penetration passed the
+        tables' top (:meth:`~offroadbench.sim.tyre_laws.terramechanics.SoilTables.outside`), where the
+        soil's sinkage cap is reached and the series spring alone carries it."""
+        return any(self._soils[self.last_soil.get(i, 0)][0].outside(v[2]) for i, v in self.last.items())
 
     # ---------------------------------------------------------------- geometry
     def _surface(self, x: float, y: float):
@@ -196,7 +271,9 @@ class SoilWheels:
         if hit is None or hit[0] <= 0.0:
             self._state[i] = None
             return None
-        delta, (nx, ny, nz), _ = hit
+        delta, (nx, ny, nz), rim = hit
+        k = 0 if self._map is None else self._map.soil_index_at(rim[0], rim[1])
+        tables, sx, sy = self._soils[k]
         vx, vy, vz = lin
         wx, wy, wz = ang
         # rolling direction e_f = axle x n, lateral e_l = n x e_f
@@ -214,25 +291,28 @@ class SoilWheels:
         if state is None:
             state = [0.0, 0.0]
         # implicit relaxation of the slip displacements (module docstring, 3)
-        ux = (state[0] + dt * (u_roll - v_f)) / (1.0 + dt * vref / self._sx)
-        ux = min(self._sx, max(-self._sx, ux))
-        uy = (state[1] - dt * v_l) / (1.0 + dt * vref / self._sy)
-        uy = min(MAX_LATERAL_SLIP * self._sy, max(-MAX_LATERAL_SLIP * self._sy, uy))
+        ux = (state[0] + dt * (u_roll - v_f)) / (1.0 + dt * vref / sx)
+        ux = min(sx, max(-sx, ux))
+        uy = (state[1] - dt * v_l) / (1.0 + dt * vref / sy)
+        uy = min(MAX_LATERAL_SLIP * sy, max(-MAX_LATERAL_SLIP * sy, uy))
         self._state[i] = [ux, uy]
-        slip = ux / self._sx
-        lam = abs(uy) / self._sy
+        slip = ux / sx
+        lam = abs(uy) / sy
         direction = 1.0 if (u_roll if abs(u_roll) >= abs(v_f) else v_f) >= 0.0 else -1.0
         s_m = direction * slip
-        tables = self.tables
-        sink, f_n, f_x, torque = tables.lookup(delta, s_m)
-        _, _, f_x0, torque0 = tables.lookup(delta, 0.0)
         fade = 1.0 - min(1.0, abs(v_f) / RESISTANCE_FADE_M_S)
-        f_x = direction * (f_x - fade * f_x0)
-        torque = direction * (torque - fade * torque0)
-        f_y = tables.lateral(delta, s_m, lam)
+        if isinstance(tables, SegmentTable):  # a track's belt segment (offroadbench.sim.tyre_laws.track_patch)
+            sink, f_n, f_x, torque, f_y = belt_segment(tables, delta, s_m, lam, direction, fade, self._r)
+        else:
+            sink, f_n, f_x, torque = tables.lookup(delta, s_m)
+            _, _, f_x0, torque0 = tables.lookup(delta, 0.0)
+            f_x = direction * (f_x - fade * f_x0)
+            torque = direction * (torque - fade * torque0)
+            f_y = tables.lateral(delta, s_m, lam)
         if uy < 0.0:
             f_y = -f_y
         f_n = max(0.0, f_n - self._c * v_n)
         self.last[i] = (sink, s_m, delta)
+        self.last_soil[i] = k
         return ([f_n * nx + f_x * fx_ + f_y * lx, f_n * ny + f_x * fy_ + f_y * ly, f_n * nz + f_x * fz_ + f_y * lz],
                 [-torque * ax, -torque * ay, -torque * az])

@@ -16,9 +16,12 @@ of travel, with the entry angle ``theta_1 = acos(1 - h / r)`` and the exit angle
   a spinning wheel digs itself in. Wong & Reece's model alone barely changes the sinkage with slip
   (9.2 -> 10.0 mm from slip 0 to 0.9 for the Husky on lunar regolith in lunar gravity), against
   single-wheel tests where it grows severalfold (Ding et al. 2010: 3-7x at slip 0.6 with lugged
-  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``, with its source);
-  ``n1 = 0`` is the model without slip-sinkage. The moduli keep their values as ``n`` varies (as
-  Ding et al. do), so their units follow ``n(s)``.
+  wheels; Lyasko 2010 reviews the effect). ``n1`` is a soil parameter (``soils/*.toml``) that must
+  cite its published value (``n1_source``: author, year, page or table); no shipped soil has one
+  that we could read (Ding et al. fit ``n1`` to their own wheels on their own simulant), so every shipped soil has ``n1 = 0``, the model without
+  slip-sinkage, and ``soil check`` shows the published band beside it where one exists
+  (``soils/data/slip-sinkage-*.csv``). The moduli keep their values as ``n`` varies (as Ding et
+  al. do), so their units follow ``n(s)``.
 * **Shear stress** (Janosi & Hanamoto 1961): ``tau = (c + sigma tan(phi)) (1 - exp(-|j| / K))``, signed as
   ``j`` (the soil resists the displacement either way), with the
   shear displacement of a driven wheel (Wong & Reece 1967, Eq. 7)
@@ -65,17 +68,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from functools import lru_cache
 
-from offroadbench import resources
-from offroadbench.bounds import check_bounds
-from offroadbench.config import check_range, from_dict, load_toml
+from offroadbench.config import check_range
 from offroadbench.errors import InputError
-from offroadbench.registry import unknown_name
+from offroadbench.sim.tyre_laws.soils import (DEFAULT_SOIL, SlipSinkageBand, SoilParams, list_soils, load_soil,
+                                              published_slip_sinkage, soil_files)
 
 __all__ = [
     "DEFAULT_SOIL",
@@ -83,6 +84,7 @@ __all__ = [
     "SlipSinkageBand",
     "SoilTables",
     "build_tables",
+    "capacity_n",
     "entry_angle",
     "gauss_legendre",
     "lateral_force",
@@ -97,127 +99,11 @@ __all__ = [
     "wheel_forces",
 ]
 
-#: the soil of a terramechanics trial when neither the study nor the terrain names one
-DEFAULT_SOIL = "lunar-regolith"
 #: deepest soil sinkage the tables cover, as a fraction of the wheel radius (theta_1 = 75.5 deg);
 #: beyond it the normal force rises with the series spring alone
 MAX_SINKAGE_FRACTION = 0.75
 #: lateral slip ratio scale of the table's axis w = lambda / (lambda + LAMBDA_SCALE) in [0, 1]
 LAMBDA_SCALE = 0.2
-
-
-@dataclass(frozen=True, kw_only=True)
-class SoilParams:
-    """A soil's Bekker, Mohr-Coulomb and Janosi-Hanamoto parameters, SI units (``soils/*.toml``)."""
-
-    name: str
-    """Short name, e.g. ``lunar-regolith``."""
-    description: str = ""
-    """What the soil is and where its numbers come from."""
-    n: float
-    """Bekker's sinkage exponent, dimensionless."""
-    k_c: float
-    """Bekker's cohesive modulus, N/m^(n+1)."""
-    k_phi: float
-    """Bekker's frictional modulus, N/m^(n+2)."""
-    cohesion_pa: float
-    """Mohr-Coulomb cohesion c, Pa."""
-    friction_angle_deg: float
-    """Mohr-Coulomb internal friction angle phi, degrees."""
-    shear_modulus_m: float
-    """Janosi-Hanamoto shear deformation modulus K (longitudinal), m."""
-    lateral_shear_modulus_m: float
-    """Shear deformation modulus K_y for the lateral force (Ishigami et al. 2007), m."""
-    a0: float = 0.4
-    """theta_m = (a0 + a1 |s|) theta_1 (Wong & Reece 1967); Ishigami et al. 2007 use 0.4."""
-    a1: float = 0.15
-    """See a0; Ishigami et al. 2007 use 0.15."""
-    n1: float = 0.0
-    """Slip-sinkage: the sinkage exponent grows with slip, ``n(s) = n + n1 |s|`` (Ding et al. 2011,
-    their slip-dependent ``N = n0 + n1 s``), so a spinning wheel sinks deeper; 0: no slip-sinkage.
-    Dimensionless."""
-
-    def __post_init__(self) -> None:
-        check_range(self, "n", self.n, lo=0, lo_open=True, hi=3)
-        check_range(self, "k_c", self.k_c, lo=None)
-        check_range(self, "k_phi", self.k_phi, lo=None)
-        check_range(self, "cohesion_pa", self.cohesion_pa, lo=0)
-        check_range(self, "friction_angle_deg", self.friction_angle_deg, lo=0, hi=60)
-        check_range(self, "shear_modulus_m", self.shear_modulus_m, lo=0, lo_open=True)
-        check_range(self, "lateral_shear_modulus_m", self.lateral_shear_modulus_m, lo=0, lo_open=True)
-        check_range(self, "a0", self.a0, lo=0, lo_open=True, hi=1)
-        check_range(self, "a1", self.a1, lo=0, hi=1)
-        check_range(self, "n1", self.n1, lo=0, hi=2)
-        if self.a0 + self.a1 >= 1.0:
-            raise InputError(f"soil {self.name!r}: a0 + a1 = {self.a0 + self.a1:g} must be below 1 (theta_m < theta_1)")
-        check_bounds(self, f"soil {self.name!r}")  # physical ranges with their sources (offroadbench.bounds)
-
-    def exponent(self, slip):
-        """The sinkage exponent at slip ``s``: ``n + n1 |s|`` (Ding et al. 2011), dimensionless."""
-        return self.n + self.n1 * np.abs(slip)
-
-    def modulus(self, width_m: float) -> float:
-        """Bekker's ``k_c / b + k_phi`` for a wheel of width ``b``, N/m^(n+2); must be positive."""
-        return self.k_c / width_m + self.k_phi
-
-
-# ---------------------------------------------------------------------------- soils as data
-def soil_files() -> dict[str, Path]:
-    """{soil name: TOML path} of every ``soils/<name>.toml`` on the search path and shipped."""
-    return resources.soil_files()
-
-
-def list_soils() -> list[str]:
-    """Names of every known soil."""
-    return list(soil_files())
-
-
-def load_soil(name_or_path: str | Path) -> SoilParams:
-    """A soil by name (``lunar-regolith``) or by the path of its TOML (a ``[soil]`` table)."""
-    text = str(name_or_path)
-    path = Path(text)
-    if not (text.endswith(".toml") or path.is_file()):
-        found = soil_files()
-        if text not in found:
-            raise unknown_name("soil", text, found, extra="(or give the path of a soil .toml)")
-        path = found[text]
-    data = load_toml(path)
-    if not isinstance(data.get("soil"), dict):
-        raise InputError(f"{path}: no [soil] table")
-    table = dict(data["soil"])
-    table.setdefault("name", path.stem)
-    return from_dict(SoilParams, table, where=f"{path} [soil]")
-
-
-@dataclass(frozen=True, kw_only=True)
-class SlipSinkageBand:
-    """A published band of sinkage at a slip relative to the static sinkage (``soils/data/*.csv``)."""
-
-    slip: float
-    ratio_low: float
-    """Lowest published sinkage(slip) / sinkage(0)."""
-    ratio_high: float
-    """Highest published sinkage(slip) / sinkage(0)."""
-    wheel: str
-    soil: str
-    source: str
-    figure: str
-
-
-def published_slip_sinkage() -> list[SlipSinkageBand]:
-    """The published single-wheel slip-sinkage bands shipped in ``soils/data/slip-sinkage-*.csv``
-    (each file's header names its source, figure and tolerance)."""
-    import csv
-
-    out = []
-    folder = resources.shipped("soils") / "data"
-    for path in sorted(folder.glob("slip-sinkage-*.csv")) if folder.is_dir() else []:
-        lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
-        for row in csv.DictReader(lines):
-            out.append(SlipSinkageBand(slip=float(row["slip"]), ratio_low=float(row["ratio_low"]),
-                                       ratio_high=float(row["ratio_high"]), wheel=row["wheel"], soil=row["soil"],
-                                       source=row["source"], figure=row["figure"]))
-    return out
 
 
 # ---------------------------------------------------------------------------- portable elementary functions
@@ -397,6 +283,12 @@ class SoilTables:
             j = self.n_slip - 2
         return i, fi, j, v - j
 
+    def outside(self, delta_m: float) -> bool:
+        """True where the penetration ``delta_m`` passes the table's top ``delta_max_m``: the soil has
+        reached its sinkage cap (``MAX_SINKAGE_FRACTION`` of the radius) at some slip and what carries
+        the wheel beyond it is the series spring alone, not the Wong-Reece model (the wheel bottoms out)."""
+        return delta_m > self.delta_max_m
+
     def lookup(self, delta_m: float, slip: float) -> tuple[float, float, float, float]:
         """(sinkage m, F_z N, F_x N, T N m) at penetration ``delta_m`` >= 0 and slip in [-1, 1]
         (bilinear; past ``delta_max`` the normal force grows with the series spring alone)."""
@@ -471,8 +363,15 @@ def build_tables(soil: SoilParams, radius_m: float, width_m: float, k_series_n_m
                       fz=flat(np.maximum(fz, 0.0)), fx=flat(fx), torque=flat(torque), fy=flat(fy))
 
 
+def capacity_n(soil: SoilParams, radius_m: float, width_m: float, slip: float = 0.0) -> float:
+    """The largest normal load the model carries at slip ``s``: ``F_z`` at the table's sinkage cap
+    ``MAX_SINKAGE_FRACTION * r``, N. A wheel loaded beyond it bottoms out (outside the model)."""
+    return float(wheel_forces(soil, radius_m, width_m, MAX_SINKAGE_FRACTION * radius_m, slip)[0])
+
+
 def static_sinkage(soil: SoilParams, radius_m: float, width_m: float, load_n: float, slip: float = 0.0) -> float:
-    """Sinkage h at which the wheel carries ``load_n`` at slip ``s``, m (bisection on F_z(h, s))."""
+    """Sinkage h at which the wheel carries ``load_n`` at slip ``s``, m (bisection on F_z(h, s)); the
+    cap ``MAX_SINKAGE_FRACTION * r`` where the soil cannot carry the load (:func:`capacity_n`)."""
     lo, hi = 0.0, MAX_SINKAGE_FRACTION * radius_m
     if float(wheel_forces(soil, radius_m, width_m, hi, slip)[0]) < load_n:
         return hi

@@ -67,6 +67,42 @@ def check_trial_timeout(value: float | None) -> float | None:
     return float(value)
 
 
+#: no engine steps a vehicle faster than this many physics steps per wall-clock second: fifteen
+#: times the fastest measured (60 Hz at a real-time factor of 109, 6,540 steps/s: benchmarks/RESULTS.md)
+MAX_STEPS_PER_S = 100_000.0
+
+
+def shortest_trial_s(plans) -> tuple[float, str]:
+    """(seconds, how): the floor of any successful trial's wall-clock time over the cells ``plans``
+    (CellPlans), and the sentence that says how it is computed. A trial that reaches its goal
+    simulates at least its settling (``sim.settle_time_s``) and its mission driven at top speed
+    (``missions.length_m`` at the lower of ``controller.cruise_speed_m_s`` and the vehicle's
+    ``max_speed_m_s``), that is so many physics steps (``sim.physics_rate_hz``), and no engine
+    steps faster than :data:`MAX_STEPS_PER_S`. A per-trial limit below it makes every trial a fault."""
+    best = None
+    for p in plans:
+        sim, missions = p.section("sim"), p.section("missions")
+        speed = min(p.section("controller").cruise_speed_m_s, p.section("vehicle").max_speed_m_s)
+        steps = (sim.settle_time_s + missions.length_m / speed) * sim.physics_rate_hz
+        floor = steps / MAX_STEPS_PER_S
+        if best is None or floor < best[0]:
+            best = (floor, f"a trial that reaches its goal simulates at least its settling ({sim.settle_time_s:g} s) "
+                           f"and its mission at top speed ({missions.length_m:g} m at {speed:g} m/s), "
+                           f"{steps:.0f} physics steps at {sim.physics_rate_hz} Hz, and no engine runs faster "
+                           f"than {MAX_STEPS_PER_S:g} steps/s (15 times the fastest measured)")
+    return best if best is not None else (0.0, "no trial")
+
+
+def check_trial_floor(value: float | None, plans, option: str = "--trial-timeout-s") -> None:
+    """Refuse (InputError, one line) a per-trial limit below :func:`shortest_trial_s` of ``plans``."""
+    if value is None:
+        return
+    floor, how = shortest_trial_s(plans)
+    if value < floor:
+        raise InputError(f"{option} {value:g} is below this study's shortest possible trial, {floor:.3g} s: {how}; "
+                         "every trial would be a fault, so give at least that")
+
+
 def task_failure(key: tuple[int, int], exc: BaseException | None, text: str, tb: str = "") -> Exception:
     """The error the coordinator raises for a failed terrain task: bad input stays an InputError
     (naming the terrain), anything else is a one-line StudyError; the traceback goes to the log."""

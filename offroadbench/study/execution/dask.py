@@ -1,14 +1,19 @@
 """The ``dask`` executor: one Dask task per terrain on a ``distributed`` cluster (see
-offroadbench.study.execution.executors), with the per-trial time limit on the workers, restarts of hung or
-killed workers and the handling of a lost scheduler."""
+offroadbench.study.execution.executors), with the per-trial time limit kept twice (on the workers,
+and by the coordinator for a worker that stops answering), restarts of hung or killed workers
+and the handling of a lost scheduler."""
 
 from __future__ import annotations
 
+import ctypes
+import dataclasses
 import logging
 import os
 import queue
+import threading
 import time
 import traceback
+import uuid
 from typing import Sequence
 
 from offroadbench.errors import InputError, StudyError
@@ -25,21 +30,63 @@ class TrialTimeout(RuntimeError):
     """A trial (or a terrain build) ran longer than the per-trial wall-clock limit on a Dask worker."""
 
 
-def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None) -> list:
+#: how long past its limit a trial's helper thread, told to stop, may take to end before its
+#: Dask worker counts as unhealthy and is restarted, seconds
+STOP_WAIT_S = 5.0
+
+
+class _Abandoned(BaseException):
+    """Raised inside a trial's helper thread that ran past its limit, to end it (a BaseException:
+    no ``except Exception`` of a trial or plug-in keeps it running)."""
+
+
+def _stop_thread(thread: threading.Thread, wait_s: float) -> bool:
+    """Raise :class:`_Abandoned` in ``thread`` and wait up to ``wait_s`` seconds for it to end.
+    True if it ended: a thread running Python code stops at its next bytecode; one blocked in C
+    code (a sleep, a stuck native loop) does not, and its worker must be restarted."""
+    if thread.ident is not None and thread.is_alive():
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(_Abandoned))
+    thread.join(wait_s)
+    return not thread.is_alive()
+
+
+def _reporter(topic: str | None):
+    """``tell(what, mission=None)``: a progress event (``begin``, ``built``, ``finished``) of the
+    running task on ``topic`` for the coordinator's deadline (:class:`DaskExecutor`); a no-op
+    without a topic (or outside a Dask worker)."""
+    if topic is None:
+        return lambda what, mission=None: None
+    from distributed import get_worker
+
+    worker = get_worker()
+    key, address, pid = str(worker.get_current_task()), worker.address, os.getpid()
+
+    def tell(what: str, mission: int | None = None) -> None:
+        worker.log_event(topic, {"key": key, "worker": address, "pid": pid, "what": what, "mission": mission})
+
+    return tell
+
+
+def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None, topic: str | None = None) -> list:
     """A terrain task on a Dask worker: quiet bootstrap, then every message of :func:`run_terrain`.
 
     With ``limit_s`` the work runs in a helper thread and every message (the terrain build, then
-    each trial) must arrive within ``limit_s`` seconds. Otherwise the task returns what arrived,
-    the fault of the hung trial (:class:`TrialFaulted`) and a ``("restart", worker address,
-    missions after the hung one)`` request: the coordinator stores the fault, restarts this
-    worker (a hung trial cannot be interrupted from Python) and submits the rest. The wait is
-    sliced into short waits, so any limit up to MAX_TRIAL_TIMEOUT_S works.
+    each trial) must arrive within ``limit_s`` seconds. Otherwise the task returns what arrived
+    and the fault of the hung trial (:class:`TrialFaulted`), and the missions after it as a
+    ``("rest", missions after the hung one)`` message, which the coordinator submits again. The
+    helper thread is told to stop (:func:`_stop_thread`); if it has not ended after
+    :data:`STOP_WAIT_S` (a trial blocked in native code) the message is ``("restart", worker
+    address, missions after the hung one)`` instead and the coordinator restarts this worker too,
+    since nothing in Python can stop such a thread. A healthy worker is not restarted. The wait is
+    sliced into short waits, so any limit up to MAX_TRIAL_TIMEOUT_S works. With ``topic`` each
+    message is also announced as a progress event (:func:`_reporter`), which lets the coordinator
+    tell a worker that stopped answering (SIGSTOP, a native loop holding the GIL) from a long trial.
     """
     worker_bootstrap()
     if limit_s is None:
         return collect_terrain(task, trial_fn)
-    import threading
-
+    tell = _reporter(topic)
+    tell("begin")
     q: queue.Queue = queue.Queue()
 
     def work() -> None:
@@ -47,10 +94,13 @@ def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None
             for msg in run_terrain(task, trial_fn):
                 q.put(("msg", msg))
             q.put(("end", None))
+        except _Abandoned:
+            pass
         except BaseException as exc:  # handed to the task thread below
             q.put(("exc", exc))
 
-    threading.Thread(target=work, daemon=True, name="offroadbench-trials").start()
+    thread = threading.Thread(target=work, daemon=True, name="offroadbench-trials")
+    thread.start()
     out: list = []
     built, finished = False, set()
     deadline = time.monotonic() + limit_s
@@ -65,6 +115,8 @@ def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None
             address = get_worker().address
             hung = next((k for k, _ in task.missions if k not in finished), None) if built else None
             faults, rest = timeout_faults(task, hung, finished, limit_s, where=f" (Dask worker {address})")
+            if _stop_thread(thread, STOP_WAIT_S):
+                return out + faults + [("rest", rest)]
             return out + faults + [("restart", address, rest)]
         if kind == "end":
             return out
@@ -74,8 +126,38 @@ def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None
         deadline = time.monotonic() + limit_s
         if isinstance(value, TerrainBuilt):
             built = True
+            tell("built")
         elif isinstance(value, (TrialDone, TrialFaulted)):
             finished.add(value.mission)
+            tell("finished", value.mission)
+
+
+@dataclasses.dataclass
+class _Progress:
+    """What the coordinator last heard of a running Dask task (its progress events)."""
+
+    worker: str
+    pid: int
+    heard: float
+    """time.monotonic() of the last event, coordinator's clock"""
+    built: bool = False
+    finished: set = dataclasses.field(default_factory=set)
+
+
+def _without(task: TerrainTask, mission: int) -> TerrainTask | None:
+    """``task`` without mission ``mission`` (None if nothing is left)."""
+    rest = tuple(m for m in task.missions if m[0] != mission)
+    return dataclasses.replace(task, missions=rest) if rest else None
+
+
+def _our_descendant(pid: int) -> bool:
+    """Whether ``pid`` is a process this one started (through any number of generations)."""
+    try:
+        import psutil
+
+        return any(p.pid == os.getpid() for p in psutil.Process(pid).parents())
+    except Exception:  # noqa: BLE001 - gone, or no psutil: not ours to kill
+        return False
 
 
 class _DropWhileDisconnected(logging.Filter):
@@ -89,14 +171,29 @@ class _DropWhileDisconnected(logging.Filter):
         return self.client.status == "running"
 
 
+class _DropRestartLines(logging.Filter):
+    """Drop a nanny's "Restarting worker" warning: in this executor's LocalCluster that is the
+    nanny replacing a worker the executor killed (one that stopped answering), already reported."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith("Restarting worker")
+
+
 class DaskExecutor:
     """One Dask task per terrain on a ``distributed`` cluster (``pip install offroadbench[dask]``).
 
     Faults. A worker that dies mid-task (SIGKILL, out of memory) loses only its task, which Dask
     runs again elsewhere (tasks are pure: the same rows come back); a task that killed
     ``distributed.scheduler.allowed-failures`` workers stops the study. A trial that runs longer
-    than ``trial_timeout_s`` is stored as a fault, its worker restarted, and the task's later
-    missions submitted again: the study goes on. A lost scheduler, or no
+    than ``trial_timeout_s`` is stored as a fault, and the task's later missions submitted again:
+    the study goes on. The worker measures that limit (:func:`dask_task`) and is restarted only
+    when the trial's thread cannot be stopped. The coordinator keeps a deadline of its own: a
+    running task whose worker has sent no progress event for ``trial_timeout_s`` plus
+    :attr:`deadline_grace_s` (10 s; a worker frozen by SIGSTOP, or stuck in native code that holds
+    the GIL, whose own limit cannot fire) has its running trial stored as a fault (every mission of
+    it when its terrain was not built yet), is cancelled, its worker is removed from the scheduler
+    (and, in the LocalCluster this executor started, killed, so that its nanny starts a fresh one),
+    and its other missions are submitted again: the study goes on. A lost scheduler, or no
     worker for ``no_worker_timeout_s``, stops the study. Every stop is a one-line StudyError;
     the trials committed so far stay, and running the study again resumes it.
     """
@@ -104,6 +201,9 @@ class DaskExecutor:
     poll_s = 0.5
     no_worker_timeout_s = 120.0
     connect_timeout_s = 20.0
+    #: the coordinator's deadline for a running task: its worker's last progress event plus the
+    #: per-trial limit plus this many seconds (the worker's own limit fires first when it can)
+    deadline_grace_s = 10.0
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None,
                  trial_timeout_s: float | None = None) -> None:
@@ -146,11 +246,39 @@ class DaskExecutor:
         # tracebacks; the study reports a lost scheduler itself, in one line
         quiet = _DropWhileDisconnected(client)
         logging.getLogger("distributed.client").addFilter(quiet)
+        restarts = _DropRestartLines()
+        if logging.getLogger("distributed").getEffectiveLevel() > logging.INFO:  # shown with -v
+            logging.getLogger("distributed.nanny").addFilter(restarts)
+        progress: dict[str, _Progress] = {}  # a running task's key -> what its worker last said
+        topic = None
+        if self.trial_timeout_s is not None:
+            topic = f"offroadbench-progress-{uuid.uuid4().hex}"
+            lock = threading.Lock()
+
+            def heard(event) -> None:  # on the client's event loop
+                msg = event[1]
+                with lock:
+                    p = progress.get(msg["key"])
+                    if p is None or p.worker != msg["worker"]:
+                        p = progress[msg["key"]] = _Progress(msg["worker"], msg["pid"], time.monotonic())
+                    p.heard = time.monotonic()
+                    if msg["what"] == "built":
+                        p.built = True
+                    elif msg["what"] == "finished":
+                        p.finished.add(msg["mission"])
+
+            client.subscribe_topic(topic, heard)
+
+        def submit(task: TerrainTask):
+            fut = client.submit(dask_task, task, trial_fn, self.trial_timeout_s, topic, pure=False)
+            futures[fut] = task
+            pending.add(fut)
+
+        heartbeats: dict[str, tuple[float, float]] = {}  # worker -> (its last_seen, when that was first seen here)
         try:
-            futures = {
-                client.submit(dask_task, task, trial_fn, self.trial_timeout_s, pure=False): task for task in tasks
-            }
-            pending = set(futures)
+            pending: set = set()
+            for task in tasks:
+                submit(task)
             no_workers_since = None
             while pending:
                 if client.status in ("closing", "closed"):
@@ -166,10 +294,17 @@ class DaskExecutor:
                         raise StudyError(f"the Dask tasks were cancelled ({' '.join(str(exc).split())[:200]})") from None
                     done = set()
                 for fut in done:
+                    progress.pop(str(fut.key), None)
                     for rest in self._collect(client, fut, futures[fut], handle):
-                        new = client.submit(dask_task, rest, trial_fn, self.trial_timeout_s, pure=False)
-                        futures[new] = rest
-                        pending.add(new)
+                        submit(rest)
+                if topic is not None:
+                    for fut in self._overdue(pending, progress):
+                        pending.discard(fut)
+                        for rest in self._give_up(client, cluster, fut, futures[fut], progress.pop(str(fut.key)),
+                                                  handle):
+                            submit(rest)
+                    for address in self._silent_workers(client, heartbeats, progress):
+                        self._remove_worker(client, cluster, _Progress(address, 0, 0.0))
                 if pending:
                     no_workers_since = self._check_workers(client, where, no_workers_since, time.monotonic())
         except BaseException:
@@ -178,6 +313,7 @@ class DaskExecutor:
         finally:
             self._close(client, cluster, list(futures), failed)
             logging.getLogger("distributed.client").removeFilter(quiet)
+            logging.getLogger("distributed.nanny").removeFilter(restarts)
 
     def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> list[TerrainTask]:
         """Hand a finished task's messages to ``handle``; returns the tasks to submit next (the
@@ -205,8 +341,94 @@ class DaskExecutor:
                 if msg[2] is not None:
                     follow.append(msg[2])
                 continue
+            if isinstance(msg, tuple) and msg and msg[0] == "rest":  # a trial past its limit, its worker healthy
+                if msg[1] is not None:
+                    follow.append(msg[1])
+                continue
             handle(msg)
         return follow
+
+    def _overdue(self, pending: set, progress: dict) -> list:
+        """The running futures whose worker has said nothing for the limit plus the grace."""
+        now = time.monotonic()
+        limit = self.trial_timeout_s + self.deadline_grace_s
+        return [fut for fut in pending if fut.status == "pending" and str(fut.key) in progress
+                and now - progress[str(fut.key)].heard > limit]
+
+    def _silent_workers(self, client, heartbeats: dict, progress: dict) -> list[str]:
+        """Workers whose heartbeat (the scheduler's ``last_seen``) has not moved for the limit plus
+        the grace, and that run none of this study's started tasks (those are given up by
+        :meth:`_give_up`): a worker frozen before a task it was handed began, on which that task
+        would otherwise wait for the scheduler's own worker-ttl (minutes)."""
+        try:
+            workers = client.scheduler_info(n_workers=-1).get("workers", {})
+        except Exception:  # noqa: BLE001 - the next wait() reports a lost scheduler
+            return []
+        now = time.monotonic()
+        for address in list(heartbeats):
+            if address not in workers:
+                del heartbeats[address]
+        for key, p in list(progress.items()):  # a task whose worker died: Dask runs it again elsewhere,
+            if p.worker not in workers:          # whose first event starts its clock anew
+                progress.pop(key, None)
+        busy = {p.worker for p in progress.values()}
+        silent = []
+        for address, info in workers.items():
+            seen = info.get("last_seen")
+            if address not in heartbeats or heartbeats[address][0] != seen:
+                heartbeats[address] = (seen, now)
+            elif now - heartbeats[address][1] > self.trial_timeout_s + self.deadline_grace_s and address not in busy:
+                log.warning("Dask worker %s has not answered for %.0f s; removed", address, now - heartbeats[address][1])
+                del heartbeats[address]
+                silent.append(address)
+        return silent
+
+    def _give_up(self, client, cluster, fut, task: TerrainTask, p: _Progress, handle: Handle) -> list[TerrainTask]:
+        """A task whose worker stopped answering: its running trial stored as a fault (every
+        unfinished mission when its terrain was not built), the task cancelled, the worker removed
+        from the scheduler (and killed when it is a process of this executor's LocalCluster); returns
+        the task of its other missions (those it finished too: their rows were in the lost result)."""
+        silent = time.monotonic() - p.heard
+        where = (f" (Dask worker {p.worker} did not answer for {silent:.0f} s: past the limit plus the "
+                 f"coordinator's {self.deadline_grace_s:g} s grace)")
+        hung = next((k for k, _ in task.missions if k not in p.finished), None) if p.built else None
+        faults, _ = timeout_faults(task, hung, set(), self.trial_timeout_s, where=where)
+        log.warning("cell %d, terrain %d: Dask worker %s did not answer for %.0f s; %s stored as a fault",
+                    task.cell.index, task.terrain, p.worker, silent,
+                    f"mission {hung}" if hung is not None else "its missions")
+        for fault in faults:
+            handle(fault)
+        try:
+            client.cancel([fut], force=True)
+        except Exception as exc:  # noqa: BLE001 - best effort: the next wait() reports a lost scheduler
+            log.info("could not cancel the task of the silent worker %s (%s)", p.worker, exc)
+        self._remove_worker(client, cluster, p)
+        return [] if hung is None else [t for t in (_without(task, hung),) if t is not None]
+
+    @staticmethod
+    def _remove_worker(client, cluster, p: _Progress) -> None:
+        """Take a worker that stopped answering off the scheduler, so no task waits on it (the
+        scheduler's own worker-ttl takes minutes); in this executor's LocalCluster also kill its
+        process (a frozen process handles no other signal), which its nanny replaces."""
+        quiet = logging.getLogger("distributed")
+        old_level = quiet.level
+        quiet.setLevel(logging.CRITICAL + 1)
+        try:
+            client.sync(client.scheduler.unregister, address=p.worker, close=False,
+                        stimulus_id=f"offroadbench-silent-worker-{time.time()}")
+        except Exception as exc:  # noqa: BLE001 - already gone, or the scheduler is: reported by wait()
+            log.info("could not remove the silent Dask worker %s (%s)", p.worker, " ".join(str(exc).split())[:200])
+        finally:
+            quiet.setLevel(old_level)
+        if cluster is None:
+            return
+        pid = next((getattr(n, "pid", None) for n in getattr(cluster, "workers", {}).values()
+                    if getattr(n, "worker_address", None) == p.worker), None) or p.pid
+        if pid and _our_descendant(pid):
+            try:
+                os.kill(pid, 9)
+            except ProcessLookupError:
+                pass
 
     @staticmethod
     def _restart(client, worker: str) -> None:

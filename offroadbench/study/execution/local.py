@@ -74,125 +74,155 @@ class LocalExecutor:
         self.workers = workers or os.cpu_count() or 1
         self.trial_timeout_s = check_trial_timeout(trial_timeout_s)
 
-    def _wait_s(self, running: dict) -> float:
-        if self.trial_timeout_s is None or not running:
-            return self.poll_s
-        first = min(r.since for r in running.values()) + self.trial_timeout_s
-        return min(self.poll_s, max(0.0, first - time.monotonic()) + 1e-3)
-
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
-        import multiprocessing as mp
-        from multiprocessing.connection import wait
+        if tasks:
+            _LocalRun(self, tasks, trial_fn, handle).run()
 
-        if not tasks:
-            return
-        ctx = mp.get_context("fork")
-        task_q = ctx.Queue()
+
+class _LocalRun:
+    """One :meth:`LocalExecutor.run`: the task queue, the workers (each with its own pipe), the
+    tasks in flight and how many are pending; one method per step (start, receive, replace a hung
+    worker, wait, stop)."""
+
+    def __init__(self, executor: LocalExecutor, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None,
+                 handle: Handle) -> None:
+        import multiprocessing as mp
+
+        self.limit_s, self.poll_s, self.workers = executor.trial_timeout_s, executor.poll_s, executor.workers
+        self.tasks, self.trial_fn, self.handle = tasks, trial_fn, handle
+        self.ctx = mp.get_context("fork")
+        self.task_q = self.ctx.Queue()
         # at once, before its feeder thread exists: a stop may leave that thread blocked writing tasks
         # to workers that are gone, and the interpreter must not wait for it at exit (issue 43)
-        task_q.cancel_join_thread()
-        procs: dict = {}  # reading end of a worker's pipe -> its process
-        serial = iter(range(10**9))
-        by_key = {(t.cell.index, t.terrain): t for t in tasks}
-        running: dict[tuple[int, int], _Running] = {}
-        state = {"pending": len(tasks)}
+        self.task_q.cancel_join_thread()
+        self.procs: dict = {}  # reading end of a worker's pipe -> its process
+        self.serial = iter(range(10**9))
+        self.by_key = {(t.cell.index, t.terrain): t for t in tasks}
+        self.running: dict[tuple[int, int], _Running] = {}
+        self.pending = len(tasks)
 
-        def start() -> None:
-            reader, writer = ctx.Pipe(duplex=False)
-            p = ctx.Process(target=_worker, args=(task_q, writer, trial_fn, os.getpid()), daemon=True,
-                            name=f"study-{next(serial)}")
-            p.start()
-            writer.close()  # the worker holds its own copy: EOF on the reader once it is gone
-            procs[reader] = p
-
-        def stop(reader) -> None:
-            p = procs.pop(reader)
-            if p.is_alive():
-                p.kill()  # a hung trial may ignore SIGTERM
-            p.join(timeout=5)
-            reader.close()
-
-        def receive(reader) -> None:
-            try:
-                msg = reader.recv()
-            except (EOFError, OSError):
-                p = procs[reader]
-                p.join(timeout=5)
-                if p.exitcode not in (None, 0):
-                    raise StudyError(f"worker {p.name} died (exit code {p.exitcode}); "
-                                     "finished trials are saved, run the same command again to resume") from None
-                stop(reader)
-                return
-            if isinstance(msg, (TerrainBuilt, TrialDone, TrialFaulted)):  # a task's message for the store
-                r = running.get(msg.key)
-                if r is not None:
-                    r.since = time.monotonic()
-                    if isinstance(msg, TerrainBuilt):
-                        r.built = True
-                    else:
-                        r.finished.add(msg.mission)
-                handle(msg)
-                return
-            kind = msg[0]  # the executor's own control messages: (kind, task key, ...)
-            if kind == "begin":
-                running[msg[1]] = _Running(by_key[msg[1]], msg[2], time.monotonic())
-            elif kind == "done":
-                running.pop(msg[1], None)
-                state["pending"] -= 1
-            elif kind == "error":
-                raise task_failure(msg[1], msg[2], msg[3], msg[4])
-
-        def replace_hung(key: tuple[int, int]) -> None:
-            r = running[key]
-            reader = next((rd for rd, p in procs.items() if p.pid == r.pid), None)
-            while reader is not None and reader in procs and not reader.closed and reader.poll(0):
-                receive(reader)  # what it sent before the limit passed counts
-                if key not in running or time.monotonic() - running[key].since <= self.trial_timeout_s:
-                    return
-            del running[key]
-            hung = r.hung_mission()
-            log.info("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
-                        key[0], key[1], "the terrain build" if hung is None else f"mission {hung}",
-                        self.trial_timeout_s)
-            if reader is not None and reader in procs:
-                stop(reader)
-            faults, rest = timeout_faults(r.task, hung, r.finished, self.trial_timeout_s)
-            for f in faults:
-                handle(f)
-            if rest is not None:
-                by_key[key] = rest
-                task_q.put(rest)
-            else:
-                state["pending"] -= 1
-            start()
-
+    def run(self) -> None:
         finished = False
         try:
-            for task in tasks:
-                task_q.put(task)
-            for _ in range(min(self.workers, len(tasks))):
-                start()
-            while state["pending"]:
-                if self.trial_timeout_s is not None:
-                    now = time.monotonic()
-                    for key in [k for k, r in running.items() if now - r.since > self.trial_timeout_s]:
-                        replace_hung(key)
-                    if not state["pending"]:
-                        break
-                for reader in wait(list(procs), timeout=self._wait_s(running)):
-                    if reader in procs:
-                        receive(reader)
+            for task in self.tasks:
+                self.task_q.put(task)
+            for _ in range(min(self.workers, len(self.tasks))):
+                self.start()
+            while self.pending:
+                self.step()
             finished = True
         finally:
-            if finished:  # every worker is idle: let them end
-                for _ in procs:
-                    task_q.put(None)
-            for reader in list(procs):
-                p = procs[reader]
-                if finished:
-                    p.join(timeout=5)
-                elif p.is_alive():
-                    p.terminate()
-                    p.join(timeout=5)
-                stop(reader)
-            task_q.close()
+            self.close(finished)
+
+    def step(self) -> None:
+        """Replace the workers past the limit, then wait for messages (at most until the next deadline)."""
+        from multiprocessing.connection import wait
+
+        if self.limit_s is not None:
+            now = time.monotonic()
+            for key in [k for k, r in self.running.items() if now - r.since > self.limit_s]:
+                self.replace_hung(key)
+            if not self.pending:
+                return
+        for reader in wait(list(self.procs), timeout=self.wait_s()):
+            if reader in self.procs:
+                self.receive(reader)
+
+    def wait_s(self) -> float:
+        """How long to wait for messages: the poll, or less when a task's deadline comes sooner."""
+        if self.limit_s is None or not self.running:
+            return self.poll_s
+        first = min(r.since for r in self.running.values()) + self.limit_s
+        return min(self.poll_s, max(0.0, first - time.monotonic()) + 1e-3)
+
+    def start(self) -> None:
+        """Start one worker on its own pipe."""
+        reader, writer = self.ctx.Pipe(duplex=False)
+        p = self.ctx.Process(target=_worker, args=(self.task_q, writer, self.trial_fn, os.getpid()), daemon=True,
+                             name=f"study-{next(self.serial)}")
+        p.start()
+        writer.close()  # the worker holds its own copy: EOF on the reader once it is gone
+        self.procs[reader] = p
+
+    def stop(self, reader) -> None:
+        """Stop one worker (killed if alive: a hung trial may ignore SIGTERM) and close its pipe."""
+        p = self.procs.pop(reader)
+        if p.is_alive():
+            p.kill()
+        p.join(timeout=5)
+        reader.close()
+
+    def receive(self, reader) -> None:
+        """Take one message from a worker: a task's message goes to ``handle``, a control message
+        updates the tasks in flight, a task's error is raised, a worker gone is stopped (or an
+        error when it died)."""
+        try:
+            msg = reader.recv()
+        except (EOFError, OSError):
+            p = self.procs[reader]
+            p.join(timeout=5)
+            if p.exitcode not in (None, 0):
+                raise StudyError(f"worker {p.name} died (exit code {p.exitcode}); "
+                                 "finished trials are saved, run the same command again to resume") from None
+            self.stop(reader)
+            return
+        if isinstance(msg, (TerrainBuilt, TrialDone, TrialFaulted)):  # a task's message for the store
+            self.progressed(msg)
+            self.handle(msg)
+            return
+        kind = msg[0]  # the executor's own control messages: (kind, task key, ...)
+        if kind == "begin":
+            self.running[msg[1]] = _Running(self.by_key[msg[1]], msg[2], time.monotonic())
+        elif kind == "done":
+            self.running.pop(msg[1], None)
+            self.pending -= 1
+        elif kind == "error":
+            raise task_failure(msg[1], msg[2], msg[3], msg[4])
+
+    def progressed(self, msg: TerrainBuilt | TrialDone | TrialFaulted) -> None:
+        """A task sent something: its clock restarts; note its terrain built or its mission finished."""
+        r = self.running.get(msg.key)
+        if r is None:
+            return
+        r.since = time.monotonic()
+        if isinstance(msg, TerrainBuilt):
+            r.built = True
+        else:
+            r.finished.add(msg.mission)
+
+    def replace_hung(self, key: tuple[int, int]) -> None:
+        """A task past the limit: take what its worker sent before, store its hung trial as a fault,
+        queue its later missions, and replace the worker."""
+        r = self.running[key]
+        reader = next((rd for rd, p in self.procs.items() if p.pid == r.pid), None)
+        while reader is not None and reader in self.procs and not reader.closed and reader.poll(0):
+            self.receive(reader)  # what it sent before the limit passed counts
+            if key not in self.running or time.monotonic() - self.running[key].since <= self.limit_s:
+                return
+        del self.running[key]
+        hung = r.hung_mission()
+        log.info("cell %d, terrain %d: %s ran longer than %g s; stored as a fault, its worker replaced",
+                 key[0], key[1], "the terrain build" if hung is None else f"mission {hung}", self.limit_s)
+        if reader is not None and reader in self.procs:
+            self.stop(reader)
+        faults, rest = timeout_faults(r.task, hung, r.finished, self.limit_s)
+        for f in faults:
+            self.handle(f)
+        if rest is not None:
+            self.by_key[key] = rest
+            self.task_q.put(rest)
+        else:
+            self.pending -= 1
+        self.start()
+
+    def close(self, finished: bool) -> None:
+        """End every worker (idle ones told to end, the rest terminated) and close the queue."""
+        for p in self.procs.values():
+            if finished:  # every worker is idle: let it end
+                self.task_q.put(None)
+            elif p.is_alive():  # all at once: a stop takes one worker's time, not the sum
+                p.terminate()
+        for reader in list(self.procs):
+            self.procs[reader].join(timeout=5)
+            self.stop(reader)
+        self.task_q.close()

@@ -79,8 +79,11 @@ def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
     def source(key: str, terrain_value: Any) -> str:
         return "study" if raw.get(key) is not None else "terrain" if terrain_value is not None else "default"
 
+    table = (info.get("recipe") or {}).get("soil") or {}
+    mapped = raw.get("soil") is None and bool(table.get("regions") or table.get("raster"))  # a soil map applies
     return {"soil": getattr(sim, "soil", None), "soil_source": source("soil", soil),
-            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity)}
+            "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity),
+            "soil_map": mapped}
 
 
 @functools.lru_cache(maxsize=None)

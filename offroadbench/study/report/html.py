@@ -12,8 +12,9 @@ the "what ran" header, every table and every figure, plus
 
 Everything is inline (figures and animations as base64 ``data:`` URIs, the style sheet and the
 script in the page), so the file can be mailed or archived alone. The Markdown of the report is
-converted by a small converter of the subset the report writes (headings, paragraphs, bullet lists,
-pipe tables, images, code spans, bold, links); nothing else is needed to read it.
+rendered by markdown-it-py (CommonMark with GFM tables; raw HTML escaped), and since the page is
+meant to be shared, a link keeps its ``href`` only for ``http``, ``https``, relative and fragment
+targets (:func:`safe_url`): a study description's ``[x](javascript:...)`` stays inert text.
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ from typing import Any, Mapping, Sequence
 
 import pandas as pd
 
-__all__ = ["ReplayMedia", "find_replays", "figure_png", "markdown_to_html", "trial_table_html", "build_html", "report_html"]
+__all__ = ["SAFE_SCHEMES", "ReplayMedia", "find_replays", "figure_png", "markdown_to_html", "safe_url", "trial_table_html",
+           "build_html", "report_html"]
 
 #: a replay file written by ``study replay`` under its default name
 _REPLAY_NAME = re.compile(r"^cell(\d+)_terrain(\d+)_mission(\d+)\.(gif|mp4|png)$")
@@ -93,113 +95,116 @@ def _data_uri(mime: str, data: bytes) -> str:
     return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
 
 
-# ---------------------------------------------------------------------------- Markdown subset
-_INLINE = re.compile(r"`([^`]+)`|\*\*(.+?)\*\*|\[([^\]]+)\]\(([^)\s]+)\)")
-
-
-def _inline(text: str) -> str:
-    """Code spans, bold and links of one line of Markdown; everything else escaped."""
-    out, pos = [], 0
-    for m in _INLINE.finditer(text):
-        out.append(html.escape(text[pos:m.start()]))
-        if m[1] is not None:
-            out.append(f"<code>{html.escape(m[1])}</code>")
-        elif m[2] is not None:
-            out.append(f"<strong>{_inline(m[2])}</strong>")
-        else:
-            out.append(f'<a href="{html.escape(m[4], quote=True)}">{_inline(m[3])}</a>')
-        pos = m.end()
-    out.append(html.escape(text[pos:]))
-    return "".join(out)
-
-
-def _split_row(line: str) -> list[str]:
-    cells = re.split(r"(?<!\\)\|", line.strip().strip("|"))
-    return [c.strip().replace("\\|", "|") for c in cells]
-
-
-_IMAGE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)$")
+# ---------------------------------------------------------------------------- Markdown
+#: the URL schemes a link of the page may have; relative URLs and fragments have none
+SAFE_SCHEMES = ("http", "https")
+_SCHEME = re.compile(r"^([a-zA-Z][a-zA-Z0-9+.-]*):")
 _NUMBER = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$|^\s*(nan|inf|-inf)\s*$")
 _TAGS = re.compile(r"<[^>]+>")
-_BULLET = re.compile(r"^\s*[-*]\s+")
-_RULE = re.compile(r"^\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?$")
+
+
+def safe_url(url: str) -> bool:
+    """Whether a link target may stay live in a page meant to be shared: ``http``, ``https``, a
+    relative URL or a fragment. The test is on the URL as a browser reads it (ASCII whitespace and
+    control characters dropped: ``java\tscript:`` is ``javascript:``), any letter case; a colon
+    before the first ``/``, ``?`` or ``#`` names a scheme, and any other scheme is refused
+    (``javascript:``, ``vbscript:``, ``data:``, ``file:`` ...)."""
+    bare = re.sub(r"[\x00-\x20\x7f]", "", url)
+    m = _SCHEME.match(bare)
+    if m:
+        return m[1].lower() in SAFE_SCHEMES
+    head = re.split(r"[/?#]", bare, maxsplit=1)[0]
+    return ":" not in head
+
+
+def _renderer():
+    """markdown-it-py (CommonMark with GFM tables; raw HTML in the Markdown is escaped, not
+    passed through) whose links and images keep only :func:`safe_url` targets: any other is
+    left as the Markdown text it was, with no ``href``."""
+    from markdown_it import MarkdownIt
+
+    md = MarkdownIt("commonmark", {"html": False, "linkify": False, "typographer": False}).enable("table")
+    md.validateLink = safe_url  # called on every link, image and autolink target (entities decoded)
+    rules = md.renderer.rules
+    for kind, tag in (("bullet_list", "ul"), ("ordered_list", "ol")):
+        rules[f"{kind}_open"] = lambda tokens, idx, options, env, tag=tag: f"<{tag}>"
+        rules[f"{kind}_close"] = lambda tokens, idx, options, env, tag=tag: f"</{tag}>\n"
+    rules["list_item_open"] = lambda tokens, idx, options, env: "<li>"
+    rules["list_item_close"] = lambda tokens, idx, options, env: "</li>"
+    return md
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
+
+
+def _figure(alt: str, name: str, images: Mapping[str, str]) -> str:
+    src = images.get(name)
+    if src is None:
+        return f"<p>(figure {html.escape(name)} missing)</p>\n"
+    return (f'<figure><img src="{src}" alt="{html.escape(alt, quote=True)}" data-name="{html.escape(name)}">'
+            f"<figcaption>{html.escape(alt)} ({html.escape(name)})</figcaption></figure>\n")
 
 
 def markdown_to_html(md: str, images: Mapping[str, str]) -> str:
-    """HTML of the report's Markdown; ``![alt](name)`` becomes an ``<img>`` of ``images[name]``
-    (a data URI) inside a ``<figure>``; a pipe table becomes a sortable ``<table>``."""
-    lines = md.splitlines()
-    out: list[str] = []
-    para: list[str] = []
+    """HTML of the report's Markdown, rendered by markdown-it-py (:func:`_renderer`: links only to
+    safe targets, :func:`safe_url`). A paragraph that is one image ``![alt](name)`` becomes a
+    ``<figure>`` of ``images[name]`` (a data URI); a pipe table a sortable ``<table>`` whose
+    numeric columns are right-aligned; a heading gets an ``id`` (its text, lower case, dashed)."""
+    from markdown_it.token import Token
+
+    renderer = _renderer()
+    tokens = renderer.parse(md)
+    out: list[Token] = []
     i = 0
 
-    def flush() -> None:
-        if para:
-            out.append(f"<p>{_inline(' '.join(para))}</p>")
-            para.clear()
+    def raw(text: str) -> Token:
+        token = Token("html_block", "", 0)
+        token.content = text
+        return token
 
-    while i < len(lines):
-        line = lines[i].rstrip()
-        head = re.match(r"^(#{1,6})\s+(.*)$", line)
-        img = _IMAGE.match(line.strip())
-        if not line.strip():
-            flush()
-        elif head:
-            flush()
-            level = len(head[1])
-            slug = re.sub(r"[^a-z0-9]+", "-", head[2].lower()).strip("-")
-            out.append(f'<h{level} id="{slug}">{_inline(head[2])}</h{level}>')
-        elif img:
-            flush()
-            alt, name = img[1], img[2]
-            src = images.get(name)
-            if src is None:
-                out.append(f"<p>(figure {html.escape(name)} missing)</p>")
-            else:
-                out.append(f'<figure><img src="{src}" alt="{html.escape(alt, quote=True)}" data-name="{html.escape(name)}">'
-                           f"<figcaption>{html.escape(alt)} ({html.escape(name)})</figcaption></figure>")
-        elif line.lstrip().startswith("|") and i + 1 < len(lines) and _RULE.match(lines[i + 1].strip()):
-            flush()
-            header = _split_row(line)
-            i += 2
-            rows = []
-            while i < len(lines) and lines[i].lstrip().startswith("|"):
-                rows.append(_split_row(lines[i]))
-                i += 1
-            out.append(_table(header, rows))
+    def inline(token: Token) -> str:
+        return renderer.renderer.renderInline(token.children or [], renderer.options, {})
+
+    while i < len(tokens):
+        t = tokens[i]
+        if t.type == "heading_open":
+            t.attrSet("id", _slug(tokens[i + 1].content))
+        elif (t.type == "paragraph_open" and tokens[i + 1].children and len(tokens[i + 1].children) == 1
+              and tokens[i + 1].children[0].type == "image"):
+            img = tokens[i + 1].children[0]
+            out.append(raw(_figure(img.content, str(img.attrGet("src") or ""), images)))
+            i += 3
             continue
-        elif _BULLET.match(line):
-            flush()
-            items = []
-            while i < len(lines) and _BULLET.match(lines[i]):
-                items.append("<li>" + _inline(_BULLET.sub("", lines[i])) + "</li>")
+        elif t.type == "table_open":
+            header: list[str] = []
+            rows: list[list[str]] = []
+            while tokens[i].type != "table_close":
+                tok = tokens[i]
+                if tok.type == "tr_open":
+                    rows.append([])
+                elif tok.type == "thead_close":
+                    header = rows.pop()
+                elif tok.type == "inline":
+                    rows[-1].append(inline(tok))
                 i += 1
-            out.append("<ul>" + "".join(items) + "</ul>")
-            continue
-        elif line.startswith("```"):
-            flush()
+            out.append(raw(_table(header, rows) + "\n"))
             i += 1
-            code = []
-            while i < len(lines) and not lines[i].startswith("```"):
-                code.append(lines[i])
-                i += 1
-            out.append(f"<pre>{html.escape(chr(10).join(code))}</pre>")
-        else:
-            para.append(line.strip())
+            continue
+        out.append(t)
         i += 1
-    flush()
-    return "\n".join(out)
+    return renderer.renderer.render(out, renderer.options, {}).strip()
 
 
 def _is_number(content: str) -> bool:
     return bool(_NUMBER.match(_TAGS.sub("", content)))
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]], cls: str = "sortable", raw: bool = False) -> str:
-    """A sortable table; cells are Markdown inline text (``raw``: already HTML). A column whose
-    cells are all numbers (blanks aside) is right-aligned (class ``num``)."""
-    th = "".join(f"<th>{_inline(h)}</th>" for h in header)
-    cells = [[c if raw else _inline(c) for c in r] for r in rows]
+def _table(header: Sequence[str], rows: Sequence[Sequence[str]], cls: str = "sortable") -> str:
+    """A sortable table of HTML cells. A column whose cells are all numbers (blanks aside) is
+    right-aligned (class ``num``)."""
+    th = "".join(f"<th>{h}</th>" for h in header)
+    cells = [list(r) for r in rows]
     ncol = max((len(r) for r in cells), default=0)
     numeric = [any(j < len(r) and _TAGS.sub("", r[j]).strip() for r in cells)
                and all(j >= len(r) or not _TAGS.sub("", r[j]).strip() or _is_number(r[j]) for r in cells)
@@ -245,7 +250,7 @@ def trial_table_html(trials: pd.DataFrame, replays: Sequence[ReplayMedia], run_d
         else:
             cells.append("")
         rows.append(cells)
-    return _table(header, rows, cls="sortable trials", raw=True)
+    return _table([html.escape(h) for h in header], rows, cls="sortable trials")
 
 
 def _replays_html(replays: Sequence[ReplayMedia]) -> str:

@@ -190,6 +190,19 @@ def _faults_section(run_dir: str | Path, tables: dict[str, pd.DataFrame]) -> lis
             markdown_table(df[["cell", "terrain", "mission", "reason", "session"]]), ""]
 
 
+
+def _outside_model_line(trials: pd.DataFrame) -> str:
+    """One line: how many soil trials had a wheel outside the soil model (bottomed out) and for what
+    share of their time (TrialResult.outside_model_fraction; runs from before the column: not recorded)."""
+    frac = trials["outside_model_fraction"].astype(float) if "outside_model_fraction" in trials else pd.Series([], dtype=float)
+    frac = frac[np.isfinite(frac)]
+    if frac.empty:
+        return "Outside the soil model (a wheel bottomed out): not recorded in this run."
+    some = frac[frac > 0.0]
+    return (f"Outside the soil model (a wheel bottomed out at the tables' sinkage cap, its forces not the "
+            f"Wong-Reece model's): {len(some)} of {len(frac)} soil trials"
+            + (f", for {100 * float(some.median()):.1f} % of their time (median)." if len(some) else "."))
+
 def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
     """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
     cell's first terrain)."""
@@ -235,9 +248,11 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     tables["held_fixed.csv"] = fixed
     faults = _faults_section(run_dir, tables)
     n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = confirmatory_section(meta, trials, terrains)
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(run_dir)])
     if confirm is not None:
         tables["confirmatory.csv"] = confirm
+        if "engine_verdicts" in confirm.attrs:
+            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
     lines = [
         f"# {report_title(meta)}",
         "",
@@ -251,7 +266,10 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         + (f", {n_faults} fault(s) (no outcome; listed under Faults, in no statistic)" if n_faults else "")
         + ("" if len(trials) + n_faults >= n_total else " (**incomplete**: the study has not finished)"),
         f"- grid: {grid}; {study['terrains_per_cell']} terrains per cell, {study['missions_per_terrain']} missions per terrain",
-        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']}; paired terrains: {study['paired_terrains']}",
+        f"- recipe: `{study['recipe']}`; root seed {study['root_seed']} "
+        + ("(**blind**: the hash of the `[analysis]` plan and the design, so no terrain of this study existed "
+           "before its plan was fixed)" if study.get("blind_seed") else "(chosen by hand: **not blind**)")
+        + f"; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
         f"- code: {_provenance(meta)}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",
@@ -338,7 +356,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
                   "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
                   "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
                   "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
-                  markdown_table(pd.DataFrame(rows)), ""]
+                  markdown_table(pd.DataFrame(rows)), "", _outside_model_line(trials), ""]
     lines += [
         "## One terrain and its missions (Fig. 4)",
         "",

@@ -5,6 +5,8 @@ the effects of each grid axis."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -137,35 +139,84 @@ def terrain_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, labels
 
 
 # ---------------------------------------------------------------------------- confirmatory
-def confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame
-                          ) -> tuple[list[str], pd.DataFrame | None]:
-    """The study's analysis plan, computed exactly (offroadbench.study.stats.plan), or the note that it has none."""
+def confirmatory_section(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame,
+                          pilot_dirs: Sequence[str | Path | None] = ()) -> tuple[list[str], pd.DataFrame | None]:
+    """The study's analysis plan, computed exactly (offroadbench.study.stats.plan), or the note that it has none.
+    ``pilot_dirs``: folders to look for the plan's pilot in (offroadbench.study.stats.power.resolve_pilot)."""
     from offroadbench.study.stats.plan import confirmatory_table, stored_plan
+    from offroadbench.study.stats.power import power_column
 
     plan = stored_plan(meta)
     head = ["## Confirmatory analysis (the study's plan)", ""]
     if plan is None:
         return head + ["This run stores no analysis plan (`[analysis]`): **every number in this report is "
                        "exploratory**.", ""], None
-    tab = confirmatory_table(plan, meta, trials, terrains)
+    power = power_column(meta, pilot_dirs)
+    tab = confirmatory_table(plan, meta, trials, terrains, power)
     rule = {"holm": "Holm's step-down adjustment", "bonferroni": "Bonferroni's adjustment"}[plan.multiplicity]
     shown = tab.assign(**{f"{100 * plan.confidence:g} % interval": [f"[{a:.3g}, {b:.3g}]" for a, b in
                                                                    zip(tab["ci_low"], tab["ci_high"], strict=True)]})
+    shown = shown.assign(power=["–" if not np.isfinite(v) else f"{v:.2f}" for v in tab["power"]],
+                         reject=[f"{r} (exploratory)" if e else str(r) for r, e in
+                                 zip(tab["reject"], tab["exploratory"], strict=True)])
     shown = shown[["comparison", "metric", "stratum", "terrains", "control_mean", "treatment_mean", "effect",
-                   f"{100 * plan.confidence:g} % interval", "test", "p", "min_p", "p_adjusted", "reject"]]
+                   f"{100 * plan.confidence:g} % interval", "test", "p", "min_p", "p_adjusted", "reject", "power"]
+                  + (["summary", "effect_other", "p_other"] if "summary" in tab else [])]
     rejected = int(tab["reject"].sum())
     cols = meta.get("columns", {})
     text = (f"Fixed before the run in the study's `[analysis]` table and stored with it; computed exactly as planned. "
             f"{len(tab)} tests; family-wise alpha = {plan.alpha:g} with {rule} over all of them; {rejected} rejected. "
             "Unit: the terrain (per-terrain value of the metric in each cell; effect = mean per-terrain difference, "
             "treatment - control, with a terrain-cluster bootstrap interval that is not adjusted for multiplicity). "
-            "`min_p`: the smallest p the test can give with these terrains. Comparisons: "
+            "`min_p`: the smallest p the test can give with these terrains. "
+            + (f"`power`: each test's power at the effect the plan states, simulated before the run from the "
+               f"plan's pilot (`{plan.pilot}`) with the exact test and the {plan.multiplicity.title()} step it faces "
+               f"(offroadbench.study.stats.power; {plan.power_sims} simulated studies); `study run` refuses a "
+               f"test under {plan.min_power:g} unless the plan marks it exploratory. "
+               if power is not None else
+               "`power`: – (the plan names no pilot" + (f", or its pilot `{plan.pilot}` is not found from here"
+                                                        if plan.pilot else ": it was written before plans stated "
+                                                        "their power (issue 42), so no power was fixed before "
+                                                        "the run and none is computed after it") + "). ")
+            + ("`summary`: the plan's per-terrain summary of the metric; `effect_other` and `p_other`: the same "
+               "test with the other summary (median or mean), exploratory, in no adjustment. "
+               if "summary" in tab else "")
+            + "Comparisons: "
             + "; ".join(f"**{c.name}** ({', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.treatment.items())} "
                         f"against {', '.join(f'{cols.get(k, k)} = {v}' for k, v in c.control.items())}, {c.metric}, "
                         f"{c.test})" for c in plan.comparisons)
             + ". **Every other number in this report is exploratory** (sections marked so): chosen or read after "
             "the data, not covered by the plan's error rate.")
-    return head + [text, "", markdown_table(shown), ""], tab
+    return head + [text, "", markdown_table(shown), "", *_engine_lines(plan, meta, trials, terrains, tab)], tab
+
+
+def _engine_lines(plan: Any, meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame,
+                  tab: pd.DataFrame) -> list[str]:
+    """The plan's tests on each engine with the cross-engine verdict (stats.engines.engine_table), stored in
+    ``tab.attrs["engine_verdicts"]``; nothing for a study on one engine."""
+    from offroadbench.study.stats.engines import engine_table
+
+    eng = engine_table(plan, meta, trials, terrains, tab)
+    if eng is None:
+        return []
+    tab.attrs["engine_verdicts"] = eng
+    order = eng["engines"].iloc[0]
+    shown = eng.assign(**{
+        "interval": [f"[{a:.3g}, {b:.3g}]" for a, b in zip(eng["ci_low"], eng["ci_high"], strict=True)],
+        f"engine difference ({order})": [f"{d:+.3g} [{a:.3g}, {b:.3g}] ({n} terrains)" for d, a, b, n in zip(
+            eng["engine_difference"], eng["engine_difference_low"], eng["engine_difference_high"],
+            eng["engine_difference_terrains"], strict=True)]})
+    shown = shown[["comparison", "stratum", "engine", "terrains", "effect", "interval", "p_adjusted", "reject",
+                   "verdict", f"engine difference ({order})"]]
+    lines = [f"- **{c}** ({s}): {v}." for (c, s), v in eng.groupby(["comparison", "stratum"], sort=False)["verdict"].first().items()]
+    return ["### The plan on each engine", "",
+            "Each planned test on each engine, over the same terrains and missions (terrain j of every cell has one "
+            "seed; the engines' tests are one Holm family, above). Verdict: holds on both (rejected on both, in one "
+            "direction), on one engine only (which), on neither. Engine difference: per terrain, the test's "
+            f"difference on {order.split(' - ')[0]} minus that on {order.split(' - ')[1]}, averaged over the "
+            "terrains with both, with its 95 % terrain-bootstrap interval (Efron & Tibshirani 1993); exploratory "
+            "(not in the plan's adjustment) ([engine_verdicts.csv](engine_verdicts.csv)).", "",
+            markdown_table(shown), "", *lines, ""]
 
 
 def mark_exploratory(lines: list[str]) -> list[str]:

@@ -105,6 +105,9 @@ def _advantage_by_stratum(paired: pd.DataFrame, group: str, level: str, strata: 
             "`*`: significant at the terrain level (Holm).", "", markdown_table(wide), ""]
 
 
+#: the control of an arm whose sorted order is not the README's (``sensor``: mast against the oracle,
+#: mast - oracle); other arms: the first of the two sorted values
+_CONTROL = {"sensor": "oracle"}
 #: arms a planner stress test compares within each stratum: column -> (title, what the paired test asks)
 _ARMS = {"band_limited": ("Aliasing: band-limited against aliased W-M surface",
                           "whether removing the W-M terms above the grid's Nyquist frequency changes success on the "
@@ -129,6 +132,8 @@ def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: st
         values = sorted(trials[arm].unique())
         if len(values) != 2:
             continue
+        if _CONTROL.get(arm) in values:  # (control, treatment)
+            values = [_CONTROL[arm], next(v for v in values if v != _CONTROL[arm])]
         by = [group, *(c for c in strata if c != arm)] + ([level] if level else [])
         tab = stress.arm_table(trials, arm, values[0], values[1], by,
                                terrains=terrains if arm == "band_limited" else None)
@@ -155,8 +160,11 @@ def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: st
 
 
 def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path,
-                     terrains: pd.DataFrame | None = None) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
-    """The planner stress-test part of a report (studies with a ``planner.name`` grid axis)."""
+                     terrains: pd.DataFrame | None = None, paths_figure: bool = True
+                     ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
+    """The planner stress-test part of a report (studies with a ``planner.name`` grid axis).
+    ``paths_figure``: draw the planned and driven paths (needs the run directory's store and telemetry;
+    False for a report re-rendered from a results folder's tables, experiments/rerender.py)."""
     from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study.stats import stress
 
@@ -198,10 +206,13 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
         bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
             stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
             zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"], strict=True)],
-            "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"],
-            "logistic (comparison only)": [("–" if math.isnan(v) else f"{v:.3f}" + (" (extrapolated)" if e else ""))
-                                           for v, e in zip(bp["logistic_point"], bp["logistic_extrapolated"], strict=True)],
-            "Fieller set": bp["fieller_set"], "logistic fit p": bp["logistic_gof_p"]})
+            "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"]})
+        located = bp[np.isfinite(bp["logistic_point"].astype(float))]
+        model = pd.DataFrame({**{c: located[c] for c in [group, *strata]},
+                              "logistic crossing": [f"{v:.3f}" for v in located["logistic_point"]],
+                              "Fieller 95 % interval": [("–" if math.isnan(a) else f"[{a:.3f}, {b:.3f}]") for a, b in
+                                                        zip(located["fieller_low"], located["fieller_high"], strict=True)],
+                              "logistic fit p": located["logistic_gof_p"]})
         lines += ["### Success against " + level, "", *figs, "",
                   markdown_table(shown), "",
                   "### Breaking points", "",
@@ -209,10 +220,17 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
                   f"{max(levels):g}) only: an isotonic (non-increasing) fit of success on {level}, interpolated "
                   "between the two studied levels around the crossing, with a 95 % terrain-bootstrap interval "
                   "('not reached up to x': the fit stays at or above 50 % up to the last level, in the share of "
-                  "resamples given). The logistic fit (clustered covariance) is shown for comparison only, with "
-                  "Fieller's set as the one or two pieces it is and the p of Pearson's goodness of fit over the "
-                  "levels (small: the curve does not follow the data); a logistic crossing outside the levels is "
-                  "an extrapolation, not a measurement.", "", markdown_table(bp_shown), ""]
+                  "resamples given). A model fit (logistic, for comparison only) is in the model appendix below, "
+                  "where the data locate it.", "", markdown_table(bp_shown), "",
+                  "### Model appendix: logistic breaking points (comparison only)", "",
+                  f"A logistic curve of success on {level} (cluster-robust covariance; Fieller 1954 interval; the p of "
+                  "Pearson's goodness of fit over the levels, small: the curve does not follow the data) is a model, "
+                  "not a measurement. It is listed only for the groups whose fitted crossing lies inside the studied "
+                  f"levels, and its Fieller interval only where it is one bounded interval inside them ('–' otherwise: "
+                  f"the slope is not clearly non-zero, so the data do not locate the crossing); "
+                  f"{len(bp) - len(located)} of {len(bp)} groups have no crossing inside the levels and are left out "
+                  "(a crossing outside them would be an extrapolation).", "",
+                  markdown_table(model) if len(model) else "(none)", ""]
     paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
@@ -245,6 +263,8 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
         f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
     tables["planner_metrics.csv"] = rms
     lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
+    if not paths_figure:
+        return lines, figures, tables
     try:
         figures["planner_paths.png"] = _paths_figure(meta, Path(run_dir), trials, group, level, strata)
         lines += ["### Planned and driven paths", "", "![paths](planner_paths.png)", ""]

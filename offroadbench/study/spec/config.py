@@ -64,6 +64,7 @@ __all__ = [
     "study_from_dict",
     "load_study",
     "build_section",
+    "blind_root_seed",
 ]
 
 
@@ -118,7 +119,9 @@ class StudyConfig:
     recipe: str
     """Terrain recipe: a preset name (``terrains/*.toml``) or a path to a recipe TOML."""
     root_seed: int
-    """Root of every seed of the study (``SeedSequence(root_seed)``)."""
+    """Root of every seed of the study (``SeedSequence(root_seed)``). ``"blind"`` in a study TOML with an
+    ``[analysis]`` plan: the seed is the hash of the plan and the design (:func:`blind_root_seed`), so no
+    terrain of the study exists before its plan is fixed."""
     terrains_per_cell: int = 20
     """Terrains generated per grid cell (paper: 20 per D)."""
     missions_per_terrain: int = 20
@@ -146,6 +149,8 @@ class StudyConfig:
     analysis: Any = None
     """The confirmatory analysis plan (:class:`offroadbench.study.stats.plan.AnalysisPlan`, the
     ``[analysis]`` table), or None."""
+    blind_seed: bool = False
+    """Whether ``root_seed`` came from the plan (``root_seed = "blind"``), not from a hand; set by the loader."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.strip() or "/" in self.name:
@@ -178,6 +183,10 @@ class StudyConfig:
                 raise InputError(f"study.missions_from: {key} = {value!r} is not a value of the axis {list(axes[key])}")
         if self.missions_from and not self.paired_terrains:
             raise InputError("study.missions_from needs paired terrains (paired_terrains = true)")
+        if not isinstance(self.blind_seed, bool):
+            raise InputError(f"study.blind_seed = {self.blind_seed!r}; must be true or false")
+        if self.blind_seed and self.analysis is None:
+            raise InputError('study.root_seed = "blind" needs an [analysis] plan: the seed is the plan\'s hash')
         if self.analysis is not None:
             from offroadbench.study.stats.plan import AnalysisPlan, check_plan
 
@@ -389,6 +398,8 @@ def study_id(study: StudyConfig, plans: list[CellPlan]) -> str:
     data.pop("analysis", None)
     if not data.get("missions_from"):
         data.pop("missions_from", None)
+    if not data.get("blind_seed"):  # ids of studies with a hand-chosen seed stay what they were
+        data.pop("blind_seed", None)
     return config_id({"study": data, "recipes": [dict(p.recipe_data) for p in plans]})
 
 
@@ -402,6 +413,24 @@ def _flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
         else:
             out[key] = v
     return out
+
+
+#: keys of a study TOML left out of a blind seed's hash: words, not design
+_BLIND_COSMETIC = ("description",)
+
+
+def blind_root_seed(data: Mapping[str, Any]) -> int:
+    """The root seed of a study TOML (as a dict) with ``root_seed = "blind"``: the first 63 bits of the
+    SHA-256 of its ``[analysis]`` table and its design (every other table, and ``[study]`` without its
+    root seed and description), as canonical JSON. Any change of the plan or the design gives other
+    terrains; a terrain of the study cannot exist before the plan that it is drawn from."""
+    import hashlib
+    import json
+
+    head = {k: v for k, v in dict(data.get("study", {})).items() if k not in ("root_seed", *_BLIND_COSMETIC)}
+    design = {**{k: v for k, v in data.items() if k not in ("study", "analysis", "reference")}, "study": head}
+    text = json.dumps({"analysis": data.get("analysis"), "design": design}, sort_keys=True, default=str)
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") >> 1
 
 
 def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfig:
@@ -423,6 +452,12 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> StudyConfi
     if missing:
         raise InputError(f"{where}: [study] is missing {', '.join(missing)} (required: name, recipe, root_seed; "
                          "e.g. root_seed = 0; `offroadbench config study` prints a [study] table to start from)")
+    if head.get("root_seed") == "blind":
+        if not data.get("analysis"):
+            raise InputError(f'{where}: [study] root_seed = "blind" needs an [analysis] plan (the seed is the hash '
+                             "of the plan and the design)")
+        head["root_seed"] = blind_root_seed(data)
+        head["blind_seed"] = True
     for name in ("grid", "recipe_overrides", "reference"):
         if not isinstance(data.get(name, {}), dict):
             raise InputError(f"{where}: [{name}] must be a table")

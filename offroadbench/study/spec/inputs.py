@@ -13,23 +13,37 @@ every input of a trial into plain JSON data, by component:
 * ``settings``: each cell's settings after defaults are filled in (``[sim]``, ``[controller]``,
   ``[rules]``, ``[missions]``, ``[roughness]``, the observation): a default written out changes
   nothing here;
-* ``vehicle``: the resolved vehicle table and the SHA-256 of its model file (URDF);
+* ``vehicle``: the resolved vehicle table and the SHA-256 of its model file (URDF): of its bytes
+  (``urdf_sha256``) and of its content (``urdf_content_sha256``: the canonical XML, C14N 2.0
+  without comments or whitespace between elements, so that a comment or a re-indentation of the
+  model is no change);
 * ``soil``: the resolved parameters of the soil a ``terramechanics`` trial drives on (the study's
   ``[sim] soil``, else the terrain's, else the default soil);
-* ``planner``: the planner or policy, its config, and the package and version it comes from;
-* ``engine``: the physics engine and its package version.
+* ``planner``: the planner or policy, its config, and the package and version it comes from, and
+  for a plug-in (an entry outside offroadbench) ``code_sha256``: a hash of its entry point's
+  module file and, where cheap (at most :data:`CODE_MAX_FILES` files and :data:`CODE_MAX_BYTES`),
+  of every ``.py`` file of its top-level package, so that code changed without a version bump is
+  named on resume;
+* ``engine``: the physics engine and its package version (with ``code_sha256`` as above for an
+  engine plug-in).
 
 The store keeps this (``meta.trial_inputs``); a resume compares it with what the same study
 resolves to now (:func:`changed_inputs`): a difference is refused with one line naming it, while
 a change of the study TOML that leaves every component equal (a description, a comment, a
-``[reference]`` table, a default written out) is cosmetic, accepted and recorded.
+``[reference]`` table, a default written out) is cosmetic, accepted and recorded. What cannot
+change a trial is left out of the comparison: a soil's ``description``, and the URDF's bytes where
+both records hold its content hash (a comment in it). What an older store did not record (the
+content hash, a plug-in's code hash) is not compared either: such a store is resumed as before.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import inspect
+import importlib
 import json
+import sys
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -40,6 +54,11 @@ __all__ = ["COSMETIC_STUDY_KEYS", "changed_inputs", "changed_study_keys", "trial
 #: keys of the study's own table whose change cannot change a trial
 COSMETIC_STUDY_KEYS = ("name", "description", "reference")
 
+#: a plug-in's package is hashed whole (``code_sha256``) up to this many ``.py`` files ...
+CODE_MAX_FILES = 500
+#: ... and this many bytes of them; a larger package is represented by its entry point's module alone
+CODE_MAX_BYTES = 20_000_000
+
 
 def _sha256(path: str | Path) -> str:
     h = hashlib.sha256()
@@ -49,6 +68,48 @@ def _sha256(path: str | Path) -> str:
                 h.update(chunk)
     except OSError as exc:
         return f"unreadable ({exc.strerror})"
+    return h.hexdigest()
+
+
+def _urdf_content_sha256(path: str | Path) -> str:
+    """SHA-256 of a URDF's content: its canonical XML (C14N 2.0) without comments and without the
+    whitespace between elements; of its bytes where it is not XML."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        text = ET.canonicalize(from_file=str(path), with_comments=False, strip_text=True)
+    except (ET.ParseError, OSError, ValueError):
+        return _sha256(path)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def _code_sha256(module: str | None) -> str | None:
+    """SHA-256 of a plug-in's code: its entry point's module file, then (where cheap: at most
+    CODE_MAX_FILES files of CODE_MAX_BYTES in all) every ``.py`` file of its top-level package,
+    each with its path relative to the package; None for offroadbench's own entries (their code is
+    the package's) and where no file can be found (a module built into the interpreter)."""
+    top = (module or "").split(".")[0]
+    if not top or top == "offroadbench":
+        return None
+    try:
+        mod = sys.modules.get(module) or importlib.import_module(module)
+    except Exception:  # noqa: BLE001 - a plug-in that does not import was refused when the study was loaded
+        return None
+    file = inspect.getfile(mod) if hasattr(mod, "__spec__") and getattr(mod.__spec__, "has_location", False) else None
+    if not file:
+        return None
+    h = hashlib.sha256()
+    h.update(f"{module}\0".encode())
+    h.update(Path(file).read_bytes())
+    package = sys.modules.get(top)
+    roots = [Path(p) for p in getattr(package, "__path__", [])]
+    files = sorted({q for r in roots for q in r.rglob("*.py") if "__pycache__" not in q.parts})
+    if files and len(files) <= CODE_MAX_FILES and sum(q.stat().st_size for q in files) <= CODE_MAX_BYTES:
+        for q in files:
+            root = next(r for r in roots if q.is_relative_to(r))
+            h.update(f"\0{q.relative_to(root).as_posix()}\0".encode())
+            h.update(q.read_bytes())
     return h.hexdigest()
 
 
@@ -84,7 +145,11 @@ def _planner(choice: Any) -> dict[str, Any]:
         module = getattr(fn, "__module__", None)
     except Exception:  # noqa: BLE001 - an unknown name was refused when the study was loaded
         pass
-    return {"name": choice.name, "kind": choice.kind, "config": to_dict(choice), "package": _distribution(module)}
+    out = {"name": choice.name, "kind": choice.kind, "config": to_dict(choice), "package": _distribution(module)}
+    code = _code_sha256(module)
+    if code is not None:
+        out["code_sha256"] = code
+    return out
 
 
 def _engine(name: str) -> dict[str, Any]:
@@ -101,7 +166,11 @@ def _engine(name: str) -> dict[str, Any]:
         module = getattr(entry, "module", None) or getattr(entry, "__module__", None)
     except Exception:  # noqa: BLE001
         module = None
-    return {"name": name, "package": _distribution(module)}
+    out = {"name": name, "package": _distribution(module)}
+    code = _code_sha256(module)
+    if code is not None:
+        out["code_sha256"] = code
+    return out
 
 
 def _soil(sim: Any, recipe_soil: str | None) -> dict[str, Any] | None:
@@ -153,6 +222,7 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
     recipes, settings, vehicles, soils, planners, engines = [], [], [], [], [], []
     sha = functools.lru_cache(maxsize=None)(_sha256)  # a grid of 10,000 cells reads each file once
     engine = functools.lru_cache(maxsize=None)(_engine)
+    content = functools.lru_cache(maxsize=None)(_urdf_content_sha256)
     for p in plans:
         ts = p.trial_settings
         recipes.append(dict(p.recipe_data))
@@ -162,6 +232,7 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
         settings.append(plain)
         vehicle["urdf"] = Path(ts.vehicle.urdf).name
         vehicle["urdf_sha256"] = sha(ts.vehicle.urdf)
+        vehicle["urdf_content_sha256"] = content(ts.vehicle.urdf)
         vehicles.append(vehicle)
         soils.append(_soil(ts.sim, (p.recipe_data.get("soil") or {}).get("name")
                            if isinstance(p.recipe_data.get("soil"), dict) else None))
@@ -204,16 +275,49 @@ def _first_differences(old: Any, new: Any, limit: int = 3) -> list[str]:
 
 _WHAT = {"design": "the study design", "recipes": "the terrain recipe", "recipe_files": "a file the recipe reads", "settings": "the trial settings",
          "vehicle": "the vehicle (its table or model file)", "soil": "the soil parameters",
-         "planner": "the planner or policy (or its package version)", "engine": "the physics engine or its version"}
+         "planner": "the planner or policy (its package version or code)",
+         "engine": "the physics engine or its version"}
+
+#: per component, keys whose change cannot change a trial
+_COSMETIC_INPUT_KEYS = {"soil": ("description",)}
+
+
+def _without(value: Any, keys: Sequence[str]) -> Any:
+    """A component's value (a dict or a list of dicts) without ``keys`` in its dicts."""
+    if isinstance(value, dict):
+        return {k: v for k, v in value.items() if k not in keys}
+    if isinstance(value, list):
+        return [_without(v, keys) if isinstance(v, dict) else v for v in value]
+    return value
+
+
+def _entries(value: Any) -> list:
+    return [v for v in (value if isinstance(value, list) else [value]) if isinstance(v, dict)]
+
+
+def _comparable(comp: str, old: Any, new: Any) -> tuple[Any, Any]:
+    """(old, new) of one component as compared on resume (module docstring): cosmetic keys left
+    out, the URDF compared by content where both records hold it, keys an older store lacks left out."""
+    drop = list(_COSMETIC_INPUT_KEYS.get(comp, ()))
+    if comp == "vehicle":
+        both = all("urdf_content_sha256" in v for v in _entries(old) + _entries(new))
+        drop.append("urdf_sha256" if both else "urdf_content_sha256")
+    elif comp in ("planner", "engine") and not any("code_sha256" in v for v in _entries(old)):
+        drop.append("code_sha256")
+    return _without(old, drop), _without(new, drop)
 
 
 def changed_inputs(old: Mapping[str, Any], new: Mapping[str, Any]) -> list[str]:
     """One phrase per component that differs between two :func:`trial_inputs`, naming the first
-    fields that changed, e.g. ``the vehicle (its table or model file): [0].wheel_torque_limit_nm 28.0 -> 12.0``."""
+    fields that changed, e.g. ``the vehicle (its table or model file): [0].wheel_torque_limit_nm 28.0 -> 12.0``.
+    What cannot change a trial is not compared (:func:`_comparable`)."""
     out = []
     for comp in new:
-        if comp in old and old[comp] != new[comp]:
-            out.append(f"{_WHAT.get(comp, comp)}: {', '.join(_first_differences(old[comp], new[comp]))}")
+        if comp not in old:
+            continue
+        a, b = _comparable(comp, old[comp], new[comp])
+        if a != b:
+            out.append(f"{_WHAT.get(comp, comp)}: {', '.join(_first_differences(a, b))}")
     return out
 
 

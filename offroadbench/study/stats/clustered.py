@@ -53,6 +53,7 @@ import numpy as np
 
 __all__ = [
     "Z95",
+    "keyed_rng",
     "sign_flip_power",
     "fieller_set",
     "isotonic_decreasing",
@@ -75,6 +76,30 @@ __all__ = [
 Z95 = 1.959963984540054
 #: largest K for which :func:`sign_flip_test` enumerates all 2^K sign patterns
 EXACT_MAX_CLUSTERS = 20
+
+
+def keyed_rng(seed: int, *key: object) -> np.random.Generator:
+    """A generator of its own for one cell (or one row) of a table: seeded by ``seed`` and the cell's
+    key (its grid values, its planner, its level, ...), so a cell's bootstrap draws are the same
+    whatever the other cells are and in whatever order they are computed (one stream drawn in cell
+    order would change every later cell's interval when a cell is added or removed). The key is
+    hashed with SHA-256 of its ``repr`` (numbers normalised: 2.0 and 2 are one key) into the
+    entropy of a ``SeedSequence`` beside ``seed``."""
+    import hashlib
+
+    def norm(v: object) -> object:
+        if isinstance(v, (bool, np.bool_)):
+            return bool(v)
+        if isinstance(v, (int, float, np.integer, np.floating)):
+            f = float(v)
+            return int(f) if f.is_integer() else f
+        if isinstance(v, (tuple, list)):
+            return tuple(norm(x) for x in v)
+        return str(v)
+
+    digest = hashlib.sha256(repr(tuple(norm(k) for k in key)).encode()).digest()
+    words = [int.from_bytes(digest[i:i + 4], "little") for i in range(0, 16, 4)]
+    return np.random.default_rng(np.random.SeedSequence([int(seed), *words]))
 
 
 def _clean(d: Sequence[float]) -> np.ndarray:

@@ -13,6 +13,10 @@ TOML::
     confidence = 0.95               # level of the effect intervals
     n_boot = 2000                   # terrain-cluster bootstrap resamples
     seed = 0                        # seed of the bootstrap (and of Monte Carlo tests)
+    pilot = "results/x/trials.parquet"   # optional: an earlier run's trials, for the power of each test
+    pilot_select = { sensor = "mast" }   # optional: the pilot's rows to use (a setting fixed outside the grid)
+    min_power = 0.8                 # study run refuses a planned test under it (unless exploratory)
+    power_sims = 1000               # simulated studies per power
 
     [[analysis.comparisons]]
     name = "astar against the line"
@@ -22,6 +26,10 @@ TOML::
     where = { "recipe.layers.base.D_high" = [2.95, 2.99] }   # optional: restrict the other axes
     test = "sign_flip"              # sign_flip (default) | wilcoxon | permutation (unpaired terrains)
     pool = ["recipe.layers.base.D_high"]   # optional: average the per-terrain values over these axes
+    effect = 20.0                   # the effect the test is meant to detect (metric's unit, treatment - control)
+    exploratory = false             # true: computed and shown, but its power is not required
+    summary = "median"              # per-terrain summary of a traversal or soil metric: median | mean
+    pilot_where = { "recipe.layers.base.D_high" = 2.95 }   # optional: read these strata at the pilot's values
 
 Each comparison expands into one test per stratum: every cell whose grid values match
 ``treatment`` (and ``where``) against the cell with the same values except ``control``'s. Axes in
@@ -40,6 +48,13 @@ signed-rank test, or for unpaired terrains the two-sample permutation test of th
 means. The multiplicity rule runs over every expanded test of the plan. ``min_p`` is the smallest p
 the test can give with the stratum's terrains (2 / 2^K for the sign-flip test): a row with
 min_p above its adjusted level cannot reject, whatever the data.
+
+Power (offroadbench.study.stats.power): with a ``pilot``, every test's power at its ``effect``, under the
+plan's multiplicity rule, is simulated from the pilot's per-terrain differences before the run;
+``study run`` refuses a test under ``min_power`` unless its comparison is ``exploratory``, and the
+confirmatory table gains a ``power`` column. A traversal or soil metric is summarised per terrain by
+the comparison's ``summary`` (the plan's; the other one is computed beside it as exploratory:
+``effect_other``, ``p_other``).
 """
 
 from __future__ import annotations
@@ -56,12 +71,15 @@ from offroadbench.config import check_choice, check_int, check_range, to_dict
 from offroadbench.errors import InputError
 
 __all__ = ["TESTS", "MULTIPLICITY", "Comparison", "AnalysisPlan", "plan_from_dict", "check_plan", "expand",
-           "terrain_metric", "confirmatory_table", "check_unchanged", "min_p", "stored_plan"]
+           "terrain_metric", "confirmatory_table", "check_unchanged", "min_p", "stored_plan",
+           "cell_label", "terrain_differences"]
 
 #: tests a comparison may use
 TESTS = ("sign_flip", "wilcoxon", "permutation")
 #: multiplicity rules over the plan's tests
 MULTIPLICITY = ("holm", "bonferroni")
+#: per-terrain summaries of a traversal or soil metric
+SUMMARIES = ("median", "mean")
 METRIC_HELP = ("success_rate_pct, area_<low|semi|high>_pct, a traversal metric (median of the terrain's successful "
                "trials: rms_vertical_accel_m_s2, rms_pitch_rate_deg_s, rms_roll_rate_deg_s, traversal_time_s) or a "
                "soil metric (median of all its trials: mean_slip, max_penetration_m)")
@@ -95,9 +113,27 @@ class Comparison:
     """``sign_flip`` (exact, paired terrains), ``wilcoxon`` (paired) or ``permutation`` (unpaired)."""
     pool: tuple[str, ...] = ()
     """Grid keys averaged over (per terrain) instead of tested per value."""
+    effect: float | None = None
+    """The effect the test is meant to detect (the metric's unit, treatment - control): its power is
+    computed at this effect (offroadbench.study.stats.power)."""
+    exploratory: bool = False
+    """True: the test is computed and shown, but ``study run`` does not require its power."""
+    summary: str = "median"
+    """Per-terrain summary of a traversal or soil metric over its trials: ``median`` or ``mean``."""
+    pilot_where: Mapping[str, Any] = field(default_factory=dict)
+    """Grid key -> the pilot's value to read a stratum at when the pilot lacks the study's (power only)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pool", tuple(self.pool))
+        if not isinstance(self.pilot_where, Mapping):
+            raise InputError(f"analysis comparison {self.name!r}: pilot_where must be a table of grid key = value")
+        object.__setattr__(self, "pilot_where", dict(self.pilot_where))
+        if self.effect is not None and (isinstance(self.effect, bool) or not isinstance(self.effect, (int, float))
+                                        or not math.isfinite(self.effect)):
+            raise InputError(f"analysis comparison {self.name!r}: effect = {self.effect!r}; give a finite number")
+        if not isinstance(self.exploratory, bool):
+            raise InputError(f"analysis comparison {self.name!r}: exploratory = {self.exploratory!r}; true or false")
+        check_choice(self, "summary", self.summary, SUMMARIES)
         if not isinstance(self.name, str) or not self.name.strip():
             raise InputError(f"analysis.comparisons: name = {self.name!r}; give each comparison a name")
         for side in ("treatment", "control", "where"):
@@ -135,9 +171,26 @@ class AnalysisPlan:
     """Terrain-cluster bootstrap resamples per effect."""
     seed: int = 0
     """Seed of the bootstrap and of Monte Carlo tests (more than 20 terrains)."""
+    pilot: str = ""
+    """An earlier run's trial table (Parquet or CSV; relative to the study TOML's folder) from which each
+    test's power is simulated (offroadbench.study.stats.power); empty: no power is computed."""
+    min_power: float = 0.8
+    """``study run`` refuses a non-exploratory test whose power is under this."""
+    power_sims: int = 1000
+    """Simulated studies per power."""
+    pilot_select: Mapping[str, Any] = field(default_factory=dict)
+    """Pilot column -> value: the pilot's rows the power is simulated from (the pilot's values of a setting
+    the study fixes outside its grid, e.g. ``{ sensor = "mast" }``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "comparisons", tuple(self.comparisons))
+        if not isinstance(self.pilot, str):
+            raise InputError(f"analysis.pilot = {self.pilot!r}; give a path to a trial table")
+        check_range(self, "min_power", self.min_power, lo=0, hi=1)
+        if not isinstance(self.pilot_select, Mapping):
+            raise InputError(f"analysis.pilot_select = {self.pilot_select!r}; give a table of pilot column = value")
+        object.__setattr__(self, "pilot_select", dict(self.pilot_select))
+        check_int(self, "power_sims", self.power_sims, lo=100)
         check_range(self, "alpha", self.alpha, lo=0, hi=0.5, lo_open=True)
         check_choice(self, "multiplicity", self.multiplicity, MULTIPLICITY)
         check_range(self, "confidence", self.confidence, lo=0.5, hi=1, hi_open=True)
@@ -149,8 +202,10 @@ class AnalysisPlan:
             raise InputError(f"analysis.comparisons: name(s) used twice: {', '.join(dup)}")
 
 
-_PLAN_KEYS = ("alpha", "multiplicity", "confidence", "n_boot", "seed", "comparisons")
-_COMP_KEYS = ("name", "treatment", "control", "metric", "where", "test", "pool")
+_PLAN_KEYS = ("alpha", "multiplicity", "confidence", "n_boot", "seed", "pilot", "min_power", "power_sims",
+              "pilot_select", "comparisons")
+_COMP_KEYS = ("name", "treatment", "control", "metric", "where", "test", "pool", "effect", "exploratory", "summary",
+              "pilot_where")
 
 
 def plan_from_dict(data: Mapping[str, Any] | None, where: str = "analysis") -> AnalysisPlan | None:
@@ -198,6 +253,9 @@ def check_plan(plan: AnalysisPlan, grid: Sequence[Any], paired_terrains: bool) -
                     if v not in axes[key]:
                         raise InputError(f"{where}: {side} {key} = {v!r} is not a value of the axis "
                                          f"{list(axes[key])}")
+        for key in c.pilot_where:
+            if key not in axes:
+                raise InputError(f"{where}: pilot_where key {key!r} is not a grid axis; axes: {', '.join(axes) or 'none'}")
         for key in c.pool:
             if key not in axes:
                 raise InputError(f"{where}: pool key {key!r} is not a grid axis; axes: {', '.join(axes) or 'none'}")
@@ -247,8 +305,10 @@ def _pooled(vals: pd.Series, cells: Sequence[int]) -> pd.Series:
     return pd.concat(parts, axis=1).mean(axis=1, skipna=False) if len(parts) > 1 else parts[0]
 
 
-def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: str) -> pd.Series:
-    """Per (cell, terrain): the metric's per-terrain value (see the module docstring)."""
+def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: str, summary: str = "median"
+                   ) -> pd.Series:
+    """Per (cell, terrain): the metric's per-terrain value (see the module docstring); a traversal or soil
+    metric summarised by ``summary`` (median or mean) over the terrain's trials."""
     from offroadbench.study.stats.terrain import METRICS, SOIL_METRICS, terrain_success
 
     if metric == "success_rate_pct":
@@ -261,7 +321,7 @@ def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: 
         return pd.Series(dtype=float)
     rows = trials[trials["success"].astype(bool)] if metric in METRICS else trials
     assert metric in METRICS or metric in SOIL_METRICS
-    return rows.groupby(["cell", "terrain"])[metric].median().astype(float)
+    return rows.groupby(["cell", "terrain"])[metric].agg(summary).astype(float)
 
 
 def min_p(test: str, k: int, n_control: int = 0) -> float:
@@ -286,29 +346,43 @@ def _permutation_test(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_
     return float(min(1.0, res.pvalue))
 
 
-def _label(values: Mapping[str, Any], columns: Mapping[str, str]) -> str:
+def cell_label(values: Mapping[str, Any], columns: Mapping[str, str]) -> str:
     return ", ".join(f"{columns.get(k, k)} = {v}" for k, v in values.items()) or "all"
 
 
+def terrain_differences(vals: pd.Series, ti: Sequence[int], ci: Sequence[int]) -> tuple[pd.DataFrame, np.ndarray]:
+    """Per terrain the treatment's and the control's (pooled) values and their difference."""
+    have = set(vals.index.get_level_values(0)) if len(vals) else set()
+    kept = [(t, c) for t, c in zip(ti, ci, strict=True) if t in have and c in have] if len(ti) > 1 else list(zip(ti, ci, strict=True))
+    a, b = _pooled(vals, [t for t, _ in kept]), _pooled(vals, [c for _, c in kept])
+    both = pd.concat([a.rename("t"), b.rename("c")], axis=1, join="inner").dropna()
+    return both, (both["t"] - both["c"]).to_numpy(float)
+
+
 def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.DataFrame,
-                       terrains: pd.DataFrame | None) -> pd.DataFrame:
+                       terrains: pd.DataFrame | None, power: pd.DataFrame | None = None) -> pd.DataFrame:
     """Exactly the plan's tests on a run's tables: one row per expanded test (see the module docstring).
 
     Columns: comparison, metric, treatment, control, stratum, terrains, treatment_mean,
     control_mean, effect (mean per-terrain difference), ci_low, ci_high, test, p, min_p, p_adjusted
-    (Holm or Bonferroni over every row), reject (p_adjusted < alpha).
+    (Holm or Bonferroni over every row), reject (p_adjusted < alpha); exploratory (the plan marks the
+    comparison so), power (from ``power``, offroadbench.study.stats.power.plan_power, in the same
+    order; NaN without one); for a traversal or soil metric, summary (the plan's per-terrain summary)
+    and effect_other / p_other: the same test with the other summary (exploratory, in no adjustment).
     """
-    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test, wilcoxon_test
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, keyed_rng, sign_flip_test, wilcoxon_test
 
     rng = np.random.default_rng(plan.seed)
     columns = meta.get("columns", {})
     cells = [c["values"] for c in sorted(meta["cells"], key=lambda c: c["index"])]
-    cache: dict[str, pd.Series] = {}
+    cache: dict[tuple[str, str], pd.Series] = {}
     rows = []
     for comp, stratum, ti, ci in expand(plan, cells):
-        if comp.metric not in cache:
-            cache[comp.metric] = terrain_metric(trials, terrains, comp.metric)
-        vals = cache[comp.metric]
+        for summ in ((comp.summary, "mean" if comp.summary == "median" else "median")
+                     if comp.metric not in ("success_rate_pct",) and not comp.metric.startswith("area_") else ("median",)):
+            if (comp.metric, summ) not in cache:
+                cache[comp.metric, summ] = terrain_metric(trials, terrains, comp.metric, summ)
+        vals = cache[comp.metric, comp.summary if (comp.metric, comp.summary) in cache else "median"]
         # a pooled pair of cells with no value on one side (every trial a fault: a planner that refuses
         # a vehicle) is left out of both sides, so both means pool the same vehicles, levels, ...
         have = set(vals.index.get_level_values(0)) if len(vals) else set()
@@ -316,8 +390,8 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
         a, b = _pooled(vals, [t for t, _ in kept]), _pooled(vals, [c for _, c in kept])
         pooled = f"; pooled over {', '.join(columns.get(k, k) for k in comp.pool)}" if comp.pool else ""
         row: dict[str, Any] = {"comparison": comp.name, "metric": comp.metric,
-                               "treatment": _label(comp.treatment, columns), "control": _label(comp.control, columns),
-                               "stratum": _label(stratum, columns) + pooled, "test": comp.test}
+                               "treatment": cell_label(comp.treatment, columns), "control": cell_label(comp.control, columns),
+                               "stratum": cell_label(stratum, columns) + pooled, "test": comp.test}
         if comp.test == "permutation":
             x, y = a.dropna().to_numpy(float), b.dropna().to_numpy(float)
             diffs = (x[rng.integers(0, x.size, (plan.n_boot, x.size))].mean(axis=1)
@@ -337,6 +411,14 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
             row.update(terrains=int(d.size), treatment_mean=float(both["t"].mean()) if d.size else math.nan,
                        control_mean=float(both["c"].mean()) if d.size else math.nan, effect=boot.estimate,
                        ci_low=boot.low, ci_high=boot.high, p=p, min_p=min_p(comp.test, int(d.size)))
+        other = next((v for (m, sm), v in cache.items() if m == comp.metric and sm != comp.summary), None)
+        if other is not None and comp.test != "permutation":  # the other per-terrain summary, exploratory
+            _, d2 = terrain_differences(other, ti, ci)
+            orng = keyed_rng(plan.seed, "other summary", comp.name, row["stratum"])
+            row.update(summary=comp.summary, effect_other=float(d2.mean()) if d2.size else math.nan,
+                       p_other=((sign_flip_test(d2, rng=orng) if comp.test == "sign_flip" else wilcoxon_test(d2))
+                                if d2.size else math.nan))
+        row["exploratory"] = comp.exploratory
         rows.append(row)
     out = pd.DataFrame(rows, columns=["comparison", "metric", "treatment", "control", "stratum", "terrains",
                                       "treatment_mean", "control_mean", "effect", "ci_low", "ci_high", "test", "p",
@@ -348,6 +430,12 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
     else:
         out["p_adjusted"] = np.minimum(1.0, p * m)
     out["reject"] = out["p_adjusted"] < plan.alpha
+    out["exploratory"] = [bool(r.get("exploratory", False)) for r in rows]
+    out["power"] = (power["power"].to_numpy(float) if power is not None and len(power) == len(out)
+                    else np.full(len(out), math.nan))
+    if any("summary" in r for r in rows):
+        for col in ("summary", "effect_other", "p_other"):
+            out[col] = [r.get(col, "" if col == "summary" else math.nan) for r in rows]
     return out
 
 
@@ -364,9 +452,11 @@ def stored_plan(meta: Mapping[str, Any]) -> AnalysisPlan | None:
 def check_unchanged(old_meta: Mapping[str, Any], new_meta: Mapping[str, Any], trials_stored: int, where: str) -> bool:
     """Refuse (one InputError) a plan that differs from the one stored with trials already run.
     Returns whether the plan changed (with no trial stored yet: the store may take the new one)."""
-    old = (old_meta.get("study") or {}).get("analysis")
-    new = (new_meta.get("study") or {}).get("analysis")
-    changed = to_dict(old) != to_dict(new)
+    def plain(meta: Mapping[str, Any]) -> Any:  # with every key a later version added at its default
+        plan = stored_plan(meta)
+        return None if plan is None else to_dict(plan)
+
+    changed = plain(old_meta) != plain(new_meta)
     if trials_stored and changed:
         raise InputError(f"{where}: the [analysis] plan differs from the one stored with its {trials_stored} trials; "
                          "a plan is fixed before the run (restore it, or run the new plan into another --out)")

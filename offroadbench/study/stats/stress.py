@@ -13,9 +13,15 @@ breaking point, and paired comparisons on the same missions, with the terrain as
   fit of success on the level, interpolated between the two studied levels around the crossing, with
   a terrain-cluster bootstrap interval. Where the fit does not fall below 50 % up to the last level
   the point is "not reached up to D = x", with the success there. A logistic fit (clustered
-  covariance, Fieller's set printed as the one or two pieces it is, and a goodness-of-fit p) is
-  kept for comparison only: three levels rarely pin a logistic curve, and its crossing may be an
-  extrapolation. The first studied level with under 50 % success is listed beside it.
+  covariance, Fieller's 1954 interval and a goodness-of-fit p) is kept for comparison only, and only
+  where the data locate it: its crossing is given only inside the studied levels and its Fieller
+  interval only when it is one bounded interval inside them (three levels rarely pin a logistic
+  curve; a crossing outside them is an extrapolation and an unbounded set says the data do not
+  locate it, so neither is printed). The first studied level with under 50 % success is listed
+  beside it.
+* **A generator per cell.** Every bootstrap here draws from a generator of its own, seeded by the
+  table's seed and the cell's key (``offroadbench.study.stats.clustered.keyed_rng``): a cell's
+  interval does not depend on which other cells the table holds or their order.
 * **Paired comparisons.** Every planner drove the same missions (same terrain seed and mission
   seed). The unit is the terrain: per terrain k, b_k missions only A completed and c_k only B
   completed out of n_k; the difference (b_k - c_k) / n_k is tested with the exact sign-flip test
@@ -85,15 +91,16 @@ def success_by_level(trials: pd.DataFrame, group: str, level: str, by: Sequence[
     """Per group (planner), stratum (the other grid axes ``by``) and level (D): trials, successes,
     rate, its terrain-cluster bootstrap 95 % interval (``ci95_low``/``ci95_high``: terrains resampled,
     the rate recomputed from their pooled missions) and, for comparison only, the Wilson interval
-    that treats missions as independent (``wilson_low``/``wilson_high``)."""
-    from offroadbench.study.stats.clustered import cluster_bootstrap
+    that treats missions as independent (``wilson_low``/``wilson_high``). Each row's bootstrap has its
+    own generator (:func:`~offroadbench.study.stats.clustered.keyed_rng` of ``seed`` and the row's values)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
 
-    rng = np.random.default_rng(seed)
     keys = [group, *by, level]
     rows = []
     for vals, t in trials.groupby(keys, sort=True):
         n, k = len(t), int(t["success"].astype(bool).sum())
         per = t.groupby("terrain")["success"].agg(["sum", "size"]).to_numpy(float)
+        rng = keyed_rng(seed, "success_by_level", *vals)
         boot = cluster_bootstrap(per, lambda v: v[:, 0].sum() / v[:, 1].sum(), rng, n_boot)
         lo, hi = wilson_interval(k, n)
         rows.append({**dict(zip(keys, vals, strict=True)), "trials": n, "successes": k, "terrains": len(per),
@@ -126,16 +133,6 @@ def isotonic_crossing(levels: Sequence[float], successes: Sequence[float], trial
     return float(x[i - 1] + (f[i - 1] - threshold) / (f[i - 1] - f[i]) * (x[i] - x[i - 1]))
 
 
-def _fmt_set(pieces: list[tuple[float, float]]) -> str:
-    def f(v: float) -> str:
-        return "+inf" if v == math.inf else ("-inf" if v == -math.inf else f"{v:.3f}")
-
-    if not pieces:
-        return "–"
-    return " ∪ ".join(("(" if a == -math.inf else "[") + f"{f(a)}, {f(b)}" + (")" if b == math.inf else "]")
-                      for a, b in pieces)
-
-
 def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: float = 0.5,
                     by: Sequence[str] = (), seed: int = 0, n_boot: int = 2000) -> pd.DataFrame:
     """Breaking point per group (and stratum ``by``): where success falls below ``threshold``,
@@ -149,23 +146,27 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
     first), ``ci95_low``, ``ci95_high`` (percentiles of the bootstrap crossings, ``+inf``/``-inf``
     meaning the same), ``not_reached_share`` (resamples with no crossing up to the last level),
     ``success_at_last`` (observed success at the last level), ``terrains``, ``first_level_below``
-    (observed), ``levels``; and for comparison a logistic fit with a cluster-robust covariance:
-    ``logistic_point`` (may lie outside the levels: an extrapolation), ``fieller_set`` (Fieller's
-    confidence set, two rays when the slope is not clearly non-zero), ``logistic_gof_p`` (Pearson's
-    X^2 over the levels; small: the logistic curve does not follow the data).
+    (observed), ``levels``; and for comparison a logistic fit with a cluster-robust covariance, only
+    where the data locate it: ``logistic_point`` (NaN when the crossing lies outside the studied
+    levels: an extrapolation), ``fieller_low``/``fieller_high`` (Fieller's 95 % interval, NaN unless it
+    is one bounded interval inside the studied levels; an unbounded set, two rays or the whole line,
+    says the slope is not clearly non-zero), ``logistic_slope``, ``logistic_gof_p`` (Pearson's X^2
+    over the levels; small: the logistic curve does not follow the data). Each group's bootstrap has
+    its own generator (:func:`~offroadbench.study.stats.clustered.keyed_rng` of ``seed`` and the group).
     """
     from offroadbench.study.stats.clustered import (
         breaking_point_logistic,
         fieller_set,
         fit_logistic,
+        keyed_rng,
         logistic_fit_check,
     )
 
-    rng = np.random.default_rng(seed)
     levels = sorted(trials[level].unique())
     keys = [group, *by]
     rows = []
     for vals, t in trials.groupby(keys, sort=True):
+        rng = keyed_rng(seed, "breaking_points", *(vals if isinstance(vals, tuple) else (vals,)))
         rates = t.groupby(level, sort=True)["success"].mean()
         s = t.assign(ok=t["success"].astype(float))
         cube = s.pivot_table(index="terrain", columns=level, values="ok", aggfunc="sum", fill_value=0.0)
@@ -181,8 +182,12 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
         fit = fit_logistic(x, y, t["terrain"].to_numpy())
         lpoint, _, _ = breaking_point_logistic(fit, threshold)
         pieces = fieller_set(fit, threshold) if fit.slope < 0 else []
-        if not fit.slope < 0:
-            lpoint = math.nan
+        lo_lv, hi_lv = float(min(levels)), float(max(levels))
+        if not (fit.slope < 0 and math.isfinite(lpoint) and lo_lv <= lpoint <= hi_lv):
+            lpoint = math.nan  # no crossing, or one outside the studied levels: not a measurement
+        inside = (len(pieces) == 1 and math.isfinite(lpoint) and all(math.isfinite(v) for v in pieces[0])
+                  and lo_lv <= pieces[0][0] and pieces[0][1] <= hi_lv)
+        f_lo, f_hi = pieces[0] if inside else (math.nan, math.nan)
         _, _, gof_p = logistic_fit_check(fit, x, y) if fit.converged else (math.nan, 0, math.nan)
         rows.append({**dict(zip(keys, vals if isinstance(vals, tuple) else (vals,), strict=True)), "breaking_point": point,
                      "ci95_low": float(lo), "ci95_high": float(hi),
@@ -190,8 +195,8 @@ def breaking_points(trials: pd.DataFrame, group: str, level: str, threshold: flo
                      "success_at_last": float(rates.iloc[-1]), "terrains": int(succ.shape[0]),
                      "first_level_below": first_level_below(rates.index, rates.to_numpy(float), threshold),
                      "levels": f"{min(levels):g}-{max(levels):g}", "logistic_point": lpoint,
-                     "logistic_extrapolated": bool(math.isfinite(lpoint) and not (min(levels) <= lpoint <= max(levels))),
-                     "fieller_set": _fmt_set(pieces), "logistic_slope": fit.slope, "logistic_gof_p": gof_p})
+                     "fieller_low": float(f_lo), "fieller_high": float(f_hi), "logistic_slope": fit.slope,
+                     "logistic_gof_p": gof_p})
     return pd.DataFrame(rows)
 
 
@@ -250,9 +255,10 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
     bootstrap interval and distinct resamples, ``p_sign_flip``, ``p_wilcoxon``, ``p_durkalski``, and
     ``p_holm`` (Holm over the sign-flip p of every row) with ``significant`` = p_holm < 0.05.
     ``by``: the other grid axes (strata); each stratum is compared within itself, at each level and
-    pooled over its levels.
+    pooled over its levels. Each row draws from a generator of its own (``keyed_rng``).
     """
-    rng = np.random.default_rng(seed)
+    from offroadbench.study.stats.clustered import keyed_rng
+
     by = list(by)
     key = ["terrain", "mission", *by] + ([level] if level else [])
     base = trials[trials[group] == baseline].set_index(key)["success"].astype(bool)
@@ -275,7 +281,8 @@ def paired_table(trials: pd.DataFrame, group: str, level: str | None, baseline: 
                          "both": int((p["a"] & p["b"]).sum()), "only this": n10, "only baseline": n01,
                          "neither": int((~p["a"] & ~p["b"]).sum()),
                          "success_diff_pct": 100.0 * (p["a"].mean() - p["b"].mean()),
-                         "mcnemar_p_missions": mcnemar_exact(n10, n01), **_terrain_row(p, rng, n_boot)})
+                         "mcnemar_p_missions": mcnemar_exact(n10, n01),
+                         **_terrain_row(p, keyed_rng(seed, "paired_table", g, baseline, *sv, x), n_boot)})
     out = pd.DataFrame(rows)
     if not out.empty:
         from offroadbench.study.stats.clustered import holm
@@ -297,13 +304,13 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
     arms (1.0: the arms are paired mission by mission). With ``terrains`` holding ``resolution`` (the
     treatment arm's per-terrain statistic, e.g. the share of the aliased surface's variance above the
     grid's Nyquist frequency), its mean over the stratum's terrains and its Spearman correlation with
-    the per-terrain difference are added. ``p_holm``: Holm over the rows of this table.
+    the per-terrain difference are added. ``p_holm``: Holm over the rows of this table. Each row draws
+    from a generator of its own (``keyed_rng``).
     """
     from scipy.stats import spearmanr
 
-    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, keyed_rng, sign_flip_test
 
-    rng = np.random.default_rng(seed)
     ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]
     a = trials[trials[arm] == control]
     b = trials[trials[arm] == treatment]
@@ -323,6 +330,7 @@ def arm_table(trials: pd.DataFrame, arm: str, control, treatment, by: Sequence[s
                 if have and len(pair) else math.nan)
         per = pair.groupby(level="terrain").agg(t=("success_t", "mean"), c=("success_c", "mean"))
         d = 100.0 * (per["t"] - per["c"]).to_numpy(float)
+        rng = keyed_rng(seed, "arm_table", arm, treatment, control, *sv)
         boot = cluster_bootstrap(d, np.mean, rng, n_boot)
         row = {**dict(zip(by, sv, strict=True)), arm: f"{treatment} vs {control}", "terrains": d.size, "missions": len(pair),
                "same_missions": float(same), "success_control_pct": 100 * per["c"].mean(),

@@ -53,6 +53,14 @@ CREATE TABLE IF NOT EXISTS faults (
 #: the faults table (issue 30), made by a run in a store that lacks it (older stores are read without it)
 FAULTS_SQL = SCHEMA_SQL[SCHEMA_SQL.index("CREATE TABLE IF NOT EXISTS faults"):]
 
+#: the table a failure search adds to a study's store (offroadbench.study.store.search)
+SEARCH_TABLE = """
+CREATE TABLE IF NOT EXISTS search_trials (
+    cell INTEGER PRIMARY KEY, grp INTEGER NOT NULL, method TEXT NOT NULL, batch INTEGER NOT NULL,
+    slot INTEGER NOT NULL, stage TEXT NOT NULL, x TEXT NOT NULL, z TEXT NOT NULL, log_w REAL,
+    UNIQUE (grp, method, batch, slot));
+"""
+
 
 #: columns added by schema 2, per table: (name, SQL type)
 SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),

@@ -15,17 +15,12 @@ import math
 from typing import Any, Mapping, Sequence
 
 from offroadbench.errors import StudyError
+from offroadbench.study.store.file import SEARCH_TABLE
 from offroadbench.study.store.store import Store
 
 __all__ = ["SEARCH_TABLE", "add_search_batch", "ensure_search_table", "next_search_cell", "search_rows",
            "stream_trials"]
 
-SEARCH_TABLE = """
-CREATE TABLE IF NOT EXISTS search_trials (
-    cell INTEGER PRIMARY KEY, grp INTEGER NOT NULL, method TEXT NOT NULL, batch INTEGER NOT NULL,
-    slot INTEGER NOT NULL, stage TEXT NOT NULL, x TEXT NOT NULL, z TEXT NOT NULL, log_w REAL,
-    UNIQUE (grp, method, batch, slot));
-"""
 
 
 def ensure_search_table(store: Store) -> None:

@@ -55,6 +55,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from offroadbench.errors import InputError, StudyError
+from offroadbench.study.store.integrity import TRUSTED_SCHEMA_OFF, check_store
 from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, lock_holder_alive, error_reason
 from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, FAULTS_SQL, SCHEMA_SQL,
                                            SCHEMA2_COLUMNS, check_existing, nearly_full, remove_stale_temp_files,
@@ -98,8 +99,10 @@ class Store:
                 check_existing(path)
         else:
             check_existing(path)
+        check_store(path)  # data only, every value decodes (issue 44); read-only, before any write
         try:
             self.con = sqlite3.connect(path, timeout=30.0, isolation_level=None)
+            self.con.execute(TRUSTED_SCHEMA_OFF)
             self.con.execute("PRAGMA synchronous=NORMAL")
             if create:
                 self._migrate()

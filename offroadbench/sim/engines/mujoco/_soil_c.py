@@ -39,7 +39,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["APPLY", "apply_soil", "check_types", "new_state", "penetration", "reset_state", "slip", "wheel_force"]
+__all__ = ["APPLY", "apply_soil", "check_types", "new_state", "outside", "penetration", "reset_state", "slip",
+           "wheel_force"]
 
 # offsets past 8 n in the float state
 (F_R, F_DT, F_C, F_SX, F_SY, F_CELL, F_DELTA_MAX, F_K_SERIES, F_LAMBDA_SCALE, F_MAX_LAT, F_FADE,
@@ -91,6 +92,13 @@ def penetration(f: np.ndarray, i: np.ndarray, n: int) -> float:
     world's ``max(sinkage over soil.last, default=0)``, in its order."""
     sinks = [float(f[2 * n + 3 * k]) for k in range(n) if i[k]]
     return max(sinks, default=0.0)
+
+
+def outside(f: np.ndarray, i: np.ndarray, n: int) -> bool:
+    """True when a wheel on the soil in the last step had its penetration past the tables' top (it
+    bottomed out: SoilWheels.outside_model)."""
+    top = float(f[8 * n + F_DELTA_MAX])
+    return any(bool(i[k]) and float(f[2 * n + 3 * k + 2]) > top for k in range(n))
 
 
 def slip(f: np.ndarray, i: np.ndarray, n: int) -> float | None:

@@ -36,9 +36,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, njit, types
 
-__all__ = ["APPLY", "READ", "apply_tyres", "check_types", "loads", "new_state", "penetration", "read_contacts", "reset_state",
+from offroadbench.sim.engines.mujoco._cabi import as_pointer, call_step, int_at, pointer_at, swap_entry
+
+__all__ = ["APPLY", "READ", "STEP", "apply_tyres", "step_trial", "check_types", "loads", "new_state", "penetration", "read_contacts", "reset_state",
            "wheel_force"]
 
 # offsets past 14 n in the float state
@@ -290,9 +292,56 @@ def _entry(kernel):
         return kernel
 
 
-#: :func:`read_contacts` and :func:`apply_tyres` without numba's per-call type dispatch
+# indices into the layout tuple of :func:`step_trial` (offroadbench.sim.engines.mujoco._layout.StepLayout)
+S_NCON, S_NEFC, S_CONTACT, S_EFC_FORCE, S_SIZE, S_DIST, S_POS, S_FRAME, S_GEOM, S_EFC_ADDRESS = range(10)
+_STEP_SIG = types.void(types.int64, types.int64, types.UniTuple(types.int64, 3), types.UniTuple(types.int64, 10),
+                       types.UniTuple(types.int64, 4), types.float64[:], types.float64[:, :], types.float64[:, :], types.float64[:, :],
+                       types.float64[::1], types.int64[::1], types.int64, types.boolean)
+
+
+@njit(_STEP_SIG, cache=True)
+def step_trial(m, d, fns, lay, table, qvel, xmat, xipos, xfrc, f, st, substeps, each):  # pragma: no cover - compiled
+    """One trial step of the MuJoCo world with the compiled tyre loop, wholly outside the interpreter:
+    ``substeps`` times MuJoCo's ``mj_step1``, :func:`apply_tyres`, ``mj_step2`` and :func:`read_contacts`
+    (``each``), or (``each`` False) that once and then plain ``mj_step`` with the forces held, the
+    contacts read after the last. ``m``, ``d``: the mjModel and mjData addresses; ``fns``: the
+    addresses of ``mj_step``, ``mj_step1``, ``mj_step2``; ``lay``: where the contacts are
+    (offroadbench.sim.engines.mujoco._layout.StepLayout.as_tuple); ``table``: (entry, function) x 2,
+    the world's height-field collision functions, written into MuJoCo's collision table for these
+    calls and the entries' old values put back after them (a function 0: the entry left alone;
+    offroadbench.sim.engines.mujoco._hfield_c.HFieldCollision.entries); the arrays as for the two
+    kernels. The same calls in the same order as MuJoCoTyres._step_compiled, so the same bits."""
+    old0 = swap_entry(table[0], table[1])
+    old1 = swap_entry(table[2], table[3])
+    last = substeps - 1
+    for k in range(substeps):
+        if each or k == 0:
+            call_step(fns[1], m, d)
+            apply_tyres(qvel, xmat, xipos, xfrc, f, st)
+            call_step(fns[2], m, d)
+        else:
+            call_step(fns[0], m, d)
+        if each or k == last:
+            ncon = int_at(d, lay[S_NCON])
+            nefc = int_at(d, lay[S_NEFC])
+            buf = as_pointer(pointer_at(d, lay[S_CONTACT]))
+            size = lay[S_SIZE]
+            fv = carray(buf, (ncon, size // 8), np.float64)
+            iv = carray(buf, (ncon, size // 4), np.int32)
+            efc = carray(as_pointer(pointer_at(d, lay[S_EFC_FORCE])), (nefc,), np.float64)
+            od, op, of = lay[S_DIST] // 8, lay[S_POS] // 8, lay[S_FRAME] // 8
+            og, oe = lay[S_GEOM] // 4, lay[S_EFC_ADDRESS] // 4
+            read_contacts(iv[:, og:og + 2], fv[:, od], fv[:, op:op + 3], fv[:, of:of + 9], iv[:, oe], efc, f, st)
+    if table[1] != 0:
+        swap_entry(table[0], old0)
+    if table[3] != 0:
+        swap_entry(table[2], old1)
+
+
+#: :func:`read_contacts`, :func:`apply_tyres` and :func:`step_trial` without numba's per-call type dispatch
 READ = _entry(read_contacts)
 APPLY = _entry(apply_tyres)
+STEP = _entry(step_trial)
 
 
 def check_types(qvel, xmat, xipos, xfrc, contact, efc_force) -> None:

@@ -59,6 +59,17 @@ class MuJoCoConfig:
     bit at a fraction of the cost), ``python`` (the interpreted loop over CoulombBristles or
     SoilWheels) or ``auto`` (compiled when numba is installed, else python). Vehicles with
     articulated wheels (steering, rockers, bogies) always use the Python loop."""
+    hfield_collision: str = "closed_form"
+    """How the wheels and the chassis collide with the terrain's height field
+    (offroadbench.sim.engines.mujoco._hfield_c): ``mujoco`` (MuJoCo's own ``mjc_ConvexHField``, a
+    GJK/EPA call per candidate prism); ``exact`` (the chassis box's early-out when no height sample
+    under it reaches its lowest point, else MuJoCo's own call: the same contacts to the bit, so the
+    same trials as ``mujoco``); ``closed_form`` (``exact`` plus the sphere wheels' prisms in closed
+    form: MuJoCo's contacts to ~1e-15 m and normals to ~1e-10 at driving depths, so trials within
+    run-to-run chaos, not to the bit: 1.5-1.7x the trials' speed on 36 paired paper missions with
+    no outcome flipped, benchmarks/RESULTS.md 'Issue 41'). ``exact`` and ``closed_form`` need numba; without it
+    the world uses ``mujoco`` (logged), which gives ``exact``'s trials, not ``closed_form``'s.
+    Studies run before this setting existed (MuJoCo's own collision) are reproduced by ``exact``."""
 
     def __post_init__(self) -> None:
         for name in ("wheel_solref", "chassis_solref", "solimp", "chassis_solimp"):
@@ -81,6 +92,7 @@ class MuJoCoConfig:
         check_int(self, "ccd_iterations", self.ccd_iterations, lo=1, hi=1000)
         check_range(self, "servo_gain", self.servo_gain, lo=0, lo_open=True)
         check_choice(self, "tyre_loop", self.tyre_loop, TYRE_LOOPS)
+        check_choice(self, "hfield_collision", self.hfield_collision, HFIELD_COLLISIONS)
         for name in ("refsafe", "tyres_each_substep"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"MuJoCoConfig.{name} = {getattr(self, name)!r}: allowed true or false")
@@ -88,6 +100,8 @@ class MuJoCoConfig:
 
 #: values of MuJoCoConfig.tyre_loop
 TYRE_LOOPS = ("auto", "compiled", "python")
+#: values of MuJoCoConfig.hfield_collision (offroadbench.sim.engines.mujoco._hfield_c.MODES)
+HFIELD_COLLISIONS = ("mujoco", "exact", "closed_form")
 
 
 def _check_pair(owner, name: str, value) -> None:

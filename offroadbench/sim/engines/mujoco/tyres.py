@@ -13,7 +13,9 @@ class MuJoCoTyres:
 
     def _step_compiled(self) -> None:
         """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
-        sequence, the contacts read and the forces applied outside the interpreter."""
+        sequence, the contacts read and the forces applied outside the interpreter; where MuJoCo's
+        struct layout checks out, the whole trial step, MuJoCo's calls included, in one compiled call
+        (``_tyres_c.step_trial``)."""
         m, d = self.model, self.data
         tc, f, ist = self._fast
         each = self.contact.tyres_each_substep
@@ -23,7 +25,14 @@ class MuJoCoTyres:
         if pushed is not None:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
-        qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
+        qvel, xmat, xipos, xfrc = self._step_arrays
+        whole = self._fast_step
+        if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
+            tc.STEP(whole[0], whole[1], whole[2], whole[3], whole[4], qvel, xmat, xipos, xfrc, f, ist, self.substeps, each)
+            if pushed is not None:
+                self._base_force = None
+                f[push + 3] = 0.0
+            return
         step1, step2, apply, read = mujoco.mj_step1, mujoco.mj_step2, tc.APPLY, tc.READ
         for k in range(self.substeps):
             if each or k == 0:
@@ -43,7 +52,8 @@ class MuJoCoTyres:
         """:meth:`step` with the compiled soil loop (offroadbench.sim.engines.mujoco._soil_c): the same
         sequence, the soil forces applied outside the interpreter. No contact is read: the wheels
         do not collide under the soil model (their loads stay zero, as the Python loop reads them),
-        and the soil's sinkage and slip come from the loop's state."""
+        and the soil's sinkage and slip come from the loop's state. The whole trial step, MuJoCo's
+        calls included, in one compiled call (``_soil_step_c.step_trial_soil``)."""
         m, d = self.model, self.data
         sc, f, ist, tab = self._fast_soil
         each = self.contact.tyres_each_substep
@@ -52,6 +62,14 @@ class MuJoCoTyres:
         if pushed is not None:
             f[push:push + 3] = pushed
             f[push + 3] = 1.0
+        whole = self._fast_soil_step
+        if whole is not None:  # no Python between MuJoCo's calls: one compiled call per trial step
+            qvel, xmat, xipos, xfrc = self._step_arrays
+            whole[0](whole[1], whole[2], whole[3], whole[4], qvel, xmat, xipos, xfrc, f, ist, tab, self.substeps, each)
+            if pushed is not None:
+                self._base_force = None
+                f[push + 3] = 0.0
+            return
         qvel, xmat, xipos, xfrc = d.qvel, d.xmat, d.xipos, d.xfrc_applied
         step1, step2, apply = mujoco.mj_step1, mujoco.mj_step2, sc.APPLY
         for k in range(self.substeps):

@@ -23,7 +23,14 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   the same forces to the last bit, about a tenth of the Python loop's cost) when numba is
   installed, else in Python (``[sim.mujoco] tyre_loop``, MuJoCoConfig); so do the
   ``terramechanics`` soil forces (``_soil_c``). Vehicles with articulated wheels keep the Python
-  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin).
+  loops (the kernels take a wheel's velocity from the chassis' rigid motion and its spin). With
+  the compiled loops a whole trial step is one compiled call (``_tyres_c.step_trial``,
+  ``_soil_step_c.step_trial_soil``: MuJoCo's ``mj_step1`` / ``mj_step2`` called through their C
+  addresses, no Python between them; the same bits).
+- **Terrain collision**: ``[sim.mujoco] hfield_collision`` (offroadbench.sim.engines.mujoco._hfield_c):
+  the sphere wheels' height-field contacts in closed form and the chassis box's early-out, installed in
+  MuJoCo's collision table only during this world's own MuJoCo calls (``closed_form``, the default);
+  the box's early-out alone (``exact``: MuJoCo's own contacts to the bit); or MuJoCo's own (``mujoco``).
 - **Contact**: the tyres' vertical stiffness and damping (``tyre_stiffness_n_m``,
   ``tyre_damping_n_s_m``) as the wheels' ``solref = (time constant, damping ratio)``: the tyre's
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
@@ -41,7 +48,6 @@ as the two halves of :class:`MuJoCoWorld`.
 
 from __future__ import annotations
 
-import importlib
 import logging
 import math
 import time
@@ -58,32 +64,13 @@ from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuning
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
+from offroadbench.sim.engines.mujoco.kernels import compiled_loop, hfield_functions, soil_step, whole_step
 from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
 from offroadbench.sim.engines.mujoco.tyres import MuJoCoTyres
 
 __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
 
 log = logging.getLogger(__name__)
-
-
-def _compiled_loop(choice: str, kernels: str = "_tyres_c"):
-    """offroadbench.sim.engines.mujoco._tyres_c (coulomb) or ``_soil_c`` (terramechanics) for
-    ``[sim.mujoco] tyre_loop = choice``, or None for the Python loop (``auto`` without numba)."""
-    if choice == "python":
-        return None
-    try:
-        module = importlib.import_module(f"offroadbench.sim.engines.mujoco.{kernels}")
-    except ImportError:
-        if choice == "compiled":
-            raise InputError("MuJoCoConfig.tyre_loop = 'compiled' needs numba: pip install 'offroadbench[fast]'") from None
-        return None
-    except RuntimeError as exc:  # numba installed but unable to compile or cache (e.g. no writable cache folder)
-        if choice == "compiled":
-            raise InputError(f"MuJoCoConfig.tyre_loop = 'compiled': numba cannot build the loop ({exc})") from None
-        log.warning("the compiled tyre loop is unavailable (%s); using the Python loop", exc)
-        return None
-    return module
-
 
 
 # ---------------------------------------------------------------------------- the world
@@ -109,10 +96,13 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._write_heights()
         self.data = mujoco.MjData(self.model)
         self._index()
+        self._hfield = hfield_functions(contact.hfield_collision, self.model, self.data)
         log.info("MuJoCo world %dx%d built in %.2f s", hm.rows, hm.cols, time.perf_counter() - t0)
         self._mass_kg = self.geometry_mass()  # summed once
         self._tyres = None
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
+        self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
+        self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -129,21 +119,27 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             d = self.data
             tc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied, d.contact, d.efc_force)
             self._fast = (tc, f, ist)
+            self._fast_step = whole_step(self.model, d, self._hfield)
+            self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
+        self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
         if sim.tyre_model == "terramechanics":
             # the soil of the PyBullet world (tables and constants from the trial's step, the force
             # law offroadbench.sim.tyre_laws.soil_wheels), integrated at MuJoCo's step
             n = len(self._wheel_bodies)
             setup = soil_setup(self.spec, sim.soil, self._mass_kg, n, sim.gravity_m_s2, self.dt_s)
             self._soil = setup.wheels(n, hm, self.dt_s, self._dt_mj if contact.tyres_each_substep else self.dt_s)
-            sc = self._loop_kernels(contact.tyre_loop, "_soil_c")
+            # the compiled loop holds wheel tables: a track's belt segments run in the Python loop
+            sc = None if self.spec.track_contact_length_m else self._loop_kernels(contact.tyre_loop, "_soil_c")
             if sc is not None:
                 f, ist, tab = sc.new_state(self._soil, hm, self._wheel_bodies, self._wheel_qvel, self._wheel_axis,
                                            self._chassis)
                 d = self.data
                 sc.check_types(d.qvel, d.xmat, d.xipos, d.xfrc_applied)
                 self._fast_soil = (sc, f, ist, tab)
+                self._fast_soil_step = soil_step(self.model, d, self._hfield)  # the whole step in one call
+                self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)
         self._forces = self._tyres is not None or self._soil is not None  # tyre forces written each step
         self._loads = [0.0] * len(self._wheel_bodies)
         self._penetration = 0.0
@@ -157,7 +153,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         choice``, or None for the Python loop: also for a vehicle whose wheels move with more than the
         chassis (steering, rockers, bogies): the kernels take each wheel's velocity from the chassis'
         rigid motion and its spin, the Python loop from MuJoCo (``mj_objectVelocity``)."""
-        module = _compiled_loop(choice, kernels)
+        module = compiled_loop(choice, kernels)
         if module is not None and self._articulated:
             log.info("vehicle %r has articulated wheels: the Python tyre loop", self.spec.name)
             return None
@@ -167,6 +163,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def close(self) -> None:
         """Drop the model and data (MuJoCo frees them with the objects). Safe to call twice."""
         self.data = None
+        self._fast_step = self._fast_soil_step = self._step_arrays = None  # the data's addresses and views
 
     def __enter__(self) -> MuJoCoWorld:
         return self
@@ -174,11 +171,18 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _write_heights(self) -> None:
+    def _write_heights(self, block_rows: int = 64) -> None:
+        """The map's heights into the model's height field, normalised to its relief (float32), in
+        blocks of ``block_rows`` rows (elementwise, so the same bits as at once, without a float64
+        copy of the whole map: offroadbench.memory.MUJOCO_BYTES_PER_CELL)."""
         hm = self.hm
-        relief = hm.relief_m
-        data = (hm.z - hm.z_min_m) / relief if relief > 0 else np.zeros_like(hm.z)
-        self.model.hfield_data[:] = data.astype(np.float32).ravel()
+        relief, z_min = hm.relief_m, hm.z_min_m
+        out = self.model.hfield_data
+        cols = hm.cols
+        for r0 in range(0, hm.rows, block_rows):
+            z = hm.z[r0:r0 + block_rows]
+            block = (z - z_min) / relief if relief > 0 else np.zeros_like(z)
+            out[r0 * cols:r0 * cols + block.size] = block.astype(np.float32).ravel()
 
     def _index(self) -> None:
         m = self.model
@@ -281,7 +285,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         bottom = base[2] - min(lows)
         d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
                                    self.sim.spawn_clearance_m)
-        mujoco.mj_forward(m, d)
+        self._forward()
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0
         if self._tyres is not None:
@@ -316,9 +320,36 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         n = len(self._wheel_bodies)
         self.data.ctrl[n : n + len(angles_rad)] = angles_rad
 
+    def _forward(self) -> None:
+        """``mj_forward`` with this world's height-field collision functions."""
+        hf = self._hfield
+        if hf is None:
+            mujoco.mj_forward(self.model, self.data)
+            return
+        hf.install()
+        try:
+            mujoco.mj_forward(self.model, self.data)
+        finally:
+            hf.restore()
+
     def step(self) -> None:
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
-        ``xfrc_applied``, ``mj_step2``, then the contacts."""
+        ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
+        functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
+        hf = self._hfield
+        whole = (self._fast_step if self._fast is not None else
+                 self._fast_soil_step if self._fast_soil is not None else None)
+        if hf is None or whole is not None:  # none, or the compiled step installs them itself
+            self._advance()
+            return
+        hf.install()
+        try:
+            self._advance()
+        finally:
+            hf.restore()
+
+    def _advance(self) -> None:
+        """:meth:`step`'s MuJoCo calls and force loops."""
         if self._fast is not None:
             self._step_compiled()
             return
@@ -375,6 +406,23 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         if self._soil is not None:
             return max((v[0] for v in self._soil.last.values()), default=0.0)
         return self._penetration
+
+    def use_soil_map(self, soil_map) -> None:
+        """Each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap), read at its contact
+        every step: the Python soil loop (the compiled loop holds one soil's tables)."""
+        if self._soil is None:
+            return
+        n = len(self._wheel_bodies)
+        setup = soil_setup(self.spec, self.sim.soil, self._mass_kg, n, self.sim.gravity_m_s2, self.dt_s, soil_map)
+        self._soil = setup.wheels(n, self.hm, self.dt_s, self._dt_mj if self.contact.tyres_each_substep else self.dt_s)
+        self._fast_soil = None
+
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model), None
+        without the ``terramechanics`` tyre model."""
+        if self._fast_soil is not None:
+            return self._fast_soil[0].outside(self._fast_soil[1], self._fast_soil[2], len(self._loads))
+        return None if self._soil is None else self._soil.outside_model()
 
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),

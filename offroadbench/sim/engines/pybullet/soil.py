@@ -62,7 +62,8 @@ def make_soil_tyres(world, body: int, mass_kg: float) -> SoilTyres:
     spec, sim, cid = world.spec, world.sim, world.client_id
     setup = getattr(world, "_soil_setup", None)
     if setup is None:  # once per World: the vehicle is reloaded for every mission, the soil is not
-        setup = soil_setup(spec, sim.soil, mass_kg, len(world.wheel_joints), sim.gravity_m_s2, world.dt_s)
+        setup = soil_setup(spec, sim.soil, mass_kg, len(world.wheel_joints), sim.gravity_m_s2, world.dt_s,
+                           getattr(world, "soil_map", None))  # World.use_soil_map
         world._soil_setup = setup
     for terrain in world.terrain_bodies:
         for j in world.wheel_joints:

@@ -52,7 +52,6 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   results then differ in the last digits from a fresh World (solver and contact state carried
   over), and it would save only ~0.2 s per terrain once the build above is cheap.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
-
 - Under the ``coulomb`` tyre model Bullet's friction cone is off (``enableConeFriction = 0``,
   SimConfig.cone_friction): the wheels' Bullet friction is 0 there, so the cone's solver rows for
   their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
@@ -470,6 +469,14 @@ class World:
                 worst = -c[8]
         return worst
 
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last step (outside the soil model); None without soil."""
+        return self._tyres.core.outside_model() if self.sim.tyre_model == "terramechanics" else None
+
+    def use_soil_map(self, soil_map) -> None:
+        """From the next spawn, each wheel's soil from ``soil_map`` (offroadbench.terrain.soil_map.SoilMap)."""
+        self.soil_map, self._soil_setup = soil_map, None
+
     def wheel_slip(self) -> float | None:
         """Mean longitudinal slip of the wheels on the soil in the last step (1: spinning in place),
         or None without the ``terramechanics`` tyre model or with no wheel on the ground."""
@@ -491,5 +498,3 @@ class World:
             if hit[0] in self._terrain_set:
                 return float(hit[3][2])
         return float("nan")
-
-
