@@ -73,6 +73,11 @@ def cmd_terrains(args: argparse.Namespace) -> int:
     return 0
 
 
+def clipped_label(label: str, percentile: float) -> str:
+    """A terrain's label with its clip said: ``paper-d2.45 seed 0, clipped to the 0.1..99.9 percentiles``."""
+    return f"{label}, clipped to the {percentile:g}..{100 - percentile:g} percentiles"
+
+
 def cmd_generate(args: argparse.Namespace) -> int:
     from offroadbench.io.png16 import sidecar_path, write_png16
     from offroadbench.terrain.recipe import generate_terrain
@@ -87,15 +92,15 @@ def cmd_generate(args: argparse.Namespace) -> int:
     hm = generate_terrain(recipe, args.seed)
     dt = time.perf_counter() - t0
     meta = recipe_meta(recipe, args.seed, parse_sets(args.set))
-    label = str(meta["label"])
     if args.clip_percentile:
         hm = clip_percentile(hm, args.clip_percentile)
         meta["clip_percentile"] = args.clip_percentile
+        meta["label"] = clipped_label(str(meta["label"]), args.clip_percentile)  # the sidecar's label says so too
+    label = str(meta["label"])
     warn_relief_tails(hm, label)
     with created_dirs(out.parent):
         meta = write_png16(hm, out, meta=meta)
-    print(f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s"
-          + (f", clipped to the {args.clip_percentile:g}..{100 - args.clip_percentile:g} percentiles" if args.clip_percentile else ""))
+    print(f"{label}: {hm.rows}x{hm.cols} at {hm.cell_size_m:g} m, relief {hm.relief_m:.3f} m, generated in {dt:.2f} s")
     for layer in recipe.layers:
         if hasattr(layer.config, "describe"):
             print(f"  layer {layer.name}: {layer.config.describe(recipe.grid)}")
@@ -155,6 +160,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         check_output_file(_surface_plot_path(plot), "--plot")
     hm, label, recipe = load_heightmap_arg(args.terrain, args.seed, args.cell_size_m, args.relief_m, args.set, args.force)
     hm = clip_percentile(hm, args.clip_percentile)  # P = 0 (the default) keeps every height
+    label = clipped_label(label, args.clip_percentile) if args.clip_percentile else label
     warn_relief_tails(hm, label)
     rep = describe_terrain(hm, rcfg, crater_diameters_m=crater_diameters(recipe, args.seed))
     print(format_terrain_report(rep, label))

@@ -74,3 +74,16 @@ def test_drive_help_names_both_engines(capsys):
     sub = next(a for a in parser._actions if a.dest == "command")
     help_text = next(a.help for a in sub._choices_actions if a.dest == "drive")
     assert "PyBullet or MuJoCo" in help_text
+
+
+def test_a_clipped_terrain_says_so_in_its_label_and_sidecar(tmp_path, capsys):
+    import json
+
+    png = tmp_path / "c.png"
+    assert main(["generate", "paper-d2.45", "--set", "grid.rows=129", "--set", "grid.cols=129", "--seed", "1",
+                 "--clip-percentile", "0.1", "-o", str(png)]) == 0
+    assert json.loads(png.with_suffix(".json").read_text())["label"].endswith("seed 1, clipped to the 0.1..99.9 percentiles")
+    capsys.readouterr()
+    assert main(["analyze", "paper-d2.45", "--set", "grid.rows=129", "--set", "grid.cols=129", "--seed", "1", "--border-m", "1",
+                 "--clip-percentile", "0.1"]) == 0
+    assert "seed 1, clipped to the 0.1..99.9 percentiles" in capsys.readouterr().out

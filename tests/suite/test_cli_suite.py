@@ -129,3 +129,13 @@ def test_the_suite_runs_on_dask_with_the_same_rows(scored, capsys):
     assert rc == 0, err
     local = read_card(tmp / "scores" / "tiny-v1" / "quick" / "straight")
     assert read_card(tmp / "dask")["tasks"] == local["tasks"]
+
+
+def test_score_refuses_a_run_of_another_planner_or_an_empty_folder(scored, capsys, tmp_path):
+    tmp, _ = scored
+    rc, _, err = _run(tmp, capsys, "score", "--suite", str(tmp / "tiny-v1.toml"), "--planner", "astar",
+                      "--out", str(tmp / "straight"))
+    assert rc == 2 and "with planner straight, not tiny-v1-quick-rough with astar" in err
+    rc, _, err = _run(tmp, capsys, "score", "--suite", str(tmp / "tiny-v1.toml"), "--planner", "astar",
+                      "--out", str(tmp_path))
+    assert rc == 2 and "has not run (no study.sqlite)" in err
