@@ -42,3 +42,12 @@ def test_the_both_engines_readme_counts_come_from_its_trials():
                                                        ("holds on pybullet only", 1)]
     assert text.count("**holds on both**") == 4 and text.count("**holds on neither**") == 3
     assert pd.read_csv(folder / "confirmatory.csv")["power"].min() >= 0.8
+
+
+def test_no_committed_report_or_readme_prints_an_extrapolation_or_an_unbounded_interval():
+    """Issue 42: what the data cannot support is not printed in any committed Markdown."""
+    import re
+
+    bad = re.compile(r"\(extrapolated\)|inf\)|\(-inf|-inf\]|, inf\]|-inf\b")
+    found = [str(p.relative_to(RESULTS)) for p in sorted(RESULTS.rglob("*.md")) if bad.search(p.read_text())]
+    assert found == []
