@@ -51,7 +51,7 @@ from offroadbench.search.plan import SearchPlan, trial_cell
 from offroadbench.study.execution.executors import get_executor
 from offroadbench.study.execution.tasks import NO_MISSION_FAULT, NO_MISSION_KIND, TerrainTask, TrialFaulted, TrialFn
 from offroadbench.study.runner import default_trial_timeout_s
-from offroadbench.study.session import RunSession, code_version
+from offroadbench.study.session import RunRates, RunSession, code_version
 from offroadbench.study.spec.config import CellPlan
 from offroadbench.study.store.search import add_search_batch, ensure_search_table, next_search_cell, stream_trials
 
@@ -60,7 +60,7 @@ log = logging.getLogger(__name__)
 __all__ = ["NO_MISSION", "RETRIED", "SearchSummary", "cell_meta", "margin_of", "no_mission_row", "run_search", "search_meta"]
 
 @dataclass(frozen=True)
-class SearchSummary:
+class SearchSummary(RunRates):
     """What one ``run_search`` call did."""
 
     run_dir: Path
@@ -77,16 +77,6 @@ class SearchSummary:
     """Proposals stored as faults after this call (no outcome, no margin)."""
     new_faults: tuple = ()
     """The faults this call stored, per kind (offroadbench.study.session.FaultCount)."""
-
-    @property
-    def faulted(self) -> int:
-        """Proposals this call stored as faults."""
-        return sum(f.count for f in self.new_faults)
-
-    @property
-    def trials_per_s(self) -> float:
-        """Trials this call stored (outcomes and faults) per wall second."""
-        return (self.ran + self.faulted) / self.wall_s if self.wall_s > 0 else float("nan")
 
 
 def _columns(plan: SearchPlan) -> dict[str, str]:

@@ -41,7 +41,7 @@ from offroadbench.study.store.store import RunLock, Store, remove_stale_temp_fil
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FaultCount", "RunSession", "RunSummary", "code_version", "remove_dirs", "repair_telemetry",
+__all__ = ["FaultCount", "RunRates", "RunSession", "RunSummary", "code_version", "remove_dirs", "repair_telemetry",
            "save_trial_telemetry"]
 
 
@@ -58,8 +58,27 @@ class FaultCount:
         return f"{self.count} x {self.example}"
 
 
+class RunRates:
+    """What a run's summary derives from its ``ran``, ``wall_s`` and ``new_faults`` (RunSummary, and the
+    failure search's SearchSummary)."""
+
+    ran: int
+    wall_s: float
+    new_faults: tuple[FaultCount, ...]
+
+    @property
+    def faulted(self) -> int:
+        """Trials this call stored as faults."""
+        return sum(f.count for f in self.new_faults)
+
+    @property
+    def trials_per_s(self) -> float:
+        """Trials this call stored (outcomes and faults) per wall second."""
+        return (self.ran + self.faulted) / self.wall_s if self.wall_s > 0 else float("nan")
+
+
 @dataclass(frozen=True)
-class RunSummary:
+class RunSummary(RunRates):
     """What one run (``run_study``, and the counts of ``run_search``) did."""
 
     run_dir: Path
@@ -83,16 +102,6 @@ class RunSummary:
     def complete(self) -> bool:
         """Whether every trial of the study is stored, as a trial or as a fault."""
         return self.done + self.faults >= self.total
-
-    @property
-    def faulted(self) -> int:
-        """Trials this call stored as faults."""
-        return sum(f.count for f in self.new_faults)
-
-    @property
-    def trials_per_s(self) -> float:
-        """Trials this call stored (outcomes and faults) per wall second."""
-        return (self.ran + self.faulted) / self.wall_s if self.wall_s > 0 else float("nan")
 
 
 def save_trial_telemetry(run_dir: str | Path, cell: int, terrain: int, mission: int, kept: Mapping[str, Any]) -> list[str]:

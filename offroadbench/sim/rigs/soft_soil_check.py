@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
@@ -143,20 +144,27 @@ def come_to_rest(world: TrialWorld, speed_m_s: float = 0.005, hold_s: float = 0.
             return
 
 
+def _soft_setup(sim: SimConfig) -> tuple[float, Any, SimConfig, Heightmap]:
+    """(gravity m/s^2, the soil's parameters, the rigs' settings, their flat 16 m world) of the soft-soil
+    rows: ``SOFT_SOIL`` under the terramechanics tyres in ``SOFT_SOIL_GRAVITY_M_S2``."""
+    from offroadbench.sim.tyre_laws.terramechanics import load_soil
+
+    g = SOFT_SOIL_GRAVITY_M_S2
+    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
+                               settle_time_s=min(sim.settle_time_s, 0.5))
+    return g, load_soil(SOFT_SOIL), soft, Heightmap.flat(161, 161, FLAT_CELL_M)
+
+
 def soft_soil_checks(vehicle: VehicleSpec | str, sim: SimConfig = SimConfig()) -> list[CheckResult]:
     """The soft-soil rows (module docstring): ``SOFT_SOIL`` in ``SOFT_SOIL_GRAVITY_M_S2``."""
-    from offroadbench.sim.tyre_laws.terramechanics import load_soil, static_sinkage, wheel_forces
+    from offroadbench.sim.tyre_laws.terramechanics import static_sinkage, wheel_forces
 
     spec = vehicle if isinstance(vehicle, VehicleSpec) else load_vehicle(vehicle)
     if spec.wheel_width_m is None:
         return []
     if spec.track_contact_length_m is not None:
         return _track_rows(spec, sim)
-    g = SOFT_SOIL_GRAVITY_M_S2
-    soil = load_soil(SOFT_SOIL)
-    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
-                               settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
+    g, soil, soft, flat = _soft_setup(sim)
     r, b = spec.wheel_radius_m, spec.wheel_width_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity)"
     with open_world(flat, spec, soft) as world:
@@ -197,14 +205,9 @@ def _track_rows(spec: VehicleSpec, sim: SimConfig) -> list[CheckResult]:
     track relations (offroadbench.sim.tyre_laws.track_patch), each belt carrying half the weight. The
     belts' slip settles more slowly than a wheel's (their relaxation length is longer), so the tow rig
     runs 16 s."""
-    from offroadbench.sim.tyre_laws.terramechanics import load_soil
     from offroadbench.sim.tyre_laws.track_patch import drawbar_pull_n, track_sinkage_m
 
-    g = SOFT_SOIL_GRAVITY_M_S2
-    soil = load_soil(SOFT_SOIL)
-    soft = dataclasses.replace(sim, tyre_model="terramechanics", soil=SOFT_SOIL, gravity_m_s2=g,
-                               settle_time_s=min(sim.settle_time_s, 0.5))
-    flat = Heightmap.flat(161, 161, FLAT_CELL_M)
+    g, soil, soft, flat = _soft_setup(sim)
     b, length = spec.wheel_width_m, spec.track_contact_length_m
     where = f"{SOFT_SOIL}, g = {g:g} m/s^2 (Bekker parameters from 1 g: not validated in reduced gravity); belts {length:g} x {b:g} m"
     with open_world(flat, spec, soft) as world:
