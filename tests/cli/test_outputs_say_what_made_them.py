@@ -149,7 +149,7 @@ def test_analyze_says_when_d_from_the_psd_does_not_hold(capsys):
 
 def test_the_rules_row_states_the_capped_stuck_window():
     from offroadbench.navigation.rules import FailureRules, stuck_window_s, trial_timeout_s
-    from offroadbench.study.report.header import _stuck_window_text
+    from offroadbench.study.report.header import stuck_window_text
     from offroadbench.study.spec.config import build_section
 
     secs = {name: build_section(name, table, where="test") for name, table in
@@ -158,10 +158,10 @@ def test_the_rules_row_states_the_capped_stuck_window():
     timeout = trial_timeout_s(rules, 6.0, secs["controller"].cruise_speed_m_s, secs["vehicle"].max_speed_m_s)
     window = stuck_window_s(rules, timeout)
     assert window < 30.0
-    text = _stuck_window_text(rules, secs)
+    text = stuck_window_text(rules, secs)
     assert text.startswith(f"{window:.3g} s (30 s capped at 0.5 x the {timeout:.3g} s timeout of a 6 m mission)")
     secs["missions"] = build_section("missions", {"length_m": 35.0}, where="test")
-    assert _stuck_window_text(rules, secs) == "30 s"  # the paper's missions keep the paper's window
+    assert stuck_window_text(rules, secs) == "30 s"  # the paper's missions keep the paper's window
 
 
 def test_exported_rows_carry_the_fixed_settings(tmp_path, capsys):
@@ -191,7 +191,7 @@ def test_the_model_file_that_drove_is_recorded(tmp_path):
     import hashlib
 
     from offroadbench.navigation.drivers import PlannerChoice
-    from offroadbench.study.report.header import _files_rows, driver_files
+    from offroadbench.study.report.header import files_rows, driver_files
 
     @dataclasses.dataclass(frozen=True)
     class ModelConfig:
@@ -206,6 +206,6 @@ def test_the_model_file_that_drove_is_recorded(tmp_path):
     assert driver_files(PlannerChoice("straight")) == {}
     assert driver_files(PlannerChoice("sb3", ModelConfig(model=str(tmp_path / "gone.zip")), "policy")) == {}
     meta = {"cells": [{"index": 0, "files": {}}, {"index": 1, "files": files}]}
-    (row,) = _files_rows(meta)
+    (row,) = files_rows(meta)
     assert row["setting"] == "planner.model (file)" and row["note"] == "cells 1"
     assert str(model.resolve()) in row["value"] and files["planner.model"]["sha256"][:16] in row["value"]

@@ -10,7 +10,7 @@ from scipy.stats import binom
 from offroadbench.errors import InputError
 from offroadbench.study.spec.config import study_from_dict
 from offroadbench.study.stats.clustered import holm
-from offroadbench.study.stats.power import _adjust, check_power, family_power, plan_power
+from offroadbench.study.stats.power import adjust_rows, check_power, family_power, plan_power
 
 
 def sign_test_power(k: int, q: float, level: float) -> float:
@@ -70,7 +70,7 @@ def test_the_stated_effect_shifts_the_pilot():
 
 def test_vectorised_holm_is_holm():
     p = np.random.default_rng(4).random((50, 6)) ** 3
-    assert np.allclose(_adjust(p, "holm"), np.array([holm(r) for r in p]))
+    assert np.allclose(adjust_rows(p, "holm"), np.array([holm(r) for r in p]))
 
 
 def _pilot(n_terrains: int, rates: dict[str, float], seed: int = 0) -> pd.DataFrame:
@@ -174,16 +174,16 @@ def test_study_run_refuses_an_underpowered_plan_in_one_line(tmp_path, capsys):
 
 
 def test_a_pooled_axis_pools_only_the_studys_values_in_the_pilot():
-    from offroadbench.study.stats.power import _within_design
+    from offroadbench.study.stats.power import within_design
 
     pilot = pd.DataFrame({"vehicle": ["husky", "jackal", "hunter"], "D_high": [2.95, 2.95, 2.6], "terrain": 0})
     cells = [{"vehicle.name": v, "recipe.layers.base.D_high": 2.95} for v in ("husky", "jackal")]
     cols = {"vehicle.name": "vehicle", "recipe.layers.base.D_high": "D_high"}
-    assert list(_within_design(pilot, cells, cols)["vehicle"]) == ["husky", "jackal"]
+    assert list(within_design(pilot, cells, cols)["vehicle"]) == ["husky", "jackal"]
     # an axis read at the pilot's own value (pilot_where) is not restricted
     cells99 = [{"vehicle.name": "husky", "recipe.layers.base.D_high": 2.99}]
-    assert list(_within_design(pilot, cells99, cols, keep=["recipe.layers.base.D_high"])["vehicle"]) == ["husky"]
-    assert _within_design(pilot, cells99, cols).empty
+    assert list(within_design(pilot, cells99, cols, keep=["recipe.layers.base.D_high"])["vehicle"]) == ["husky"]
+    assert within_design(pilot, cells99, cols).empty
 
 
 def test_pilot_select_keeps_the_pilots_rows_of_a_fixed_setting(tmp_path):

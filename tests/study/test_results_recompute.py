@@ -158,10 +158,10 @@ def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
     generator per cell)."""
     def compute(folder: Path) -> list[float]:
         from experiments.rerender import folder_meta
-        from offroadbench.study.report.planners import _stress_axes
+        from offroadbench.study.report.planners import stress_axes
         from offroadbench.study.stats.stress import success_by_level
 
-        group, lv, strata = _stress_axes(folder_meta(folder))
+        group, lv, strata = stress_axes(folder_meta(folder))
         by = success_by_level(trial_table(folder), group, lv, by=strata).set_index([group, "vehicle", "sensor", lv])
         out = []
         for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo"):

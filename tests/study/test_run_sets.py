@@ -5,7 +5,7 @@ import pytest
 
 from offroadbench.cli.study import apply_sets
 from offroadbench.errors import InputError
-from offroadbench.study.report.markdown import _provenance
+from offroadbench.study.report.markdown import provenance_text
 from offroadbench.study.spec.config import plan_cells, study_from_dict, study_id
 from offroadbench.study.execution.tasks import unexplained_variance
 
@@ -28,9 +28,9 @@ def test_study_sets_reach_study_settings_and_recipe_and_change_the_id():
 
 def test_provenance_names_commit_and_dirty_tree():
     meta = {"version": "0.9+git.abc1234", "runs": [{"version": "0.9+git.abc1234"}, {"version": "0.9+git.def5678-dirty"}]}
-    line = _provenance(meta)
+    line = provenance_text(meta)
     assert "commit `abc1234`, clean tree" in line and "commit `def5678`, **dirty tree**" in line
-    assert "not a git checkout" in _provenance({"version": "0.9", "runs": []})
+    assert "not a git checkout" in provenance_text({"version": "0.9", "runs": []})
 
 
 def test_unexplained_variance_of_a_surface_and_its_smooth_twin():

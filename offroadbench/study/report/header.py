@@ -105,7 +105,7 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def _stuck_window_text(rules: Any, secs: dict[str, Any]) -> str:
+def stuck_window_text(rules: Any, secs: dict[str, Any]) -> str:
     """The stuck window as the trials applied it: ``30 s``, or, where the mission's timeout caps it
     (offroadbench.navigation.rules.stuck_window_s), ``15.3 s (30 s capped at 0.5 x the 30.6 s timeout)``."""
     from offroadbench.navigation.rules import stuck_window_s, trial_timeout_s
@@ -189,13 +189,13 @@ def held_fixed(meta: dict[str, Any]) -> pd.DataFrame:
         default = _default("rules")
         grid_rules = sorted(k for k in axes if k.startswith("rules."))
         value = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
-                 f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
+                 f"{stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal; goal within "
                  f"{_fmt(rules.goal_tolerance_m)} m")
         diff = [f.name for f in dataclasses.fields(rules) if getattr(rules, f.name) != getattr(default, f.name)]
         note = (f"varies: {', '.join(grid_rules)}; " if grid_rules else "") + (
             f"not the default: {', '.join(diff)}" if diff else "the paper's (Sec. 2.4)")
         rows.append({"setting": "failure rules", "value": value, "note": note})
-    rows += _files_rows(meta)
+    rows += files_rows(meta)
     overrides = study.get("recipe_overrides", {})
     recipe_axes = sorted(k for k in axes if k == "recipe" or k.startswith("recipe."))
     rows.append({"setting": "terrain recipe", "value": study["recipe"]
@@ -251,7 +251,7 @@ def settings_columns(meta: dict[str, Any]) -> pd.DataFrame:
         rules = secs["rules"]
         if dataclasses.is_dataclass(rules) and not any(k.startswith("rules.") for k in axes):
             row["rules"] = (f"tipped > {_fmt(rules.tip_angle_deg)} deg; stuck < {_fmt(rules.stuck_distance_m)} m in "
-                            f"{_stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal")
+                            f"{stuck_window_text(rules, secs)}; timeout {_fmt(rules.timeout_factor)} x nominal")
         if "recipe" not in axes:
             row["recipe"] = study["recipe"] + (
                 f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else "")
@@ -284,7 +284,7 @@ def driver_files(planner: Any) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _files_rows(meta: dict[str, Any]) -> list[dict[str, str]]:
+def files_rows(meta: dict[str, Any]) -> list[dict[str, str]]:
     """Header rows for the files the cells' drivers named (driver_files), one per distinct file."""
     seen: dict[tuple[str, str], list[int]] = {}
     for info in meta["cells"]:

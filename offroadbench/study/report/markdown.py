@@ -87,7 +87,7 @@ def _fig4(meta: dict[str, Any], trials: pd.DataFrame, cell: int, terrain: int):
     return fig_missions(hm, maps.classes, maps.closed, rcfg.border_m, t, title=title)
 
 
-def _provenance(meta: dict[str, Any]) -> str:
+def provenance_text(meta: dict[str, Any]) -> str:
     """The code each session ran: git commit and whether the tree was clean (from the recorded version)."""
     seen = []
     for v in [meta.get("version", "")] + [r.get("version") or "" for r in meta.get("runs", [])]:
@@ -271,7 +271,7 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
            "before its plan was fixed)" if study.get("blind_seed") else "(chosen by hand: **not blind**)")
         + f"; paired terrains: {study['paired_terrains']}",
         f"- study id `{meta['study_id']}`, created {meta['created']} with offroadbench {meta['version']}",
-        f"- code: {_provenance(meta)}",
+        f"- code: {provenance_text(meta)}",
         f"- wall time: **{wall:.0f} s** ({wall / 60:.1f} min) over {len(sessions)} session(s)",
         "",
         "Statistics as in Majhor & Bos 2023, Sec. 2.4: medians, IQR = Q3 - Q1 (Eq. 6), outliers beyond "

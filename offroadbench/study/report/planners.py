@@ -21,7 +21,7 @@ def all_numeric(values) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
 
-def _stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str]]:
+def stress_axes(meta: dict[str, Any]) -> tuple[str | None, str | None, list[str]]:
     """(planner column, the level column or None, the other grid columns) of a study with a planner
     axis. The level is the one numeric axis, or the one numeric recipe axis (e.g. ``D_high``) when
     there are several; every other axis (``band_limited``, ``map_noise_m``, ...) is a stratum."""
@@ -168,7 +168,7 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study.stats import stress
 
-    group, level, strata = _stress_axes(meta)
+    group, level, strata = stress_axes(meta)
     if group is None:
         return [], {}, {}
     planners = sorted(trials[group].unique())

@@ -64,7 +64,7 @@ def _signs(k: int, rng: np.random.Generator, exact_max: int, n_flips: int) -> np
     return s
 
 
-def _adjust(p: np.ndarray, multiplicity: str) -> np.ndarray:
+def adjust_rows(p: np.ndarray, multiplicity: str) -> np.ndarray:
     """Holm or Bonferroni adjustment of each row of ``p`` (simulated studies x tests)."""
     m = p.shape[1]
     if multiplicity == "bonferroni":
@@ -114,7 +114,7 @@ def family_power(pilots: Sequence[np.ndarray], n_terrains: Sequence[int], alpha:
             p[:, i] = [wilcoxon_test(row) for row in x]
         else:
             p[:, i] = sign_flip_pvalues(x, _signs(k, rng, exact_max, n_flips))
-    return np.mean(_adjust(p, multiplicity) < alpha, axis=0)
+    return np.mean(adjust_rows(p, multiplicity) < alpha, axis=0)
 
 
 # ---------------------------------------------------------------------------- pilots
@@ -171,7 +171,7 @@ def pilot_terrain_values(rows: pd.DataFrame, metric: str, summary: str = "median
     return v.groupby(level="terrain").mean() if len(keys) > 1 else v
 
 
-def _within_design(pilot: pd.DataFrame, cells: Sequence[Mapping[str, Any]], columns: Mapping[str, str],
+def within_design(pilot: pd.DataFrame, cells: Sequence[Mapping[str, Any]], columns: Mapping[str, str],
                    keep: Sequence[str] = ()) -> pd.DataFrame:
     """The pilot's rows whose grid columns take values of the study's axes (a pooled axis pools the study's
     values only: a vehicle the study drops is dropped from its pilot too), except the axes in ``keep``."""
@@ -191,7 +191,7 @@ def _within_design(pilot: pd.DataFrame, cells: Sequence[Mapping[str, Any]], colu
 
 def _pilot_differences(pilot: pd.DataFrame, comp: Any, stratum: Mapping[str, Any], columns: Mapping[str, str],
                        cells: Sequence[Mapping[str, Any]] = ()) -> np.ndarray:
-    pilot = _within_design(pilot, cells, columns, keep=list(comp.pilot_where)) if cells else pilot
+    pilot = within_design(pilot, cells, columns, keep=list(comp.pilot_where)) if cells else pilot
     strat = {**stratum, **{k: v for k, v in comp.pilot_where.items()}}
     base = {columns.get(k, k): v for k, v in strat.items()}
     t = _select(pilot, {**base, **{columns.get(k, k): v for k, v in comp.treatment.items()}})
