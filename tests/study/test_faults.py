@@ -22,6 +22,7 @@ from offroadbench.errors import InputError, TrialFault
 from offroadbench.study import load, load_meta, run_study, study_from_dict
 from offroadbench.study.execution.executors import MAX_TRIAL_TIMEOUT_S, check_trial_timeout
 from offroadbench.study.spec.config import plan_cells
+from offroadbench.study.store.file import RESERVE_BYTES, RESERVE_NAME
 from offroadbench.study.store.store import LOCK_NAME, Store
 from tests.study.test_run import STUDY, fake_trials
 
@@ -385,6 +386,56 @@ def test_a_full_disk_in_a_trial_commit_is_one_oserror_naming_the_store(tmp_path,
     assert not (tmp_path / LOCK_NAME).exists()
     assert len(load(tmp_path)) == 2  # what was committed stays
     assert run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials).done == study.n_trials
+
+
+class _FullUntilFreed:
+    """A connection on a disk that fills at the ``n``-th trial: from then on every write fails with
+    SQLITE_FULL (rolled back by SQLite itself) until the run directory's reserve is removed."""
+
+    def __init__(self, con, n: int, run_dir: Path) -> None:
+        self._con, self._n, self._seen, self._reserve = con, n, 0, run_dir / RESERVE_NAME
+
+    def __getattr__(self, name):
+        return getattr(self._con, name)
+
+    def execute(self, sql, *args):
+        if sql.startswith("INSERT OR IGNORE INTO trials"):
+            self._seen += 1
+        if self._seen >= self._n and sql.startswith(("INSERT", "UPDATE")) and self._reserve.exists():
+            if self._con.in_transaction:
+                self._con.execute("ROLLBACK")
+            raise sqlite3.OperationalError("database or disk is full")
+        return self._con.execute(sql, *args)
+
+
+def test_a_session_stopped_by_a_full_disk_is_recorded_as_failed_not_killed(tmp_path, monkeypatch):
+    """The session's end is written into the space its reserve held (issue 44: it used to be listed
+    ``killed``), the error names the full disk, and no reserve is left behind."""
+    study, cells = cells_of(small())
+    real_init = Store.__init__
+    seen_reserve = []
+
+    def init(self, *a, **k):
+        real_init(self, *a, **k)
+        if k.get("create"):
+            self.con = _FullUntilFreed(self.con, 3, self.run_dir)
+
+    def trials(*a, **k):
+        seen_reserve.append((tmp_path / RESERVE_NAME).stat().st_size)
+        return fake_trials(*a, **k)
+
+    monkeypatch.setattr(Store, "__init__", init)
+    with pytest.raises(OSError) as info:
+        run_study(study, cells, tmp_path, executor="inline", trial_fn=trials)
+    assert info.value.errno == errno.ENOSPC
+    monkeypatch.undo()
+    assert seen_reserve and min(seen_reserve) >= RESERVE_BYTES  # set aside while the trials ran
+    assert not (tmp_path / RESERVE_NAME).exists()
+    (run,) = load_meta(tmp_path)["runs"]
+    assert run["status"] == "failed" and "No space left on device" in run["error"]
+    run_study(study, cells, tmp_path, executor="inline", trial_fn=fake_trials)
+    assert [r["status"] for r in load_meta(tmp_path)["runs"]] == ["failed", "finished"]
+    assert not (tmp_path / RESERVE_NAME).exists()
 
 
 def test_a_full_disk_while_locking_leaves_no_lock_file(tmp_path, monkeypatch):

@@ -3,6 +3,7 @@ a store this version can use, and its removal (see offroadbench.study.store.stor
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import sqlite3
@@ -65,6 +66,44 @@ CREATE TABLE IF NOT EXISTS search_trials (
 #: columns added by schema 2, per table: (name, SQL type)
 SCHEMA2_COLUMNS = {"trials": (("telemetry", "TEXT"), ("run_id", "INTEGER")),
                     "runs": (("platform", "TEXT"), ("error", "TEXT"))}
+
+
+#: space set aside in the run directory while a session runs (``make_reserve``): a session stopped by a
+#: full disk frees it to record how it ended (``failed``, with the error) instead of being found ``killed``
+RESERVE_NAME = "study.reserve"
+RESERVE_BYTES = 256 << 10
+
+
+def make_reserve(run_dir: str | Path) -> None:
+    """Set aside :data:`RESERVE_BYTES` on the run directory's file system (blocks allocated, not a
+    sparse file), so that a session that meets a full disk can still write its own end. Best effort:
+    a disk already too full to hold it is left as it is (logged)."""
+    path = Path(run_dir) / RESERVE_NAME
+    try:
+        if path.is_file() and path.stat().st_size >= RESERVE_BYTES:
+            return
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT, 0o644)
+        try:
+            try:
+                os.posix_fallocate(fd, 0, RESERVE_BYTES)
+            except (AttributeError, OSError):  # a file system without fallocate: write the bytes
+                os.pwrite(fd, bytes(RESERVE_BYTES), 0)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        log.info("%s: could not set aside %d bytes (%s)", path, RESERVE_BYTES, exc)
+        with contextlib.suppress(OSError):
+            path.unlink()
+
+
+def release_reserve(run_dir: str | Path) -> bool:
+    """Remove the run directory's reserve; True if there was one to free."""
+    try:
+        (Path(run_dir) / RESERVE_NAME).unlink()
+    except FileNotFoundError:
+        return False
+    return True
 
 
 def store_path(run_dir: str | Path) -> Path:

@@ -58,8 +58,8 @@ from offroadbench.errors import InputError, StudyError
 from offroadbench.study.store.integrity import TRUSTED_SCHEMA_OFF, check_store
 from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, lock_holder_alive, error_reason
 from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, FAULTS_SQL, SCHEMA_SQL,
-                                           SCHEMA2_COLUMNS, check_existing, nearly_full, remove_stale_temp_files,
-                                           remove_store, store_path)
+                                           SCHEMA2_COLUMNS, check_existing, make_reserve, nearly_full,
+                                           release_reserve, remove_stale_temp_files, remove_store, store_path)
 
 log = logging.getLogger(__name__)
 
@@ -328,7 +328,9 @@ class Store:
 
     # ------------------------------------------------------------------ run sessions
     def start_run(self, executor: str, workers: int, version: str, fingerprint: Mapping[str, Any] | None = None) -> int:
-        """Open a session; ``fingerprint`` is the platform the trials of this session run on."""
+        """Open a session; ``fingerprint`` is the platform the trials of this session run on. The run
+        directory's reserve is set aside for :meth:`finish_run`."""
+        make_reserve(self.run_dir)
         cur = self._write(
             "INSERT INTO runs (started, executor, workers, status, host, machine, version, platform) "
             "VALUES (?, ?, ?, 'running', ?, ?, ?, ?)",
@@ -339,16 +341,23 @@ class Store:
 
     def finish_run(self, run_id: int, status: str, error: str | None = None) -> None:
         """Close a session (``error``: why it failed, one line). Its ``trials_run`` was counted by
-        :meth:`add_trial`, trial by trial. Best effort: on a full disk the session stays open
-        (shown as ``killed`` later) and the error that stopped the run is the one reported."""
-        try:
-            if error is not None and "error" in self.columns["runs"]:
-                self._write("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
-                            (time.time(), status, " ".join(error.split())[:2000], run_id))
-            else:
-                self._write("UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id))
-        except (OSError, sqlite3.DatabaseError) as exc:
-            log.info("%s: could not record the end of session %d (%s)", self.path, run_id, exc)
+        :meth:`add_trial`, trial by trial. On a full disk the reserve :meth:`start_run` set aside is
+        freed and the write tried once more; if that fails too the session stays open (shown as
+        ``killed`` later) and the error that stopped the run is still the one reported."""
+        if error is not None and "error" in self.columns["runs"]:
+            sql, params = ("UPDATE runs SET finished=?, status=?, error=? WHERE id=?",
+                           (time.time(), status, " ".join(error.split())[:2000], run_id))
+        else:
+            sql, params = "UPDATE runs SET finished=?, status=? WHERE id=?", (time.time(), status, run_id)
+        for last in (False, True):
+            try:
+                self._write(sql, params)
+                break
+            except (OSError, sqlite3.DatabaseError) as exc:
+                if last or not release_reserve(self.run_dir):
+                    log.info("%s: could not record the end of session %d (%s)", self.path, run_id, exc)
+                    break
+        release_reserve(self.run_dir)
 
     def mark_killed_sessions(self) -> int:
         """Mark every session still ``running`` as ``killed``: call only while holding the run
