@@ -87,6 +87,25 @@ def test_a_resume_refuses_an_edited_vehicle_or_urdf(tmp_path, user_dir):
         run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
 
 
+def test_a_replay_refuses_a_urdf_replaced_since_the_run(tmp_path, user_dir):
+    """Replay checks the vehicle against the run's record before it drives (issue 44): a comment is
+    no change; a new mass is one line naming the model file's content hash."""
+    from offroadbench.study.execution import replay_trial
+    from offroadbench.study.spec import CellPlan, vehicle_changed
+
+    data = small(vehicle={"name": "my-husky"})
+    run_study(*cells_of(data), tmp_path / "run", executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path / "run") as store:
+        stored = store.meta()
+    urdf = user_dir / "vehicles" / "my-husky" / "husky.urdf"
+    urdf.write_bytes(urdf.read_bytes() + b"\n<!-- edited -->\n")
+    assert vehicle_changed(stored["trial_inputs"], CellPlan.from_meta(stored, 0).trial_settings) is None
+    _edit(urdf, '<mass value="46.034"/>', '<mass value="40.0"/>')
+    with pytest.raises(InputError, match=r"cannot replay cell 0, terrain 0, mission 1: the vehicle .* changed since "
+                                         r"the run: .*urdf_content_sha256 .*restore the model file"):
+        replay_trial(tmp_path / "run", 0, 0, 1)
+
+
 def test_a_store_without_the_urdf_content_hash_compares_the_bytes(tmp_path, user_dir):
     """A store made before the content hash was recorded is resumed as before: by the file's bytes."""
     data = small(vehicle={"name": "my-husky"})

@@ -288,6 +288,7 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     import json
 
     from offroadbench.errors import InputError
+    from offroadbench.study.spec import vehicle_changed
     from offroadbench.study.store.store import Store
 
     with Store(run_dir) as store:
@@ -299,6 +300,10 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     tseed, mseed, stored = hit
     plan = CellPlan.from_meta(meta, cell)
     settings = plan.trial_settings
+    changed = vehicle_changed(meta.get("trial_inputs", {}), settings)
+    if changed:
+        raise InputError(f"{run_dir}: cannot replay cell {cell}, terrain {terrain}, mission {mission}: {changed} "
+                         "(restore the model file the run used)")
     prepared, _ = prepare_cell(plan, tseed, [(mission, mseed)])
     rec = next(iter(drive_terrain(prepared, settings)))
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too

@@ -49,7 +49,8 @@ from typing import Any, Mapping, Sequence
 
 from offroadbench.config import to_dict
 
-__all__ = ["COSMETIC_STUDY_KEYS", "changed_inputs", "changed_study_keys", "trial_inputs"]
+__all__ = ["COSMETIC_STUDY_KEYS", "changed_inputs", "changed_study_keys", "trial_inputs", "vehicle_changed",
+           "vehicle_entry"]
 
 #: keys of the study's own table whose change cannot change a trial
 COSMETIC_STUDY_KEYS = ("name", "description", "reference")
@@ -211,6 +212,30 @@ def _distinct(values: Sequence[Any]) -> list[Any]:
     return out
 
 
+def vehicle_entry(ts: Any, sha: Any = _sha256, content: Any = _urdf_content_sha256) -> dict[str, Any]:
+    """The ``vehicle`` component of one cell's trial settings ``ts``: its table, its URDF's file name
+    and the SHA-256 of the URDF's bytes and of its content."""
+    vehicle = to_dict(ts.vehicle)
+    vehicle["urdf"] = Path(ts.vehicle.urdf).name
+    vehicle["urdf_sha256"] = sha(ts.vehicle.urdf)
+    vehicle["urdf_content_sha256"] = content(ts.vehicle.urdf)
+    return json.loads(json.dumps(vehicle, default=repr))
+
+
+def vehicle_changed(stored: Mapping[str, Any], ts: Any) -> str | None:
+    """Why the vehicle of trial settings ``ts`` is not one the run recorded (``stored``: the run's
+    :func:`trial_inputs`), e.g. its URDF replaced since the run; None when it is, or when the run
+    recorded no trial inputs. Compared as a resume compares them (cosmetic keys left out)."""
+    if "vehicle" not in stored:
+        return None
+    now = vehicle_entry(ts)
+    recorded = _entries(stored["vehicle"])
+    if any(a == b for a, b in (_comparable("vehicle", r, now) for r in recorded)):
+        return None
+    diffs = [", ".join(_first_differences(*_comparable("vehicle", r, now))) for r in recorded]
+    return f"{_WHAT['vehicle']} changed since the run: {min(diffs, key=len)}"
+
+
 def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
     """Every input of the study's trials, resolved, by component (module docstring); JSON data.
 
@@ -227,13 +252,10 @@ def trial_inputs(study: Any, plans: Sequence[Any]) -> dict[str, Any]:
         ts = p.trial_settings
         recipes.append(dict(p.recipe_data))
         plain = to_dict(ts)
-        vehicle = plain.pop("vehicle")
+        plain.pop("vehicle")
         plain.pop("planner")
         settings.append(plain)
-        vehicle["urdf"] = Path(ts.vehicle.urdf).name
-        vehicle["urdf_sha256"] = sha(ts.vehicle.urdf)
-        vehicle["urdf_content_sha256"] = content(ts.vehicle.urdf)
-        vehicles.append(vehicle)
+        vehicles.append(vehicle_entry(ts, sha, content))
         soils.append(_soil(ts.sim, (p.recipe_data.get("soil") or {}).get("name")
                            if isinstance(p.recipe_data.get("soil"), dict) else None))
         planners.append(_planner(ts.planner))
