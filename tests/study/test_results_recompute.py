@@ -623,7 +623,7 @@ SAMPLES = [
            _metric_medians("rms_vertical_accel_m_s2")),
     Sample("majhor2023-mujoco quotes PyBullet's successes and vertical acceleration", "majhor2023-mujoco",
            rf"\(886\) \| {_NUM} / {_NUM} / {_NUM} \({_NUM};[^\n]*\n[^\n]*\n"
-           rf"\| median RMS vertical acceleration, m/s² \|[^|]*\|[^|]*\| {_NUM} / {_NUM} / {_NUM} \|",
+           rf"\| median RMS vertical acceleration, m/s² \|[^|]*\|[^|]*\|[^|]*\| {_NUM} / {_NUM} / {_NUM} \|",
            lambda f: [*_successes(f.parent / "majhor2023"), sum(_successes(f.parent / "majhor2023")),
                       *_metric_medians("rms_vertical_accel_m_s2")(f.parent / "majhor2023")]),
     Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
