@@ -536,7 +536,7 @@ SAMPLES = [
            rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
            rf"\(on {_NUM}\)", _failure_search_first_k),
     Sample("engines success by engine", "engines",
-           rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \*\*\+{_NUM} \[",
+           rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \+{_NUM} \[",
            _pooled_success_effect("engine", "mujoco", "pybullet")),
     Sample("engines successes per engine and D_high", "engines",
            rf"successful trials \(of 100\) \| {_NUM} / {_NUM} / {_NUM} \([^)]*\) \| {_NUM} / {_NUM} / {_NUM} \(",
