@@ -4,16 +4,22 @@ one line; faults are summarised per kind, not a line each."""
 
 from __future__ import annotations
 
+import copy
 import random
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
 
-from offroadbench.study import load_meta
+from offroadbench import stop
+from offroadbench.errors import Stopped
+from offroadbench.study import load_meta, run_study, study_from_dict
+from offroadbench.study.spec.config import plan_cells
 from offroadbench.study.store.store import LOCK_NAME, Store
+from tests.study.test_run import STUDY, fake_trials
 
 CLI = [sys.executable, "-c", "import sys; from offroadbench.cli import main; sys.exit(main())"]
 
@@ -159,3 +165,38 @@ def test_a_search_stops_within_10_s_with_the_same_one_line(tmp_path, stored_tria
     assert len(lines) == 1 and lines[0].startswith(f"offroadbench: {word}; "), err
     assert "stored in" in lines[0] and "run the same command again to resume" in lines[0]
     assert load_meta(out)["runs"][-1]["status"] == "interrupted"
+
+
+_RELEASE = threading.Event()
+
+
+def _slow_trials(prepared, settings):
+    """fake_trials that first wait (up to 60 s) for the test to release them: no message reaches the
+    coordinator while the test looks."""
+    _RELEASE.wait(60)
+    yield from fake_trials(prepared, settings)
+
+
+def test_a_swallowed_stop_ends_a_dask_run_within_one_poll(tmp_path):
+    """A Ctrl-C swallowed where it was raised (a fork's callback) stops a Dask run at the coordinator's
+    next poll (0.5 s), not at the next message: here none comes for 60 s (issue 43)."""
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    study = study_from_dict(copy.deepcopy(STUDY))
+    cells = plan_cells(study)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        try:
+            with stop.handled():
+                try:
+                    signal.raise_signal(signal.SIGINT)
+                except Stopped:
+                    pass  # swallowed, as an at-fork callback swallows it
+                t0 = time.monotonic()
+                with pytest.raises(Stopped):
+                    run_study(study, cells, tmp_path / "run", executor="dask", scheduler=cluster.scheduler_address,
+                              trial_fn=_slow_trials)
+                assert time.monotonic() - t0 < 20
+        finally:
+            _RELEASE.set()
+    assert not (tmp_path / "run" / "study.sqlite").exists()  # a stop before any trial leaves no store

@@ -16,6 +16,7 @@ import traceback
 import uuid
 from typing import Sequence
 
+from offroadbench import stop
 from offroadbench.errors import InputError, StudyError
 from offroadbench.study.execution.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
                                       run_terrain)
@@ -281,6 +282,7 @@ class DaskExecutor:
                 submit(task)
             no_workers_since = None
             while pending:
+                stop.check()  # a Ctrl-C swallowed where it was raised still stops the run, within one poll
                 if client.status in ("closing", "closed"):
                     raise StudyError(f"lost the Dask scheduler at {where}")
                 try:
