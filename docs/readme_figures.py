@@ -1,6 +1,6 @@
 """The figures README.md quotes from commands, regenerated into docs/readme-figures.md.
 
-    python docs/readme_figures.py                      # every source (about 8 minutes on 2 cores)
+    python docs/readme_figures.py                      # every source (about 20 minutes on 2 shared cores)
     python docs/readme_figures.py --only husky-check   # some sources; the others keep their values
     python docs/readme_figures.py --list               # the sources, their commands, and which are cheap
 
@@ -14,12 +14,14 @@ never states a figure that its file does not hold.
 ``tests/test_readme_figures.py`` fails
 
 * while README.md does not contain every quote formatted with the committed figures (all sources),
-* while a *cheap* source (``cheap=True``: deterministic on every CPU and a few seconds: terrain
-  statistics, whose bits do not depend on the CPU, README "Reproducibility"; the SB3 example's
-  figures, read from its committed tables) gives other figures than the committed file.
+* while a *cheap* source (``cheap=True``: deterministic on every CPU and a few seconds: the terrain
+  statistics of ``jacksboro`` and ``terrain-tails``, whose bits do not depend on the CPU, README
+  "Reproducibility"; ``sb3-example``, read from the example's committed tables) gives other figures
+  than the committed file.
 
-The physics sources (vehicle checks and drives: 30-90 s each) are not re-run by the tests: after a
-change to the physics, run this script; it reports which figures moved.
+The slow sources (vehicle checks, soil check and drives: physics, 15-90 s each; the roughness study,
+about a minute) are not re-run by the tests: after a change to the physics or the terrain, run this
+script; it prints every figure that moved.
 """
 
 from __future__ import annotations
@@ -128,6 +130,46 @@ def hunter_soft() -> dict[str, str]:
     return out
 
 
+def soil_check() -> dict[str, str]:
+    """One Husky wheel on lunar regolith in lunar gravity against the Wong-Reece integrals."""
+    d = json.loads(_cli(["soil", "check", "lunar-regolith", "--gravity", "1.62", "--json"]))
+    rows = {r["slip"]: r for r in d["rows"]}
+    return {"soil.largest_difference_pct": f"{100 * d['largest_difference_fraction']:.2f}",
+            "soil.sinkage_ratio_slip0.6": f"{rows[0.6]['sinkage_m'] / rows[0.0]['sinkage_m']:.2f}"}
+
+
+PAPER_CHANGES_PP = {"low": (-13.8, -7.16), "semi": (11.7, 5.63), "high": (1.54, 3.33)}
+"""Majhor & Bos 2023, Sec. 3.1: change of the median class areas, D 2.3 -> 2.45 and 2.45 -> 2.6 (points)."""
+
+
+def roughness_study() -> dict[str, str]:
+    """The paper's Fig. 5 study: median class areas per D and their changes, and their ratio to the paper's."""
+    with tempfile.TemporaryDirectory() as tmp:
+        _cli(["roughness-study", "--dims", "2.3", "2.45", "2.6", "--terrains", "20", "--seed", "0", "--out", tmp])
+        table = pd.read_csv(Path(tmp) / "roughness_summary.csv").sort_values("D")
+    out, ratios = {}, []
+    for cls, paper in PAPER_CHANGES_PP.items():
+        out[f"roughness.{cls}.medians"] = " / ".join(f"{v:.1f}" for v in table[f"median_{cls}_pct"])
+        changes = list(table[f"change_{cls}_pp"].iloc[1:])
+        out |= {f"roughness.{cls}.change{i}": f"{c:+.2f}" for i, c in enumerate(changes, 1)}
+        ratios += [round(c, 2) / p for c, p in zip(changes, paper, strict=True)]
+    return out | {"roughness.ratio_range": f"{min(ratios):.2f}-{max(ratios):.2f}"}
+
+
+VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
+"""The shipped vehicles (``offroadbench vehicle list``)."""
+
+
+def vehicle_checks() -> dict[str, str]:
+    """Per engine: how many shipped vehicles pass every row of ``vehicle check`` (exit 0), and which fail."""
+    out = {}
+    for engine in ("pybullet", "mujoco"):
+        failing = [v for v in VEHICLES if not all(r["ok"] for r in _check(v, engine).values())]
+        out |= {f"checks.{engine}.passing": f"{len(VEHICLES) - len(failing)} of {len(VEHICLES)}",
+                f"checks.{engine}.failing": ", ".join(failing) or "none"}
+    return out
+
+
 DRIVES = (  # (vehicle, engine, root seed) on `drive paper-d2.3 --missions 10 --border-m 2`
     ("husky", "pybullet", 0), ("sojourner", "pybullet", 0), ("talon", "pybullet", 0), ("talon", "mujoco", 0),
     ("hunter", "pybullet", 0), ("hunter", "mujoco", 0), ("talon", "pybullet", 1), ("hunter", "pybullet", 1))
@@ -187,6 +229,12 @@ SOURCES = (
     Source("husky-check", "offroadbench vehicle check husky --json", False, husky_check, "PyBullet"),
     Source("hunter-soft", "offroadbench vehicle check hunter --json --engine pybullet|mujoco", False, hunter_soft,
            "the soft-soil rows"),
+    Source("vehicle-checks", "offroadbench vehicle check V --json --engine E", False, vehicle_checks,
+           "every shipped vehicle on both engines; exit 0 when every row passes"),
+    Source("soil-check", "offroadbench soil check lunar-regolith --gravity 1.62 --json", False, soil_check,
+           "PyBullet's single-wheel rig; the largest difference from the integrals, sinkage at slip 0.6 over slip 0"),
+    Source("roughness-study", "offroadbench roughness-study --dims 2.3 2.45 2.6 --terrains 20 --seed 0", False,
+           roughness_study, "no physics, but about a minute; the ratio is ours over the paper's change, per class and step"),
     Source("drive-counts", "offroadbench drive paper-d2.3 --missions 10 --border-m 2 --seed S --vehicle V --engine E",
            False, drive_counts, "successes of 10"),
     Source("jacksboro-drive", "offroadbench drive jacksboro-rover --missions 3 --length-m 20", False, jacksboro_drive,
@@ -212,6 +260,16 @@ QUOTES = (
     "sinkage at rest (Husky {husky.soft_sinkage_mm} mm against {husky.soft_sinkage_expected_mm} mm from Wong-Reece)",
     "steepest grade climbed from rest ({husky.soft_grade_deg} deg against the quasi-static soil limit of "
     "{husky.soft_grade_expected_deg} deg; {husky.grade_deg} deg on rigid ground)",
+    "the Wong-Reece integrals ({soil.largest_difference_pct} % of the load apart;",
+    "`soil check lunar-regolith --gravity 1.62` gives {soil.sinkage_ratio_slip0.6}x the static sinkage at slip 0.6",
+    """| low | {roughness.low.change1} | {roughness.low.change2} | -13.8 | -7.16 |
+| semi | {roughness.semi.change1} | {roughness.semi.change2} | +11.7 | +5.63 |
+| high | {roughness.high.change1} | {roughness.high.change2} | +1.54 | +3.33 |""",
+    "Medians: low {roughness.low.medians} %, semi {roughness.semi.medians} %, high {roughness.high.medians} %",
+    "({roughness.ratio_range} of its median class-area changes",
+    "climbs {husky.grade_deg} deg from rest on mu = 0.8",
+    "Of the five shipped vehicles {checks.pybullet.passing} pass every row on PyBullet (failing: "
+    "{checks.pybullet.failing}, its soft-soil rows, above) and {checks.mujoco.passing} on MuJoCo",
     "the drawbar pull at 20 % slip ({husky.soft_pull_n} N against {husky.soft_pull_expected_n} N, the Husky weighing "
     "{husky.soft_weight_n} N there)",
     "it climbs {hunter.pybullet.soft_grade_deg} deg of regolith against the {hunter.pybullet.soft_grade_expected_deg} "
@@ -282,7 +340,7 @@ def render(figures: dict[str, str]) -> str:
     return "\n".join(lines)
 
 
-PREFIXES = {"husky-check": {"husky"}, "hunter-soft": {"hunter"}, "drive-counts": {"drive"},
+PREFIXES = {"husky-check": {"husky"}, "hunter-soft": {"hunter"}, "vehicle-checks": {"checks"}, "soil-check": {"soil"}, "roughness-study": {"roughness"}, "drive-counts": {"drive"},
             "jacksboro-drive": {"jacksboro_drive"}, "jacksboro": {"jacksboro"}, "terrain-tails": {"paper", "mare"},
             "sb3-example": {"sb3"}}
 

@@ -8,9 +8,10 @@ docs/readme_figures.py runs each source command and writes its figures; README.m
 * the committed file is exactly what the script renders from its own figures;
 * the *cheap* sources (terrain statistics, deterministic on every CPU; the SB3 example's figures,
   read from examples/sb3_policy/results/) are re-run and must give the committed figures;
-* the physics sources (``vehicle check husky``, the HUNTER's soft-soil rows, the ``drive`` counts:
-  30-90 s each, about 8 minutes together) are NOT re-run here: after a physics change run
-  ``python docs/readme_figures.py``.
+* the slow sources (``vehicle check`` of every vehicle on both engines, ``soil check``, the ``drive``
+  counts: physics, 15-90 s each; ``roughness-study``: about a minute; about 20 minutes together on
+  2 shared cores) are NOT re-run here: after a physics or terrain change run
+  ``python docs/readme_figures.py``; it prints every figure that moved.
 """
 
 from __future__ import annotations
