@@ -116,6 +116,13 @@ def husky_check() -> dict[str, str]:
     }
 
 
+def talon_check() -> dict[str, str]:
+    r = _check("talon", "pybullet")
+    step = next(v for k, v in r.items() if k.startswith("highest step climbed"))
+    return {"talon.step_expected_m": f"{step['expected']:.3f}",
+            "talon.soft_sinkage_expected_mm": f"{1000 * r['soft soil: sinkage at rest']['expected']:.2f}"}
+
+
 def hunter_soft() -> dict[str, str]:
     out = {}
     for engine in ("pybullet", "mujoco"):
@@ -227,6 +234,8 @@ def sb3_example() -> dict[str, str]:
 
 SOURCES = (
     Source("husky-check", "offroadbench vehicle check husky --json", False, husky_check, "PyBullet"),
+    Source("talon-check", "offroadbench vehicle check talon --json", False, talon_check,
+           "PyBullet; the expected column: the belt's quasi-static step bound and its closed-form soft-soil sinkage"),
     Source("hunter-soft", "offroadbench vehicle check hunter --json --engine pybullet|mujoco", False, hunter_soft,
            "the soft-soil rows"),
     Source("vehicle-checks", "offroadbench vehicle check V --json --engine E", False, vehicle_checks,
@@ -268,6 +277,8 @@ QUOTES = (
     "Medians: low {roughness.low.medians} %, semi {roughness.semi.medians} %, high {roughness.high.medians} %",
     "({roughness.ratio_range} of its median class-area changes",
     "climbs {husky.grade_deg} deg from rest on mu = 0.8",
+    "the belts sink {talon.soft_sinkage_expected_mm} mm",
+    "(`track_step_bound_m`, {talon.step_expected_m} m)",
     "Of the five shipped vehicles {checks.pybullet.passing} pass every row on PyBullet (failing: "
     "{checks.pybullet.failing}, its soft-soil rows, above) and {checks.mujoco.passing} on MuJoCo",
     "the drawbar pull at 20 % slip ({husky.soft_pull_n} N against {husky.soft_pull_expected_n} N, the Husky weighing "
@@ -340,7 +351,7 @@ def render(figures: dict[str, str]) -> str:
     return "\n".join(lines)
 
 
-PREFIXES = {"husky-check": {"husky"}, "hunter-soft": {"hunter"}, "vehicle-checks": {"checks"}, "soil-check": {"soil"}, "roughness-study": {"roughness"}, "drive-counts": {"drive"},
+PREFIXES = {"husky-check": {"husky"}, "talon-check": {"talon"}, "hunter-soft": {"hunter"}, "vehicle-checks": {"checks"}, "soil-check": {"soil"}, "roughness-study": {"roughness"}, "drive-counts": {"drive"},
             "jacksboro-drive": {"jacksboro_drive"}, "jacksboro": {"jacksboro"}, "terrain-tails": {"paper", "mare"},
             "sb3-example": {"sb3"}}
 
