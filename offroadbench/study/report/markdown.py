@@ -203,57 +203,17 @@ def _outside_model_line(trials: pd.DataFrame) -> str:
             f"Wong-Reece model's): {len(some)} of {len(frac)} soil trials"
             + (f", for {100 * float(some.median()):.1f} % of their time (median)." if len(some) else "."))
 
-def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
-    """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
-    cell's first terrain)."""
-    from offroadbench.errors import InputError
+def _header_lines(meta: dict[str, Any], trials: pd.DataFrame, fixed: pd.DataFrame, sessions: pd.DataFrame,
+                  n_faults: int) -> list[str]:
+    """The report's title, what ran, the run's facts (trials, grid, seed, provenance, wall time) and
+    the statistics' definitions."""
+    from offroadbench.study.report.header import report_title
 
-    meta = load_meta(run_dir)
-    trials = load(run_dir)
-    terrains = load_terrains(run_dir)
-    if trials.empty:
-        raise InputError(f"{run_dir}: no finished trials yet; run the study first")
-    labels = stats.group_labels(meta)
     study = meta["study"]
-    summary = stats.group_summary(trials, terrains, labels)
-    per_terrain = stats.terrain_success(trials)
-    failures = stats.failure_table(trials, labels)
-    tabs = _summary_tables(summary)
-    sessions = _sessions(meta)
     wall = float(np.nansum(sessions["wall time (s)"])) if not sessions.empty else math.nan
-
-    if fig4 is None:
-        fig4 = (sorted(labels)[len(labels) // 2], int(trials["terrain"].min()))
-    if fig4[0] not in labels:
-        raise InputError(f"--fig4 cell {fig4[0]} does not exist; cells: {', '.join(map(str, sorted(labels)))}")
-
-    figures = {
-        "fig5_class_areas.png": fig_class_areas(summary),
-        "fig6_success_rate.png": fig_success(stats.success_boxes(per_terrain, labels)),
-        "fig7_traversal_metrics.png": fig_metrics(stats.metric_boxes(trials, labels), stats.METRICS),
-        "fig4_missions.png": _fig4(meta, trials, *fig4),
-    }
-    tables = {
-        "summary.csv": summary,
-        "failures.csv": failures.reset_index(),
-        "terrains.csv": terrains.merge(per_terrain, on=["cell", "terrain"], how="left"),
-        "sessions.csv": sessions,
-    }
-
-    n_total = meta["n_trials"]
     grid = ", ".join(f"`{a['key']}` = {list(a['values'])}" for a in study["grid"]) or "none"
-    from offroadbench.study.report.header import held_fixed, report_title
-
-    fixed = held_fixed(meta)
-    tables["held_fixed.csv"] = fixed
-    faults = _faults_section(run_dir, tables)
-    n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
-    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(run_dir)])
-    if confirm is not None:
-        tables["confirmatory.csv"] = confirm
-        if "engine_verdicts" in confirm.attrs:
-            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
-    lines = [
+    n_total = meta["n_trials"]
+    return [
         f"# {report_title(meta)}",
         "",
         study.get("description", ""),
@@ -279,13 +239,12 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         "Success rate per terrain = successes / trials x 100 (Eq. 5). Traversal metrics are for "
         "successful trials only.",
         "",
-        *confirm_lines,
-        "## Run sessions",
-        "",
-        markdown_table(sessions),
-        "",
-        *faults,
-        *_platforms_section(run_dir, meta)[0],
+    ]
+
+
+def _paper_figure_sections(tabs: dict[str, pd.DataFrame]) -> list[str]:
+    """The sections of the paper's Figs. 5-7: class areas, success rate, traversal metrics."""
+    return [
         "## Roughness classes (Fig. 5)",
         "",
         "![Fig. 5](fig5_class_areas.png)",
@@ -307,73 +266,148 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
         markdown_table(tabs["metrics"]),
         "",
     ]
+
+
+def _median_changes_section(trials: pd.DataFrame, terrains: pd.DataFrame, summary: pd.DataFrame,
+                            labels: dict[int, str], study: dict[str, Any],
+                            names: list[str]) -> tuple[list[str], pd.DataFrame]:
+    """The changes of the medians between consecutive groups of one numeric axis, with the sample size
+    behind each median and (paired terrains) a terrain-bootstrap interval."""
+    changes = stats.median_changes(summary, names)
+    if bool(study.get("paired_terrains", True)):  # terrain-bootstrap intervals of each change
+        changes = stats.median_change_intervals(trials, terrains, changes, labels)
+    for side in ("from", "to"):  # the sample size behind each median
+        changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
+                                for g, q in zip(changes[side], changes["quantity"], strict=True)]
+    small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
+    return ["## Changes of the medians between consecutive groups", "",
+            f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median; "
+            "`ci95_low`/`ci95_high`: a 95 % terrain-bootstrap interval of the change (terrains resampled, "
+            "the same ones in both groups). "
+            f"A median of n < 10 moves by a whole sample's step (one terrain's success rate is a multiple "
+            f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
+            "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
+            markdown_table(changes), ""], changes
+
+
+def _group_change_sections(meta: dict[str, Any], trials: pd.DataFrame, terrains: pd.DataFrame,
+                           summary: pd.DataFrame, labels: dict[int, str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
+    """The exploratory comparisons of the grid's groups, by the grid's shape: one numeric axis
+    (consecutive groups), several numeric axes (every cell against the first) or a categorical axis
+    other than the planner (each axis's effect within the others). Nothing for one group."""
+    study = meta["study"]
+    lines: list[str] = []
+    tables: dict[str, pd.DataFrame] = {}
     if len(labels) > 1 and len(study["grid"]) == 1 and all_numeric(study["grid"][0]["values"]):
         # a categorical axis (planner, vehicle) has no order: no "change between consecutive groups"
         names = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
-        changes = stats.median_changes(summary, names)
-        if bool(study.get("paired_terrains", True)):  # terrain-bootstrap intervals of each change
-            changes = stats.median_change_intervals(trials, terrains, changes, labels)
-        for side in ("from", "to"):  # the sample size behind each median
-            changes[f"n_{side}"] = [int(summary.loc[summary["group"] == g, f"n_{q}"].iloc[0])
-                                    for g, q in zip(changes[side], changes["quantity"], strict=True)]
-        tables["median_changes.csv"] = changes
-        small = int(changes[["n_from", "n_to"]].min().min()) if len(changes) else 0
-        lines += ["## Changes of the medians between consecutive groups", "",
-                  f"n: terrains (success rate, class areas) or successful trials (metrics) behind each median; "
-                  "`ci95_low`/`ci95_high`: a 95 % terrain-bootstrap interval of the change (terrains resampled, "
-                  "the same ones in both groups). "
-                  f"A median of n < 10 moves by a whole sample's step (one terrain's success rate is a multiple "
-                  f"of 100 / missions per terrain %): {'these changes are' if small < 10 else 'changes with small n are'} "
-                  "not evidence of an effect on their own; the box plots show every sample where n < 10.", "",
-                  markdown_table(changes), ""]
+        lines, tables["median_changes.csv"] = _median_changes_section(trials, terrains, summary, labels, study, names)
         terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(trials, terrains, labels, names, study)
         lines += terrain_lines
     elif len(labels) > 1 and study["grid"] and all(all_numeric(a["values"]) for a in study["grid"]):
         # several numeric axes (a sensitivity study): every cell against the first
         names = ["success_rate_pct", *stats.METRICS]
         first = min(labels)
-        terrain_lines, tables["terrain_changes.csv"] = terrain_changes_section(
+        lines, tables["terrain_changes.csv"] = terrain_changes_section(
             trials, terrains, labels, names, study, [(first, c) for c in sorted(labels) if c != first])
-        lines += terrain_lines
     elif len(labels) > 1 and "planner.name" not in meta["columns"] and bool(study.get("paired_terrains", True)):
         # a grid with a categorical axis (engine, tyre model): each axis's effect within the others
-        terrain_lines, tables["terrain_changes.csv"] = axis_effects_section(trials, terrains, labels, meta)
-        lines += terrain_lines
-    lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
-    soil = stats.soil_boxes(trials, labels)
-    if soil:
-        from offroadbench.study.report.header import soil_conditions
+        lines, tables["terrain_changes.csv"] = axis_effects_section(trials, terrains, labels, meta)
+    return lines, tables
 
-        cond = {labels[c]: soil_conditions(meta, c) for c in sorted(labels) if labels[c] in next(iter(soil.values()))}
-        figures["fig8_soil.png"] = fig_soil(soil, stats.SOIL_METRICS, cond)
-        rows = [{"metric": f"{title} ({unit})", "group": g, "n": b["n"], "median": b["median"], "Q1": b["q1"],
-                 "Q3": b["q3"], "max": float(np.nanmax(b["values"])) if b["n"] else math.nan}
-                for m, (title, unit) in stats.SOIL_METRICS.items() for g, b in soil[m].items()]
-        lines += ["## Soft soil: slip and sinkage (every trial)", "", "![Soft soil](fig8_soil.png)", "",
-                  "Per trial: the mean longitudinal slip of the wheels and the median and 95th percentile of "
-                  "the deepest wheel's sinkage, over the samples where the vehicle is driven (Wong-Reece "
-                  "terramechanics tyre model; offroadbench.navigation.metrics); the boxes are over every trial "
-                  "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
-                  "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
-                  "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
-                  markdown_table(pd.DataFrame(rows)), "", _outside_model_line(trials), ""]
-    lines += [
-        "## One terrain and its missions (Fig. 4)",
-        "",
-        "![Fig. 4](fig4_missions.png)",
-        "",
-        "Classes: low (blue), semi (orange), high (yellow). Starts green, goals red.",
-        "",
-    ]
+
+def _soil_section(meta: dict[str, Any], trials: pd.DataFrame,
+                  labels: dict[int, str]) -> tuple[list[str], dict[str, Any]]:
+    """Slip and sinkage of the groups driven on soft soil (Fig. 8), with each group's soil and gravity;
+    nothing when no trial ran on soil."""
+    soil = stats.soil_boxes(trials, labels)
+    if not soil:
+        return [], {}
+    from offroadbench.study.report.header import soil_conditions
+
+    cond = {labels[c]: soil_conditions(meta, c) for c in sorted(labels) if labels[c] in next(iter(soil.values()))}
+    rows = [{"metric": f"{title} ({unit})", "group": g, "n": b["n"], "median": b["median"], "Q1": b["q1"],
+             "Q3": b["q3"], "max": float(np.nanmax(b["values"])) if b["n"] else math.nan}
+            for m, (title, unit) in stats.SOIL_METRICS.items() for g, b in soil[m].items()]
+    lines = ["## Soft soil: slip and sinkage (every trial)", "", "![Soft soil](fig8_soil.png)", "",
+             "Per trial: the mean longitudinal slip of the wheels and the median and 95th percentile of "
+             "the deepest wheel's sinkage, over the samples where the vehicle is driven (Wong-Reece "
+             "terramechanics tyre model; offroadbench.navigation.metrics); the boxes are over every trial "
+             "of the groups driven on soil, failed ones included. Soil and gravity of each group, and "
+             "where each came from (study: the study sets it; terrain: the recipe's [soil] / [body]; "
+             "default):", "", *[f"- {g}: {conditions_text(c)}" for g, c in cond.items()], "",
+             markdown_table(pd.DataFrame(rows)), "", _outside_model_line(trials), ""]
+    return lines, {"fig8_soil.png": fig_soil(soil, stats.SOIL_METRICS, cond)}
+
+
+def _fig4_key(labels: dict[int, str], trials: pd.DataFrame, fig4: tuple[int, int] | None) -> tuple[int, int]:
+    """(cell, terrain) of Fig. 4: ``fig4`` checked, or the middle cell's first terrain."""
+    from offroadbench.errors import InputError
+
+    if fig4 is None:
+        return sorted(labels)[len(labels) // 2], int(trials["terrain"].min())
+    if fig4[0] not in labels:
+        raise InputError(f"--fig4 cell {fig4[0]} does not exist; cells: {', '.join(map(str, sorted(labels)))}")
+    return fig4
+
+
+def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Report:
+    """The report of a run directory. ``fig4`` = (cell, terrain) for Fig. 4 (default: the middle
+    cell's first terrain)."""
+    from offroadbench.errors import InputError
+    from offroadbench.study.report.header import held_fixed
+
+    meta = load_meta(run_dir)
+    trials = load(run_dir)
+    terrains = load_terrains(run_dir)
+    if trials.empty:
+        raise InputError(f"{run_dir}: no finished trials yet; run the study first")
+    labels = stats.group_labels(meta)
+    summary = stats.group_summary(trials, terrains, labels)
+    per_terrain = stats.terrain_success(trials)
+    failures = stats.failure_table(trials, labels)
+    sessions = _sessions(meta)
+    fig4 = _fig4_key(labels, trials, fig4)
+    figures = {
+        "fig5_class_areas.png": fig_class_areas(summary),
+        "fig6_success_rate.png": fig_success(stats.success_boxes(per_terrain, labels)),
+        "fig7_traversal_metrics.png": fig_metrics(stats.metric_boxes(trials, labels), stats.METRICS),
+        "fig4_missions.png": _fig4(meta, trials, *fig4),
+    }
+    fixed = held_fixed(meta)
+    tables = {
+        "summary.csv": summary,
+        "failures.csv": failures.reset_index(),
+        "terrains.csv": terrains.merge(per_terrain, on=["cell", "terrain"], how="left"),
+        "sessions.csv": sessions,
+        "held_fixed.csv": fixed,
+    }
+    faults = _faults_section(run_dir, tables)
+    confirm_lines, confirm = confirmatory_section(meta, trials, terrains, [Path(run_dir)])
+    if confirm is not None:
+        tables["confirmatory.csv"] = confirm
+        if "engine_verdicts" in confirm.attrs:
+            tables["engine_verdicts.csv"] = confirm.attrs.pop("engine_verdicts")
+    n_faults = len(tables["faults.csv"]) if "faults.csv" in tables else 0
+    lines = [*_header_lines(meta, trials, fixed, sessions, n_faults), *confirm_lines,
+             "## Run sessions", "", markdown_table(sessions), "", *faults, *_platforms_section(run_dir, meta)[0],
+             *_paper_figure_sections(_summary_tables(summary))]
+    change_lines, change_tables = _group_change_sections(meta, trials, terrains, summary, labels)
+    lines += change_lines
+    tables.update(change_tables)
+    lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
+    soil_lines, soil_figures = _soil_section(meta, trials, labels)
+    lines += soil_lines
+    figures.update(soil_figures)
+    lines += ["## One terrain and its missions (Fig. 4)", "", "![Fig. 4](fig4_missions.png)", "",
+              "Classes: low (blue), semi (orange), high (yellow). Starts green, goals red.", ""]
     stress_lines, stress_figures, stress_tables = planner_sections(meta, trials, run_dir, terrains)
     lines += stress_lines
     figures.update(stress_figures)
     tables.update(stress_tables)
-    ref_lines, ref_tables = reference_sections(study.get("reference", {}), summary, tables.get("terrain_changes.csv"),
-                                                tables.get("median_changes.csv"))
+    ref_lines, ref_tables = reference_sections(meta["study"].get("reference", {}), summary,
+                                               tables.get("terrain_changes.csv"), tables.get("median_changes.csv"))
     lines += ref_lines
     tables.update(ref_tables)
     lines = mark_exploratory(lines)
     return Report(markdown="\n".join(lines).rstrip() + "\n", figures=figures, tables=tables)
-
-

@@ -27,74 +27,84 @@ def _direction_agrees(paper: float, ours: float) -> str:
     return "yes" if np.sign(paper) == np.sign(ours) else "no"
 
 
+def _reference_successes(ref: dict[str, Any], summary: pd.DataFrame) -> pd.DataFrame:
+    """The paper's successful trials per group beside ours."""
+    groups = list(summary["group"])
+    paper_n = list(ref.get("trials", [math.nan] * len(groups)))
+    rows = []
+    for i, g in enumerate(groups):
+        ps = ref["successes"][i] if i < len(ref["successes"]) else math.nan
+        pn = paper_n[i] if i < len(paper_n) else math.nan
+        ours_s, ours_n = int(summary["successes"].iloc[i]), int(summary["trials"].iloc[i])
+        rows.append({"group": g, "paper successes": f"{ps} / {pn}", "paper %": 100.0 * ps / pn,
+                     "ours successes": f"{ours_s} / {ours_n}", "ours %": 100.0 * ours_s / ours_n if ours_n else math.nan})
+    return pd.DataFrame(rows)
+
+
+def _reference_changes(changes: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None,
+                       ours_changes: pd.DataFrame | None) -> pd.DataFrame:
+    """The paper's changes of the group medians from one group to the next beside ours (with our
+    terrain-bootstrap intervals where the report has them) and the terrain-level verdict."""
+    order = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
+    names = sorted((n for n in changes if f"median_{n}" in summary),
+                   key=lambda n: order.index(n) if n in order else len(order))
+    ours = stats.median_changes(summary, names)
+    if ours_changes is not None and "ci95_low" in ours_changes:  # the report's terrain-bootstrap intervals
+        ours = ours.merge(ours_changes[["quantity", "from", "to", "ci95_low", "ci95_high"]],
+                          on=["quantity", "from", "to"], how="left")
+    rows = []
+    for name in names:
+        mine = ours[ours["quantity"] == name].reset_index(drop=True)
+        for i, pair in enumerate(changes[name]):
+            if i >= len(mine):
+                break
+            p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
+            o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
+            same = _direction_agrees(p_abs, o_abs)
+            rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
+                         "paper change": p_abs, "paper %": p_pct, "ours change": o_abs,
+                         **({"ours 95 % low": mine.loc[i, "ci95_low"], "ours 95 % high": mine.loc[i, "ci95_high"]}
+                            if "ci95_low" in mine else {}), "ours %": o_pct,
+                         "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
+                         "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
+                                                                     mine.loc[i, "to"], p_abs)})
+    return pd.DataFrame(rows)
+
+
+def _reference_outliers(outliers: dict[str, Any], summary: pd.DataFrame) -> pd.DataFrame:
+    """The paper's 1.5 IQR outlier counts per quantity and group beside ours."""
+    rows = []
+    for name, counts in outliers.items():
+        if f"outliers_{name}" not in summary:
+            continue
+        for i, g in enumerate(summary["group"]):
+            rows.append({"quantity": name, "group": g, "paper outliers": counts[i] if i < len(counts) else math.nan,
+                         "ours outliers": int(summary[f"outliers_{name}"].iloc[i]),
+                         "ours n": int(summary[f"n_{name}"].iloc[i])})
+    return pd.DataFrame(rows)
+
+
 def reference_sections(ref: dict[str, Any], summary: pd.DataFrame, terrain: pd.DataFrame | None = None,
                         ours_changes: pd.DataFrame | None = None) -> tuple[list[str], dict[str, pd.DataFrame]]:
+    """The report's side-by-side with a study's ``[reference]`` (the published successes, changes of
+    the medians and outlier counts) and the tables it writes; nothing without a reference."""
     lines: list[str] = []
     tables: dict[str, pd.DataFrame] = {}
     if not ref:
         return lines, tables
     lines += ["## Side by side with the published numbers", "", f"Source: {ref.get('source', 'reference')}.", ""]
-    groups = list(summary["group"])
     if "successes" in ref:
-        paper_n = list(ref.get("trials", [math.nan] * len(groups)))
-        rows = []
-        for i, g in enumerate(groups):
-            ps = ref["successes"][i] if i < len(ref["successes"]) else math.nan
-            pn = paper_n[i] if i < len(paper_n) else math.nan
-            ours_s, ours_n = int(summary["successes"].iloc[i]), int(summary["trials"].iloc[i])
-            rows.append({"group": g, "paper successes": f"{ps} / {pn}", "paper %": 100.0 * ps / pn,
-                         "ours successes": f"{ours_s} / {ours_n}", "ours %": 100.0 * ours_s / ours_n if ours_n else math.nan})
-        df = pd.DataFrame(rows)
-        tables["reference_successes.csv"] = df
+        tables["reference_successes.csv"] = df = _reference_successes(ref, summary)
         lines += ["### Successful trials", "", markdown_table(df), ""]
-    changes = ref.get("median_change", {})
-    if changes:
-        order = ["success_rate_pct", *(f"area_{c}_pct" for c in stats.CLASSES), *stats.METRICS]
-        names = sorted((n for n in changes if f"median_{n}" in summary),
-                       key=lambda n: order.index(n) if n in order else len(order))
-        ours = stats.median_changes(summary, names)
-        if ours_changes is not None and "ci95_low" in ours_changes:  # the report's terrain-bootstrap intervals
-            ours = ours.merge(ours_changes[["quantity", "from", "to", "ci95_low", "ci95_high"]],
-                              on=["quantity", "from", "to"], how="left")
-        rows = []
-        for name in names:
-            mine = ours[ours["quantity"] == name].reset_index(drop=True)
-            for i, pair in enumerate(changes[name]):
-                if i >= len(mine):
-                    break
-                p_abs, p_pct = (list(pair) + [math.nan, math.nan])[:2]
-                o_abs, o_pct = mine.loc[i, "change"], mine.loc[i, "change_pct"]
-                same = _direction_agrees(p_abs, o_abs)
-                rows.append({"quantity": name, "step": f"{short_label(mine.loc[i, 'from'], True)} → {short_label(mine.loc[i, 'to'], True)}",
-                             "paper change": p_abs, "paper %": p_pct, "ours change": o_abs,
-                             **({"ours 95 % low": mine.loc[i, "ci95_low"], "ours 95 % high": mine.loc[i, "ci95_high"]}
-                                if "ci95_low" in mine else {}), "ours %": o_pct,
-                             "ours median before": mine.loc[i, "median_from"], "ours median after": mine.loc[i, "median_to"],
-                             "same direction": same, **_terrain_verdict(terrain, name, mine.loc[i, "from"],
-                                                                         mine.loc[i, "to"], p_abs)})
-        df = pd.DataFrame(rows)
-        tables["reference_median_changes.csv"] = df
-        lines += [
-            "### Changes of the group medians from one group to the next",
-            "",
-            "Percent = change / the earlier median. Success rate and class areas change in percentage points "
-            "(the paper's wording does not say whether its class-area changes are points or relative).",
-            "",
-            markdown_table(df),
-            "",
-        ]
-    outliers = ref.get("outliers", {})
-    if outliers:
-        rows = []
-        for name, counts in outliers.items():
-            if f"outliers_{name}" not in summary:
-                continue
-            for i, g in enumerate(groups):
-                rows.append({"quantity": name, "group": g, "paper outliers": counts[i] if i < len(counts) else math.nan,
-                             "ours outliers": int(summary[f"outliers_{name}"].iloc[i]),
-                             "ours n": int(summary[f"n_{name}"].iloc[i])})
-        df = pd.DataFrame(rows)
-        tables["reference_outliers.csv"] = df
+    if ref.get("median_change"):
+        tables["reference_median_changes.csv"] = df = _reference_changes(ref["median_change"], summary, terrain,
+                                                                         ours_changes)
+        lines += ["### Changes of the group medians from one group to the next", "",
+                  "Percent = change / the earlier median. Success rate and class areas change in percentage points "
+                  "(the paper's wording does not say whether its class-area changes are points or relative).", "",
+                  markdown_table(df), ""]
+    if ref.get("outliers"):
+        tables["reference_outliers.csv"] = df = _reference_outliers(ref["outliers"], summary)
         lines += ["### 1.5 IQR outliers", "", markdown_table(df), ""]
     return lines, tables
 

@@ -159,13 +159,95 @@ def _arm_sections(trials: pd.DataFrame, terrains: pd.DataFrame | None, group: st
     return lines, tables
 
 
+def _level_sections(trials: pd.DataFrame, group: str, level: str,
+                    strata: list[str]) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
+    """Success against the stress level per planner (figures, terrain-bootstrap intervals), the
+    isotonic breaking points inside the studied levels, and the logistic model appendix."""
+    from offroadbench.plots.study import fig_success_vs_level
+    from offroadbench.study.stats import stress
+
+    figures: dict[str, Any] = {}
+    tables: dict[str, pd.DataFrame] = {}
+    lines: list[str] = []
+    by = stress.success_by_level(trials, group, level, by=strata)
+    tables["planner_success.csv"] = by
+    figs = []
+    for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
+        name = f"planner_success_{i}.png" if strata else "planner_success.png"
+        figures[name] = fig = fig_success_vs_level(part, group, level)
+        where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,), strict=True))
+        if where:
+            fig.axes[0].set_title(f"Success per planner, {where} (95 % terrain bootstrap)", fontsize=10)
+        figs.append(f"![success{': ' + where if where else ''}]({name})")
+    shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low (terrains)": 100 * by["ci95_low"],
+                         "95 % CI high (terrains)": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
+                                                                 "success (%)", "95 % CI low (terrains)",
+                                                                 "95 % CI high (terrains)"]]
+    bp = stress.breaking_points(trials, group, level, by=strata)
+    tables["breaking_points.csv"] = bp
+    levels = sorted(trials[level].unique())
+    bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
+        stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
+        zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"], strict=True)],
+        "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"]})
+    located = bp[np.isfinite(bp["logistic_point"].astype(float))]
+    model = pd.DataFrame({**{c: located[c] for c in [group, *strata]},
+                          "logistic crossing": [f"{v:.3f}" for v in located["logistic_point"]],
+                          "Fieller 95 % interval": [("–" if math.isnan(a) else f"[{a:.3f}, {b:.3f}]") for a, b in
+                                                    zip(located["fieller_low"], located["fieller_high"], strict=True)],
+                          "logistic fit p": located["logistic_gof_p"]})
+    lines += ["### Success against " + level, "", *figs, "",
+              markdown_table(shown), "",
+              "### Breaking points", "",
+              f"Where success falls below 50 %, measured inside the studied levels ({min(levels):g}-"
+              f"{max(levels):g}) only: an isotonic (non-increasing) fit of success on {level}, interpolated "
+              "between the two studied levels around the crossing, with a 95 % terrain-bootstrap interval "
+              "('not reached up to x': the fit stays at or above 50 % up to the last level, in the share of "
+              "resamples given). A model fit (logistic, for comparison only) is in the model appendix below, "
+              "where the data locate it.", "", markdown_table(bp_shown), "",
+              "### Model appendix: logistic breaking points (comparison only)", "",
+              f"A logistic curve of success on {level} (cluster-robust covariance; Fieller 1954 interval; the p of "
+              "Pearson's goodness of fit over the levels, small: the curve does not follow the data) is a model, "
+              "not a measurement. It is listed only for the groups whose fitted crossing lies inside the studied "
+              f"levels, and its Fieller interval only where it is one bounded interval inside them ('–' otherwise: "
+              f"the slope is not clearly non-zero, so the data do not locate the crossing); "
+              f"{len(bp) - len(located)} of {len(bp)} groups have no crossing inside the levels and are left out "
+              "(a crossing outside them would be an extrapolation).", "",
+              markdown_table(model) if len(model) else "(none)", ""]
+    return lines, figures, tables
+
+
+def _outcome_sections(trials: pd.DataFrame, run_dir: str | Path, group: str, level: str | None,
+                      strata: list[str]) -> tuple[list[str], dict[str, pd.DataFrame]]:
+    """Outcomes per planner, failures to replay (one command each) and the traversal metrics of the
+    successful trials."""
+    tables: dict[str, pd.DataFrame] = {}
+    lines: list[str] = []
+    reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
+    reasons.columns.name = None
+    tables["planner_failures.csv"] = reasons.reset_index()
+    lines += ["### Outcomes per planner", "", markdown_table(reasons.reset_index()), ""]
+    examples = _replay_examples(trials, group, str(run_dir))
+    if not examples.empty:
+        tables["replay_examples.csv"] = examples
+        lines += ["### Failures to replay", "",
+                  "Each command re-runs one trial bit for bit from the run directory and draws it "
+                  "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
+    ok = trials[trials["success"].astype(bool)]
+    keys = [group, *strata] + ([level] if level else [])
+    rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
+        f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
+    tables["planner_metrics.csv"] = rms
+    lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
+    return lines, tables
+
+
 def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | Path,
                      terrains: pd.DataFrame | None = None, paths_figure: bool = True
                      ) -> tuple[list[str], dict[str, Any], dict[str, pd.DataFrame]]:
     """The planner stress-test part of a report (studies with a ``planner.name`` grid axis).
     ``paths_figure``: draw the planned and driven paths (needs the run directory's store and telemetry;
     False for a report re-rendered from a results folder's tables, experiments/rerender.py)."""
-    from offroadbench.plots.study import fig_success_vs_level
     from offroadbench.study.stats import stress
 
     group, level, strata = stress_axes(meta)
@@ -186,51 +268,8 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     figures: dict[str, Any] = {}
     tables: dict[str, pd.DataFrame] = {}
     if level is not None:
-        by = stress.success_by_level(trials, group, level, by=strata)
-        tables["planner_success.csv"] = by
-        figs = []
-        for i, (sv, part) in enumerate(by.groupby(strata, sort=True) if strata else [((), by)]):
-            name = f"planner_success_{i}.png" if strata else "planner_success.png"
-            figures[name] = fig = fig_success_vs_level(part, group, level)
-            where = ", ".join(f"{c} = {v}" for c, v in zip(strata, sv if isinstance(sv, tuple) else (sv,), strict=True))
-            if where:
-                fig.axes[0].set_title(f"Success per planner, {where} (95 % terrain bootstrap)", fontsize=10)
-            figs.append(f"![success{': ' + where if where else ''}]({name})")
-        shown = by.assign(**{"success (%)": 100 * by["success_rate"], "95 % CI low (terrains)": 100 * by["ci95_low"],
-                             "95 % CI high (terrains)": 100 * by["ci95_high"]})[[group, *strata, level, "successes", "trials",
-                                                                     "success (%)", "95 % CI low (terrains)",
-                                                                     "95 % CI high (terrains)"]]
-        bp = stress.breaking_points(trials, group, level, by=strata)
-        tables["breaking_points.csv"] = bp
-        levels = sorted(trials[level].unique())
-        bp_shown = pd.DataFrame({**{c: bp[c] for c in [group, *strata]}, f"{level} where success falls below 50 %": [
-            stress.describe_breaking_point(p, lo, hi, levels, last, level) for p, lo, hi, last in
-            zip(bp["breaking_point"], bp["ci95_low"], bp["ci95_high"], bp["success_at_last"], strict=True)],
-            "resamples not reaching it": bp["not_reached_share"], "terrains": bp["terrains"]})
-        located = bp[np.isfinite(bp["logistic_point"].astype(float))]
-        model = pd.DataFrame({**{c: located[c] for c in [group, *strata]},
-                              "logistic crossing": [f"{v:.3f}" for v in located["logistic_point"]],
-                              "Fieller 95 % interval": [("–" if math.isnan(a) else f"[{a:.3f}, {b:.3f}]") for a, b in
-                                                        zip(located["fieller_low"], located["fieller_high"], strict=True)],
-                              "logistic fit p": located["logistic_gof_p"]})
-        lines += ["### Success against " + level, "", *figs, "",
-                  markdown_table(shown), "",
-                  "### Breaking points", "",
-                  f"Where success falls below 50 %, measured inside the studied levels ({min(levels):g}-"
-                  f"{max(levels):g}) only: an isotonic (non-increasing) fit of success on {level}, interpolated "
-                  "between the two studied levels around the crossing, with a 95 % terrain-bootstrap interval "
-                  "('not reached up to x': the fit stays at or above 50 % up to the last level, in the share of "
-                  "resamples given). A model fit (logistic, for comparison only) is in the model appendix below, "
-                  "where the data locate it.", "", markdown_table(bp_shown), "",
-                  "### Model appendix: logistic breaking points (comparison only)", "",
-                  f"A logistic curve of success on {level} (cluster-robust covariance; Fieller 1954 interval; the p of "
-                  "Pearson's goodness of fit over the levels, small: the curve does not follow the data) is a model, "
-                  "not a measurement. It is listed only for the groups whose fitted crossing lies inside the studied "
-                  f"levels, and its Fieller interval only where it is one bounded interval inside them ('–' otherwise: "
-                  f"the slope is not clearly non-zero, so the data do not locate the crossing); "
-                  f"{len(bp) - len(located)} of {len(bp)} groups have no crossing inside the levels and are left out "
-                  "(a crossing outside them would be an extrapolation).", "",
-                  markdown_table(model) if len(model) else "(none)", ""]
+        level_lines, figures, tables = _level_sections(trials, group, level, strata)
+        lines += level_lines
     paired = stress.paired_table(trials, group, level, baseline, by=strata)
     if not paired.empty:
         tables["paired_tests.csv"] = paired
@@ -247,22 +286,9 @@ def planner_sections(meta: dict[str, Any], trials: pd.DataFrame, run_dir: str | 
     arm_lines, arm_tables = _arm_sections(trials, terrains, group, level, strata)
     lines += arm_lines
     tables.update(arm_tables)
-    reasons = pd.crosstab(trials[group], trials["failure_reason"].replace("", "success"))
-    reasons.columns.name = None
-    tables["planner_failures.csv"] = reasons.reset_index()
-    lines += ["### Outcomes per planner", "", markdown_table(reasons.reset_index()), ""]
-    examples = _replay_examples(trials, group, str(run_dir))
-    if not examples.empty:
-        tables["replay_examples.csv"] = examples
-        lines += ["### Failures to replay", "",
-                  "Each command re-runs one trial bit for bit from the run directory and draws it "
-                  "(class map, planned and driven paths, time series).", "", markdown_table(examples), ""]
-    ok = trials[trials["success"].astype(bool)]
-    keys = [group, *strata] + ([level] if level else [])
-    rms = ok.groupby(keys, sort=True).agg(n=("success", "size"), **{
-        f"median {title} ({unit})": (metric, "median") for metric, (title, unit) in stats.METRICS.items()}).reset_index()
-    tables["planner_metrics.csv"] = rms
-    lines += ["### Traversal metrics of successful trials (medians)", "", markdown_table(rms), ""]
+    outcome_lines, outcome_tables = _outcome_sections(trials, run_dir, group, level, strata)
+    lines += outcome_lines
+    tables.update(outcome_tables)
     if not paths_figure:
         return lines, figures, tables
     try:
