@@ -322,8 +322,9 @@ SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on 
 """The soil-map README table's rows: (row label regex, recipe)."""
 
 
-LUNAR_SOIL_CELLS = [(m, g, a) for m in ("coulomb", "terramechanics") for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
-"""The lunar-soil README table's rows: (tyre model, gravity m/s^2, surface age Ga)."""
+LUNAR_SOIL_CELLS = [(e, m, g, a) for e in ("pybullet", "mujoco") for m in ("coulomb", "terramechanics")
+                    for g in (1.62, 9.81) for a in (0.01, 0.1, 3.5)]
+"""The lunar-soil README table's rows: (engine, tyre model, gravity m/s^2, surface age Ga)."""
 
 
 def _lunar_soil_rows(folder: Path) -> list[float]:
@@ -331,8 +332,8 @@ def _lunar_soil_rows(folder: Path) -> list[float]:
     slip and the medians of the per-trial median and 95th-percentile sinkage (mm)."""
     t = trial_table(folder)
     out: list[float] = []
-    for m, g, a in LUNAR_SOIL_CELLS:
-        cell = t[(t["tyre_model"] == m) & (t["gravity_m_s2"] == g) & (t["age_ga"] == a)]
+    for e, m, g, a in LUNAR_SOIL_CELLS:
+        cell = t[(t["engine"] == e) & (t["tyre_model"] == m) & (t["gravity_m_s2"] == g) & (t["age_ga"] == a)]
         out += [float(cell["success"].sum()), float(cell.loc[cell["success"].astype(bool), "traversal_time_s"].median())]
         if m == "terramechanics":
             out += [float(cell["mean_slip"].median()), 1000 * float(cell["sinkage_median_m"].median()),
@@ -341,11 +342,26 @@ def _lunar_soil_rows(folder: Path) -> list[float]:
 
 
 def _soil_success_by_gravity(folder: Path) -> list[float]:
-    """Mean per-terrain success (%) on regolith, lunar then Earth gravity, each terrain over the three ages."""
+    """Mean per-terrain success (%) on regolith, lunar then Earth gravity, each terrain over the three ages:
+    PyBullet, then MuJoCo."""
     t = trial_table(folder)
-    soil = t[t["tyre_model"] == "terramechanics"]
-    rate = soil.groupby(["gravity_m_s2", "terrain"])["success"].mean().mul(100).groupby("gravity_m_s2").mean()
-    return [float(rate[1.62]), float(rate[9.81])]
+    out: list[float] = []
+    for e in ("pybullet", "mujoco"):
+        soil = t[(t["tyre_model"] == "terramechanics") & (t["engine"] == e)]
+        rate = soil.groupby(["gravity_m_s2", "terrain"])["success"].mean().mul(100).groupby("gravity_m_s2").mean()
+        out += [float(rate[1.62]), float(rate[9.81])]
+    return out
+
+
+def _soil_effect_per_engine(folder: Path) -> list[float]:
+    """Regolith against rigid ground: the fall in mean per-terrain success (points), PyBullet then MuJoCo,
+    each terrain's rate pooled over gravity and age (the plan's test, per engine)."""
+    t = trial_table(folder)
+    out: list[float] = []
+    for e in ("pybullet", "mujoco"):
+        rate = t[t["engine"] == e].groupby(["tyre_model", "terrain"])["success"].mean().mul(100).unstack("tyre_model")
+        out.append(-float((rate["terramechanics"] - rate["coulomb"]).mean()))
+    return out
 
 
 def _one_engine_only(folder: Path) -> list[float]:
@@ -548,8 +564,8 @@ SAMPLES = [
     Sample("engines trials equal the paper studies' trials", "engines",
            rf"the {_NUM}\s+PyBullet trials are rows of the \[majhor2023\][^\n]*\n[^\n]*\n{_NUM} MuJoCo trials rows",
            _engines_trials_in_paper_studies),
-    Sample("lunar-soil regolith against rigid ground", "lunar-soil", rf"missions succeed {_NUM} points",
-           lambda f: [-_pooled_success_effect("tyre_model", "terramechanics", "coulomb")(f)[0]]),
+    Sample("lunar-soil regolith against rigid ground", "lunar-soil",
+           rf"missions succeed {_NUM} points less often on PyBullet and {_NUM} on MuJoCo", _soil_effect_per_engine),
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
@@ -571,12 +587,15 @@ SAMPLES = [
     Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
            _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",
-           "".join(rf"\| {m} \| {g} \| {a} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| "
-                   + (rf"{_NUM} \([\d.]+\) \| {_NUM} / {_NUM} \([\d./ ]+\) \|\n" if m == "terramechanics"
+           "".join(rf"\| {e} \| {m} \| {g} \| {a} \| {_NUM}{old[e]} \|[^|\n]*\|[^|\n]*\| {_NUM}{old[e]} \| "
+                   + (rf"{_NUM}{old[e]} \| {_NUM} / {_NUM}{oldsink[e]} \|\n" if m == "terramechanics"
                       else r"- \| [^|\n]+ \|\n")
-                   for m, g, a in LUNAR_SOIL_CELLS), _lunar_soil_rows),
+                   for e, m, g, a in LUNAR_SOIL_CELLS
+                   for old, oldsink in [({"pybullet": r" \([\d.]+\)", "mujoco": ""},
+                                         {"pybullet": r" \([\d./ ]+\)", "mujoco": ""})]), _lunar_soil_rows),
     Sample("lunar-soil success on regolith by gravity", "lunar-soil",
-           rf"more missions succeed \({_NUM} against {_NUM} %", _soil_success_by_gravity),
+           rf"more missions succeed \(PyBullet {_NUM} against {_NUM} %, MuJoCo {_NUM}\s+against {_NUM} %",
+           _soil_success_by_gravity),
     Sample("crater-density successes and medians per density", "crater-density",
            "".join(rf"\| {c} \| {_NUM} \(\d+\) \|[^|\n]*\|[^|\n]*\| {_NUM} \([\d.]+\) \| {_NUM} \([\d.]+\) \| "
                    rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
