@@ -8,10 +8,12 @@ and row definitions of the one-world engines), and takes the next when it ends. 
 its physics steps; when the trial reads the state (at its 20 Hz telemetry and control ticks) the
 slot waits. Once every busy slot waits, :class:`Lockstep` advances the whole batch by the fewest
 steps any of them waits for, reads the state to the host once, and wakes the slots whose steps are
-done. Only one Python thread runs at a time between advances (the others wait), and a world's
-trial reads and writes only its own world, so a trial's row does not depend on which slot ran it,
-on the other trials of the batch, or on the number of worlds (on Warp's CPU device: bit for bit,
-offroadbench.sim.engines.mujoco_warp.kernels on the order of the sums).
+done. The batch is touched by the main thread only while every slot waits; the woken slots run
+side by side until they wait again, each reading and writing only its own world's rows (the host
+MuJoCo data they share for a spawn's kinematics is behind BatchModel.lock). So a trial's row does
+not depend on which slot ran it, on the other trials of the batch, on the threads' timing or on
+the number of worlds (on Warp's CPU device: bit for bit; offroadbench.sim.engines.mujoco_warp.kernels
+on the order of the sums).
 
 A trial that raises (TrialFault: thrown while settling; PluginError: the planner failed) gives its
 exception in place of its record; the other trials go on.
