@@ -143,7 +143,12 @@ def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
     if batched is not None:  # the engine drives the terrain's missions as one batch of worlds
         import importlib
 
-        yield from importlib.import_module(batched).drive_terrain_batched(prepared, settings, progress=progress)
+        try:
+            module = importlib.import_module(batched)
+        except ModuleNotFoundError as exc:
+            raise InputError(f"engine {settings.sim.engine!r} needs the {exc.name} package, which is not installed "
+                             f"(see the engine's extra in pyproject.toml)") from None
+        yield from module.drive_terrain_batched(prepared, settings, progress=progress)
         return
     with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim),
                     soil_map=prepared.soil_map_for(settings.sim)) as world:

@@ -18,10 +18,13 @@ from __future__ import annotations
 
 import math
 
-import mujoco_warp as mjw
 import numpy as np
 import warp as wp
 
+wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no banner, no line per kernel module loaded
+import mujoco_warp as mjw  # noqa: E402
+
+from offroadbench.errors import InputError
 from offroadbench.sim.engines.mujoco_warp import kernels
 from offroadbench.sim.engines.mujoco_warp.model import BatchModel
 
@@ -45,9 +48,12 @@ class WarpBatch:
 
     def __init__(self, model: BatchModel, terrain_of, device: str = "cpu", nconmax: int = 64,
                  njmax: int = 256) -> None:
-        wp.config.quiet = True
         wp.init()
         self.model = model
+        found = [str(d) for d in wp.get_devices()]
+        if device not in found and not (device == "cuda" and any(d.startswith("cuda") for d in found)):
+            raise InputError(f"[sim.mujoco_warp] device = {device!r}: Warp finds no such device here "
+                             f"(available: {', '.join(found)})")
         self.device = wp.get_device(device)
         self.nworld = nworld = len(terrain_of)
         m = model.model
