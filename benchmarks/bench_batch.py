@@ -15,7 +15,17 @@ after the other) in trial steps per second.
     .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu]
     .venv/bin/python benchmarks/bench_batch.py --smoke      # CI: 2 worlds, short missions; figures mean nothing
 
-The kernels' first compile on a cold cache (``WARP_CACHE_PATH``) is timed by the warm-up batch.
+The warm-up batch times the kernels' compile where they are not cached yet (a fresh
+``WARP_CACHE_PATH``: the cold compile).
+
+``--compare N`` instead drives N missions (half on each terrain) three ways, trial by trial: the
+MuJoCo engine, the MuJoCo engine with a 0.1 mm higher spawn (the chaos yardstick of
+``bench_sim.py --paired``: the closed loop's own run-to-run spread) and one batch of N worlds; it
+prints each trial's outcome and ride metrics, the outcome flips against the MuJoCo engine, and per
+ride metric the median over the trials both finished of |log(other / MuJoCo)| and of the ratio
+(what tests/sim/test_mujoco_warp.py holds a batch of 8 to).
+
+    .venv/bin/python benchmarks/bench_batch.py --compare 20
 """
 
 from __future__ import annotations
@@ -49,6 +59,39 @@ def _sim_steps(records, sim: SimConfig) -> int:
     return sum(round((r.result.sim_time_s + sim.settle_time_s) * sim.physics_rate_hz) for r in records)
 
 
+METRICS = ("rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
+
+
+def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
+    """The trial-by-trial comparison of ``--compare``."""
+    import math
+
+    import numpy as np
+
+    from offroadbench.sim.engines.mujoco_warp.runner import drive_batch
+
+    prepared, settings = _prepared(n, length, rows)
+    runs = {}
+    for name, variant in (("mujoco", SimConfig(engine="mujoco")),
+                          ("mujoco+0.1mm", SimConfig(engine="mujoco", spawn_clearance_m=0.0201))):
+        runs[name] = [r.result for p in prepared for r in drive_terrain(p, settings.replace(sim=variant))]
+    batch = drive_batch(prepared, settings.replace(sim=sim), worlds=n)
+    runs["mujoco_warp"] = [r.result for rs in batch.records for r in rs]
+    for name, res in runs.items():
+        print(f"{name}: " + " ".join(r.failure_reason or "ok" for r in res), flush=True)
+    ref = runs["mujoco"]
+    print(f"{'variant':14s} {'flips':>5s} " + " ".join(f"{m[:14]:>14s} |log| {'ratio':>6s}" for m in METRICS))
+    for name in ("mujoco+0.1mm", "mujoco_warp"):
+        res = runs[name]
+        flips = sum(a.failure_reason != b.failure_reason for a, b in zip(ref, res, strict=True))
+        both = [(a, b) for a, b in zip(ref, res, strict=True) if a.success and b.success]
+        cols = []
+        for m in METRICS:
+            ratios = [getattr(b, m) / getattr(a, m) for a, b in both]
+            cols.append(f"{np.median([abs(math.log(x)) for x in ratios]):20.4f} {np.median(ratios):6.3f}")
+        print(f"{name:14s} {flips:5d} " + " ".join(cols) + f"   ({len(both)} trials both finished)", flush=True)
+
+
 def main() -> None:
     from offroadbench.sim.engines.mujoco_warp.runner import drive_batch
 
@@ -58,6 +101,7 @@ def main() -> None:
     ap.add_argument("--length", type=float, default=6.0, help="mission length, m")
     ap.add_argument("--reference", type=int, default=8, help="trials the MuJoCo engine drives for reference (0: none)")
     ap.add_argument("--smoke", action="store_true", help="2 worlds, 2 m missions on 129^2 maps (CI)")
+    ap.add_argument("--compare", type=int, default=0, help="trial-by-trial comparison with the MuJoCo engine, N trials")
     args = ap.parse_args()
     sizes = [2] if args.smoke else [int(v) for v in args.worlds.split(",")]
     length, rows = (2.0, 129) if args.smoke else (args.length, 257)
@@ -65,10 +109,14 @@ def main() -> None:
     sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device))
     print(f"bench_batch: {platform.processor() or platform.machine()}, device {args.device}, "
           f"{length:g} m missions on {rows}^2 maps", flush=True)
+    if args.compare:
+        compare(args.compare, length, rows, sim)
+        return
     prepared, settings = _prepared(2, length, rows)
     t0 = time.perf_counter()
     drive_batch(prepared, settings.replace(sim=sim))
-    print(f"warm-up batch of 2 worlds (kernel compile on a cold cache): {time.perf_counter() - t0:.1f} s", flush=True)
+    print(f"warm-up batch of 2 worlds (compiles the kernels not yet cached): {time.perf_counter() - t0:.1f} s",
+          flush=True)
     print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s}")
     for n in sizes:
         prepared, settings = _prepared(n, length, rows)
