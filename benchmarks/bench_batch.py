@@ -26,6 +26,13 @@ ride metric the median over the trials both finished of |log(other / MuJoCo)| an
 (what tests/sim/test_mujoco_warp.py holds a batch of 8 to).
 
     .venv/bin/python benchmarks/bench_batch.py --compare 20
+
+``--contacts N`` counts the wheels' terrain contacts in both engines (MuJoCo Warp keeps at most 4
+per geom pair, MuJoCo up to 50; the tyre tuning counted on 4-5 a wheel): N missions, each vehicle
+spawned at its start and driven straight at 3 rad/s for 2 s, the contacts of each MuJoCo step's
+last substep counted per wheel that has any.
+
+    .venv/bin/python benchmarks/bench_batch.py --contacts 8
 """
 
 from __future__ import annotations
@@ -92,6 +99,37 @@ def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
         print(f"{name:14s} {flips:5d} " + " ".join(cols) + f"   ({len(both)} trials both finished)", flush=True)
 
 
+def contacts(n: int, length: float, rows: int, sim: SimConfig) -> None:
+    """The contact count of ``--contacts``."""
+    import numpy as np
+
+    from offroadbench.sim.engine import open_world
+
+    prepared, _ = _prepared(n, length, rows)
+    for name, variant in (("mujoco", SimConfig(engine="mujoco")), ("mujoco_warp", sim)):
+        counts = []
+        for p in prepared:
+            with open_world(p.hm, "husky", variant) as world:
+                model = world.model if name == "mujoco" else world.batch.model.model
+                wheels = [g for g in range(model.ngeom) if model.geom(g).name.startswith("wheel_")]
+                for m in p.missions:
+                    world.spawn(*m.start_xy_m, m.heading_rad)
+                    for _ in range(2 * variant.physics_rate_hz):
+                        world.command_wheels(3.0, 3.0)
+                        world.step()
+                        world.base_state()  # the lazy world runs its step here
+                        if name == "mujoco":
+                            geoms = world.data.contact.geom[:world.data.ncon]
+                        else:
+                            d = world.batch.d
+                            geoms = d.contact.geom.numpy()[:int(d.nacon.numpy()[0])]
+                        per = [int(np.sum(np.any(geoms == g, axis=1))) for g in wheels]
+                        counts += [c for c in per if c]
+        counts = np.array(counts)
+        print(f"{name:12s} contacts per touching wheel: mean {counts.mean():.2f}, median {np.median(counts):.0f}, "
+              f"max {counts.max()}; {len(counts)} wheel-steps", flush=True)
+
+
 def main() -> None:
     import importlib.util
     import sys
@@ -102,6 +140,7 @@ def main() -> None:
     ap.add_argument("--length", type=float, default=6.0, help="mission length, m")
     ap.add_argument("--reference", type=int, default=8, help="trials the MuJoCo engine drives for reference (0: none)")
     ap.add_argument("--smoke", action="store_true", help="2 worlds, 2 m missions on 129^2 maps (CI)")
+    ap.add_argument("--contacts", type=int, default=0, help="count the wheels' contacts in both engines, N missions")
     ap.add_argument("--compare", type=int, default=0, help="trial-by-trial comparison with the MuJoCo engine, N trials")
     args = ap.parse_args()
     if importlib.util.find_spec("mujoco_warp") is None:
@@ -119,6 +158,9 @@ def main() -> None:
           f"{length:g} m missions on {rows}^2 maps", flush=True)
     if args.compare:
         compare(args.compare, length, rows, sim)
+        return
+    if args.contacts:
+        contacts(args.contacts, length, rows, sim)
         return
     prepared, settings = _prepared(2, length, rows)
     t0 = time.perf_counter()
