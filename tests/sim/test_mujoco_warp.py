@@ -106,3 +106,26 @@ def test_the_engine_refuses_what_it_does_not_implement():
         SimConfig(engine="mujoco_warp", tyre_model="terramechanics")
     with pytest.raises(InputError, match="device"):
         SimConfig(engine="mujoco_warp", mujoco_warp=dataclasses.replace(SimConfig().mujoco_warp, device="tpu"))
+
+
+def test_the_engines_own_world_settles_on_its_wheels_and_reads_its_terrain():
+    """``open_world`` on ``mujoco_warp`` (a batch of one): the settled Husky's wheel loads carry its
+    weight, a ray finds the terrain's height, gravity cannot be turned, the geometry is the MuJoCo
+    engine's."""
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.sim.engine import open_world
+
+    z = np.zeros((65, 65))
+    z[:, 40:] = 0.02  # a 2 cm step, off the vehicle's footprint
+    hm = Heightmap(z=z, cell_size_m=0.05)
+    with open_world(hm, "husky", SimConfig(engine="mujoco_warp")) as world, \
+            open_world(hm, "husky", SimConfig(engine="mujoco")) as ref:
+        world.spawn(1.0, 1.6, 0.0)
+        ref.spawn(1.0, 1.6, 0.0)
+        assert sum(world.wheel_loads_n()) == pytest.approx(world.geometry.mass_kg * 9.81, rel=0.02)
+        assert world.base_state()[0][2] == pytest.approx(ref.base_state()[0][2], abs=2e-3)  # settled ride height
+        assert world.ray_height(2.5, 1.6) == pytest.approx(0.02, abs=1e-5)
+        assert world.ray_height(1.0, 1.6) == pytest.approx(0.0, abs=1e-5)
+        assert world.geometry == ref.geometry
+        with pytest.raises(InputError, match="gravity"):
+            world.set_gravity(0.0, 0.0, -1.62)
