@@ -129,3 +129,20 @@ def test_the_engines_own_world_settles_on_its_wheels_and_reads_its_terrain():
         assert world.geometry == ref.geometry
         with pytest.raises(InputError, match="gravity"):
             world.set_gravity(0.0, 0.0, -1.62)
+
+
+def test_a_study_batched_across_terrains_stores_the_table_of_one_batch_per_terrain(tmp_path, write_tiny_study):
+    """``--executor batched`` (one batch of every terrain's missions) and ``inline`` (one batch per
+    terrain) store the same table on ``mujoco_warp``: a trial does not depend on its batch."""
+    import pandas as pd
+
+    from offroadbench.study import load, load_study, run_study
+
+    path = write_tiny_study(tmp_path, name="warp", root_seed=5, terrains=1, missions=2)
+    path.write_text(path.read_text() + '\n[sim]\nengine = "mujoco_warp"\n')
+    study, cells = load_study(path)
+    run_study(study, cells, tmp_path / "inline", executor="inline")
+    run_study(study, cells, tmp_path / "batched", executor="batched")
+    table = load(tmp_path / "inline")
+    assert len(table) == 4
+    pd.testing.assert_frame_equal(load(tmp_path / "batched"), table)

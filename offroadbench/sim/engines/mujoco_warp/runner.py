@@ -118,24 +118,28 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
                 progress: ProgressFn | None = None) -> BatchRun:
     """Drive every mission of every prepared terrain (offroadbench.sim.trial.pipeline.PreparedTerrain,
     all on one grid) as trials of one MuJoCo Warp batch of at most ``worlds`` worlds (default
-    ``[sim.mujoco_warp] worlds``), each trial as offroadbench.sim.trial.runner.drive_mission drives it."""
+    ``[sim.mujoco_warp] worlds``), each trial as offroadbench.sim.trial.runner.drive_mission drives it.
+    ``settings``: one TrialSettings for all, or one per prepared terrain (the study's cells: they may
+    differ in all but the vehicle and the physics, which the batch's one model fixes)."""
     from offroadbench.errors import InputError
     from offroadbench.sim.trial.runner import drive_mission
 
     prepared = list(prepared)
-    sims = {p.sim_for(settings.sim) for p in prepared}
-    if len(sims) != 1:
-        raise InputError("engine 'mujoco_warp': one batch's terrains must name the same gravity and soil")
+    per = list(settings) if isinstance(settings, (list, tuple)) else [settings] * len(prepared)
+    sims = {p.sim_for(s.sim) for p, s in zip(prepared, per, strict=True)}
+    if len(sims) != 1 or any(s.vehicle != per[0].vehicle for s in per):
+        raise InputError("engine 'mujoco_warp': one batch's trials must share the vehicle, the physics settings, "
+                         "the gravity and the soil")
     sim = sims.pop()
     cfg = sim.mujoco_warp
     jobs = [(k, i) for k, p in enumerate(prepared) for i in range(len(p.missions))]
     records: list[list[Any]] = [[None] * len(p.missions) for p in prepared]
     if not jobs:
         return BatchRun(records, 0, 0, 0)
-    needs = settings.planner.needs
-    if any("classes" in needs and p.maps is None for p in prepared):
-        raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
-    model = BatchModel([p.hm for p in prepared], settings.vehicle, sim)
+    for p, s in zip(prepared, per, strict=True):
+        if "classes" in s.planner.needs and p.maps is None:
+            raise InputError(f"planner {s.planner.name!r} needs the terrain's class map; prepare the terrain first")
+    model = BatchModel([p.hm for p in prepared], per[0].vehicle, sim)
     n = min(len(jobs), worlds or cfg.worlds)
     batch = WarpBatch(model, [jobs[w][0] for w in range(n)], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax)
     sched = Lockstep(batch)
@@ -149,11 +153,11 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
                 if not queue:
                     return
                 k, i = queue.pop()
-            p = prepared[k]
+            p, s = prepared[k], per[k]
             view = WorldView(batch, w, k, sched.wait)
             try:
-                rec = drive_mission(view, p.missions[i], settings=settings,
-                                    classes=p.maps.closed if "classes" in needs else None)
+                rec = drive_mission(view, p.missions[i], settings=s,
+                                    classes=p.maps.closed if "classes" in s.planner.needs else None)
             except (KeyboardInterrupt, SystemExit):
                 raise
             except Exception as exc:  # noqa: BLE001 - the trial's outcome is its fault
