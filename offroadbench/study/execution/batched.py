@@ -37,9 +37,12 @@ class BatchedExecutor:
     """Run a study's trials as batches of a batched engine, in this process (``workers`` unused:
     the engine's device does the parallel work)."""
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+    def __init__(self, workers: int | None = None, scheduler: str | None = None,
+                 trial_timeout_s: float | None = None) -> None:
         if scheduler:
             raise InputError("--scheduler is only for --executor dask")
+        if trial_timeout_s is not None:
+            raise InputError("--trial-timeout-s is not for --executor batched (a batch's trials end together)")
         self.workers = 1
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
