@@ -70,12 +70,10 @@ class Lockstep:
             finally:
                 with self._lock:
                     self._running -= 1
-                    self._done += 1
                     self.batch.ctrl[w] = 0.0  # an idle world stands still
                     if self._running == 0:
                         self._all_waiting.notify()
 
-        self._done = 0
         self._running = len(slots)
         threads = [threading.Thread(target=body, args=(w, fn), daemon=True) for w, fn in enumerate(slots)]
         for t in threads:
