@@ -155,7 +155,7 @@ MUJOCO_BYTES_PER_CELL = 5
 #: wheels) and its compiled collision functions, bytes
 MUJOCO_ARENA_BYTES = 20 * 2**20
 #: engines :func:`world_bytes` knows (offroadbench.sim.engine.ENGINES)
-WORLD_ENGINES = ("pybullet", "mujoco")
+WORLD_ENGINES = ("pybullet", "mujoco", "mujoco_warp")
 
 
 def world_bytes(rows: int, cols: int, tile_cells: int, engine: str = "pybullet", numba: bool | None = None) -> int:
@@ -164,7 +164,7 @@ def world_bytes(rows: int, cols: int, tile_cells: int, engine: str = "pybullet",
     heightfield); on ``mujoco`` (which has one height field whatever ``tile_cells``) with numba's
     compiled kernels when ``numba`` (None: when numba is installed)."""
     cells = int(rows) * int(cols)
-    if engine == "mujoco":
+    if engine in ("mujoco", "mujoco_warp"):  # the batched engine's host model is the MuJoCo engine's
         if numba is None:
             import importlib.util
 

@@ -108,7 +108,11 @@ def test_importing_leaves_pybullet_and_matplotlib_backend_alone(module):
 
 
 #: top-level packages of physics engines -> the engine they belong to
-ENGINE_PACKAGES = {"pybullet": "pybullet", "pybullet_data": "pybullet", "pybullet_envs": "pybullet", "mujoco": "mujoco"}
+ENGINE_PACKAGES = {"pybullet": "pybullet", "pybullet_data": "pybullet", "pybullet_envs": "pybullet", "mujoco": "mujoco",
+                   "mujoco_warp": "mujoco_warp", "warp": "mujoco_warp"}
+#: engine packages that may also talk to another engine: the batched MuJoCo Warp engine compiles its
+#: model with MuJoCo (the MuJoCo engine's model, offroadbench.sim.engines.mujoco_warp.model)
+ENGINE_ALSO = {"mujoco_warp": {"mujoco"}}
 #: modules outside the engine packages that may import an engine: the banner guard (it imports
 #: pybullet quietly for the CLI and the study workers)
 ENGINE_EXCEPTIONS = {"offroadbench.sim._banner": {"pybullet"}}
@@ -144,7 +148,7 @@ def _allowed_engines(module: str) -> set[str]:
     """The engines ``module`` may talk to: its own, inside ``offroadbench.sim.engines.<engine>``."""
     parts = module.split(".")
     if parts[:3] == ["offroadbench", "sim", "engines"] and len(parts) > 3 and parts[3] in ENGINE_PACKAGES.values():
-        return {parts[3]}
+        return {parts[3]} | ENGINE_ALSO.get(parts[3], set())
     return ENGINE_EXCEPTIONS.get(module, set())
 
 
@@ -170,7 +174,8 @@ def test_the_engine_detector_sees_function_level_imports_and_client_ids():
 def test_only_each_engine_package_talks_to_its_engine():
     """The engine boundary (issues 19, 35): only modules under ``sim/engines/pybullet/`` import
     pybullet or use a physics client id, only modules under ``sim/engines/mujoco/`` import mujoco
-    (the banner guard aside), at any level; and each engine package does talk to its engine (the
+    (and ``sim/engines/mujoco_warp/``, which also compiles its model with it), only those under
+    ``sim/engines/mujoco_warp/`` import mujoco_warp or warp (the banner guard aside), at any level; and each engine package does talk to its engine (the
     rule is not vacuous)."""
     offenders = []
     used: dict[str, set[str]] = {}
@@ -182,7 +187,7 @@ def test_only_each_engine_package_talks_to_its_engine():
             used.setdefault(engine, set()).add(m)
     assert offenders == []
     assert {m.split(".")[3] for e in used for m in used[e] if m.startswith("offroadbench.sim.engines.")} == {
-        "pybullet", "mujoco"}
+        "pybullet", "mujoco", "mujoco_warp"}
 
 
 def test_print_only_in_cli():

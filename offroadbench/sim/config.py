@@ -14,6 +14,7 @@ from offroadbench.errors import InputError
 from offroadbench.navigation.rules import FailureRules  # noqa: F401  (re-exported: a study's [rules] table)
 from offroadbench.sim.engine import ENGINES, TYRE_MODELS, engine_capabilities
 from offroadbench.sim.engines.mujoco.settings import MuJoCoConfig
+from offroadbench.sim.engines.mujoco_warp.settings import MuJoCoWarpConfig
 
 __all__ = ["SimConfig", "ControllerConfig", "FailureRules", "TYRE_MODELS", "EARTH_GRAVITY_M_S2", "tile_spans"]
 
@@ -86,6 +87,9 @@ class SimConfig:
     Both run the same trial, tyre model, telemetry and failure rules."""
     mujoco: MuJoCoConfig = MuJoCoConfig()
     """The MuJoCo engine's own settings (the ``[sim.mujoco]`` table; the other engines ignore it)."""
+    mujoco_warp: MuJoCoWarpConfig = MuJoCoWarpConfig()
+    """The batched MuJoCo Warp engine's own settings (the ``[sim.mujoco_warp]`` table: device, worlds
+    per batch, contact buffers; the other engines ignore it). Its model is ``[sim.mujoco]``'s."""
 
     def __post_init__(self) -> None:
         check_int(self, "physics_rate_hz", self.physics_rate_hz, lo=30, hi=2000)

@@ -169,6 +169,10 @@ class EngineCapabilities:
     settings: tuple[str, ...] = ()
     """The SimConfig keys that this engine alone reads (its own table, e.g. ``mujoco`` for
     ``[sim.mujoco]``, or keys of ``[sim]``); the other engines ignore them."""
+    batch_module: str | None = None
+    """Module whose ``drive_terrain_batched(prepared, settings, progress=...)`` drives a terrain's
+    missions as one batch of worlds (offroadbench.sim.trial.pipeline.drive_terrain uses it in place
+    of one world per mission); None: the engine runs one world at a time."""
 
     def soil_rig(self) -> Callable[..., tuple[float, float, float]]:
         """The engine's ``run_rig`` (imports the engine); an InputError where it has none."""
@@ -205,6 +209,8 @@ ENGINES.add("pybullet", _lazy("offroadbench.sim.engines.pybullet.world", "World"
                               "offroadbench.sim.engines.pybullet"))
 ENGINES.add("mujoco", _lazy("offroadbench.sim.engines.mujoco.world", "MuJoCoWorld", "mujoco", "mujoco",
                             "offroadbench.sim.engines.mujoco"))
+ENGINES.add("mujoco_warp", _lazy("offroadbench.sim.engines.mujoco_warp.world", "WarpWorld", "mujoco_warp", "warp",
+                                 "offroadbench.sim.engines.mujoco_warp"))
 
 
 def engine_capabilities(name: str) -> EngineCapabilities:

@@ -128,15 +128,28 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
 
 def drive_terrain(prepared: PreparedTerrain, settings: TrialSettings, *,
                   progress: ProgressFn | None = None) -> Iterator[Any]:
-    """Drive every prepared mission in one world of ``sim.engine`` (offroadbench.sim.engine.open_world); yield one TrialRecord per mission as it finishes."""
+    """Drive every prepared mission in one world of ``sim.engine`` (offroadbench.sim.engine.open_world),
+    or, on an engine that declares a ``batch_module`` (``mujoco_warp``), as one batch of worlds; yield
+    one TrialRecord per mission, in order, as it finishes."""
     from offroadbench.sim.trial.runner import drive_mission
-    from offroadbench.sim.engine import open_world
+    from offroadbench.sim.engine import engine_capabilities, open_world
 
     needs = settings.planner.needs
     if "classes" in needs and prepared.maps is None:
         raise InputError(f"planner {settings.planner.name!r} needs the terrain's class map; prepare the terrain first")
     classes = prepared.maps.closed if "classes" in needs else None
     n = len(prepared.missions)
+    batched = engine_capabilities(settings.sim.engine).batch_module
+    if batched is not None:  # the engine drives the terrain's missions as one batch of worlds
+        import importlib
+
+        try:
+            module = importlib.import_module(batched)
+        except ModuleNotFoundError as exc:
+            raise InputError(f"engine {settings.sim.engine!r} needs the {exc.name} package, which is not installed "
+                             f"(see the engine's extra in pyproject.toml)") from None
+        yield from module.drive_terrain_batched(prepared, settings, progress=progress)
+        return
     with open_world(prepared.hm, settings.vehicle, prepared.sim_for(settings.sim),
                     soil_map=prepared.soil_map_for(settings.sim)) as world:
         for i, mission in enumerate(prepared.missions):

@@ -11,6 +11,9 @@ executor, a task's results depend only on the task, so all of them give the same
   ``trial_timeout_s`` a worker that sends nothing for that long (a terrain build, or one trial,
   that hangs) is killed and replaced, the trial is stored as a fault and the study goes on.
 * ``inline``: runs in the calling process (debugging, profiling).
+* ``batched``: for a batched engine (``mujoco_warp``), every pending terrain built in the calling
+  process and the trials of all terrains that can share a model run as one batch of worlds
+  (offroadbench.study.execution.batched); other engines' tasks run as ``inline``.
 * ``dask``: one Dask task per terrain on a ``distributed`` cluster (``scheduler`` address, or a
   ``LocalCluster`` of ``workers`` processes when no address is given). A task's trials arrive
   when its terrain is done, so a killed coordinator loses the terrains in flight. Killed or
@@ -30,8 +33,10 @@ from offroadbench.study.execution.tasks import TerrainTask, TrialFn, run_terrain
 from offroadbench.study.execution.dask import DaskExecutor, TrialTimeout, dask_task  # noqa: F401  (dask_task re-exported)
 from offroadbench.study.execution.common import Handle, MAX_TRIAL_TIMEOUT_S, check_trial_timeout
 from offroadbench.study.execution.local import LocalExecutor
+from offroadbench.study.execution.batched import BatchedExecutor
 
-__all__ = ["EXECUTORS", "MAX_TRIAL_TIMEOUT_S", "check_trial_timeout", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor"]
+__all__ = ["EXECUTORS", "MAX_TRIAL_TIMEOUT_S", "check_trial_timeout", "get_executor", "StudyError", "TrialTimeout", "InlineExecutor", "LocalExecutor", "DaskExecutor",
+           "BatchedExecutor"]
 
 
 class InlineExecutor:
@@ -52,6 +57,7 @@ EXECUTORS: Registry[type] = Registry("executor", entry_point_group="offroadbench
 EXECUTORS.register("local", LocalExecutor)
 EXECUTORS.register("inline", InlineExecutor)
 EXECUTORS.register("dask", DaskExecutor)
+EXECUTORS.register("batched", BatchedExecutor)
 
 
 def get_executor(name: str, workers: int | None = None, scheduler: str | None = None, **options):

@@ -1,0 +1,171 @@
+"""A batch of worlds on MuJoCo Warp: one vehicle, each world on its own terrain, stepped together.
+
+:class:`WarpBatch` puts the host model (offroadbench.sim.engines.mujoco_warp.model.BatchModel: K
+height fields) on a Warp device (``[sim.mujoco_warp] device``) with ``geom_dataid`` batched per
+world, so world w's terrain geom reads terrain ``terrain_of[w]``. A trial step of every world is
+``substeps`` MuJoCo steps, each ``step1``, the tyre kernel (offroadbench.sim.engines.mujoco_warp.
+kernels.apply_tyres), ``step2`` and the contact read: the sequence of the MuJoCo engine's
+``MuJoCoTyres._step_compiled`` with ``tyres_each_substep``. The host talks to the device once per
+:meth:`advance` (the commands and any resets go down, the state comes back in :attr:`host`), not
+per MuJoCo step.
+
+Worlds reset individually (:meth:`reset`): MuJoCo Warp's ``reset_data`` with a mask, then the new
+pose written into that world's ``qpos`` (velocities zero) and its tyre state forgotten, as the
+MuJoCo engine's ``mj_resetData`` before every spawn.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import warp as wp
+
+wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no banner, no line per kernel module loaded
+import mujoco_warp as mjw  # noqa: E402
+
+from offroadbench.errors import InputError
+from offroadbench.sim.engines.mujoco_warp import kernels
+from offroadbench.sim.engines.mujoco_warp.model import BatchModel
+
+__all__ = ["WarpBatch"]
+
+
+class HostState:
+    """The batch's state as last read to the host: every world's ``qpos`` and ``qvel`` (float64
+    copies of the device's float32), its wheels' normal loads (N) and deepest wheel penetration (m)."""
+
+    def __init__(self, nworld: int, nq: int, nv: int, nwheel: int) -> None:
+        self.qpos = np.zeros((nworld, nq))
+        self.qvel = np.zeros((nworld, nv))
+        self.loads = np.zeros((nworld, nwheel))
+        self.penetration = np.zeros(nworld)
+
+
+class WarpBatch:
+    """``nworld`` worlds of ``model`` on Warp device ``device`` (``cpu`` or ``cuda[:n]``), world w on
+    terrain ``terrain_of[w]`` (an index into ``model.terrains``)."""
+
+    def __init__(self, model: BatchModel, terrain_of, device: str = "cpu", nconmax: int = 64,
+                 njmax: int = 256) -> None:
+        wp.init()
+        self.model = model
+        found = [str(d) for d in wp.get_devices()]
+        if device not in found and not (device == "cuda" and any(d.startswith("cuda") for d in found)):
+            raise InputError(f"[sim.mujoco_warp] device = {device!r}: Warp finds no such device here "
+                             f"(available: {', '.join(found)})")
+        self.device = wp.get_device(device)
+        self.nworld = nworld = len(terrain_of)
+        m = model.model
+        lay = model.layout()
+        self.nwheel = nwheel = len(lay["wheel_bodies"])
+        self.n_left = lay["n_left"]
+        self.substeps = model.substeps
+        self.terrain_of = np.asarray(terrain_of, dtype=np.int32)
+        with wp.ScopedDevice(self.device):
+            self.m = mjw.put_model(m, batch_sizes={"geom_dataid": nworld})
+            dataid = self.m.geom_dataid.numpy()
+            dataid[:, lay["terrain_geom"]] = self.terrain_of
+            self.m.geom_dataid.assign(dataid)
+            self.d = mjw.make_data(m, nworld=nworld, nconmax=nconmax, njmax=njmax)
+            self.state = wp.zeros((nworld, nwheel, kernels.NCOL), dtype=wp.float64)
+            self.touch = wp.zeros((nworld, nwheel), dtype=wp.int32)
+            self.held = wp.zeros((nworld, nwheel), dtype=wp.int32)
+            self.pen = wp.zeros(nworld, dtype=wp.float64)
+            self.push = wp.zeros(nworld, dtype=wp.vec3)
+            self.wheel_body = wp.array(lay["wheel_bodies"], dtype=wp.int32)
+            self.wheel_qvel = wp.array(lay["wheel_qvel"], dtype=wp.int32)
+            self.wheel_axis = wp.array(np.asarray(lay["wheel_axes"], dtype=np.float64), dtype=wp.vec3d)
+            self.consts = wp.array(np.array([lay["mu"], lay["dt"], lay["k"], lay["c"]]), dtype=wp.float64)
+            self.geom_slot = wp.array(lay["geom_slot"], dtype=wp.int32)
+            self.mask = wp.zeros(nworld, dtype=wp.int32)
+        self.chassis = lay["chassis"]
+        self.terrain_geom = lay["terrain_geom"]
+        self.ctrl = np.zeros((nworld, m.nu))
+        self.pushed = np.zeros((nworld, 3))
+        self._resets: dict[int, np.ndarray] = {}
+        self.host = HostState(nworld, m.nq, m.nv, nwheel)
+        self.steps = 0
+        """MuJoCo steps taken by every world so far (a world-step count is this times nworld)."""
+
+    # ------------------------------------------------------------------ host -> device
+    def reset(self, world: int, qpos: np.ndarray, terrain: int) -> None:
+        """Reset world ``world`` to rest at ``qpos`` on terrain ``terrain`` (before the next :meth:`advance`)."""
+        self._resets[world] = np.asarray(qpos, dtype=float)
+        self.terrain_of[world] = terrain
+        self.host.qpos[world] = qpos
+        self.host.qvel[world] = 0.0
+        self.host.loads[world] = 0.0
+        self.host.penetration[world] = 0.0
+
+    def _apply_resets(self) -> None:
+        if not self._resets:
+            return
+        mask = np.zeros(self.nworld, dtype=np.int32)
+        mask[list(self._resets)] = 1
+        with wp.ScopedDevice(self.device):
+            self.mask.assign(mask)
+            dataid = self.m.geom_dataid.numpy()
+            dataid[:, self.terrain_geom] = self.terrain_of
+            self.m.geom_dataid.assign(dataid)
+            mjw.reset_data(self.m, self.d, wp.array(mask.astype(bool), dtype=bool))
+            qpos = self.d.qpos.numpy()
+            for w, q in self._resets.items():
+                qpos[w] = q
+            self.d.qpos.assign(qpos)
+            wp.launch(kernels.reset_worlds, dim=(self.nworld, self.nwheel),
+                      inputs=[self.mask, self.state, self.touch, self.held, self.pen])
+        self._resets.clear()
+
+    # ------------------------------------------------------------------ stepping
+    def advance(self, trial_steps: int) -> None:
+        """Every world ``trial_steps`` trial steps ahead (``substeps`` MuJoCo steps each) with the
+        commands in :attr:`ctrl` and :attr:`pushed`, then the state read into :attr:`host`."""
+        self._apply_resets()
+        d, m = self.d, self.m
+        with wp.ScopedDevice(self.device):
+            d.ctrl.assign(self.ctrl.astype(np.float32))
+            self.push.assign(self.pushed.astype(np.float32))
+            con = d.contact
+            dim = (self.nworld, self.nwheel)
+            for _ in range(trial_steps * self.substeps):
+                mjw.step1(m, d)
+                wp.launch(kernels.apply_tyres, dim=dim,
+                          inputs=[d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body,
+                                  self.wheel_qvel, self.wheel_axis, self.consts, self.push, self.state,
+                                  self.touch, self.held])
+                mjw.step2(m, d)
+                wp.launch(kernels.clear_sums, dim=dim, inputs=[self.state, self.touch, self.pen])
+                wp.launch(kernels.read_contacts, dim=d.naconmax,
+                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.efc_address,
+                                  d.efc.force, self.terrain_geom, self.geom_slot, self.state, self.touch, self.pen])
+                wp.launch(kernels.release_untouched, dim=dim, inputs=[self.touch, self.held])
+            self.steps += trial_steps * self.substeps
+            host = self.host
+            host.qpos[:] = d.qpos.numpy()
+            host.qvel[:] = d.qvel.numpy()
+            host.loads[:] = self.state.numpy()[:, :, kernels.LOAD]
+            host.penetration[:] = self.pen.numpy()
+
+    def base_state(self, w: int) -> tuple[tuple, tuple, tuple, tuple]:
+        """World ``w``'s (centre-of-mass position, quaternion xyzw, linear velocity, angular
+        velocity) in the world frame, from :attr:`host`: MuJoCoWorld.base_state's arithmetic."""
+        q = self.host.qpos[w].tolist()
+        v = self.host.qvel[w].tolist()
+        qw, x, y, z = q[3:7]
+        n = math.sqrt(qw * qw + x * x + y * y + z * z)  # float32 storage: renormalised in float64
+        qw, x, y, z = qw / n, x / n, y / n, z / n
+        r = rotation_matrix((x, y, z, qw))
+        wb = v[3:6]
+        ang = (r[0] * wb[0] + r[1] * wb[1] + r[2] * wb[2],
+               r[3] * wb[0] + r[4] * wb[1] + r[5] * wb[2],
+               r[6] * wb[0] + r[7] * wb[1] + r[8] * wb[2])
+        return (q[0], q[1], q[2]), (x, y, z, qw), (v[0], v[1], v[2]), ang
+
+
+def rotation_matrix(quat: tuple) -> tuple:
+    """Row-major 3x3 rotation matrix (body -> world) of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = quat
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+            2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+            2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y))

@@ -1,0 +1,155 @@
+"""The host half of the batched engine: one MuJoCo model of one vehicle holding K terrains.
+
+:class:`BatchModel` is the MuJoCo engine's own world (offroadbench.sim.engines.mujoco.world.MuJoCoWorld:
+the same URDF -> MJCF translation, contact tuning, servo gains and measured geometry) built on
+an *envelope* of the batch's terrains, with one height field per terrain in its assets. The
+terrains must share their grid (rows, columns, cell size); the envelope spans the lowest and the
+highest height of them all, and every height field is written as ``(z - z_low) / (z_high - z_low)``
+in float32 with that one size, so the one terrain geom (placed at ``z_low``) shows terrain k
+wherever the geom's ``geom_dataid`` is k: MuJoCo Warp batches that field per world
+(``put_model(m, batch_sizes={"geom_dataid": nworld})``).
+
+The model stays a CPU MuJoCo model: its data is used only for kinematics at a spawn (where the
+vehicle is put down clear of its own terrain, as MuJoCoWorld.spawn does) and by nothing else.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import xml.etree.ElementTree as ET
+
+import mujoco
+import numpy as np
+
+from offroadbench.errors import InputError
+from offroadbench.heightmap import Heightmap
+from offroadbench.sim.config import SimConfig
+from offroadbench.sim.engines.base import spawn_height_m
+from offroadbench.sim.engines.mujoco.world import MuJoCoWorld
+from offroadbench.sim.trial.vehicle import VehicleSpec
+from offroadbench.sim.tyre_laws.coulomb import bristle_constants
+
+__all__ = ["BatchModel", "envelope"]
+
+
+def envelope(terrains: list[Heightmap]) -> Heightmap:
+    """A Heightmap of the terrains' common grid whose heights span the lowest and highest of them
+    all (the size every height field of the batch model is given); an InputError if the grids differ."""
+    first = terrains[0]
+    for hm in terrains[1:]:
+        if (hm.rows, hm.cols, hm.cell_size_m) != (first.rows, first.cols, first.cell_size_m):
+            raise InputError(f"engine 'mujoco_warp': one batch's terrains must share a grid; got {first.rows}x"
+                             f"{first.cols} at {first.cell_size_m} m and {hm.rows}x{hm.cols} at {hm.cell_size_m} m")
+    lo = min(hm.z_min_m for hm in terrains)
+    hi = max(hm.z_max_m for hm in terrains)
+    z = np.full((first.rows, first.cols), lo)
+    z[0, 0] = hi if hi > lo else lo + 1.0
+    return Heightmap(z=z, cell_size_m=first.cell_size_m)
+
+
+class BatchModel(MuJoCoWorld):
+    """The MuJoCo model of ``vehicle`` with one height field per terrain of ``terrains`` (same grid).
+
+    ``hfield_ids[k]`` is terrain k's height field; :meth:`spawn_qpos` puts the vehicle down on
+    one of them. The MuJoCo engine's own collision functions and tyre loops are built but never
+    stepped here (MuJoCo Warp steps the model)."""
+
+    def __init__(self, terrains: list[Heightmap], vehicle: VehicleSpec | str, sim: SimConfig) -> None:
+        self.terrains = list(terrains)
+        super().__init__(envelope(self.terrains), vehicle, sim)
+        if self._articulated:
+            raise InputError(f"engine 'mujoco_warp': vehicle {self.spec.name!r} has steering or suspension joints; "
+                             "only vehicles whose wheels hang straight off the chassis are supported")
+        self.hfield_ids = tuple(range(len(self.terrains)))
+        self.lock = threading.Lock()
+        """Held while the host MuJoCo data is used (the batch's slots spawn from their own threads)."""
+
+    def _mjcf(self) -> str:
+        """The MuJoCo engine's MJCF with K - 1 more height fields of the same size."""
+        root = ET.fromstring(super()._mjcf())
+        asset = root.find("asset")
+        first = asset.find("hfield")
+        for k in range(1, len(self.terrains)):
+            ET.SubElement(asset, "hfield", {**first.attrib, "name": f"terrain_{k}"})
+        return ET.tostring(root, encoding="unicode")
+
+    def _write_heights(self, block_rows: int = 64) -> None:
+        """Each terrain's heights into its height field, normalised to the envelope (float32)."""
+        m, env = self.model, self.hm
+        lo, span = env.z_min_m, env.relief_m
+        for k, hm in enumerate(self.terrains):
+            adr, cols = int(m.hfield_adr[k]), hm.cols
+            for r0 in range(0, hm.rows, block_rows):
+                block = (hm.z[r0:r0 + block_rows] - lo) / span
+                m.hfield_data[adr + r0 * cols:adr + r0 * cols + block.size] = block.astype(np.float32).ravel()
+
+    def spawn_qpos(self, terrain: int, x_m: float, y_m: float, heading_rad: float, roll_rad: float = 0.0) -> np.ndarray:
+        """The vehicle's joint positions at a spawn on terrain ``terrain``: at (x, y) facing
+        ``heading_rad``, rolled by ``roll_rad``, its lowest point ``sim.spawn_clearance_m`` above
+        the terrain within its reach: MuJoCoWorld.spawn's pose, before the settle."""
+        with self.lock:
+            return self._spawn_qpos(terrain, x_m, y_m, heading_rad, roll_rad)
+
+    def _spawn_qpos(self, terrain: int, x_m: float, y_m: float, heading_rad: float, roll_rad: float) -> np.ndarray:
+        m, d = self.model, self.data
+        hm = self.terrains[terrain]
+        mujoco.mj_resetData(m, d)
+        cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
+        ch, sh = math.cos(0.5 * heading_rad), math.sin(0.5 * heading_rad)
+        d.qpos[0:3] = (x_m, y_m, hm.z_max_m + 10.0)
+        d.qpos[3:7] = (ch * cr, ch * sr, sh * sr, sh * cr)
+        for adr in self._strut_qpos:
+            d.qpos[adr] = self._spring_rest_m
+        mujoco.mj_kinematics(m, d)
+        lows, reach = [], 0.0
+        base = d.xipos[self._chassis].tolist()
+        for g in range(m.ngeom):
+            if g != self._terrain_geom:
+                glo, ghi = self._geom_box(g)
+                lows.append(glo[2])
+                if m.geom_bodyid[g] == self._chassis:
+                    reach = max(reach, 0.5 * math.hypot(ghi[0] - glo[0], ghi[1] - glo[1]))
+        d.qpos[2] = spawn_height_m(hm, x_m, y_m, reach, self.spec.wheel_radius_m, base[2] - min(lows),
+                                   self.sim.spawn_clearance_m)
+        return d.qpos.copy()
+
+    def centre_of_mass_at(self, qpos) -> tuple[float, float, float]:
+        """The whole vehicle's centre of mass at joint positions ``qpos``, m (host kinematics)."""
+        m, d = self.model, self.data
+        with self.lock:
+            d.qpos[:] = qpos
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            return tuple(d.subtree_com[self._chassis].tolist())
+
+    def ray_height(self, terrain: int, x_m: float, y_m: float) -> float:
+        """Height of terrain ``terrain``'s collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
+        m = self.model
+        with self.lock:
+            return self._ray_height(m, terrain, x_m, y_m)
+
+    def _ray_height(self, m, terrain: int, x_m: float, y_m: float) -> float:
+        m.geom_dataid[self._terrain_geom] = self.hfield_ids[terrain]
+        try:
+            mujoco.mj_kinematics(m, self.data)
+            top = self.terrains[terrain].z_max_m + 1.0
+            dist = mujoco.mj_rayHfield(m, self.data, self._terrain_geom, np.array([x_m, y_m, top]),
+                                       np.array([0.0, 0.0, -1.0]))
+        finally:
+            m.geom_dataid[self._terrain_geom] = self.hfield_ids[0]
+        return float("nan") if dist < 0 else top - dist
+
+    def layout(self) -> dict:
+        """What the device kernels need of the model: wheel bodies, their spin dofs' qvel addresses
+        and axes (chassis frame), the chassis body, the terrain geom, each geom's wheel slot, the
+        number of left wheels, and the tyre constants (friction coefficient, bristle step s,
+        stiffness N/m, damping N s/m) of the MuJoCo engine's CoulombBristles."""
+        k, c = bristle_constants(self._mass_kg / len(self._wheel_bodies), self.dt_s)
+        dt = self._dt_mj if self.contact.tyres_each_substep else self.dt_s
+        slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
+        return {"wheel_bodies": list(self._wheel_bodies), "wheel_qvel": list(self._wheel_qvel),
+                "wheel_axes": [list(a) for a in self._wheel_axis], "chassis": self._chassis,
+                "terrain_geom": self._terrain_geom, "geom_slot": slot, "n_left": self._n_left,
+                "mu": self.spec.wheel_friction * self.sim.terrain_friction, "dt": dt, "k": k, "c": c}
+

@@ -1,0 +1,178 @@
+"""Many trials at once: the trial runner's own per-tick code in every world of a MuJoCo Warp batch,
+the physics of all worlds advanced together once per trial tick.
+
+Each world of the batch is a slot: a thread that takes the next pending trial, drives it with
+offroadbench.sim.trial.runner.drive_mission on its :class:`~offroadbench.sim.engines.mujoco_warp.world.WorldView`
+(the spawn, planner, pure pursuit, speed loop, failure rules, telemetry and metrics: the very code
+and row definitions of the one-world engines), and takes the next when it ends. A view only counts
+its physics steps; when the trial reads the state (at its 20 Hz telemetry and control ticks) the
+slot waits. Once every busy slot waits, :class:`Lockstep` advances the whole batch by the fewest
+steps any of them waits for, reads the state to the host once, and wakes the slots whose steps are
+done. The batch is touched by the main thread only while every slot waits; the woken slots run
+side by side until they wait again, each reading and writing only its own world's rows (the host
+MuJoCo data they share for a spawn's kinematics is behind BatchModel.lock). So a trial's row does
+not depend on which slot ran it, on the other trials of the batch, on the threads' timing or on
+the number of worlds (on Warp's CPU device: bit for bit; offroadbench.sim.engines.mujoco_warp.kernels
+on the order of the sums).
+
+A trial that raises (TrialFault: thrown while settling; PluginError: the planner failed) gives its
+exception in place of its record; the other trials go on.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import Any, Iterator, Sequence
+
+from offroadbench.progress import ProgressFn, report
+from offroadbench.sim.engines.mujoco_warp.batch import WarpBatch
+from offroadbench.sim.engines.mujoco_warp.model import BatchModel
+from offroadbench.sim.engines.mujoco_warp.world import WorldView
+
+__all__ = ["BatchRun", "Lockstep", "drive_batch", "drive_terrain_batched"]
+
+
+class Lockstep:
+    """The scheduler of a batch's slots: :meth:`run` starts one thread per slot and advances the
+    batch whenever every busy slot waits for its counted steps (:meth:`wait`)."""
+
+    def __init__(self, batch: WarpBatch) -> None:
+        self.batch = batch
+        self._lock = threading.Lock()
+        self._all_waiting = threading.Condition(self._lock)
+        self._wake = [threading.Event() for _ in range(batch.nworld)]
+        self._waiting: dict[int, WorldView] = {}
+        self._running = 0
+        self.advances = 0
+        """Times the batch was advanced (each one host exchange)."""
+
+    def wait(self, view: WorldView) -> None:
+        """Called in a slot's thread: block until the batch has run ``view``'s counted steps."""
+        event = self._wake[view.world]
+        with self._lock:
+            self._waiting[view.world] = view
+            self._running -= 1
+            if self._running == 0:
+                self._all_waiting.notify()
+        event.wait()
+        event.clear()
+
+    def run(self, slots: Sequence[Any]) -> None:
+        """Run ``slots`` (callables taking the slot's world index) to the end, one thread each."""
+        errors: list[BaseException] = []
+
+        def body(w: int, fn) -> None:
+            try:
+                fn(w)
+            except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+                errors.append(exc)
+            finally:
+                with self._lock:
+                    self._running -= 1
+                    self.batch.ctrl[w] = 0.0  # an idle world stands still
+                    if self._running == 0:
+                        self._all_waiting.notify()
+
+        self._running = len(slots)
+        threads = [threading.Thread(target=body, args=(w, fn), daemon=True) for w, fn in enumerate(slots)]
+        for t in threads:
+            t.start()
+        with self._lock:
+            while True:
+                self._all_waiting.wait_for(lambda: self._running == 0)
+                if not self._waiting:
+                    break
+                steps = min(v.pending for v in self._waiting.values())
+                self.batch.advance(steps)
+                self.advances += 1
+                for w, v in list(self._waiting.items()):
+                    v.pending -= steps
+                    if v.pending == 0:
+                        del self._waiting[w]
+                        self._running += 1
+                        self._wake[w].set()
+        for t in threads:
+            t.join()
+        if errors:
+            raise errors[0]
+
+
+@dataclass(frozen=True)
+class BatchRun:
+    """What :func:`drive_batch` returns: per terrain, per mission (in order), the TrialRecord or the
+    exception the trial raised; and the batch's counts."""
+
+    records: list[list[Any]]
+    worlds: int
+    """Worlds in the batch."""
+    world_steps: int
+    """MuJoCo steps summed over the worlds (idle worlds included), what the batch computed."""
+    advances: int
+    """Host exchanges (one per lock-step advance)."""
+
+
+def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = None,
+                progress: ProgressFn | None = None) -> BatchRun:
+    """Drive every mission of every prepared terrain (offroadbench.sim.trial.pipeline.PreparedTerrain,
+    all on one grid) as trials of one MuJoCo Warp batch of at most ``worlds`` worlds (default
+    ``[sim.mujoco_warp] worlds``), each trial as offroadbench.sim.trial.runner.drive_mission drives it.
+    ``settings``: one TrialSettings for all, or one per prepared terrain (the study's cells: they may
+    differ in all but the vehicle and the physics, which the batch's one model fixes)."""
+    from offroadbench.errors import InputError
+    from offroadbench.sim.trial.runner import drive_mission
+
+    prepared = list(prepared)
+    per = list(settings) if isinstance(settings, (list, tuple)) else [settings] * len(prepared)
+    sims = {p.sim_for(s.sim) for p, s in zip(prepared, per, strict=True)}
+    if len(sims) != 1 or any(s.vehicle != per[0].vehicle for s in per):
+        raise InputError("engine 'mujoco_warp': one batch's trials must share the vehicle, the physics settings, "
+                         "the gravity and the soil")
+    sim = sims.pop()
+    cfg = sim.mujoco_warp
+    jobs = [(k, i) for k, p in enumerate(prepared) for i in range(len(p.missions))]
+    records: list[list[Any]] = [[None] * len(p.missions) for p in prepared]
+    if not jobs:
+        return BatchRun(records, 0, 0, 0)
+    for p, s in zip(prepared, per, strict=True):
+        if "classes" in s.planner.needs and p.maps is None:
+            raise InputError(f"planner {s.planner.name!r} needs the terrain's class map; prepare the terrain first")
+    model = BatchModel([p.hm for p in prepared], per[0].vehicle, sim)
+    n = min(len(jobs), worlds or cfg.worlds)
+    batch = WarpBatch(model, [jobs[w][0] for w in range(n)], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax)
+    sched = Lockstep(batch)
+    queue = list(reversed(jobs))
+    taking = threading.Lock()
+    done = [0]
+
+    def slot(w: int) -> None:
+        while True:
+            with taking:
+                if not queue:
+                    return
+                k, i = queue.pop()
+            p, s = prepared[k], per[k]
+            view = WorldView(batch, w, k, sched.wait)
+            try:
+                rec = drive_mission(view, p.missions[i], settings=s,
+                                    classes=p.maps.closed if "classes" in s.planner.needs else None)
+            except (KeyboardInterrupt, SystemExit):
+                raise
+            except Exception as exc:  # noqa: BLE001 - the trial's outcome is its fault
+                rec = exc
+            records[k][i] = rec
+            done[0] += 1
+            report(progress, done[0], len(jobs))
+
+    sched.run([slot] * n)
+    return BatchRun(records, n, batch.steps * n, sched.advances)
+
+
+def drive_terrain_batched(prepared: Any, settings: Any, *, progress: ProgressFn | None = None) -> Iterator[Any]:
+    """offroadbench.sim.trial.pipeline.drive_terrain on this engine: the terrain's missions as one
+    batch; one TrialRecord per mission in order, a trial's exception raised at its turn."""
+    run = drive_batch([prepared], settings, progress=progress)
+    for rec in run.records[0]:
+        if isinstance(rec, BaseException):
+            raise rec
+        yield rec

@@ -1,0 +1,103 @@
+"""The ``batched`` executor: a study's trials across terrains as batches of worlds of a batched engine.
+
+For an engine that declares a ``batch_module`` (offroadbench.sim.engine.EngineCapabilities; the
+``mujoco_warp`` engine), the executor builds every pending terrain in this process (TerrainBuilt
+messages, as offroadbench.study.execution.tasks.run_terrain sends them), groups the terrains whose
+trials can share one model (the same vehicle and physics, the same grid), and drives each group's
+missions as one batch (the module's ``drive_batch``): a paper study's 60 terrains x 20 missions
+are then one batch of 1,200 worlds, where the ``local`` executor gives the engine one terrain's 20
+at a time. Every trial's row is the trial runner's, so the study's table is the one ``inline``
+gives on the same engine. A trial that could not give an outcome (TrialFault, PlannerRefusal) is
+a TrialFaulted message, as under the other executors.
+
+Tasks on an engine without a batch module, and runs with a stand-in ``trial_fn``, run one task at
+a time in this process (the ``inline`` executor). The batch's messages arrive when its batch ends:
+a study stopped mid-batch keeps none of that batch's trials (resume runs them again).
+"""
+
+from __future__ import annotations
+
+import importlib
+import time
+from typing import Sequence
+
+from offroadbench.errors import InputError, TrialFault
+from offroadbench.navigation.missions import NoMissionError
+from offroadbench.navigation.problem import PlannerRefusal
+from offroadbench.sim.engine import engine_capabilities
+from offroadbench.study.execution.common import Handle
+from offroadbench.study.execution.tasks import (NO_MISSION_FAULT, NO_MISSION_KIND, REFUSED_FAULT, REFUSED_KIND,
+                                                TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn,
+                                                keeps_telemetry, prepare_cell, run_terrain)
+
+__all__ = ["BatchedExecutor"]
+
+
+class BatchedExecutor:
+    """Run a study's trials as batches of a batched engine, in this process (``workers`` unused:
+    the engine's device does the parallel work)."""
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None,
+                 trial_timeout_s: float | None = None) -> None:
+        if scheduler:
+            raise InputError("--scheduler is only for --executor dask")
+        if trial_timeout_s is not None:
+            raise InputError("--trial-timeout-s is not for --executor batched (a batch's trials end together)")
+        self.workers = 1
+
+    def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
+        groups: dict[tuple, list] = {}
+        for task in tasks:
+            module = engine_capabilities(task.cell.trial_settings.sim.engine).batch_module
+            if trial_fn is not None or module is None:
+                for msg in run_terrain(task, trial_fn):
+                    handle(msg)
+                continue
+            built = _build(task, handle)
+            if built is None:
+                continue
+            prepared, settings = built
+            key = (module, settings.vehicle.name, prepared.sim_for(settings.sim), prepared.hm.rows, prepared.hm.cols,
+                   prepared.hm.cell_size_m)
+            groups.setdefault(key, []).append((task, prepared, settings))
+        for (module, *_), members in groups.items():
+            run = importlib.import_module(module).drive_batch([p for _, p, _ in members], [s for _, _, s in members])
+            for (task, _, _), records in zip(members, run.records, strict=True):
+                _send(task, records, handle)
+
+
+def _build(task: TerrainTask, handle: Handle):
+    """The task's terrain and missions (its TerrainBuilt sent), or None when no mission can be drawn
+    (its faults sent): run_terrain's first half."""
+    cell = task.cell
+    t0 = time.perf_counter()
+    try:
+        prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    except NoMissionError as exc:
+        reason = NO_MISSION_FAULT + " ".join(str(exc).split())
+        for k, seed in task.missions:
+            handle(TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason, NO_MISSION_KIND))
+        return None
+    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
+    stats["build_s"] = time.perf_counter() - t0
+    handle(TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats))
+    return prepared, cell.trial_settings
+
+
+def _send(task: TerrainTask, records, handle: Handle) -> None:
+    """One message per mission of ``task``: TrialDone for a record, TrialFaulted for a trial that
+    raised TrialFault or PlannerRefusal; any other exception ends the run, as in run_terrain."""
+    cell, seeds = task.cell, dict(task.missions)
+    for (k, _), rec in zip(task.missions, records, strict=True):
+        if isinstance(rec, TrialFault):
+            handle(TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seeds[k], " ".join(str(rec).split())))
+        elif isinstance(rec, PlannerRefusal):
+            handle(TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seeds[k],
+                                REFUSED_FAULT + " ".join(str(rec).split()), REFUSED_KIND))
+        elif isinstance(rec, BaseException):
+            raise rec
+        else:
+            row = rec.result.as_row()
+            kept = ({"telemetry": rec.telemetry, "path_xy": rec.path_xy}
+                    if keeps_telemetry(task.telemetry, bool(row["success"])) else None)
+            handle(TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept))
