@@ -28,7 +28,8 @@ __all__ = [
     "MUJOCO_WORKER_BASE_BYTES", "NUMBA_KERNELS_BYTES", "MUJOCO_BYTES_PER_CELL", "MUJOCO_ARENA_BYTES",
     "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
     "check_memory",
-    "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES", "one_malloc_arena",
+    "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES", "MMAP_THRESHOLD_BYTES",
+    "release_large_blocks",
 ]
 
 
@@ -189,26 +190,30 @@ def workers_that_fit(per_worker_bytes: int) -> int:
     return workers
 
 
+#: allocations from this size up get their own ``mmap`` in a study worker (:func:`release_large_blocks`),
+#: bytes: glibc's initial threshold, held fixed
+MMAP_THRESHOLD_BYTES = 128 * 1024
+#: ``mallopt``'s parameter number of the threshold (glibc's malloc.h)
+_M_MMAP_THRESHOLD = -3
 
-#: ``mallopt``'s parameter number of the arena count limit (glibc's malloc.h: M_ARENA_MAX)
-_M_ARENA_MAX = -8
 
+def release_large_blocks() -> bool:
+    """Make glibc's malloc give every block of :data:`MMAP_THRESHOLD_BYTES` or more back to the
+    system when it is freed (its own ``mmap``), for the rest of this process; False where the C
+    library has no ``mallopt`` (not glibc) or refuses.
 
-def one_malloc_arena() -> bool:
-    """Make every thread of this process allocate from glibc's main malloc arena (``M_ARENA_MAX``
-    = 1) from now on; False where the C library has no ``mallopt`` (not glibc) or refuses.
-
-    A study worker generates each terrain on a pool of threads (offroadbench.terrain.fractal.wm);
-    by default glibc gives each thread an arena of its own, and what a 1009^2 terrain's arrays
-    freed there stays with the worker: a MuJoCo study worker grew from 267 to 345 MB over its first
-    terrains; with one arena it holds 288-308 MB and peaks at 310 MB, at the same CPU time
-    (benchmarks/RESULTS.md, issue 41). Holding the mmap threshold fixed instead returned even more
-    (a 288 MB peak) but faulted every large array in afresh: +0.15-0.2 s of CPU per terrain."""
+    By default glibc raises that threshold to the largest block freed so far (up to 32 MB), so
+    after the first terrain a worker's 1009^2 arrays (8 MB of float64 each) come from the heap,
+    and the heap keeps what they freed: a MuJoCo study worker then grew from 267 to 345 MB over
+    its first terrains and stayed there; with the threshold held, 218 -> 288 MB at its peak
+    (benchmarks/RESULTS.md, issue 41). What it costs: each large array's pages are faulted in
+    afresh (tens of ms per 1009^2 terrain)."""
     import ctypes
 
     try:
-        mallopt = ctypes.CDLL(None).mallopt
+        libc = ctypes.CDLL(None)
+        mallopt = libc.mallopt
     except (OSError, AttributeError):
         return False
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
-    return bool(mallopt(_M_ARENA_MAX, 1))
+    return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES))

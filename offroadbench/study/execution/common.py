@@ -34,14 +34,13 @@ def die_with_parent(parent_pid: int) -> None:
 
 
 def worker_bootstrap() -> None:
-    """What every worker process does first: import pybullet without its banner, and have its
-    threads share one malloc arena (offroadbench.memory.one_malloc_arena: the terrains' thread
-    pools otherwise keep what they freed)."""
-    from offroadbench.memory import one_malloc_arena
+    """What every worker process does first: import pybullet without its banner, and have malloc
+    give a freed terrain's arrays back to the system (offroadbench.memory.release_large_blocks)."""
+    from offroadbench.memory import release_large_blocks
     from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
-    one_malloc_arena()
+    release_large_blocks()
 
 
 def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:
