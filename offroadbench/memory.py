@@ -204,10 +204,11 @@ def release_large_blocks() -> bool:
 
     By default glibc raises that threshold to the largest block freed so far (up to 32 MB), so
     after the first terrain a worker's 1009^2 arrays (8 MB of float64 each) come from the heap,
-    and the heap keeps what they freed: a MuJoCo study worker then grew from 267 to 345 MB over
-    its first terrains and stayed there; with the threshold held, 218 -> 288 MB at its peak
-    (benchmarks/RESULTS.md, issue 41). What it costs: each large array's pages are faulted in
-    afresh (tens of ms per 1009^2 terrain)."""
+    which fragments and keeps what they freed: on the full MuJoCo paper study a worker peaked at
+    404-417 MB (349-410 MB with every thread on one malloc arena, ``M_ARENA_MAX`` = 1); with the
+    threshold held, 284-285 MB (benchmarks/RESULTS.md, issue 41). What it costs: each large
+    array's pages are faulted in afresh, about 0.12 s of CPU per 1009^2 terrain (its generation
+    touches ~165 MB of new pages)."""
     import ctypes
 
     try:
