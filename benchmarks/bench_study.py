@@ -21,7 +21,7 @@ cannot rot); its figures mean nothing.
 ``compare`` runs the paper study cut to ``--terrains`` terrains per D (the same seeds and first
 terrains as the full study) once per variant, each in a fresh process, one after the other in
 this one run, and prints wall time, trials/s, the peak RSS of the largest worker (the
-children's ``ru_maxrss``) and a digest of the trial table, so variants that must give identical
+children's ``ru_maxrss``), the CPU time of the workers and of the coordinator, and a digest of the trial table, so variants that must give identical
 results can be checked. A variant is ``NAME`` or ``NAME:k=v,k=v``: ``executor`` (local, dask,
 inline), ``workers``, ``tree`` (another checkout of offroadbench, e.g. a git worktree of an
 older commit, to compare with the old code), and dotted study keys such as
@@ -271,7 +271,16 @@ def child(spec: dict) -> dict:
         "digest": digest,
         "worker_peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
         "self_peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        # CPU seconds (user + system) of the workers and of this coordinator: on a shared machine
+        # these move much less with the load than the wall time does
+        "workers_cpu_s": _cpu_s(resource.RUSAGE_CHILDREN),
+        "self_cpu_s": _cpu_s(resource.RUSAGE_SELF),
     }
+
+
+def _cpu_s(who: int) -> float:
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
 
 
 def compare(variants: list[str], terrains: int, missions: int) -> None:
@@ -290,7 +299,8 @@ def compare(variants: list[str], terrains: int, missions: int) -> None:
         print(
             f"{spec['name']} ({spec['executor']}, {spec['workers']} worker(s)): {res['trials']} trials in {res['wall_s']:.1f} s = "
             f"{res['trials'] / res['wall_s']:.2f} trials/s, {res['successes']} successes, worker peak RSS "
-            f"{res['worker_peak_mb']:.0f} MB, coordinator {res['self_peak_mb']:.0f} MB, table {res['digest']}",
+            f"{res['worker_peak_mb']:.0f} MB, coordinator {res['self_peak_mb']:.0f} MB, CPU workers "
+            f"{res['workers_cpu_s']:.1f} s + coordinator {res['self_cpu_s']:.1f} s, table {res['digest']}",
             flush=True,
         )
     if rows:
@@ -299,7 +309,8 @@ def compare(variants: list[str], terrains: int, missions: int) -> None:
         for spec, res in rows:
             speed = base["wall_s"] / res["wall_s"]
             eff = speed * base_spec["workers"] / spec["workers"]
-            print(f"  {spec['name']}: speed-up {speed:.2f}x, efficiency {eff * 100:.0f} %, "
+            cpu = (base["workers_cpu_s"] + base["self_cpu_s"]) / (res["workers_cpu_s"] + res["self_cpu_s"])
+            print(f"  {spec['name']}: speed-up {speed:.2f}x, efficiency {eff * 100:.0f} %, CPU time ratio {cpu:.2f}x, "
                   f"same table: {res['digest'] == base['digest']}")
 
 

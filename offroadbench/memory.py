@@ -28,7 +28,8 @@ __all__ = [
     "MUJOCO_WORKER_BASE_BYTES", "NUMBA_KERNELS_BYTES", "MUJOCO_BYTES_PER_CELL", "MUJOCO_ARENA_BYTES",
     "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
     "check_memory",
-    "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES",
+    "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES", "MMAP_THRESHOLD_BYTES",
+    "release_large_blocks",
 ]
 
 
@@ -187,3 +188,33 @@ def workers_that_fit(per_worker_bytes: int) -> int:
     if avail is not None:
         workers = max(1, min(workers, avail // per_worker_bytes))
     return workers
+
+
+#: allocations from this size up get their own ``mmap`` in a study worker (:func:`release_large_blocks`),
+#: bytes: glibc's initial threshold, held fixed
+MMAP_THRESHOLD_BYTES = 128 * 1024
+#: ``mallopt``'s parameter number of the threshold (glibc's malloc.h)
+_M_MMAP_THRESHOLD = -3
+
+
+def release_large_blocks() -> bool:
+    """Make glibc's malloc give every block of :data:`MMAP_THRESHOLD_BYTES` or more back to the
+    system when it is freed (its own ``mmap``), for the rest of this process; False where the C
+    library has no ``mallopt`` (not glibc) or refuses.
+
+    By default glibc raises that threshold to the largest block freed so far (up to 32 MB), so
+    after the first terrain a worker's 1009^2 arrays (8 MB of float64 each) come from the heap,
+    which fragments and keeps what they freed: on the full MuJoCo paper study a worker peaked at
+    404-417 MB (349-410 MB with every thread on one malloc arena, ``M_ARENA_MAX`` = 1); with the
+    threshold held, 284-285 MB (benchmarks/RESULTS.md, issue 41). What it costs: each large
+    array's pages are faulted in afresh, about 0.12 s of CPU per 1009^2 terrain (its generation
+    touches ~165 MB of new pages)."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None)
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+    return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES))

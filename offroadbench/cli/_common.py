@@ -12,14 +12,15 @@ import contextlib
 import math
 import sys
 from pathlib import Path
-from typing import Callable, Iterator
-
-import pandas as pd
+from typing import TYPE_CHECKING, Callable, Iterator
 
 from offroadbench.errors import InputError
 from offroadbench.io.outputs import check_output_dir, check_output_file, created_dirs
 from offroadbench.memory import available_memory_bytes, check_memory, check_recipe_memory, grid_bytes
 from offroadbench.progress import ProgressFn
+
+if TYPE_CHECKING:  # only format_table needs pandas: ``study run`` forks its workers without it (issue 41)
+    import pandas as pd
 
 __all__ = [
     "int_at_least", "seed_arg", "positive_int", "float_at_least", "positive_float", "nonnegative_float",

@@ -9,8 +9,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import pandas as pd
-
 from offroadbench.cli._common import (
     bar,
     check_output_dir,
@@ -47,6 +45,8 @@ SET_SECTIONS = ("sim", "controller", "rules", "roughness", "vehicle", "planner")
 
 def format_drive_run(run, label: str) -> str:
     """The per-mission table and the summary of a DriveRun."""
+    import pandas as pd
+
     from offroadbench.cli._common import count_text, medians_text
 
     df = pd.DataFrame(run.rows())
@@ -133,6 +133,8 @@ def write_drive_run(run, out: Path, label: str = "", options: dict | None = None
     older runs still load with offroadbench.io.telemetry.load_telemetry) and settings.json (what
     drove them: :func:`drive_record`), all or nothing; returns what was written."""
     import json
+
+    import pandas as pd
 
     from offroadbench.io.export import staged_dir
     from offroadbench.io.telemetry import save_telemetry

@@ -10,7 +10,6 @@ import argparse
 import json
 
 import numpy as np
-import pandas as pd
 
 from offroadbench.cli._common import (
     add_plot_option,
@@ -75,6 +74,8 @@ def _outside_line(rig, model) -> str | None:
 def format_soil_check(rig, model, gravity_m_s2: float, published=()) -> str:
     """The per-slip table: engine rig beside the integrals (rows outside the model marked), then the
     published comparison."""
+    import pandas as pd
+
     outside = outside_rows(rig, model)
     df = pd.DataFrame({
         "slip": rig.slip,

@@ -145,9 +145,10 @@ def _run(args: argparse.Namespace) -> int:
         raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
-    from offroadbench.study.stats.power import check_power
+    if study.analysis is not None and study.analysis.pilot:  # (only then: pandas, which the workers need not fork with)
+        from offroadbench.study.stats.power import check_power
 
-    check_power(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
+        check_power(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
     try:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:

@@ -21,9 +21,9 @@ from offroadbench.memory import world_bytes
 from offroadbench.progress import ProgressFn
 from offroadbench.study.execution.executors import get_executor
 from offroadbench.study.execution.tasks import TerrainTask, TrialFn
-from offroadbench.study.report.header import driver_files
 from offroadbench.study.session import RunSession, RunSummary, code_version
 from offroadbench.study.spec.config import CellPlan, StudyConfig, study_id
+from offroadbench.study.spec.inputs import driver_files
 
 log = logging.getLogger(__name__)
 

@@ -104,3 +104,23 @@ def test_mission_between():
     m = Mission.between(3, (1, 1), (1, -2))
     assert m.length_m == 3.0
     assert math.degrees(m.heading_rad) == pytest.approx(270.0)
+
+
+def test_sites_computed_once_draw_the_same_missions():
+    """A terrain's start cells and goal map computed once (mission_sites, as prepare_terrain does for
+    a study's 20 missions) give each seeded mission exactly as computing them per mission does; the
+    sites are np.isin's class masks inside the border."""
+    from offroadbench.analysis.roughness import border_mask
+    from offroadbench.navigation.missions import mission_sites, sample_mission
+
+    hm = _map(401)
+    classes = _patchy_classes(hm.shape, np.random.default_rng(5))
+    for start, goal in [(("low",), ("low", "semi")), (("semi",), ("semi", "high")), (("low", "semi"), ("low", "semi", "high"))]:
+        cfg = MissionConfig(length_m=12.0, border_m=2.0, start_classes=start, goal_classes=goal)
+        sites = mission_sites(hm, classes, cfg)
+        inside = border_mask(hm.shape, cfg.border_m, CELL)
+        names = ("low", "semi", "high")
+        assert np.array_equal(sites.starts, np.flatnonzero(np.isin(classes, [names.index(n) for n in start]) & inside))
+        assert np.array_equal(sites.goal_ok, np.isin(classes, [names.index(n) for n in goal]) & inside)
+        for k in range(6):
+            assert sample_mission(hm, classes, cfg, k, 1000 + k, sites) == sample_mission(hm, classes, cfg, k, 1000 + k)

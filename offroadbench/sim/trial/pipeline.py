@@ -29,7 +29,7 @@ from offroadbench.analysis.roughness import ClassMaps, classify_terrain
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.drivers import PlannerChoice
-from offroadbench.navigation.missions import Mission, MissionConfig, sample_mission
+from offroadbench.navigation.missions import Mission, MissionConfig, mission_sites, sample_mission
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.config import ControllerConfig, FailureRules, SimConfig
 from offroadbench.sim.trial.settings import SETTINGS_TABLES, TrialSettings, settings_part  # noqa: F401  (re-exported)
@@ -120,7 +120,8 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
     if items and isinstance(items[0], Mission):
         drawn, seeds = tuple(items), (None,) * len(items)
     else:
-        drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s)) for k, s in items)
+        sites = mission_sites(hm, maps.closed, settings.missions) if items else None  # once per terrain
+        drawn = tuple(sample_mission(hm, maps.closed, settings.missions, int(k), int(s), sites) for k, s in items)
         seeds = tuple(int(s) for _, s in items)
     return PreparedTerrain(hm=hm, maps=maps, missions=drawn, terrain_seed=seed, mission_seeds=seeds,
                            gravity_m_s2=gravity_m_s2, soil=soil, soil_map=soil_map)

@@ -34,10 +34,13 @@ def die_with_parent(parent_pid: int) -> None:
 
 
 def worker_bootstrap() -> None:
-    """What every worker process does first: import pybullet without its banner."""
+    """What every worker process does first: import pybullet without its banner, and have malloc
+    give a freed terrain's arrays back to the system (offroadbench.memory.release_large_blocks)."""
+    from offroadbench.memory import release_large_blocks
     from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
+    release_large_blocks()
 
 
 def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:

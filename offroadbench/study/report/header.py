@@ -16,6 +16,8 @@ from typing import Any
 
 import pandas as pd
 
+from offroadbench.study.spec.inputs import driver_files  # noqa: F401  (re-exported: the report's header shows them)
+
 __all__ = ["held_fixed", "report_title", "settings_columns", "driver_files", "soil_conditions"]
 
 #: (table, field, label) of the settings every report header lists
@@ -257,31 +259,6 @@ def settings_columns(meta: dict[str, Any]) -> pd.DataFrame:
                 f" with {', '.join(f'{k} = {_fmt(v)}' for k, v in overrides.items())}" if overrides else "")
         rows.append(row)
     return pd.DataFrame(rows)
-
-
-def driver_files(planner: Any) -> dict[str, dict[str, Any]]:
-    """The files a planner's or policy's config names (a trained model: the sb3 example's ``model``),
-    as the study found them when it was created: ``{"planner.FIELD": {"path", "bytes", "sha256"}}``.
-    Stored with the run (``cells[i]["files"]``) and shown in the report's header, so a report says
-    which model drove, not only its (possibly relative, since overwritten) name."""
-    import hashlib
-    from pathlib import Path
-
-    cfg = getattr(planner, "config", None)
-    out: dict[str, dict[str, Any]] = {}
-    if not dataclasses.is_dataclass(cfg):
-        return out
-    for f in dataclasses.fields(cfg):
-        value = getattr(cfg, f.name)
-        if not isinstance(value, str) or not Path(value).suffix or not Path(value).is_file():
-            continue
-        path = Path(value).resolve()
-        digest = hashlib.sha256()
-        with path.open("rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(block)
-        out[f"planner.{f.name}"] = {"path": str(path), "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
-    return out
 
 
 def files_rows(meta: dict[str, Any]) -> list[dict[str, str]]:

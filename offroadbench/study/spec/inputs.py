@@ -38,6 +38,7 @@ content hash, a plug-in's code hash) is not compared either: such a store is res
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import inspect
@@ -49,8 +50,8 @@ from typing import Any, Mapping, Sequence
 
 from offroadbench.config import to_dict
 
-__all__ = ["COSMETIC_STUDY_KEYS", "changed_inputs", "changed_study_keys", "trial_inputs", "vehicle_changed",
-           "vehicle_entry"]
+__all__ = ["COSMETIC_STUDY_KEYS", "changed_inputs", "changed_study_keys", "driver_files", "trial_inputs",
+           "vehicle_changed", "vehicle_entry"]
 
 #: keys of the study's own table whose change cannot change a trial
 COSMETIC_STUDY_KEYS = ("name", "description", "reference")
@@ -347,3 +348,25 @@ def changed_study_keys(old: Mapping[str, Any], new: Mapping[str, Any]) -> list[s
     """The dotted keys of the study config (``to_dict(StudyConfig)``) that differ."""
     a, b = _flat(dict(old)), _flat(dict(new))
     return sorted(k for k in set(a) | set(b) if a.get(k, "<absent>") != b.get(k, "<absent>"))
+
+
+def driver_files(planner: Any) -> dict[str, dict[str, Any]]:
+    """The files a planner's or policy's config names (a trained model: the sb3 example's ``model``),
+    as the study found them when it was created: ``{"planner.FIELD": {"path", "bytes", "sha256"}}``.
+    Stored with the run (``cells[i]["files"]``) and shown in the report's header, so a report says
+    which model drove, not only its (possibly relative, since overwritten) name."""
+    cfg = getattr(planner, "config", None)
+    out: dict[str, dict[str, Any]] = {}
+    if not dataclasses.is_dataclass(cfg):
+        return out
+    for f in dataclasses.fields(cfg):
+        value = getattr(cfg, f.name)
+        if not isinstance(value, str) or not Path(value).suffix or not Path(value).is_file():
+            continue
+        path = Path(value).resolve()
+        digest = hashlib.sha256()
+        with path.open("rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        out[f"planner.{f.name}"] = {"path": str(path), "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+    return out

@@ -1,9 +1,70 @@
-"""A study's statistics: terrain-level tests, clustered intervals, stress curves and the [analysis] plan."""
+"""A study's statistics: terrain-level tests, clustered intervals, stress curves and the [analysis] plan.
 
-from offroadbench.study.stats.clustered import LogisticFit, breaking_point_logistic, cluster_bootstrap, durkalski_mcnemar, fieller_set, fit_logistic, holm, isotonic_decreasing, obuchowski_mcnemar, paired_power, sign_flip_power, sign_flip_test, terrains_needed, wilcoxon_test
-from offroadbench.study.stats.engines import ENGINE_KEY, engine_table, engine_verdict
-from offroadbench.study.stats.plan import AnalysisPlan, check_plan, check_unchanged, confirmatory_table, expand, min_p, plan_from_dict, stored_plan
-from offroadbench.study.stats.stress import arm_table, breaking_points, describe_breaking_point, first_level_below, isotonic_crossing, mcnemar_exact, paired_table, wilson_interval
-from offroadbench.study.stats.terrain import METRICS, box_stats, group_summary, median_change_intervals, median_changes, terrain_changes, terrain_success
+The names load lazily (PEP 562): reading a study's ``[analysis]`` plan (offroadbench.study.stats.plan)
+does not import pandas, so ``study run`` forks its workers without it (issue 41).
+"""
 
-__all__ = ['ENGINE_KEY', 'engine_table', 'engine_verdict', 'LogisticFit', 'breaking_point_logistic', 'cluster_bootstrap', 'durkalski_mcnemar', 'fieller_set', 'fit_logistic', 'holm', 'isotonic_decreasing', 'obuchowski_mcnemar', 'paired_power', 'sign_flip_power', 'sign_flip_test', 'terrains_needed', 'wilcoxon_test', 'AnalysisPlan', 'check_plan', 'check_unchanged', 'confirmatory_table', 'expand', 'min_p', 'plan_from_dict', 'stored_plan', 'arm_table', 'breaking_points', 'describe_breaking_point', 'first_level_below', 'isotonic_crossing', 'mcnemar_exact', 'paired_table', 'wilson_interval', 'METRICS', 'box_stats', 'group_summary', 'median_change_intervals', 'median_changes', 'terrain_changes', 'terrain_success']
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: public name -> the submodule that defines it
+_EXPORTS = {
+    "ENGINE_KEY": "engines",
+    "engine_table": "engines",
+    "engine_verdict": "engines",
+    "LogisticFit": "clustered",
+    "breaking_point_logistic": "clustered",
+    "cluster_bootstrap": "clustered",
+    "durkalski_mcnemar": "clustered",
+    "fieller_set": "clustered",
+    "fit_logistic": "clustered",
+    "holm": "clustered",
+    "isotonic_decreasing": "clustered",
+    "obuchowski_mcnemar": "clustered",
+    "paired_power": "clustered",
+    "sign_flip_power": "clustered",
+    "sign_flip_test": "clustered",
+    "terrains_needed": "clustered",
+    "wilcoxon_test": "clustered",
+    "AnalysisPlan": "plan",
+    "check_plan": "plan",
+    "check_unchanged": "plan",
+    "confirmatory_table": "plan",
+    "expand": "plan",
+    "min_p": "plan",
+    "plan_from_dict": "plan",
+    "stored_plan": "plan",
+    "arm_table": "stress",
+    "breaking_points": "stress",
+    "describe_breaking_point": "stress",
+    "first_level_below": "stress",
+    "isotonic_crossing": "stress",
+    "mcnemar_exact": "stress",
+    "paired_table": "stress",
+    "wilson_interval": "stress",
+    "METRICS": "terrain",
+    "box_stats": "terrain",
+    "group_summary": "terrain",
+    "median_change_intervals": "terrain",
+    "median_changes": "terrain",
+    "terrain_changes": "terrain",
+    "terrain_success": "terrain",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module 'offroadbench.study.stats' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f"offroadbench.study.stats.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

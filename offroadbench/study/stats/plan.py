@@ -62,13 +62,15 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
 from offroadbench.config import check_choice, check_int, check_range, to_dict
 from offroadbench.errors import InputError
+
+if TYPE_CHECKING:  # the functions that build frames import pandas: a study's plan is read without it (issue 41)
+    import pandas as pd
 
 __all__ = ["TESTS", "MULTIPLICITY", "Comparison", "AnalysisPlan", "plan_from_dict", "check_plan", "expand",
            "terrain_metric", "confirmatory_table", "check_unchanged", "min_p", "stored_plan",
@@ -86,7 +88,7 @@ METRIC_HELP = ("success_rate_pct, area_<low|semi|high>_pct, a traversal metric (
 
 
 def _known_metric(name: str) -> bool:
-    from offroadbench.study.stats.terrain import CLASSES, METRICS, SOIL_METRICS
+    from offroadbench.study.stats.metrics import CLASSES, METRICS, SOIL_METRICS
 
     return name == "success_rate_pct" or name in METRICS or name in SOIL_METRICS or name in {
         f"area_{c}_pct" for c in CLASSES}
@@ -298,6 +300,8 @@ def expand(plan: AnalysisPlan, cells: Sequence[Mapping[str, Any]]
 def _pooled(vals: pd.Series, cells: Sequence[int]) -> pd.Series:
     """Per terrain: the mean of its values over ``cells`` (NaN, so the terrain is left out, where one cell has
     no value: a metric of successful trials on a terrain without a success there)."""
+    import pandas as pd
+
     have = set(vals.index.get_level_values(0)) if len(vals) else set()
     parts = [vals.xs(c, level="cell") for c in cells if c in have]
     if not parts:
@@ -309,6 +313,8 @@ def terrain_metric(trials: pd.DataFrame, terrains: pd.DataFrame | None, metric: 
                    ) -> pd.Series:
     """Per (cell, terrain): the metric's per-terrain value (see the module docstring); a traversal or soil
     metric summarised by ``summary`` (median or mean) over the terrain's trials."""
+    import pandas as pd
+
     from offroadbench.study.stats.terrain import METRICS, SOIL_METRICS, terrain_success
 
     if metric == "success_rate_pct":
@@ -352,6 +358,8 @@ def cell_label(values: Mapping[str, Any], columns: Mapping[str, str]) -> str:
 
 def terrain_differences(vals: pd.Series, ti: Sequence[int], ci: Sequence[int]) -> tuple[pd.DataFrame, np.ndarray]:
     """Per terrain the treatment's and the control's (pooled) values and their difference."""
+    import pandas as pd
+
     have = set(vals.index.get_level_values(0)) if len(vals) else set()
     kept = [(t, c) for t, c in zip(ti, ci, strict=True) if t in have and c in have] if len(ti) > 1 else list(zip(ti, ci, strict=True))
     a, b = _pooled(vals, [t for t, _ in kept]), _pooled(vals, [c for _, c in kept])
@@ -370,6 +378,8 @@ def confirmatory_table(plan: AnalysisPlan, meta: Mapping[str, Any], trials: pd.D
     order; NaN without one); for a traversal or soil metric, summary (the plan's per-terrain summary)
     and effect_other / p_other: the same test with the other summary (exploratory, in no adjustment).
     """
+    import pandas as pd
+
     from offroadbench.study.stats.clustered import cluster_bootstrap, holm, keyed_rng, sign_flip_test, wilcoxon_test
 
     rng = np.random.default_rng(plan.seed)

@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 import pandas as pd
 
-from offroadbench.analysis.roughness import CLASS_NAMES
+from offroadbench.study.stats.metrics import CLASSES, METRICS, SOIL_METRICS
 
 __all__ = [
     "QUANTILE_METHOD",
@@ -43,23 +43,6 @@ __all__ = [
 QUANTILE_METHOD = "hazen"
 #: whisker reach in IQRs: points beyond Q3 + 1.5 IQR or below Q1 - 1.5 IQR are outliers (Eq. 7-8)
 WHISKER_IQR = 1.5
-
-#: Fig. 7 metrics (successful trials only): column -> (title, unit)
-METRICS: dict[str, tuple[str, str]] = {
-    "rms_vertical_accel_m_s2": ("RMS vertical acceleration", "m/s²"),
-    "rms_pitch_rate_deg_s": ("RMS pitch rate", "deg/s"),
-    "rms_roll_rate_deg_s": ("RMS roll rate", "deg/s"),
-    "traversal_time_s": ("Traversal time", "s"),
-}
-CLASSES = CLASS_NAMES
-
-#: soft-soil metrics (every trial of a cell driven on soil, ``terramechanics`` tyre model): column -> (title, unit)
-SOIL_METRICS: dict[str, tuple[str, str]] = {
-    "mean_slip": ("Mean wheel slip (moving)", "-"),
-    "sinkage_median_m": ("Median wheel sinkage (moving)", "m"),
-    "sinkage_p95_m": ("95th percentile wheel sinkage (moving)", "m"),
-}
-
 
 def box_stats(values: Sequence[float], whis: float = WHISKER_IQR) -> dict[str, Any]:
     """Median, quartiles, IQR (Eq. 6), fences (Eq. 7-8), whisker ends and outliers of ``values``.

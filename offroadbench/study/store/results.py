@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from offroadbench.study.store.store import Store
+
+if TYPE_CHECKING:  # pandas is imported by the functions that build frames: a study's coordinator and
+    import pandas as pd  # its forked workers never load it (about 90 MB of each process, issue 41)
 
 __all__ = ["TIMING_COLUMNS", "load", "load_meta", "load_platforms", "load_terrains", "trial_platform"]
 
@@ -42,6 +43,8 @@ def load_meta(run_dir: str | Path) -> dict[str, Any]:
 
 
 def _grid_frame(meta: dict[str, Any]) -> pd.DataFrame:
+    import pandas as pd
+
     columns = meta["columns"]
     rows = [{"cell": c["index"], **{columns[k]: v for k, v in c["values"].items()}} for c in meta["cells"]]
     return pd.DataFrame(rows, columns=["cell", *columns.values()])
@@ -49,6 +52,8 @@ def _grid_frame(meta: dict[str, Any]) -> pd.DataFrame:
 
 def load(run_dir: str | Path) -> pd.DataFrame:
     """One tidy row per stored trial (see the module docstring)."""
+    import pandas as pd
+
     with Store(run_dir) as store:
         meta = store.meta()
         raw = store.trial_rows()
@@ -67,6 +72,8 @@ def load(run_dir: str | Path) -> pd.DataFrame:
 
 def load_terrains(run_dir: str | Path) -> pd.DataFrame:
     """One row per built terrain: grid values, seeds and class area fractions."""
+    import pandas as pd
+
     with Store(run_dir) as store:
         meta = store.meta()
         raw = store.terrain_rows()
@@ -89,6 +96,8 @@ def load_platforms(run_dir: str | Path) -> pd.DataFrame:
     """The platforms the stored trials came from, most trials first: ``platform`` (one line),
     ``sessions`` (their ids), ``trials``, ``fingerprint`` (the dict; None when not recorded, as
     in stores of schema 1) and ``version`` (offroadbench of the first of those sessions)."""
+    import pandas as pd
+
     from offroadbench.study.fingerprint import describe
 
     with Store(run_dir) as store:
