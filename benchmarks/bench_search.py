@@ -282,7 +282,10 @@ def results(folder: Path, study: Path) -> None:
                 "bootstrap low": fig["reference_interval"][0], "bootstrap high": fig["reference_interval"][1],
                 "boundary low": c["low"], "boundary high": c["high"], "band failed": b.band_failed,
                 "band trials": b.band_trials, "boundary trials": b.trials,
-                **{f"this folder: {k}": v for k, v in c.items() if k not in ("low", "high")}}]).assign(planner=planner))
+                **{f"this folder: {k}": v for k, v in c.items() if k not in ("low", "high")},
+                "this folder's own boundary: P": fig["own reference"].p,
+                "this folder's own boundary: low": fig["own reference"].boundary.edges()[0],
+                "this folder's own boundary: high": fig["own reference"].boundary.edges()[1]}]).assign(planner=planner))
         tables.setdefault("sensitivity.csv", []).append(
             pd.DataFrame([{"parameter": x.key, "eta^2": x.eta2, "threshold": x.threshold, "p": x.p_value,
                            "active": x.active, "draws": x.draws, "failures": x.failures, "source": x.source}

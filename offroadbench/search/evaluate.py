@@ -25,6 +25,7 @@ run; a results folder's, run and repeats, for the committed figures).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -356,7 +357,8 @@ def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig,
     nominal pool orders and streams computed from the boundary, and the failure modes over every
     trial. With ``[analysis] reference_from`` the reference is that folder's boundary (relative to
     ``root``; :func:`folder_reference`), with its bootstrap interval (``reference_interval``) and
-    this folder's trials checked against it (``check``: :func:`boundary_check`); the falsifier's
+    this folder's trials checked against it (``check``: :func:`boundary_check`) and the boundary
+    its own trials measure (``own reference``: not independent of the estimates); the falsifier's
     figures only where the folder has falsifier streams. Deterministic."""
     ks = analysis.first_k
     both = pd.concat([run[run["group"] == group], repeats[repeats["planner"] == planner].assign(group=group)],
@@ -370,7 +372,8 @@ def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig,
         out: dict = {"reference": ref,
                      "reference_interval": reference_interval(src[key].to_numpy(float), src["failed"].to_numpy(bool),
                                                               param, level=analysis.level),
-                     "check": boundary_check(ref.boundary, d[key].to_numpy(float), d["failed"].to_numpy(bool))}
+                     "check": boundary_check(ref.boundary, d[key].to_numpy(float), d["failed"].to_numpy(bool)),
+                     "own reference": reference(both, cfg, dataclasses.replace(analysis, reference_from=None))}
     else:
         ref = pooled_reference(run, repeats, cfg, analysis, group, planner)
         out = {"reference": ref}
