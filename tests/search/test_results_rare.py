@@ -146,7 +146,7 @@ def test_importance_sampling_over_the_repeats_and_the_gain(figures):
            [s["runs"], s["mean P"], 100 * s["rel. RMSE"], s["gain"], s["gain low"], s["gain high"],
             s["median stated gain"], s["bootstrap-t holds"], s["runs"], s["normal holds"], s["runs"]])
     r = s["rel. RMSE"]
-    _check(rf"plain Monte Carlo's variance at p on n trials is p \(1 - p\) / n: {_NUM} on 200 trials, a relative "
+    _check(rf"Plain Monte Carlo's variance at p on n trials is p \(1 - p\) / n: {_NUM} on 200 trials, a relative "
            rf"standard error of {_NUM}; for the relative error importance sampling reached \({_NUM}\) it needs "
            rf"\(1 - p\) / \(p r\^2\) = {_NUM} trials",
            [p * (1 - p) / 200, np.sqrt((1 - p) / (p * 200)), r, (1 - p) / (p * r ** 2)])
@@ -164,3 +164,36 @@ def test_the_committed_tables_recompute(figures):
     ref = pd.read_csv(FOLDER / "reference.csv").iloc[0]
     assert ref["P"] == pytest.approx(figures["reference"].p, rel=1e-12)
     assert (ref["bootstrap low"], ref["bootstrap high"]) == pytest.approx(figures["reference_interval"], rel=1e-12)
+
+
+def test_the_band_s_shape_and_the_reference_without_the_isotonic_fit(figures):
+    """The README's exploratory check: the band's failure fractions at 0.20-0.21 and 0.21-0.22, and P
+    with the band's plain failure fractions in 2 to 8 equal bins instead of its isotonic fit."""
+    from offroadbench.search import evaluate as ev
+
+    plan = _plan()
+    param, b = plan.search.params[0], figures["reference"].boundary
+    src = ev.folder_trials(ROOT / plan.analysis.reference_from, "astar")
+    u, f = src["sim.terrain_friction"].to_numpy(float), src["failed"].to_numpy(bool)
+    fractions = [f[(u > a) & (u <= c)].mean() for a, c in ((0.20, 0.21), (0.21, 0.22))]
+    binned = []
+    for nb in range(2, 9):
+        e = np.linspace(b.low, b.high, nb + 1)
+        cdf = param.cdf(e)
+        binned.append(cdf[0] + sum(f[(u >= e[j]) & (u <= e[j + 1])].mean() * (cdf[j + 1] - cdf[j]) for j in range(nb)))
+    _check(rf"\(({_NUM[1:-1]}) at 0\.20-0\.21 against ({_NUM[1:-1]}) at 0\.21-0\.22 on the site's trials\)[^;]*; integrating "
+           rf"the band's failure fractions in 2 to 8 equal bins instead gives {_NUM}-{_NUM}\.",
+           [*fractions, min(binned), max(binned)])
+
+
+def test_the_headline(figures):
+    s, p = figures["is_summary"], figures["reference"].p
+    _check(rf"\*\*P\(failure\) = ({_NUM[1:-1]}) x 10\^-4\*\*", [p * 1e4])
+    _check(rf"\*\*Importance sampling gains {_NUM}x over plain Monte Carlo\*\* at that common p \(work-normalised, by "
+           rf"the spread of {_NUM} independent runs of 200 trials about the reference; 95 % bootstrap interval "
+           rf"{_NUM}-{_NUM}x\): plain Monte Carlo would need about {_NUM} trials for the relative error importance "
+           rf"sampling reached on 200\. - Its \*\*bootstrap-t intervals hold the reference in {_NUM} of {_NUM}\*\* runs "
+           rf"\(the normal ones in {_NUM} of {_NUM}\)",
+           [s["gain"], s["runs"], s["gain low"], s["gain high"], (1 - p) / (p * s["rel. RMSE"] ** 2),
+            s["bootstrap-t holds"], s["runs"], s["normal holds"], s["runs"]])
+    assert s["gain"] >= 20 and s["gain low"] >= 20  # issue 45's 20x, over the repeats' bootstrap interval too
