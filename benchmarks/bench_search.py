@@ -46,7 +46,10 @@ table's columns); a stream already in the table is refused.
 repeats.csv and search.toml; the analysis plan of ``--study``) for every planner
 (offroadbench.search.evaluate.results_figures), printed and written to FOLDER as
 is_repeats.csv, falsifier_baselines.csv, falsifier_streams.csv, uniform_streams.csv,
-sensitivity.csv and modes.csv.
+sensitivity.csv and modes.csv (those it has: a folder without falsifier streams has no falsifier
+tables), and reference.csv where the plan's reference is another folder's boundary
+(``[analysis] reference_from``: the reference, its bracket and bootstrap interval, and this
+folder's trials checked against that boundary).
 
 ``--smoke``: one repeat, budgets 8, k = 1 (checks that the benchmark runs).
 """
@@ -256,18 +259,33 @@ def results(folder: Path, study: Path) -> None:
     plan = load_search(folder / "search.toml")
     tables: dict[str, list] = {}
     for grp, g in enumerate(plan.groups):
-        planner = g.values.get("planner.name", "straight")
-        fig = ev.results_figures(run, repeats, cfg, analysis, grp, planner)
+        planner = ev.group_planner(g)
+        fig = ev.results_figures(run, repeats, cfg, analysis, grp, planner, root=ROOT)
         ref = fig["reference"]
         print(f"== {planner}: reference P {ref.p:.4f} (bracket {ref.low:.4f}-{ref.high:.4f}); {ref.how}")
         if "is" in fig:
             print(f"importance sampling over {fig['is_summary']['runs']} runs: {fig['is_summary']}")
-        print(fig["baselines"].to_string())
+        if "check" in fig:
+            print(f"reference's bootstrap interval {fig['reference_interval']}; this folder's trials against it: "
+                  f"{fig['check']}")
+        if "baselines" in fig:
+            print(fig["baselines"].to_string())
         for name, key in (("is_repeats.csv", "is"), ("falsifier_baselines.csv", "baselines"),
                           ("falsifier_streams.csv", "falsifier"), ("uniform_streams.csv", "uniform"),
                           ("modes.csv", "modes")):
             if key in fig and len(fig[key]):
                 tables.setdefault(name, []).append(fig[key].assign(planner=planner))
+        if "check" in fig:
+            b, c = ref.boundary, fig["check"]
+            tables.setdefault("reference.csv", []).append(pd.DataFrame([{
+                "P": ref.p, "bracket low": ref.low, "bracket high": ref.high,
+                "bootstrap low": fig["reference_interval"][0], "bootstrap high": fig["reference_interval"][1],
+                "boundary low": c["low"], "boundary high": c["high"], "band failed": b.band_failed,
+                "band trials": b.band_trials, "boundary trials": b.trials,
+                **{f"this folder: {k}": v for k, v in c.items() if k not in ("low", "high")},
+                "this folder's own boundary: P": fig["own reference"].p,
+                "this folder's own boundary: low": fig["own reference"].boundary.edges()[0],
+                "this folder's own boundary: high": fig["own reference"].boundary.edges()[1]}]).assign(planner=planner))
         tables.setdefault("sensitivity.csv", []).append(
             pd.DataFrame([{"parameter": x.key, "eta^2": x.eta2, "threshold": x.threshold, "p": x.p_value,
                            "active": x.active, "draws": x.draws, "failures": x.failures, "source": x.source}

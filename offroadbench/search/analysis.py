@@ -16,6 +16,7 @@ says which of them the claims rest on) and calls every other number exploratory.
     interval = "bootstrap-t"         # ce-is: bootstrap-t (studentized, over the final draws) | normal
     reference = "boundary"           # boundary: a measured boundary in one parameter | mc: the random stream
     boundary_param = "sim.terrain_friction"   # reference = "boundary": the parameter (failure below)
+    reference_from = "experiments/results/failure-search-site"   # optional: the boundary measured there
     baseline = "uniform"             # the falsifier's baseline: uniform (its own search box) | random (nominal)
     first_k = [1, 10]                # trials to the k-th failure: the falsifier's counts
     stopping = "budget"              # each method stops at its trial budget ([search] budget, mc_budget, ce_budget)
@@ -62,6 +63,12 @@ class SearchAnalysis:
     offroadbench.search.baselines.MeasuredBoundary)."""
     boundary_param: str | None = None
     """``reference = "boundary"``: the searched key failure is a function of (failing below the boundary)."""
+    reference_from: str | None = None
+    """``reference = "boundary"``: a committed results folder of the same site and route (its
+    ``search.toml``, ``trials.csv`` and ``repeats.csv``; a path relative to the repository root)
+    whose trials of the same planner measure the boundary, instead of the run's own. The reference
+    is then independent of the estimates it judges (the run's trials only check the boundary); the
+    nominal it is integrated against is this search's (offroadbench.search.evaluate.folder_reference)."""
     baseline: str = "uniform"
     """What the falsifier's trials to the k-th failure are measured against: ``uniform`` draws on
     its own search box (the ``uniform`` stream, or streams computed from the boundary where the run
@@ -88,6 +95,10 @@ class SearchAnalysis:
             raise InputError('[analysis] reference = "boundary" needs boundary_param (the searched key failure falls with)')
         if self.reference != "boundary" and self.boundary_param is not None:
             raise InputError('[analysis] boundary_param is for reference = "boundary" only')
+        if self.reference_from is not None and (self.reference != "boundary" or not isinstance(self.reference_from, str)
+                                                or not self.reference_from.strip()):
+            raise InputError(f'[analysis] reference_from = {self.reference_from!r}: a results folder (a path), '
+                             'for reference = "boundary" only')
         ks = self.first_k
         if (not isinstance(ks, tuple) or not ks
                 or not all(isinstance(k, int) and not isinstance(k, bool) and k >= 1 for k in ks)):

@@ -5,6 +5,10 @@ run; a results folder's, run and repeats, for the committed figures).
   (``boundary``: offroadbench.search.baselines.MeasuredBoundary over every finished trial of the
   group, whoever proposed it: an outcome at a parameter value is data; ``mc``: the ``random``
   stream's estimate).
+* :func:`folder_reference`: the same, with the boundary measured on a committed results folder of
+  the same site and route (``[analysis] reference_from``), integrated against this search's
+  nominal, with a bootstrap interval over that folder's trials (:func:`reference_interval`); the
+  run's own trials only check it (:func:`boundary_check`).
 * :func:`is_summary`: the importance-sampling estimate with its normal and bootstrap-t intervals
   and the gain at the reference p (offroadbench.search.estimators.is_gain, from the run's stated
   standard error).
@@ -21,20 +25,24 @@ run; a results folder's, run and repeats, for the committed figures).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from offroadbench.errors import InputError
 from offroadbench.search.analysis import SearchAnalysis
 from offroadbench.search.baselines import (MeasuredBoundary, measured_boundary, median_interval, model_streams,
                                            nominal_draws, pool_streams, ratio_interval, trials_to_k, uniform_box)
 from offroadbench.search.estimators import Estimate, bootstrap_t_interval, is_estimate, is_gain, mc_estimate
 from offroadbench.search.modes import Sensitivity, failure_modes, mode_table, sensitivity, stream_modes
-from offroadbench.search.space import SearchConfig
+from offroadbench.search.space import SearchConfig, SearchParam
 
-__all__ = ["Reference", "reference", "is_summary", "mc_position", "falsifier_counts", "modes", "stream_mode_rows",
+__all__ = ["Reference", "reference", "group_planner", "folder_trials", "folder_reference", "reference_interval",
+           "boundary_check", "is_summary", "mc_position", "falsifier_counts", "modes", "stream_mode_rows",
            "repeat_streams", "pooled_reference", "is_repeats", "spread_gain", "stream_counts", "results_figures",
            "STREAMS", "SEED"]
 
@@ -61,10 +69,93 @@ def _done(g: pd.DataFrame) -> pd.DataFrame:
     return g[g["done"].astype(bool)]
 
 
-def reference(g: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis | None) -> Reference | None:
+def group_planner(group) -> str:
+    """The planner of a search's group (a CellPlan): its grid value or its ``[planner]`` table's."""
+    return str(group.settings.get("planner", {}).get("name", "straight"))
+
+
+def folder_trials(folder: Path, planner: str) -> pd.DataFrame:
+    """The finished trials of ``planner`` in a committed results folder: its trials.csv rows of the
+    groups of its search.toml with that planner, and its repeats.csv rows of that planner."""
+    from offroadbench.search.plan import load_search
+
+    if not (folder / "search.toml").is_file() or not (folder / "trials.csv").is_file():
+        raise InputError(f"reference_from = {str(folder)!r}: not a search results folder (no search.toml and trials.csv)")
+    plan = load_search(folder / "search.toml")
+    groups = [g.index for g in plan.groups if group_planner(g) == planner]
+    run = pd.read_csv(folder / "trials.csv")
+    parts = [run[run["group"].isin(groups)]]
+    if (folder / "repeats.csv").is_file():
+        rep = pd.read_csv(folder / "repeats.csv")
+        parts.append(rep[rep["planner"] == planner])
+    out = _done(pd.concat(parts, ignore_index=True))
+    if not len(out):
+        raise InputError(f"reference_from = {str(folder)!r}: no finished trial of planner {planner!r}")
+    return out
+
+
+def reference_interval(u: np.ndarray, failed: np.ndarray, param: SearchParam, n_boot: int = 1000,
+                       level: float = 0.95) -> tuple[float, float]:
+    """The percentile bootstrap interval (Efron & Tibshirani 1993, Ch. 13) of the boundary reference
+    P under ``param``'s nominal: the trials resampled with replacement, the boundary measured again
+    on each resample (its ends and its isotonic band) and integrated; the sampling error of the
+    measured band, beside the bracket's model-free bounds. Deterministic (:data:`SEED`)."""
+    u, f = np.asarray(u, dtype=float), np.asarray(failed, dtype=bool)
+    rng = np.random.default_rng(SEED)
+    ps = []
+    for _ in range(n_boot):
+        i = rng.integers(0, len(u), len(u))
+        try:
+            ps.append(measured_boundary(u[i], f[i]).probability(param))
+        except ValueError:
+            continue
+    a = 1 - level
+    lo, hi = np.quantile(ps, [a / 2, 1 - a / 2])
+    return float(lo), float(hi)
+
+
+def folder_reference(folder: Path, planner: str, cfg: SearchConfig, analysis: SearchAnalysis) -> Reference:
+    """The reference of ``analysis.reference_from`` (module docstring): the boundary in
+    ``boundary_param`` measured on the folder's trials of ``planner``, integrated against this
+    search's nominal of that parameter (P, and the bracket [F(low), F(high)])."""
+    d = folder_trials(folder, planner)
+    key = analysis.boundary_param
+    i = cfg.keys.index(key)
+    b = measured_boundary(d[key].to_numpy(float), d["failed"].to_numpy(bool), i)
+    lo, hi = b.bracket(cfg.params[i])
+    return Reference(b.probability(cfg.params[i]), lo, hi,
+                     f"measured boundary in `{key}` over the {b.trials} finished {planner} trials of "
+                     f"{analysis.reference_from}: {b.describe()}, {b.band_failed} of the {b.band_trials} between "
+                     f"failed (P = the nominal mass where failure is certain + the isotonic failure rate integrated "
+                     f"over the band, under this search's nominal; bracket [{lo:.4g}, {hi:.4g}] whatever the band "
+                     "does)", b)
+
+
+def boundary_check(b: MeasuredBoundary, u: np.ndarray, failed: np.ndarray) -> dict:
+    """The trials ``u`` (with outcomes ``failed``) against a boundary measured on others: how many lie
+    where it says failure is certain and how many of those passed, how many lie beyond its band on
+    the passing side and how many of those failed (each a trial the boundary did not predict), and
+    the band's trials with their failures."""
+    u, f = np.asarray(u, dtype=float), np.asarray(failed, dtype=bool)
+    lo, hi = b.edges()
+    certain = b.certain(u)
+    safe = (b.sign * u) > b.high
+    band = ~certain & ~safe
+    return {"trials": len(u), "certain": int(certain.sum()), "certain passed": int((certain & ~f).sum()),
+            "safe": int(safe.sum()), "safe failed": int((safe & f).sum()), "band": int(band.sum()),
+            "band failed": int((band & f).sum()), "low": lo, "high": hi}
+
+
+def reference(g: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis | None, planner: str | None = None,
+              root: Path | None = None) -> Reference | None:
     """The reference P of one group's trials ``g`` (every method's) as ``analysis`` says (``mc``
-    without a plan); None where it cannot be had (no ``random`` stream; nothing failed)."""
+    without a plan); None where it cannot be had (no ``random`` stream; nothing failed). With
+    ``reference_from`` the boundary is the folder's (:func:`folder_reference`; the folder relative
+    to ``root``, default the working directory, and ``planner`` the group's)."""
     d = _done(g)
+    if analysis is not None and analysis.reference_from is not None:
+        folder = (Path.cwd() if root is None else Path(root)) / analysis.reference_from
+        return folder_reference(folder, planner or "straight", cfg, analysis)
     if analysis is not None and analysis.reference == "boundary":
         i = cfg.keys.index(analysis.boundary_param)
         try:
@@ -259,15 +350,33 @@ def stream_counts(streams: list[pd.DataFrame], cfg: SearchConfig, ks: tuple[int,
 
 
 def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig, analysis: SearchAnalysis,
-                    group: int, planner: str, streams: int = STREAMS) -> dict:
+                    group: int, planner: str, streams: int = STREAMS, root: Path | None = None) -> dict:
     """The committed figures of one planner of a results folder (its trial table ``run`` and its
     repeats table): the pooled reference, the importance-sampling repeats with both intervals and
     the gains, the falsifier's streams against real uniform streams (the ``uniform`` replicates),
     nominal pool orders and streams computed from the boundary, and the failure modes over every
-    trial. Deterministic."""
+    trial. With ``[analysis] reference_from`` the reference is that folder's boundary (relative to
+    ``root``; :func:`folder_reference`), with its bootstrap interval (``reference_interval``) and
+    this folder's trials checked against it (``check``: :func:`boundary_check`) and the boundary
+    its own trials measure (``own reference``: not independent of the estimates); the falsifier's
+    figures only where the folder has falsifier streams. Deterministic."""
     ks = analysis.first_k
-    ref = pooled_reference(run, repeats, cfg, analysis, group, planner)
-    out: dict = {"reference": ref}
+    both = pd.concat([run[run["group"] == group], repeats[repeats["planner"] == planner].assign(group=group)],
+                     ignore_index=True)
+    if analysis.reference_from is not None:
+        ref = reference(both, cfg, analysis, planner, root)
+        src = folder_trials((Path.cwd() if root is None else Path(root)) / analysis.reference_from, planner)
+        key = analysis.boundary_param
+        param = cfg.params[cfg.keys.index(key)]
+        d = _done(both)
+        out: dict = {"reference": ref,
+                     "reference_interval": reference_interval(src[key].to_numpy(float), src["failed"].to_numpy(bool),
+                                                              param, level=analysis.level),
+                     "check": boundary_check(ref.boundary, d[key].to_numpy(float), d["failed"].to_numpy(bool)),
+                     "own reference": reference(both, cfg, dataclasses.replace(analysis, reference_from=None))}
+    else:
+        ref = pooled_reference(run, repeats, cfg, analysis, group, planner)
+        out = {"reference": ref}
     ce = repeat_streams(run, repeats, "ce-is", group, planner)
     if ce:
         tab = is_repeats(ce, cfg, ref.p, analysis.level)
@@ -280,6 +389,9 @@ def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig,
                              "normal holds": int(tab["normal holds the reference"].sum()),
                              "bootstrap-t holds": int(tab["bootstrap-t holds the reference"].sum())}
     fals = stream_counts(repeat_streams(run, repeats, "falsify", group, planner), cfg, ks)
+    if not len(fals):
+        out["sensitivity"], out["modes"] = modes(both, cfg)[0::3]
+        return out
     uni = stream_counts(repeat_streams(run, repeats, "uniform", group, planner), cfg, ks)
     rng = np.random.default_rng(SEED)
     d = _done(run[run["group"] == group])
@@ -316,8 +428,6 @@ def results_figures(run: pd.DataFrame, repeats: pd.DataFrame, cfg: SearchConfig,
     out["falsifier"] = fals
     out["uniform"] = uni
     out["baselines"] = pd.DataFrame(rows)
-    both = pd.concat([run[run["group"] == group], repeats[repeats["planner"] == planner].assign(group=group)],
-                     ignore_index=True)
     sens, _, _, table = modes(both, cfg)
     out["sensitivity"], out["modes"] = sens, table
     return out

@@ -209,7 +209,9 @@ def _plan_lines(plan: SearchPlan) -> list[str]:
         return ["No `[analysis]` plan in the search file: every figure below is exploratory.", ""]
     rows = [("estimand", a.estimand), ("estimator", f"`{a.estimator}`" + (f", {a.interval} interval" if a.estimator == "ce-is" else
                                                                            ", Clopper-Pearson interval")),
-            ("reference", f"`{a.reference}`" + (f" (boundary in `{a.boundary_param}`)" if a.boundary_param else "")),
+            ("reference", f"`{a.reference}`" + (f" (boundary in `{a.boundary_param}`" + (
+                f", measured on the trials of `{a.reference_from}`" if a.reference_from else "") + ")"
+                if a.boundary_param else "")),
             ("the falsifier's baseline", f"`{a.baseline}`; trials to the k-th failure for k in {list(a.first_k)}"),
             ("stopping rule", "each method its fixed trial budget" if a.stopping == "budget" else a.stopping),
             ("importance-sampling gain", "work-normalised variance ratio at the reference p: p (1 - p) / (N_IS V_IS)"),
@@ -253,7 +255,7 @@ def _analysis_sections(df: pd.DataFrame, plan: SearchPlan, run_dir: Path) -> tup
                                         f"--plot --animate cell{cell}.gif`"})
         for _, r in ev.stream_mode_rows(g, labels).iterrows():
             stream_rows.append({"group": label, **r.to_dict()})
-        ref = ev.reference(g, cfg, a)
+        ref = ev.reference(g, cfg, a, planner=ev.group_planner(plan.groups[grp]))
         counts = ev.falsifier_counts(g, cfg, ks, ref)
         count_rows += [{"group": label, **r.to_dict()} for _, r in counts.iterrows()]
         if ref is not None:

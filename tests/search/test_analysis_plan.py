@@ -28,7 +28,9 @@ def test_the_plan_is_read_and_validated():
     assert plan.analysis.first_k == (1, 3) and plan.analysis.reference == "boundary"
     for bad, msg in ((dict(estimator="bayes"), "estimator"), (dict(boundary_param="sim.nope"), "not a searched key"),
                      (dict(reference="mc"), "boundary_param is for"), (dict(first_k=[0]), "first_k"),
-                     (dict(stopping="sequential"), "stopping"), (dict(colour="red"), "unknown key")):
+                     (dict(stopping="sequential"), "stopping"), (dict(colour="red"), "unknown key"),
+                     (dict(reference="mc", boundary_param=None, reference_from="x"), "reference_from"),
+                     (dict(reference_from=""), "reference_from")):
         with pytest.raises(InputError, match=msg):
             search_from_data(_data(**bad))
     no_estimand = _data()
