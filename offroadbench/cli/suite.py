@@ -107,6 +107,15 @@ def _workers(args: argparse.Namespace, planned) -> int | None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    """``suite run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to
+    resume), as ``study run``."""
+    from offroadbench.cli._runs import stop_signals
+
+    with stop_signals():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from offroadbench.cli._common import bar, check_output_dir
     from offroadbench.study.execution import check_trial_timeout
     from offroadbench.study.runner import check_study_size

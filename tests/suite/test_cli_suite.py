@@ -139,3 +139,27 @@ def test_score_refuses_a_run_of_another_planner_or_an_empty_folder(scored, capsy
     rc, _, err = _run(tmp, capsys, "score", "--suite", str(tmp / "tiny-v1.toml"), "--planner", "astar",
                       "--out", str(tmp_path))
     assert rc == 2 and "has not run (no study.sqlite)" in err
+
+
+def test_sigterm_ends_a_suite_run_with_one_line_and_resume_finishes_it(tmp_path, tiny_suite):
+    """SIGTERM (and Ctrl-C) end ``suite run`` as they end ``study run``: exit 143, one line saying what
+    is kept and how to resume, no lock left (it used to have no handler: an inherited SIG_IGN kept a
+    background run deaf to SIGINT, and SIGTERM killed it without closing its session)."""
+    import signal
+    import time
+
+    code = "import sys; from offroadbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    args = [sys.executable, "-c", code, "suite", "run", "--suite", str(tiny_suite), "--planner", "straight",
+            "--out", str(tmp_path / "run"), "--workers", "1"]
+    proc = subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while not list((tmp_path / "run").glob("*/study.lock")) and proc.poll() is None and time.monotonic() - t0 < 120:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 143, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("offroadbench: ") and "run the same command again to" in lines[0], err
+    assert not list((tmp_path / "run").glob("*/study.lock"))
+    done = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
