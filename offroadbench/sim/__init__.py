@@ -18,8 +18,7 @@ package does not import pybullet; only touching ``World`` or the runner does.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from offroadbench.lazy import lazy_exports
 
 #: public name -> the submodule that defines it
 _EXPORTS = {
@@ -52,15 +51,4 @@ _EXPORTS = {
 __all__ = list(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    try:
-        module = _EXPORTS[name]
-    except KeyError:
-        raise AttributeError(f"module 'offroadbench.sim' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(f"offroadbench.sim.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

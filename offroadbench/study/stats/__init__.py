@@ -6,8 +6,7 @@ does not import pandas, so ``study run`` forks its workers without it (issue 41)
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from offroadbench.lazy import lazy_exports
 
 #: public name -> the submodule that defines it
 _EXPORTS = {
@@ -56,15 +55,4 @@ _EXPORTS = {
 __all__ = list(_EXPORTS)
 
 
-def __getattr__(name: str) -> Any:
-    try:
-        module = _EXPORTS[name]
-    except KeyError:
-        raise AttributeError(f"module 'offroadbench.study.stats' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(f"offroadbench.study.stats.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -261,16 +261,16 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         return [c[k] - ext[k] for k in range(3)], [c[k] + ext[k] for k in range(3)]
 
     # ------------------------------------------------------------------ vehicle state
-    def spawn(self, x_m: float, y_m: float, heading_rad: float, roll_rad: float = 0.0) -> None:
-        """Reset all state (``mj_resetData``), put the vehicle at rest just above the terrain at (x, y),
-        and let it settle for ``sim.settle_time_s`` with its wheels braked."""
+    def _place(self, hm: Heightmap, x_m: float, y_m: float, heading_rad: float, roll_rad: float) -> None:
+        """Reset all state (``mj_resetData``) and set the vehicle's joint positions at a spawn on ``hm``:
+        at (x, y) facing ``heading_rad``, rolled by ``roll_rad``, its lowest point
+        ``sim.spawn_clearance_m`` above the terrain within its reach, its struts at rest."""
         m, d = self.model, self.data
         mujoco.mj_resetData(m, d)
         cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
         ch, sh = math.cos(0.5 * heading_rad), math.sin(0.5 * heading_rad)
-        quat = (ch * cr, ch * sr, sh * sr, sh * cr)  # w x y z of yaw(heading) * roll
-        d.qpos[0:3] = (x_m, y_m, self.hm.z_max_m + 10.0)
-        d.qpos[3:7] = quat
+        d.qpos[0:3] = (x_m, y_m, hm.z_max_m + 10.0)
+        d.qpos[3:7] = (ch * cr, ch * sr, sh * sr, sh * cr)  # w x y z of yaw(heading) * roll
         for adr in self._strut_qpos:  # a sprung vehicle's struts at rest in this gravity
             d.qpos[adr] = self._spring_rest_m
         mujoco.mj_kinematics(m, d)
@@ -282,9 +282,13 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
                 lows.append(glo[2])
                 if m.geom_bodyid[g] == self._chassis:
                     reach = max(reach, 0.5 * math.hypot(ghi[0] - glo[0], ghi[1] - glo[1]))
-        bottom = base[2] - min(lows)
-        d.qpos[2] = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom,
+        d.qpos[2] = spawn_height_m(hm, x_m, y_m, reach, self.spec.wheel_radius_m, base[2] - min(lows),
                                    self.sim.spawn_clearance_m)
+
+    def spawn(self, x_m: float, y_m: float, heading_rad: float, roll_rad: float = 0.0) -> None:
+        """Reset all state (``mj_resetData``), put the vehicle at rest just above the terrain at (x, y),
+        and let it settle for ``sim.settle_time_s`` with its wheels braked."""
+        self._place(self.hm, x_m, y_m, heading_rad, roll_rad)
         self._forward()
         self._loads = [0.0] * len(self._loads)
         self._penetration = 0.0

@@ -15,7 +15,6 @@ vehicle is put down clear of its own terrain, as MuJoCoWorld.spawn does) and by 
 
 from __future__ import annotations
 
-import math
 import threading
 import xml.etree.ElementTree as ET
 
@@ -25,7 +24,6 @@ import numpy as np
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
-from offroadbench.sim.engines.base import spawn_height_m
 from offroadbench.sim.engines.mujoco.world import MuJoCoWorld
 from offroadbench.sim.trial.vehicle import VehicleSpec
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
@@ -89,30 +87,8 @@ class BatchModel(MuJoCoWorld):
         ``heading_rad``, rolled by ``roll_rad``, its lowest point ``sim.spawn_clearance_m`` above
         the terrain within its reach: MuJoCoWorld.spawn's pose, before the settle."""
         with self.lock:
-            return self._spawn_qpos(terrain, x_m, y_m, heading_rad, roll_rad)
-
-    def _spawn_qpos(self, terrain: int, x_m: float, y_m: float, heading_rad: float, roll_rad: float) -> np.ndarray:
-        m, d = self.model, self.data
-        hm = self.terrains[terrain]
-        mujoco.mj_resetData(m, d)
-        cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
-        ch, sh = math.cos(0.5 * heading_rad), math.sin(0.5 * heading_rad)
-        d.qpos[0:3] = (x_m, y_m, hm.z_max_m + 10.0)
-        d.qpos[3:7] = (ch * cr, ch * sr, sh * sr, sh * cr)
-        for adr in self._strut_qpos:
-            d.qpos[adr] = self._spring_rest_m
-        mujoco.mj_kinematics(m, d)
-        lows, reach = [], 0.0
-        base = d.xipos[self._chassis].tolist()
-        for g in range(m.ngeom):
-            if g != self._terrain_geom:
-                glo, ghi = self._geom_box(g)
-                lows.append(glo[2])
-                if m.geom_bodyid[g] == self._chassis:
-                    reach = max(reach, 0.5 * math.hypot(ghi[0] - glo[0], ghi[1] - glo[1]))
-        d.qpos[2] = spawn_height_m(hm, x_m, y_m, reach, self.spec.wheel_radius_m, base[2] - min(lows),
-                                   self.sim.spawn_clearance_m)
-        return d.qpos.copy()
+            self._place(self.terrains[terrain], x_m, y_m, heading_rad, roll_rad)
+            return self.data.qpos.copy()
 
     def centre_of_mass_at(self, qpos) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass at joint positions ``qpos``, m (host kinematics)."""
