@@ -6,6 +6,7 @@ the difference between a MuJoCo study's peak and its 0.4 GB goal)."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -34,7 +35,8 @@ main(["study", "run", "experiments/majhor2023-mujoco.toml", "--set", "study.terr
 def test_study_workers_fork_without_the_report_modules(tmp_path):
     r = subprocess.run([sys.executable, "-c", CODE, str(tmp_path / "run")], capture_output=True, text=True,
                        cwd=ROOT, timeout=300)
-    held = [json.loads(line[5:]) for line in r.stdout.splitlines() if line.startswith("HELD ")]
+    # two workers write to one pipe: their lines may interleave, so each report is found by its own pattern
+    held = [json.loads(found) for found in re.findall(r"HELD (\[[^\]]*\])", r.stdout)]
     assert len(held) == 3, r.stdout + r.stderr  # one line per terrain task (3 cells x 1 terrain)
     assert all(h == [] for h in held), f"workers forked holding {held[0]}"
 
