@@ -227,9 +227,9 @@ def test_scheduler_lost_while_fetching_a_result_is_one_study_error():
     class Finished:
         status = "finished"
 
-        def result(self):
+        def result(self, timeout=None):
             raise CommClosedError("in <TCP (closed) ConnectionPool.gather>: ConnectionResetError")
 
     task = SimpleNamespace(cell=SimpleNamespace(index=2), terrain=5)
     with pytest.raises(StudyError, match=r"^lost the Dask scheduler while fetching cell 2, terrain 5 \(CommClosedError\)$"):
-        DaskExecutor(workers=1)._collect(None, Finished(), task, lambda msg: None)
+        DaskExecutor(workers=1)._collect(None, None, Finished(), task, lambda msg: None)

@@ -5,11 +5,9 @@ and the handling of a lost scheduler."""
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import logging
 import os
-import queue
 import threading
 import time
 import traceback
@@ -18,119 +16,11 @@ from typing import Sequence
 
 from offroadbench import stop
 from offroadbench.errors import InputError, StudyError
-from offroadbench.study.execution.tasks import (TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn, collect_terrain,
-                                      run_terrain)
-from offroadbench.study.execution.common import (Handle, worker_bootstrap, check_trial_timeout, task_failure,
-                                                timeout_faults)
+from offroadbench.study.execution.common import Handle, check_trial_timeout, task_failure, timeout_faults
+from offroadbench.study.execution.dask_worker import dask_task
+from offroadbench.study.execution.tasks import TerrainTask, TrialFn
 
 log = logging.getLogger(__name__)
-
-
-# ---------------------------------------------------------------------------- dask
-class TrialTimeout(RuntimeError):
-    """A trial (or a terrain build) ran longer than the per-trial wall-clock limit on a Dask worker."""
-
-
-#: how long past its limit a trial's helper thread, told to stop, may take to end before its
-#: Dask worker counts as unhealthy and is restarted, seconds
-STOP_WAIT_S = 5.0
-
-
-class _Abandoned(BaseException):
-    """Raised inside a trial's helper thread that ran past its limit, to end it (a BaseException:
-    no ``except Exception`` of a trial or plug-in keeps it running)."""
-
-
-def _stop_thread(thread: threading.Thread, wait_s: float) -> bool:
-    """Raise :class:`_Abandoned` in ``thread`` and wait up to ``wait_s`` seconds for it to end.
-    True if it ended: a thread running Python code stops at its next bytecode; one blocked in C
-    code (a sleep, a stuck native loop) does not, and its worker must be restarted."""
-    if thread.ident is not None and thread.is_alive():
-        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(_Abandoned))
-    thread.join(wait_s)
-    return not thread.is_alive()
-
-
-def _reporter(topic: str | None):
-    """``tell(what, mission=None)``: a progress event (``begin``, ``built``, ``finished``) of the
-    running task on ``topic`` for the coordinator's deadline (:class:`DaskExecutor`); a no-op
-    without a topic (or outside a Dask worker)."""
-    if topic is None:
-        return lambda what, mission=None: None
-    from distributed import get_worker
-
-    worker = get_worker()
-    key, address, pid = str(worker.get_current_task()), worker.address, os.getpid()
-
-    def tell(what: str, mission: int | None = None) -> None:
-        worker.log_event(topic, {"key": key, "worker": address, "pid": pid, "what": what, "mission": mission})
-
-    return tell
-
-
-def dask_task(task: TerrainTask, trial_fn: TrialFn | None, limit_s: float | None, topic: str | None = None) -> list:
-    """A terrain task on a Dask worker: quiet bootstrap, then every message of :func:`run_terrain`.
-
-    With ``limit_s`` the work runs in a helper thread and every message (the terrain build, then
-    each trial) must arrive within ``limit_s`` seconds. Otherwise the task returns what arrived
-    and the fault of the hung trial (:class:`TrialFaulted`), and the missions after it as a
-    ``("rest", missions after the hung one)`` message, which the coordinator submits again. The
-    helper thread is told to stop (:func:`_stop_thread`); if it has not ended after
-    :data:`STOP_WAIT_S` (a trial blocked in native code) the message is ``("restart", worker
-    address, missions after the hung one)`` instead and the coordinator restarts this worker too,
-    since nothing in Python can stop such a thread. A healthy worker is not restarted. The wait is
-    sliced into short waits, so any limit up to MAX_TRIAL_TIMEOUT_S works. With ``topic`` each
-    message is also announced as a progress event (:func:`_reporter`), which lets the coordinator
-    tell a worker that stopped answering (SIGSTOP, a native loop holding the GIL) from a long trial.
-    """
-    worker_bootstrap()
-    if limit_s is None:
-        return collect_terrain(task, trial_fn)
-    tell = _reporter(topic)
-    tell("begin")
-    q: queue.Queue = queue.Queue()
-
-    def work() -> None:
-        try:
-            for msg in run_terrain(task, trial_fn):
-                q.put(("msg", msg))
-            q.put(("end", None))
-        except _Abandoned:
-            pass
-        except BaseException as exc:  # handed to the task thread below
-            q.put(("exc", exc))
-
-    thread = threading.Thread(target=work, daemon=True, name="offroadbench-trials")
-    thread.start()
-    out: list = []
-    built, finished = False, set()
-    deadline = time.monotonic() + limit_s
-    while True:
-        try:
-            kind, value = q.get(timeout=min(60.0, max(0.0, deadline - time.monotonic())))
-        except queue.Empty:
-            if time.monotonic() < deadline:
-                continue
-            from distributed import get_worker
-
-            address = get_worker().address
-            hung = next((k for k, _ in task.missions if k not in finished), None) if built else None
-            faults, rest = timeout_faults(task, hung, finished, limit_s, where=f" (Dask worker {address})")
-            if _stop_thread(thread, STOP_WAIT_S):
-                return out + faults + [("rest", rest)]
-            return out + faults + [("restart", address, rest)]
-        if kind == "end":
-            return out
-        if kind == "exc":
-            raise value
-        out.append(value)
-        deadline = time.monotonic() + limit_s
-        if isinstance(value, TerrainBuilt):
-            built = True
-            tell("built")
-        elif isinstance(value, (TrialDone, TrialFaulted)):
-            finished.add(value.mission)
-            tell("finished", value.mission)
 
 
 @dataclasses.dataclass
@@ -194,7 +84,9 @@ class DaskExecutor:
     the GIL, whose own limit cannot fire) has its running trial stored as a fault (every mission of
     it when its terrain was not built yet), is cancelled, its worker is removed from the scheduler
     (and, in the LocalCluster this executor started, killed, so that its nanny starts a fresh one),
-    and its other missions are submitted again: the study goes on. A lost scheduler, or no
+    and its other missions are submitted again: the study goes on. A worker that stops answering
+    after its task ended, before its result was fetched, is removed the same way after the limit plus
+    the grace and its terrain runs again (:meth:`_fetch`). A lost scheduler, or no
     worker for ``no_worker_timeout_s``, stops the study. Every stop is a one-line StudyError;
     the trials committed so far stay, and running the study again resumes it.
     """
@@ -297,7 +189,7 @@ class DaskExecutor:
                     done = set()
                 for fut in done:
                     progress.pop(str(fut.key), None)
-                    for rest in self._collect(client, fut, futures[fut], handle):
+                    for rest in self._collect(client, cluster, fut, futures[fut], handle):
                         submit(rest)
                 if topic is not None:
                     for fut in self._overdue(pending, progress):
@@ -317,9 +209,10 @@ class DaskExecutor:
             logging.getLogger("distributed.client").removeFilter(quiet)
             logging.getLogger("distributed.nanny").removeFilter(restarts)
 
-    def _collect(self, client, fut, task: TerrainTask, handle: Handle) -> list[TerrainTask]:
+    def _collect(self, client, cluster, fut, task: TerrainTask, handle: Handle) -> list[TerrainTask]:
         """Hand a finished task's messages to ``handle``; returns the tasks to submit next (the
-        missions after a trial that ran past its limit, whose worker is restarted here)."""
+        missions after a trial that ran past its limit, whose worker is restarted here; the whole
+        task again when its result did not arrive, see :meth:`_fetch`)."""
         from distributed import KilledWorker
 
         key = (task.cell.index, task.terrain)
@@ -331,11 +224,9 @@ class DaskExecutor:
                 raise StudyError(f"cell {key[0]}, terrain {key[1]} killed every Dask worker that ran it ({exc})")
             tb = "".join(traceback.format_exception(exc)) if exc is not None else ""
             raise task_failure(key, exc, f"{type(exc).__name__}: {exc}", tb)
-        try:
-            msgs = fut.result()  # fetches the task's results from its worker through the scheduler
-        except (OSError, TimeoutError) as exc:  # CommClosedError is an OSError: the scheduler went away
-            raise StudyError(f"lost the Dask scheduler while fetching cell {key[0]}, terrain {key[1]} "
-                             f"({type(exc).__name__})") from None
+        msgs = self._fetch(client, cluster, fut, key)
+        if msgs is None:
+            return [task]
         follow: list[TerrainTask] = []
         for msg in msgs:
             if isinstance(msg, tuple) and msg and msg[0] == "restart":
@@ -349,6 +240,33 @@ class DaskExecutor:
                 continue
             handle(msg)
         return follow
+
+    def _fetch(self, client, cluster, fut, key: tuple[int, int]) -> list | None:
+        """A finished task's messages, fetched from the worker that holds them; None when that
+        worker stopped answering before it handed them over (frozen right after its task ended: the
+        fetch would wait forever): then, with a per-trial limit, it is removed (and killed) as in
+        :meth:`_give_up` once the limit plus the grace has passed, and the caller runs the task again
+        (tasks are pure: the same rows come back). Without a limit the fetch waits, as every other step."""
+        limit = None if self.trial_timeout_s is None else self.trial_timeout_s + self.deadline_grace_s
+        try:
+            return fut.result(timeout=limit)
+        except (OSError, TimeoutError) as exc:  # CommClosedError is an OSError: the scheduler went away
+            if not isinstance(exc, TimeoutError) or client.status != "running":
+                raise StudyError(f"lost the Dask scheduler while fetching cell {key[0]}, terrain {key[1]} "
+                                 f"({type(exc).__name__})") from None
+        try:
+            holders = list(client.who_has([fut]).get(fut.key, ()))
+        except Exception:  # noqa: BLE001 - the next wait() reports a lost scheduler
+            holders = []
+        log.warning("cell %d, terrain %d: its result did not arrive from Dask worker %s within %g s; the worker "
+                    "removed and the terrain run again", key[0], key[1], " ".join(holders) or "(unknown)", limit)
+        try:
+            client.cancel([fut], force=True)
+        except Exception as exc:  # noqa: BLE001 - best effort, as in _give_up
+            log.info("could not cancel the task of cell %d, terrain %d (%s)", key[0], key[1], exc)
+        for address in holders:
+            self._remove_worker(client, cluster, _Progress(address, 0, 0.0))
+        return None
 
     def _overdue(self, pending: set, progress: dict) -> list:
         """The running futures whose worker has said nothing for the limit plus the grace."""

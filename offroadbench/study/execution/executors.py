@@ -30,7 +30,8 @@ from typing import Sequence
 from offroadbench.errors import InputError, StudyError
 from offroadbench.registry import Registry
 from offroadbench.study.execution.tasks import TerrainTask, TrialFn, run_terrain
-from offroadbench.study.execution.dask import DaskExecutor, TrialTimeout, dask_task  # noqa: F401  (dask_task re-exported)
+from offroadbench.study.execution.dask import DaskExecutor
+from offroadbench.study.execution.dask_worker import TrialTimeout, dask_task  # noqa: F401  (re-exported)
 from offroadbench.study.execution.common import Handle, MAX_TRIAL_TIMEOUT_S, check_trial_timeout
 from offroadbench.study.execution.local import LocalExecutor
 from offroadbench.study.execution.batched import BatchedExecutor
