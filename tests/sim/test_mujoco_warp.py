@@ -92,13 +92,24 @@ def test_a_batch_of_8_worlds_on_2_terrains_agrees_with_the_mujoco_engine_within_
         assert _spread(ref, warp, metric) <= 3.0 * _spread(ref, chaos, metric), metric
 
 
-def test_the_batch_is_bit_identical_with_fewer_worlds_than_trials(setup, batch_run):
+def test_the_batch_is_bit_identical_with_fewer_worlds_than_trials_and_hands_on_each_terrain_as_it_ends(
+        setup, batch_run):
+    """3 worlds for 8 trials: every world is reused, the trials run in another order and company, and
+    the rows are the 8-world batch's bit for bit. Terrain 0's missions are taken first, so its records
+    are handed on (``on_terrain``, what a study stores) while terrain 1's trials still run."""
     from offroadbench.sim.engines.mujoco_warp.runner import drive_batch
 
     prepared, settings = setup
-    small = drive_batch(prepared[:1], settings.replace(sim=SimConfig(engine="mujoco_warp")), worlds=3)
+    ended = [0]  # trials ended so far (the progress callback's count)
+    handed: list[tuple[int, int]] = []  # (terrain, trials ended when it was handed on)
+    small = drive_batch(prepared, settings.replace(sim=SimConfig(engine="mujoco_warp")), worlds=3,
+                        progress=lambda done, total: ended.__setitem__(0, done),
+                        on_terrain=lambda k, recs: handed.append((k, ended[0])))
     assert small.worlds == 3
-    assert _results(small.records[0]) == _results(batch_run.records[0])
+    for k in (0, 1):
+        assert _results(small.records[k]) == _results(batch_run.records[k])
+    assert sorted(k for k, _ in handed) == [0, 1]
+    assert handed[0][0] == 0 and handed[0][1] < 2 * MISSIONS  # terrain 0 handed on while terrain 1 still ran
 
 
 def test_the_engine_refuses_what_it_does_not_implement():

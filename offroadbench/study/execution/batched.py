@@ -11,8 +11,9 @@ gives on the same engine. A trial that could not give an outcome (TrialFault, Pl
 a TrialFaulted message, as under the other executors.
 
 Tasks on an engine without a batch module, and runs with a stand-in ``trial_fn``, run one task at
-a time in this process (the ``inline`` executor). The batch's messages arrive when its batch ends:
-a study stopped mid-batch keeps none of that batch's trials (resume runs them again).
+a time in this process (the ``inline`` executor). A terrain's messages are sent as soon as all its
+missions have ended, while the batch goes on: a study stopped mid-batch keeps every terrain that
+ended (resume runs the others again).
 """
 
 from __future__ import annotations
@@ -61,9 +62,9 @@ class BatchedExecutor:
                    prepared.hm.cell_size_m)
             groups.setdefault(key, []).append((task, prepared, settings))
         for (module, *_), members in groups.items():
-            run = importlib.import_module(module).drive_batch([p for _, p, _ in members], [s for _, _, s in members])
-            for (task, _, _), records in zip(members, run.records, strict=True):
-                _send(task, records, handle)
+            importlib.import_module(module).drive_batch(
+                [p for _, p, _ in members], [s for _, _, s in members],
+                on_terrain=lambda k, records, members=members: _send(members[k][0], records, handle))
 
 
 def _build(task: TerrainTask, handle: Handle):

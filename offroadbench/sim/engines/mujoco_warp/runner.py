@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.engines.mujoco_warp.batch import WarpBatch
@@ -58,8 +58,10 @@ class Lockstep:
         event.wait()
         event.clear()
 
-    def run(self, slots: Sequence[Any]) -> None:
-        """Run ``slots`` (callables taking the slot's world index) to the end, one thread each."""
+    def run(self, slots: Sequence[Any], between: Callable[[], None] | None = None) -> None:
+        """Run ``slots`` (callables taking the slot's world index) to the end, one thread each;
+        ``between()`` is called in this thread whenever every slot waits (and once at the end): the
+        place to hand finished work on while no slot runs."""
         errors: list[BaseException] = []
 
         def body(w: int, fn) -> None:
@@ -81,6 +83,8 @@ class Lockstep:
         with self._lock:
             while True:
                 self._all_waiting.wait_for(lambda: self._running == 0)
+                if between is not None:
+                    between()
                 if not self._waiting:
                     break
                 steps = min(v.pending for v in self._waiting.values())
@@ -113,12 +117,15 @@ class BatchRun:
 
 
 def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = None,
-                progress: ProgressFn | None = None) -> BatchRun:
+                progress: ProgressFn | None = None,
+                on_terrain: Callable[[int, list[Any]], None] | None = None) -> BatchRun:
     """Drive every mission of every prepared terrain (offroadbench.sim.trial.pipeline.PreparedTerrain,
     all on one grid) as trials of one MuJoCo Warp batch of at most ``worlds`` worlds (default
     ``[sim.mujoco_warp] worlds``), each trial as offroadbench.sim.trial.runner.drive_mission drives it.
     ``settings``: one TrialSettings for all, or one per prepared terrain (the study's cells: they may
-    differ in all but the vehicle and the physics, which the batch's one model fixes)."""
+    differ in all but the vehicle and the physics, which the batch's one model fixes).
+    ``on_terrain(k, records)``: called in this thread as soon as every mission of terrain ``k`` has
+    ended (while no slot runs), so a caller can store a terrain's trials before the batch ends."""
     from offroadbench.errors import InputError
     from offroadbench.sim.trial.runner import drive_mission
 
@@ -144,6 +151,13 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
     queue = list(reversed(jobs))
     taking = threading.Lock()
     done = [0]
+    left = [len(p.missions) for p in prepared]  # missions of each terrain not ended yet
+    ended: list[int] = []  # terrains whose missions all ended, not yet handed to on_terrain
+
+    def hand_on() -> None:
+        while ended and on_terrain is not None:
+            k = ended.pop(0)
+            on_terrain(k, records[k])
 
     def slot(w: int) -> None:
         while True:
@@ -160,11 +174,15 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
                 raise
             except Exception as exc:  # noqa: BLE001 - the trial's outcome is its fault
                 rec = exc
-            records[k][i] = rec
-            done[0] += 1
+            with taking:
+                records[k][i] = rec
+                done[0] += 1
+                left[k] -= 1
+                if left[k] == 0:
+                    ended.append(k)
             report(progress, done[0], len(jobs))
 
-    sched.run([slot] * n)
+    sched.run([slot] * n, between=hand_on)
     return BatchRun(records, n, batch.steps * n, sched.advances)
 
 
