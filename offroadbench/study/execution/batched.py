@@ -19,17 +19,14 @@ ended (resume runs the others again).
 from __future__ import annotations
 
 import importlib
-import time
 from typing import Sequence
 
 from offroadbench.errors import InputError, TrialFault
-from offroadbench.navigation.missions import NoMissionError
 from offroadbench.navigation.problem import PlannerRefusal
 from offroadbench.sim.engine import engine_capabilities
 from offroadbench.study.execution.common import Handle
-from offroadbench.study.execution.tasks import (NO_MISSION_FAULT, NO_MISSION_KIND, REFUSED_FAULT, REFUSED_KIND,
-                                                TerrainBuilt, TerrainTask, TrialDone, TrialFaulted, TrialFn,
-                                                keeps_telemetry, prepare_cell, run_terrain)
+from offroadbench.study.execution.tasks import (REFUSED_FAULT, REFUSED_KIND, TerrainTask, TrialFaulted, TrialFn,
+                                                build_terrain, run_terrain, trial_done)
 
 __all__ = ["BatchedExecutor"]
 
@@ -68,21 +65,12 @@ class BatchedExecutor:
 
 
 def _build(task: TerrainTask, handle: Handle):
-    """The task's terrain and missions (its TerrainBuilt sent), or None when no mission can be drawn
-    (its faults sent): run_terrain's first half."""
-    cell = task.cell
-    t0 = time.perf_counter()
-    try:
-        prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
-    except NoMissionError as exc:
-        reason = NO_MISSION_FAULT + " ".join(str(exc).split())
-        for k, seed in task.missions:
-            handle(TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason, NO_MISSION_KIND))
-        return None
-    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
-    stats["build_s"] = time.perf_counter() - t0
-    handle(TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats))
-    return prepared, cell.trial_settings
+    """The task's terrain and settings (its TerrainBuilt sent), or None when no mission can be drawn
+    (its faults sent)."""
+    prepared, msgs = build_terrain(task)
+    for msg in msgs:
+        handle(msg)
+    return None if prepared is None else (prepared, task.cell.trial_settings)
 
 
 def _send(task: TerrainTask, records, handle: Handle) -> None:
@@ -98,7 +86,4 @@ def _send(task: TerrainTask, records, handle: Handle) -> None:
         elif isinstance(rec, BaseException):
             raise rec
         else:
-            row = rec.result.as_row()
-            kept = ({"telemetry": rec.telemetry, "path_xy": rec.path_xy}
-                    if keeps_telemetry(task.telemetry, bool(row["success"])) else None)
-            handle(TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept))
+            handle(trial_done(task, k, seeds[k], rec))

@@ -184,25 +184,47 @@ def keeps_telemetry(setting: str, success: bool) -> bool:
     return setting == "all" or (setting == "failed" and not success)
 
 
+def build_terrain(task: TerrainTask) -> tuple[PreparedTerrain | None, list[TerrainBuilt | TrialFaulted]]:
+    """The task's terrain and missions, and its messages: ``(prepared, [TerrainBuilt])``, or ``(None,
+    [one TrialFaulted per mission])`` when the drawn terrain admits no mission (e.g. no low-roughness
+    cell inside the border at high D): those trials are faults, excluded from every statistic and
+    listed in the report, and the study goes on (the design: a terrain is never redrawn, so no seed
+    is picked after the fact)."""
+    cell = task.cell
+    t0 = time.perf_counter()
+    try:
+        prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
+    except NoMissionError as exc:
+        reason = NO_MISSION_FAULT + " ".join(str(exc).split())
+        return None, [TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason, NO_MISSION_KIND)
+                      for k, seed in task.missions]
+    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
+    stats["build_s"] = time.perf_counter() - t0
+    return prepared, [TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)]
+
+
+def trial_done(task: TerrainTask, mission: int, seed: int, item: Any) -> TrialDone:
+    """A trial's message: its row (from a TrialRecord, or a trial function's own mapping) and, as
+    the study's ``telemetry`` setting asks, its telemetry and planned path."""
+    kept = None
+    if hasattr(item, "result"):  # a TrialRecord
+        row = item.result.as_row()
+        if keeps_telemetry(task.telemetry, bool(row["success"])):
+            kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
+    else:
+        row = dict(item)
+    return TrialDone(task.cell.index, task.terrain, mission, task.terrain_seed, seed, row, kept)
+
+
 def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[TerrainBuilt | TrialDone]:
     """Build the task's terrain once and run all its pending missions, yielding messages."""
     trial_fn = trial_fn or drive_terrain
     cell = task.cell
     settings = cell.trial_settings
-    t0 = time.perf_counter()
-    try:
-        prepared, extra = prepare_cell(cell, task.terrain_seed, task.missions)
-    except NoMissionError as exc:
-        # the drawn terrain admits no mission (e.g. no low-roughness cell inside the border at high
-        # D): its trials are faults, excluded from every statistic and listed in the report, and the
-        # study goes on (the design: a terrain is never redrawn, so no seed is picked after the fact)
-        reason = NO_MISSION_FAULT + " ".join(str(exc).split())
-        for k, seed in task.missions:
-            yield TrialFaulted(cell.index, task.terrain, k, task.terrain_seed, seed, reason, NO_MISSION_KIND)
+    prepared, msgs = build_terrain(task)
+    yield from msgs
+    if prepared is None:
         return
-    stats = {f"area_{k}": v for k, v in prepared.maps.fractions.items()} | extra
-    stats["build_s"] = time.perf_counter() - t0
-    yield TerrainBuilt(cell.index, task.terrain, task.terrain_seed, stats)
     seeds = dict(task.missions)
     pending = list(prepared.missions)
     while pending:
@@ -215,17 +237,11 @@ def run_terrain(task: TerrainTask, trial_fn: TrialFn | None = None) -> Iterator[
             # missions it did not drive stay pending
             for mission, item in zip(part.missions, trial_fn(part, settings), strict=False):
                 k = mission.index
-                kept = None
-                if hasattr(item, "result"):  # a TrialRecord
-                    row = item.result.as_row()
-                    if keeps_telemetry(task.telemetry, bool(row["success"])):
-                        kept = {"telemetry": item.telemetry, "path_xy": item.path_xy}
-                else:
-                    row = dict(item)
-                if int(row.get("mission_index", k)) != k:
-                    raise RuntimeError(f"trial function returned mission {row.get('mission_index')} for mission {k}")
+                done = trial_done(task, k, seeds[k], item)
+                if int(done.row.get("mission_index", k)) != k:
+                    raise RuntimeError(f"trial function returned mission {done.row.get('mission_index')} for mission {k}")
                 pending.pop(0)
-                yield TrialDone(cell.index, task.terrain, k, task.terrain_seed, seeds[k], row, kept)
+                yield done
             return
         except TrialFault as exc:
             k = pending.pop(0).index
