@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # only format_table needs pandas: ``study run`` forks its wor
 
 __all__ = [
     "int_at_least", "seed_arg", "positive_int", "float_at_least", "positive_float", "nonnegative_float",
-    "parse_sets", "load_recipe_with_sets", "load_heightmap_arg", "crater_diameters",
+    "parse_sets", "put_setting", "load_recipe_with_sets", "load_heightmap_arg", "crater_diameters",
     "sets_text", "terrain_label", "recipe_meta", "count_text", "medians_text", "run_caption",
     "add_plot_option", "plot_path",
     "grid_bytes", "check_memory", "check_recipe_memory", "available_memory_bytes",
@@ -82,6 +82,47 @@ def parse_sets(pairs: list[str] | None) -> dict[str, object]:
             raise InputError(f"--set {item!r}: expected KEY=VALUE with a dotted TOML key, e.g. layers.base.D_high=2.6")
         out[key.strip()] = parse_set_value(value.strip())
     return out
+
+
+def put_setting(tables: dict, item: str) -> None:
+    """Put ``--set SECTION.FIELD=VALUE`` into ``tables[SECTION]`` (a settings table of
+    offroadbench.sim.trial.settings.TrialSettings), and ``SECTION.SUB.FIELD=VALUE`` into its nested
+    table ``[SECTION.SUB]`` where SUB is a field holding a config class (``sim.mujoco.hfield_collision``
+    into ``[sim.mujoco]``), as the TOML nests them. A SUB that is no such table is refused here; the
+    field's name and value are checked where the tables are built (offroadbench.config.from_dict),
+    with the same one-line errors as the TOML's."""
+    import typing
+
+    from offroadbench.config import dataclass_type, set_dotted
+    from offroadbench.sim.trial.settings import TrialSettings
+
+    key = item.partition("=")[0].strip()
+    head, _, rest = key.partition(".")
+    (value,) = parse_sets([item]).values()
+    cls, parts = dataclass_type(typing.get_type_hints(TrialSettings).get(head)), rest.split(".")
+    for depth, part in enumerate(parts[:-1]):
+        nested = _nested_tables(cls)
+        if part not in nested:
+            form = f"{'.'.join([head, *parts[:depth]])}.FIELD=VALUE"
+            allowed = f" or {form.replace('FIELD', 'TABLE.FIELD')} with TABLE one of {', '.join(nested)}" if nested else ""
+            raise InputError(f"--set {item!r}: a settings key is {form}{allowed}")
+        cls = nested[part]
+    if not all(parts):
+        raise InputError(f"--set {item!r}: a settings key is {head}.FIELD=VALUE")
+    tables[head] = set_dotted(tables.get(head, {}), rest, value)
+
+
+def _nested_tables(cls: type | None) -> dict[str, type]:
+    """The fields of config class ``cls`` that are nested tables: name -> their config class."""
+    import dataclasses
+    import typing
+
+    from offroadbench.config import dataclass_type
+
+    if cls is None:
+        return {}
+    hints = typing.get_type_hints(cls)
+    return {f.name: sub for f in dataclasses.fields(cls) if (sub := dataclass_type(hints.get(f.name))) is not None}
 
 
 def sets_text(overrides: dict[str, object] | None) -> str:

@@ -150,20 +150,16 @@ def write_drive_run(run, out: Path, label: str = "", options: dict | None = None
 
 
 def _drive_settings(args: argparse.Namespace) -> tuple[dict, list[str]]:
-    """The settings tables of ``--set SECTION.KEY=VALUE`` (plus ``--physics-rate-hz``, ``--engine``,
+    """The settings tables of ``--set SECTION.KEY=VALUE`` and ``SECTION.TABLE.KEY=VALUE`` (plus ``--physics-rate-hz``, ``--engine``,
     ``--gravity``, ``--border-m``) and the remaining recipe overrides."""
-    from offroadbench.cli._common import parse_sets
+    from offroadbench.cli._common import put_setting
 
     tables: dict[str, dict] = {name: {} for name in SET_SECTIONS}
     recipe_sets = []
     for item in args.set or []:
-        key = item.partition("=")[0].strip()
-        head, dot, rest = key.partition(".")
+        head = item.partition("=")[0].strip().partition(".")[0]
         if head in SET_SECTIONS:
-            if not dot or not rest or "." in rest:
-                raise InputError(f"--set {item!r}: a settings key is {head}.FIELD=VALUE")
-            (value,) = parse_sets([item]).values()
-            tables[head][rest] = value
+            put_setting(tables, item)  # SECTION.FIELD, or SECTION.TABLE.FIELD for [sim.mujoco] and the like
         else:
             recipe_sets.append(item)
     if args.physics_rate_hz is not None:
@@ -322,7 +318,8 @@ def register(sub) -> None:
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="a setting, repeatable: sim.KEY, controller.KEY, rules.KEY, roughness.KEY, vehicle.KEY or "
                    "planner.KEY (a study's tables; `offroadbench config SECTION` lists the keys), e.g. "
-                   "sim.gravity_m_s2=1.62; any other key is a recipe override, e.g. layers.base.D_high=2.6")
+                   "sim.gravity_m_s2=1.62, and sim.mujoco.KEY, sim.mujoco_warp.KEY for the nested tables, e.g. "
+                   "sim.mujoco.hfield_collision=exact; any other key is a recipe override, e.g. layers.base.D_high=2.6")
     p.add_argument("--vehicle", default="husky", help="vehicle name or vehicle.toml path (default husky)")
     p.add_argument("--planner", default="straight",
                    help="planner or policy (built-in: straight, astar, lattice, reactive, mppi, ppo; installed plug-ins too)")

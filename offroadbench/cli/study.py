@@ -39,8 +39,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
                           "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
-                          "vehicle, planner, missions), any other key is a recipe override (as drive --set), "
-                          "e.g. --set study.terrains_per_cell=2 --set sim.engine=mujoco; repeatable")
+                          "vehicle, planner, missions), SECTION.TABLE.FIELD for a nested one (sim.mujoco, sim.mujoco_warp), "
+                          "any other key is a recipe override (as drive --set), e.g. --set study.terrains_per_cell=2 "
+                          "--set sim.engine=mujoco --set sim.mujoco.hfield_collision=exact; repeatable")
     run.add_argument("--force", action="store_true",
                      help="skip the up-front memory and study-size estimate checks (memory also "
                           "OFFROADBENCH_NO_MEMORY_CHECK=1)")
@@ -86,9 +87,11 @@ def _run_dir(path: str) -> Path:
 
 def apply_sets(data: dict, sets: list[str] | None) -> dict:
     """The study TOML dict with ``--set KEY=VALUE`` applied: ``study.FIELD`` into ``[study]``,
-    ``SECTION.FIELD`` into a settings table, other (recipe) keys into ``[recipe_overrides]``. A key
-    that a grid axis varies is refused (it would be overwritten in every cell)."""
-    from offroadbench.cli._common import parse_sets
+    ``SECTION.FIELD`` into a settings table and ``SECTION.TABLE.FIELD`` into a nested one
+    (``sim.mujoco.hfield_collision``: ``[sim.mujoco]``), other (recipe) keys into
+    ``[recipe_overrides]``. A key that a grid axis varies is refused (it would be overwritten in
+    every cell)."""
+    from offroadbench.cli._common import parse_sets, put_setting
     from offroadbench.study.spec.config import SECTIONS
 
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
@@ -99,9 +102,11 @@ def apply_sets(data: dict, sets: list[str] | None) -> dict:
         if key in grid or f"recipe.{key}" in grid:
             raise InputError(f"--set {item!r}: {key} is a grid axis of this study; change the grid in the file")
         (value,) = parse_sets([item]).values()
-        if head == "study" or head in SECTIONS:
+        if head in SECTIONS:
+            put_setting(out, item)  # SECTION.FIELD, or SECTION.TABLE.FIELD for [sim.mujoco] and the like
+        elif head == "study":
             if not dot or not rest or "." in rest:
-                raise InputError(f"--set {item!r}: a study or settings key is {head}.FIELD=VALUE")
+                raise InputError(f"--set {item!r}: a study key is study.FIELD=VALUE")
             out.setdefault(head, {})[rest] = value
         else:
             out.setdefault("recipe_overrides", {})[key] = value

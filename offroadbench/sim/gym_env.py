@@ -1,8 +1,9 @@
 """A Gymnasium environment for mission driving on one terrain: ``offroadbench/Traverse-v0``.
 
 Each episode is one mission drawn by :func:`offroadbench.navigation.missions.sample_missions` (Majhor & Bos
-Sec. 2.3) on the closed roughness-class map of the terrain (Eq. 3-4), with the generator Gymnasium
-seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's seed follows
+Sec. 2.3) on the closed roughness-class map of the terrain (Eq. 3-4; its start cells and goal map,
+:func:`offroadbench.navigation.missions.mission_sites`, computed at the first draw and kept for the
+terrain, as a study's are), with the generator Gymnasium seeds in ``reset(seed=...)`` (Gymnasium's own episode seeding; the terrain's seed follows
 :mod:`offroadbench.seeding`): the same seed gives the same mission and, because
 :meth:`World.spawn` resets every piece of vehicle state, the same episode bit for bit.
 
@@ -106,7 +107,7 @@ from offroadbench.analysis.roughness import RoughnessConfig
 from offroadbench.config import check_int, check_range
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.navigation.missions import Mission, MissionConfig, sample_missions
+from offroadbench.navigation.missions import Mission, MissionConfig, MissionSites, mission_sites, sample_missions
 from offroadbench.navigation.observation import (STATE_FIELDS, UNKNOWN_FILL_M, ObservationConfig, finite_observation,
                                                  height_patch, observation)
 from offroadbench.navigation.perception import PerceptionConfig
@@ -262,6 +263,7 @@ class TraverseEnv(gym.Env):
         self.hm = hm
         self.closed_classes = self.terrain.maps.closed  # the map the trials' missions use
         self._mission_cfg = dataclasses.replace(settings.missions, count=1)
+        self._sites: MissionSites | None = None  # the terrain's start cells and goal map, at the first draw
         self._sensing = None  # the episode's Oracle or MastSensor (offroadbench.navigation.sensor)
         self._world: TrialWorld | None = open_world(hm, settings.vehicle, self.terrain.sim_for(settings.sim),
                                                     soil_map=self.terrain.soil_map_for(settings.sim))
@@ -304,7 +306,10 @@ class TraverseEnv(gym.Env):
         given = (options or {}).get("mission")
         if given is not None and not isinstance(given, Mission):
             raise InputError(f"reset options['mission'] must be an offroadbench.navigation.missions.Mission, got {type(given).__name__}")
-        self.mission = given or sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random)[0]
+        if given is None and self._sites is None:  # once per terrain, as a study's (prepare_terrain)
+            self._sites = mission_sites(self.hm, self.closed_classes, self._mission_cfg)
+        self.mission = given or sample_missions(self.hm, self.closed_classes, self._mission_cfg, self.np_random,
+                                                self._sites)[0]
         m = self.mission
         self.path_xy = None
         if self.planner is not None:

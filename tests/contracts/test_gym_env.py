@@ -426,3 +426,48 @@ def test_the_env_config_and_the_trial_settings_share_their_fields_both_ways():
     assert (settings.missions.length_m, settings.missions.border_m, settings.controller.control_rate_hz,
             settings.observation.patch_cells, settings.observation.patch_spacing_m) == (4.0, 1.5, 10, 8, 0.2)
     assert gym_env._config_of(TraverseConfig(success_bonus=3.0), settings) == cfg
+
+
+def test_mission_sites_are_computed_once_per_terrain_and_episodes_are_unchanged(small_paper_recipe, monkeypatch):
+    """The start cells and goal map (mission_sites) are the terrain's, computed at the first draw and
+    reused by every reset (as a study computes them once per terrain); each episode's mission and
+    observations are those of sampling without them (a fresh env, the sampler's own computation)."""
+    import offroadbench.navigation.missions as missions_module
+    import offroadbench.sim.gym_env as gym_env_module
+    from offroadbench.terrain.recipe import generate_terrain
+
+    hm = generate_terrain(small_paper_recipe, 3)
+    calls = []
+    original = missions_module.mission_sites
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    def episode(env, seed):
+        obs, info = env.reset(seed=seed)
+        first = obs
+        for _ in range(3):
+            obs, *_ = env.step(np.array([1.0, 0.3], dtype=np.float32))
+        return info["mission"], first, obs
+
+    fresh = {}
+    for seed in (7, 8):  # each in a fresh env: the first draw computes the sites
+        with TraverseEnv(hm, config=SHORT) as env:
+            fresh[seed] = episode(env, seed)
+    monkeypatch.setattr(missions_module, "mission_sites", counted)
+    monkeypatch.setattr(gym_env_module, "mission_sites", counted)
+    with TraverseEnv(hm, config=SHORT) as env:
+        assert not calls  # nothing drawn yet
+        runs = [(seed, episode(env, seed)) for seed in (7, 8, 7, 8)]
+        env.reset(options={"mission": fresh[7][0]})
+    assert len(calls) == 1
+    for seed, (mission, first, last) in runs:
+        want = fresh[seed]
+        assert mission == want[0]
+        for got, ref in ((first, want[1]), (last, want[2])):
+            assert all(np.array_equal(got[k], ref[k]) for k in ref)
+    rc = RoughnessConfig()
+    closed = close_rough(classify(hm, rc), rc.closing_radius_m, CELL)
+    cfg = MissionConfig(count=1, length_m=3.0, border_m=1.0)
+    assert fresh[8][0] == sample_missions(hm, closed, cfg, np.random.default_rng(8))[0]

@@ -72,13 +72,18 @@ class SoilSetup:
     """A soil map (offroadbench.terrain.soil_map.SoilMap) whose index 0 is this setup's soil, or None."""
     map_soils: tuple = ()
     """For a soil map, (tables, relaxation m, lateral relaxation m) of each of its soils, index 0 first."""
+    damping_mass_kg: float | None = None
+    """The mass the penetration damping is sized for, kg: None, the wheel's share (``share_kg``); on
+    a sprung vehicle its unsprung mass (:func:`soil_setup`)."""
 
     def wheels(self, n_wheels: int, hm: Heightmap, dt_s: float, step_dt_s: float | None = None) -> SoilWheels:
         """The per-wheel contact for ``n_wheels`` wheels on ``hm``, integrated at ``step_dt_s``
         (default ``dt_s``, the trial's step the setup was built for); penetration damping
-        ``0.5 m / dt`` for a wheel's share ``m`` (as the Coulomb bristle's)."""
+        ``0.5 m / dt`` for the wheel's moving mass ``m`` (:attr:`damping_mass_kg`; as the Coulomb
+        bristle's)."""
+        m = self.share_kg if self.damping_mass_kg is None else self.damping_mass_kg
         return SoilWheels(n_wheels, hm, self.tables, dt_s if step_dt_s is None else step_dt_s, self.share_kg,
-                          damping_n_s_m=0.5 * self.share_kg / dt_s, relaxation_m=self.relaxation_m,
+                          damping_n_s_m=0.5 * m / dt_s, relaxation_m=self.relaxation_m,
                           lateral_relaxation_m=self.lateral_relaxation_m, soil_map=self.soil_map,
                           map_soils=self.map_soils)
 
@@ -106,13 +111,30 @@ def soil_setup(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2
     ``0.25 m / dt^2``. With a ``soil_map`` (offroadbench.terrain.soil_map.SoilMap) every soil of the
     map gets its own tables and lengths, the same way; ``soil_name`` is then ignored for the map's
     default, its index 0.
+
+    The penetration damping (:meth:`SoilSetup.wheels`) is sized for the mass that moves with the
+    wheel: its share of the vehicle on a rigid one, but on a sprung vehicle (``suspension_joints``)
+    the unsprung mass below a strut (offroadbench.sim.engines.base.unsprung_kg), which moves alone
+    once its strut leaves the droop stop. Sized on the share, the HUNTER's (16.25 kg against its
+    wheels' 3.5-4.5 kg: ``c dt / m`` = 2.3 on a rear wheel at 60 Hz, above the explicit step's bound
+    of 2) made the wheels that left their stops chatter on lunar regolith (vertical speed
+    0.08-0.11 m/s RMS) and the car rest on that diagonal pair (31-32 N against 20-21 N), which read
+    -6.8 N of drawbar pull against -5.2 N in vehicle check (-5.8 N with this damping; MuJoCo, at
+    120 Hz, did not chatter).
     """
     if soil_map is not None:
         parts = [_one_soil(spec, name, mass_kg, n_wheels, gravity_m_s2, dt_s) for name in soil_map.soils]
         first = parts[0]
-        return dataclasses.replace(first, soil_map=soil_map,
-                                   map_soils=tuple((p.tables, p.relaxation_m, p.lateral_relaxation_m) for p in parts))
-    return _one_soil(spec, soil_name, mass_kg, n_wheels, gravity_m_s2, dt_s)
+        setup = dataclasses.replace(first, soil_map=soil_map,
+                                    map_soils=tuple((p.tables, p.relaxation_m, p.lateral_relaxation_m) for p in parts))
+    else:
+        setup = _one_soil(spec, soil_name, mass_kg, n_wheels, gravity_m_s2, dt_s)
+    if getattr(spec, "suspension_joints", ()):
+        from offroadbench.sim.engines.base import unsprung_kg
+
+        unsprung = unsprung_kg(spec.urdf, spec.suspension_joints)
+        setup = dataclasses.replace(setup, damping_mass_kg=min(setup.share_kg, unsprung))
+    return setup
 
 
 def _one_soil(spec, soil_name: str, mass_kg: float, n_wheels: int, gravity_m_s2: float, dt_s: float) -> SoilSetup:

@@ -36,8 +36,12 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
   ``sqrt(m / k)`` and ``c / (2 sqrt(k m))`` for a wheel's share ``m`` of the mass, the time
   constant raised to two steps (MuJoCo's stable minimum; at 60 Hz the tyre is so softer than
   PyBullet's). MuJoCo's direct form ``(-k / m, -c / m)`` was tried: a sphere on a height field
-  gets 4-5 contacts (the field is a union of prisms), each as stiff, and at 60 Hz the vehicle
-  bounced off the ground. The chassis contact is MuJoCo's default, with the chassis' friction.
+  gets several contacts (the field is a union of prisms; counted after every trial step, the
+  hfield's contacts with a wheel's geoms over the wheels with at least one: 2.66 a touching wheel
+  for the Husky, median 2, 6 in 15 % of the wheel-steps, on 12 missions of 15 m on paper-d2.3 and
+  paper-d2.45 cut to 601^2 cells; the Jackal 2.13; ``tests/sim/test_mujoco_contact_count.py``),
+  each as stiff, and at 60 Hz the vehicle bounced off the ground. The chassis contact is MuJoCo's
+  default, with the chassis' friction.
 - **Reset**: ``mj_resetData`` before every spawn clears every piece of state, so results do not
   depend on the missions run before (bit-identical in any mission order).
 
