@@ -48,6 +48,7 @@ REDESIGNED = {
     "lunar-soil": (10, 6, 2, [1.00], BOTH),
     # the seven older studies, re-planned before their blind re-runs (issue 42, Deliver 1-2)
     "crater-density": (20, 10, 6, [1.00, 1.00, 0.95, 1.00, 1.00, 0.84], ("pybullet",)),
+    "majhor2023": (20, 20, 8, [0.98, 0.96, 1.00, 1.00, 0.98, 1.00, 0.99, 1.00], ("pybullet",)),
 }
 
 #: the hand-chosen root seeds of the earlier runs: a blind seed is none of them
