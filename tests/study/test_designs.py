@@ -49,6 +49,7 @@ REDESIGNED = {
     # the seven older studies, re-planned before their blind re-runs (issue 42, Deliver 1-2)
     "crater-density": (20, 10, 6, [1.00, 1.00, 0.95, 1.00, 1.00, 0.84], ("pybullet",)),
     "engines": (12, 10, 6, [1.00, 1.00, 1.00, 1.00, 0.94, 0.85], BOTH),
+    "soil-map": (24, 6, 2, [0.95, 1.00], ("pybullet",)),
     "majhor2023": (20, 20, 8, [0.98, 0.96, 1.00, 1.00, 0.98, 1.00, 0.99, 1.00], ("pybullet",)),
     "majhor2023-mujoco": (20, 20, 8, [1.00, 0.96, 1.00, 1.00, 0.99, 1.00, 1.00, 1.00], ("mujoco",)),
 }
