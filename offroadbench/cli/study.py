@@ -12,6 +12,30 @@ from offroadbench.io.atomic import atomic_path, atomic_paths
 EXPORT_FORMATS = ("parquet", "csv")
 
 
+def _power_refusal(study, base_dir: Path) -> str | None:
+    """check_power's refusal (its one line), or None when every planned test has the power."""
+    from offroadbench.study.stats.power import check_power
+
+    try:
+        check_power(study, base_dir)
+    except InputError as exc:
+        return str(exc)
+    return None
+
+
+def _check_power_apart(study, base_dir: Path) -> None:
+    """check_power in a forked child: it needs pandas, and this process's workers fork from it (issue
+    41: workers hold no pandas or pyarrow). Where fork is not available, here."""
+    import multiprocessing
+
+    if "fork" not in multiprocessing.get_all_start_methods():  # pragma: no cover - not on Linux
+        refusal = _power_refusal(study, base_dir)
+    else:
+        with multiprocessing.get_context("fork").Pool(1) as pool:
+            refusal = pool.apply(_power_refusal, (study, base_dir))
+    if refusal is not None:
+        raise InputError(refusal)
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
     from offroadbench.cli._common import float_at_least, int_at_least
@@ -150,10 +174,8 @@ def _run(args: argparse.Namespace) -> int:
         raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
-    if study.analysis is not None and study.analysis.pilot:  # (only then: pandas, which the workers need not fork with)
-        from offroadbench.study.stats.power import check_power
-
-        check_power(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
+    if study.analysis is not None and study.analysis.pilot:
+        _check_power_apart(study, path.parent)  # a planned test under the plan's min_power is refused (issue 42)
     try:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:
