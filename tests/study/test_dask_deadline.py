@@ -33,6 +33,21 @@ def _frozen_gone(pid: int) -> bool:
         return True
 
 
+def _trial_plugin(tmp_path, monkeypatch, module: str, source: str, env: str, path):
+    """The trial function of ``source`` (written as ``module``, importable by the LocalCluster's
+    spawned workers, which inherit sys.path), ``env`` set to ``path``; and the list of workers the
+    executor restarts (none is restarted: each is recorded)."""
+    import importlib
+
+    (tmp_path / f"{module}.py").write_text(source)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv(env, str(path))
+    fn = next(v for k, v in vars(importlib.import_module(module)).items() if k.endswith("_once"))
+    restarts: list = []
+    monkeypatch.setattr(DaskExecutor, "_restart", staticmethod(lambda client, worker: restarts.append(worker)))
+    return fn, restarts
+
+
 FREEZE_MODULE = """
 import os, signal, time
 from pathlib import Path
@@ -62,14 +77,9 @@ def test_a_sigstopped_worker_s_trial_is_a_fault_within_a_minute_and_the_study_fi
                                                                                           monkeypatch):
     study_path = write_tiny_study(tmp_path, name="frozen", root_seed=7, terrains=2, missions=3)
     study, cells = load_study(study_path)
-    (tmp_path / "freeze_trials.py").write_text(FREEZE_MODULE)
-    monkeypatch.syspath_prepend(str(tmp_path))  # the LocalCluster's spawned workers inherit sys.path
     marker = tmp_path / "frozen.pid"
-    monkeypatch.setenv("OFFROADBENCH_TEST_FREEZE_MARKER", str(marker))
-    from freeze_trials import freeze_once
-
-    restarts = []
-    monkeypatch.setattr(DaskExecutor, "_restart", staticmethod(lambda client, worker: restarts.append(worker)))
+    freeze_once, restarts = _trial_plugin(tmp_path, monkeypatch, "freeze_trials", FREEZE_MODULE,
+                                          "OFFROADBENCH_TEST_FREEZE_MARKER", marker)
     try:
         summary = run_study(study, cells, tmp_path / "out", executor="dask", workers=2, trial_fn=freeze_once,
                             executor_options={"trial_timeout_s": 8})
@@ -152,14 +162,9 @@ def slow_once(prepared, settings):
 def test_a_trial_past_its_limit_on_a_healthy_worker_costs_no_restart(tmp_path, write_tiny_study, monkeypatch):
     study_path = write_tiny_study(tmp_path, name="healthy", root_seed=5, terrains=1, missions=2)
     study, cells = load_study(study_path)
-    (tmp_path / "slow_trials.py").write_text(SLOW_MODULE)
-    monkeypatch.syspath_prepend(str(tmp_path))  # the LocalCluster's spawned workers inherit sys.path
     log = tmp_path / "pids.log"
-    monkeypatch.setenv("OFFROADBENCH_TEST_SLOW_LOG", str(log))
-    from slow_trials import slow_once
-
-    restarts = []
-    monkeypatch.setattr(DaskExecutor, "_restart", staticmethod(lambda client, worker: restarts.append(worker)))
+    slow_once, restarts = _trial_plugin(tmp_path, monkeypatch, "slow_trials", SLOW_MODULE,
+                                        "OFFROADBENCH_TEST_SLOW_LOG", log)
     summary = run_study(study, cells, tmp_path / "out", executor="dask", workers=1, trial_fn=slow_once,
                         executor_options={"trial_timeout_s": 6})
     assert (summary.done, summary.faults) == (3, 1) and summary.complete
