@@ -48,6 +48,7 @@ as the two halves of :class:`MuJoCoWorld`.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -103,6 +104,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
         self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
         self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
+        self._step_call = None  # the compiled whole trial step with its arguments bound, for a step without a push
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -121,6 +123,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             self._fast = (tc, f, ist)
             self._fast_step = whole_step(self.model, d, self._hfield)
             self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
+            if self._fast_step is not None:  # the whole step's call with every argument bound (they never change)
+                self._step_call = functools.partial(tc.STEP, *self._fast_step, *self._step_arrays, f, ist,
+                                                    self.substeps, contact.tyres_each_substep)
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
@@ -340,6 +345,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
         ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
         functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
+        if self._step_call is not None and self._base_force is None:  # the compiled whole step, as _step_compiled calls it
+            self._step_call()
+            return
         hf = self._hfield
         whole = (self._fast_step if self._fast is not None else
                  self._fast_soil_step if self._fast_soil is not None else None)
