@@ -151,6 +151,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
         self._xfrc_zero = [0.0] * (6 * self.model.nbody)
         self._base_force = None  # push_base's force for the next step
+        self._last_rotation = None  # (quaternion, rotation matrix) of the last base_state
+        self._z_max_m = hm.z_max_m  # the map's top, for every spawn (a scan of the whole map)
         self.geometry = self._measure_geometry()
 
     def _loop_kernels(self, choice: str, kernels: str):
@@ -274,7 +276,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         mujoco.mj_resetData(m, d)
         cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
         ch, sh = math.cos(0.5 * heading_rad), math.sin(0.5 * heading_rad)
-        d.qpos[0:3] = (x_m, y_m, hm.z_max_m + 10.0)
+        d.qpos[0:3] = (x_m, y_m, (self._z_max_m if hm is self.hm else hm.z_max_m) + 10.0)
         d.qpos[3:7] = (ch * cr, ch * sr, sh * sr, sh * cr)  # w x y z of yaw(heading) * roll
         for adr in self._strut_qpos:  # a sprung vehicle's struts at rest in this gravity
             d.qpos[adr] = self._spring_rest_m
@@ -394,15 +396,25 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         q = self.data.qpos.tolist()
         v = self.data.qvel.tolist()
         w, x, y, z = q[3:7]
-        r = self.rotation_matrix((x, y, z, w))
+        quat = (x, y, z, w)
+        r = self._rotation(quat)
+        self._last_rotation = (quat, r)  # the caller's body frame (runner.body_frame) asks for it again
         wb = v[3:6]
         ang = (r[0] * wb[0] + r[1] * wb[1] + r[2] * wb[2],
                r[3] * wb[0] + r[4] * wb[1] + r[5] * wb[2],
                r[6] * wb[0] + r[7] * wb[1] + r[8] * wb[2])
-        return (q[0], q[1], q[2]), (x, y, z, w), (v[0], v[1], v[2]), ang
+        return (q[0], q[1], q[2]), quat, (v[0], v[1], v[2]), ang
 
     def rotation_matrix(self, quat: tuple) -> tuple:
         """Row-major 3x3 rotation matrix (body -> world) of a unit quaternion (x, y, z, w)."""
+        last = self._last_rotation
+        if last is not None and quat is last[0]:  # the quaternion base_state returned last: its matrix
+            return last[1]
+        return self._rotation(quat)
+
+    @staticmethod
+    def _rotation(quat: tuple) -> tuple:
+        """:meth:`rotation_matrix`, computed."""
         x, y, z, w = quat
         return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
                 2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
