@@ -252,10 +252,7 @@ class TrialLoop:
 
     def telemetry(self) -> dict[str, np.ndarray]:
         """The telemetry so far, TELEMETRY_COLUMNS."""
-        table = np.array(self.rows, dtype=float).reshape(len(self.rows), -1)  # one row per tick, as recorded
-        if table.shape[1] != len(TELEMETRY_COLUMNS):
-            raise ValueError(f"telemetry rows have {table.shape[1]} values, expected {len(TELEMETRY_COLUMNS)}")
-        return {name: np.ascontiguousarray(table[:, i]) for i, name in enumerate(TELEMETRY_COLUMNS)}
+        return {name: np.array(col, dtype=float) for name, col in zip(TELEMETRY_COLUMNS, zip(*self.rows, strict=True), strict=True)}
 
 
 def drive_mission(
