@@ -19,8 +19,8 @@ digest of the trials' rows and telemetry, which must be the same for every tree.
 loaded machine the compiled step's CPU time swings by more than the whole Python part, the
 replay's much less.
 
-Prints figures; record them in benchmarks/RESULTS.md. Not a test. ``--smoke``: one round, two
-missions, on a 161^2 map with 5 m missions (seconds; its figures mean nothing).
+Prints figures; record them in benchmarks/RESULTS.md. Not a test. ``--smoke``: one round of both
+modes, two missions, on a 161^2 map with 5 m missions (seconds; its figures mean nothing).
 """
 
 from __future__ import annotations
@@ -206,7 +206,7 @@ def main() -> None:
     ap.add_argument("--tree", action="append", default=[], help="a checkout of offroadbench (repeat); default this one")
     ap.add_argument("--missions", type=int, default=10)
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--smoke", action="store_true", help="one round of two short missions on a 161^2 map (CI)")
+    ap.add_argument("--smoke", action="store_true", help="one round of both modes, two short missions on a 161^2 map (CI)")
     ap.add_argument("--replay", action="store_true", help="the trial loop's Python by replay (see replay_child)")
     ap.add_argument("--child", choices=["plain", "timed", "replay"], help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -223,9 +223,10 @@ def main() -> None:
 
     trees = args.tree or [str(ROOT)]
     print(f"machine: {machine_description()}; load average {os.getloadavg()[0]:.1f}")
-    if args.replay:
+    if args.replay or args.smoke:  # the smoke mode runs both
         _replay_rounds(trees, args, rows)
-        return
+        if args.replay:
+            return
     print("tree | trial steps | CPU us per trial step (untimed) | compiled step us | Python us per trial step | digest")
     digests = set()
     for _ in range(args.rounds):
