@@ -19,7 +19,9 @@ line naming the estimate (``--force`` or ``OFFROADBENCH_NO_MEMORY_CHECK=1`` skip
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 from offroadbench.errors import InputError
 
@@ -29,7 +31,8 @@ __all__ = [
     "NO_MEMORY_CHECK_ENV", "grid_bytes", "world_bytes", "address_space_room_bytes", "available_memory_bytes",
     "check_memory",
     "check_recipe_memory", "workers_that_fit", "format_bytes", "WORLD_ENGINES", "MMAP_THRESHOLD_BYTES",
-    "release_large_blocks",
+    "release_large_blocks", "TRIM_THRESHOLD_BYTES", "REUSE_MMAP_THRESHOLD_BYTES", "REUSE_TRIM_THRESHOLD_BYTES",
+    "reusing_freed_blocks",
 ]
 
 
@@ -193,28 +196,83 @@ def workers_that_fit(per_worker_bytes: int) -> int:
 #: allocations from this size up get their own ``mmap`` in a study worker (:func:`release_large_blocks`),
 #: bytes: glibc's initial threshold, held fixed
 MMAP_THRESHOLD_BYTES = 128 * 1024
-#: ``mallopt``'s parameter number of the threshold (glibc's malloc.h)
+#: the heap's free top above this size goes back to the system at each ``free`` in a study worker, bytes:
+#: glibc's default (``DEFAULT_TRIM_THRESHOLD``), held fixed with the mmap threshold
+TRIM_THRESHOLD_BYTES = 128 * 1024
+#: the thresholds while a terrain is prepared (:func:`reusing_freed_blocks`), bytes: the ceiling of
+#: glibc's own adaptive mmap threshold on 64-bit (``DEFAULT_MMAP_THRESHOLD_MAX``, 32 MiB) and twice
+#: it for the trim threshold, the pair glibc's adaptive rule ends at
+REUSE_MMAP_THRESHOLD_BYTES = 32 * 1024 * 1024
+REUSE_TRIM_THRESHOLD_BYTES = 2 * REUSE_MMAP_THRESHOLD_BYTES
+#: ``mallopt``'s parameter numbers (glibc's malloc.h)
+_M_TRIM_THRESHOLD = -1
 _M_MMAP_THRESHOLD = -3
+
+_held = False  # release_large_blocks has set this process's thresholds
+
+
+def _libc_malloc():
+    """(mallopt, malloc_trim) of the process's C library, or None where it has not both (not glibc)."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None)
+        mallopt, trim = libc.mallopt, libc.malloc_trim
+    except (OSError, AttributeError):
+        return None
+    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+    trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
+    return mallopt, trim
 
 
 def release_large_blocks() -> bool:
     """Make glibc's malloc give every block of :data:`MMAP_THRESHOLD_BYTES` or more back to the
-    system when it is freed (its own ``mmap``), for the rest of this process; False where the C
-    library has no ``mallopt`` (not glibc) or refuses.
+    system when it is freed (its own ``mmap``), and the heap's free top above
+    :data:`TRIM_THRESHOLD_BYTES`, for the rest of this process; False where the C library has no
+    ``mallopt`` (not glibc) or refuses.
 
     By default glibc raises that threshold to the largest block freed so far (up to 32 MB), so
     after the first terrain a worker's 1009^2 arrays (8 MB of float64 each) come from the heap,
     which fragments and keeps what they freed: on the full MuJoCo paper study a worker peaked at
     404-417 MB (349-410 MB with every thread on one malloc arena, ``M_ARENA_MAX`` = 1); with the
     threshold held, 284-285 MB (benchmarks/RESULTS.md, issue 41). What it costs: each large
-    array's pages are faulted in afresh, about 0.12 s of CPU per 1009^2 terrain (its generation
-    touches ~165 MB of new pages)."""
-    import ctypes
-
-    try:
-        libc = ctypes.CDLL(None)
-        mallopt = libc.mallopt
-    except (OSError, AttributeError):
+    array's pages are faulted in afresh; :func:`reusing_freed_blocks` gives that back where a
+    terrain is prepared."""
+    global _held
+    calls = _libc_malloc()
+    if calls is None:
         return False
-    mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
-    return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES))
+    mallopt, _ = calls
+    _held = bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES)) and bool(mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES))
+    return _held
+
+
+@contextmanager
+def reusing_freed_blocks() -> Iterator[None]:
+    """In a process whose thresholds :func:`release_large_blocks` holds (a study worker): inside the
+    block, glibc serves large blocks from the heap and keeps what they free for the next ones
+    (:data:`REUSE_MMAP_THRESHOLD_BYTES`, :data:`REUSE_TRIM_THRESHOLD_BYTES`); on leaving, the held
+    thresholds come back and every free page of the heap goes back to the system (``malloc_trim``).
+    Elsewhere it does nothing.
+
+    Around a terrain's preparation (offroadbench.sim.trial.pipeline.prepare_terrain): its
+    W-M layers, the finufft transforms (whose fine grid and spreading grid, 6.5 and 6.9 MB a call
+    on the paper's grid, finufft 2.5 allocates inside every ``execute``, so a reused ``Plan``
+    allocates them again) and the class maps allocate and free the same sizes many times; with
+    every one a fresh mapping, a 1009^2 terrain page-faulted 52-60 k times instead of 3-4 k
+    (benchmarks/RESULTS.md, issue 41). What the terrain keeps (its heights, class maps) stays in
+    the heap; what it freed is returned on leaving. Results are unchanged (allocation never
+    changes a value: tests/terrain/test_bit_identical.py)."""
+    calls = _libc_malloc() if _held else None
+    if calls is None:
+        yield
+        return
+    mallopt, trim = calls
+    mallopt(_M_MMAP_THRESHOLD, REUSE_MMAP_THRESHOLD_BYTES)
+    mallopt(_M_TRIM_THRESHOLD, REUSE_TRIM_THRESHOLD_BYTES)
+    try:
+        yield
+    finally:
+        mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES)
+        mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES)
+        trim(0)

@@ -32,7 +32,7 @@ def _worlds(hm, sim=MUJOCO, **tuning):
     """(Python loop, compiled kernels between the bindings' calls, whole compiled step)."""
     python = MuJoCoWorld(hm, "husky", sim, MuJoCoConfig(tyre_loop="python", **tuning))
     glue = MuJoCoWorld(hm, "husky", sim, MuJoCoConfig(tyre_loop="compiled", **tuning))
-    glue._fast_step = glue._fast_soil_step = None
+    glue._fast_step = glue._fast_soil_step = glue._step_call = None
     whole = MuJoCoWorld(hm, "husky", sim, MuJoCoConfig(tyre_loop="compiled", **tuning))
     if sim.tyre_model == "terramechanics":
         assert python._fast_soil is None and glue._fast_soil is not None and whole._fast_soil_step is not None

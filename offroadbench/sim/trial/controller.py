@@ -77,11 +77,17 @@ def pure_pursuit_omega(
     pos_xy: np.ndarray, yaw_rad: float, target_xy: np.ndarray, v_m_s: float, max_yaw_rate_rad_s: float
 ) -> float:
     """Yaw-rate command (rad/s, CCW +) to follow the arc to ``target_xy`` at speed ``v_m_s``."""
-    d = np.asarray(target_xy, dtype=float) - np.asarray(pos_xy, dtype=float)
-    dist = math.hypot(d[0], d[1])
+    return _pursuit(float(target_xy[0]) - float(pos_xy[0]), float(target_xy[1]) - float(pos_xy[1]), yaw_rad, v_m_s,
+                    max_yaw_rate_rad_s)
+
+
+def _pursuit(dx: float, dy: float, yaw_rad: float, v_m_s: float, max_yaw_rate_rad_s: float) -> float:
+    """:func:`pure_pursuit_omega` from the target's offset (dx, dy) from the vehicle, m, in plain
+    floats (each operation the one numpy's element-wise arithmetic does, so the same bits)."""
+    dist = math.hypot(dx, dy)
     if dist < 1e-9:
         return 0.0
-    alpha = math.atan2(d[1], d[0]) - yaw_rad
+    alpha = math.atan2(dy, dx) - yaw_rad
     kappa = 2.0 * math.sin(alpha) / dist
     return max(-max_yaw_rate_rad_s, min(max_yaw_rate_rad_s, v_m_s * kappa))
 
@@ -161,7 +167,7 @@ class SpeedProfile:
             self._inp.current_position = [min(float(progress_m), self.length_m)]
             self._inp.current_velocity = [max(0.0, min(self._v_max, float(speed_m_s)))]
         self._advance()
-        p_ref, v_ref, _ = self.reference
+        p_ref, v_ref = self._inp.current_position[0], self._inp.current_velocity[0]  # as .reference gives them
         error = p_ref - progress_m
         if abs(error) > self._bound:
             # re-plan: the reference is moved to the bound from the measured progress; its speed and
@@ -202,17 +208,24 @@ class LineTracker:
         self.cfg = cfg
         self.spec = spec
         self.speed = speed_loop(self.length_m, spec, cfg)
+        # the per-tick arithmetic in plain floats: the same operations as numpy's on the arrays above
+        self._sx, self._sy = float(self.start[0]), float(self.start[1])
+        self._ux, self._uy = float(self.unit[0]), float(self.unit[1])
+        self._lookahead_m = float(cfg.lookahead_m)
+        self._w_max = float(spec.max_yaw_rate_rad_s)
 
-    def progress(self, pos_xy: np.ndarray) -> float:
-        """Distance along the line of the projection of ``pos_xy``, metres."""
-        return _dot2(pos_xy[0] - self.start[0], pos_xy[1] - self.start[1], self.unit)
+    def progress(self, pos_xy) -> float:
+        """Distance along the line of the projection of ``pos_xy`` (x, y, ...), metres."""
+        return (float(pos_xy[0]) - self._sx) * self._ux + (float(pos_xy[1]) - self._sy) * self._uy
 
-    def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
-        """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
-        s = self.progress(pos_xy)
-        v = self.speed.command(s, _dot2(vel_xy[0], vel_xy[1], self.unit))
-        target = self.start + self.unit * min(max(s, 0.0) + self.cfg.lookahead_m, self.length_m)
-        omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
+    def command(self, pos_xy, yaw_rad: float, vel_xy) -> tuple[float, float, float]:
+        """(v, omega, progress) for the measured position, yaw and horizontal velocity (each (x, y))."""
+        px, py = float(pos_xy[0]), float(pos_xy[1])
+        ux, uy = self._ux, self._uy
+        s = (px - self._sx) * ux + (py - self._sy) * uy
+        v = self.speed.command(s, float(vel_xy[0]) * ux + float(vel_xy[1]) * uy)
+        m = min(max(s, 0.0) + self._lookahead_m, self.length_m)
+        omega = _pursuit(self._sx + ux * m - px, self._sy + uy * m - py, yaw_rad, v, self._w_max)
         return v, omega, s
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from offroadbench.analysis.roughness import ClassMaps, classify_terrain
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
+from offroadbench.memory import reusing_freed_blocks
 from offroadbench.navigation.drivers import PlannerChoice
 from offroadbench.navigation.missions import Mission, MissionConfig, mission_sites, sample_mission
 from offroadbench.progress import ProgressFn, report
@@ -105,7 +106,16 @@ def prepare_terrain(terrain, seed: int | None, settings: TrialSettings,
     ``[soil]`` give gravity and soil). ``missions`` are
     ``(index, mission_seed)`` pairs, each drawn alone on the closed class map (Majhor & Bos 2023,
     Sec. 2.3), or Mission objects used as they are; either way in the order they will be driven.
+
+    In a study worker the heap keeps the blocks the preparation frees for its next ones and returns
+    them at the end (offroadbench.memory.reusing_freed_blocks); the results do not depend on it.
     """
+    with reusing_freed_blocks():
+        return _prepare(terrain, seed, settings, missions, gravity_m_s2, soil, soil_map)
+
+
+def _prepare(terrain, seed, settings, missions, gravity_m_s2, soil, soil_map) -> PreparedTerrain:
+    """:func:`prepare_terrain`'s work."""
     if isinstance(terrain, Heightmap):
         hm = terrain
     else:

@@ -148,6 +148,7 @@ class TrialLoop:
         self.rows: list[tuple] = []
         self._row_k = -1  # the tick of the last row
         self.slips: list[float] = []
+        self._outside = getattr(world, "wheel_outside_model", None)
         self.outside: list[float] = []
         """Per telemetry row: 1 where a wheel bottomed out (outside the soil model), 0 where not, NaN
         where the engine or the tyre model has no soil."""
@@ -203,7 +204,7 @@ class TrialLoop:
             self._row_k = k
             slip = world.wheel_slip()
             self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
-            outside = getattr(world, "wheel_outside_model", lambda: None)()
+            outside = self._outside() if self._outside is not None else None
             self.outside.append(math.nan if outside is None else float(outside))
             done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
             if done is not None:
@@ -232,9 +233,10 @@ class TrialLoop:
             if self.record(progress_m):
                 return True
 
-    def result(self) -> TrialResult:
-        """The trial's row (:class:`TrialResult`), once it has ended."""
-        tel = self.telemetry()
+    def result(self, telemetry: dict[str, np.ndarray] | None = None) -> TrialResult:
+        """The trial's row (:class:`TrialResult`), once it has ended; ``telemetry``: :meth:`telemetry`'s
+        columns if the caller has them already."""
+        tel = self.telemetry() if telemetry is None else telemetry
         reason = "timeout" if self.reason is None else self.reason
         result = make_result(self.mission, tel, reason, self.traversal_time_s, self.end_step * self.world.dt_s,
                          1.0 / self.world.sim.telemetry_rate_hz, self.goal)
@@ -324,11 +326,11 @@ def drive_mission(
         length = tracker.length_m
     else:
         length = mission.length_m
-    fill_m = hm.z_min_m - settings.rules.fall_depth_m
+    fill_m = hm.z_min_m - settings.rules.fall_depth_m if policy is not None else None  # a policy's map fill
 
     def progress_m(pos) -> float:
         if replanner is None and tracker is not None:
-            return tracker.progress(np.array(pos[:2]))
+            return tracker.progress(pos[:2])
         return mission.length_m - math.hypot(goal[0] - pos[0], goal[1] - pos[1])
 
     loop = TrialLoop(world, mission, settings, length_m=length, name=planner.name, spawn_roll_rad=spawn_roll_rad)
@@ -338,7 +340,7 @@ def drive_mission(
         if policy is None:
             if replanner is not None and replanner.update((bx, by)) is not None:
                 tracker = make_vehicle_tracker(replanner.waypoints, spec, controller, world)
-            v, w, _ = tracker.command(np.array((bx, by)), byaw, np.array(lin[:2]))
+            v, w, _ = tracker.command((bx, by), byaw, lin[:2])
         else:
             obs = observe(hm, observation, goal, (bx, by, pos[2]), roll, pitch, byaw, rates,
                           body_velocity(world, quat, lin), fill_m, None if sensing.name == "oracle" else sensing.z)
@@ -351,7 +353,8 @@ def drive_mission(
             break
     path = replanner.trace if replanner is not None else waypoints
     belief = None if sensing.name == "oracle" else Belief(np.asarray(sensing.trail, dtype=float).reshape(-1, 2), sensing.seen)
-    return TrialRecord(loop.result(), loop.telemetry(), np.asarray(path, dtype=float), belief)
+    telemetry = loop.telemetry()
+    return TrialRecord(loop.result(telemetry), telemetry, np.asarray(path, dtype=float), belief)
 
 
 def settings_of(world: TrialWorld, *, planner: PlannerChoice | None = None, border_m: float | None = None,

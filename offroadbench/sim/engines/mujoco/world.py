@@ -52,6 +52,7 @@ as the two halves of :class:`MuJoCoWorld`.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -107,6 +108,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._fast = None  # the compiled tyre loop's (module, float state, int state), if used
         self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
         self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
+        self._step_call = None  # the compiled whole trial step with its arguments bound, for a step without a push
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -125,6 +127,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             self._fast = (tc, f, ist)
             self._fast_step = whole_step(self.model, d, self._hfield)
             self._step_arrays = (d.qvel, d.xmat, d.xipos, d.xfrc_applied)  # views of fixed buffers: fetched once
+            if self._fast_step is not None:  # the whole step's call with every argument bound (they never change)
+                self._step_call = functools.partial(tc.STEP, *self._fast_step, *self._step_arrays, f, ist,
+                                                    self.substeps, contact.tyres_each_substep)
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
@@ -150,6 +155,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._xfrc = [0.0] * (6 * self.model.nbody)  # xfrc_applied, row-major, written once per step
         self._xfrc_zero = [0.0] * (6 * self.model.nbody)
         self._base_force = None  # push_base's force for the next step
+        self._last_rotation = None  # (quaternion, rotation matrix) of the last base_state
+        self._z_max_m = hm.z_max_m  # the map's top, for every spawn (a scan of the whole map)
         self.geometry = self._measure_geometry()
 
     def _loop_kernels(self, choice: str, kernels: str):
@@ -273,7 +280,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         mujoco.mj_resetData(m, d)
         cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
         ch, sh = math.cos(0.5 * heading_rad), math.sin(0.5 * heading_rad)
-        d.qpos[0:3] = (x_m, y_m, hm.z_max_m + 10.0)
+        d.qpos[0:3] = (x_m, y_m, (self._z_max_m if hm is self.hm else hm.z_max_m) + 10.0)
         d.qpos[3:7] = (ch * cr, ch * sr, sh * sr, sh * cr)  # w x y z of yaw(heading) * roll
         for adr in self._strut_qpos:  # a sprung vehicle's struts at rest in this gravity
             d.qpos[adr] = self._spring_rest_m
@@ -344,6 +351,9 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         """One trial step of ``dt_s``: ``substeps`` times ``mj_step1``, the tyre forces into
         ``xfrc_applied``, ``mj_step2``, then the contacts; with this world's height-field collision
         functions in MuJoCo's table during those calls only (``[sim.mujoco] hfield_collision``)."""
+        if self._step_call is not None and self._base_force is None:  # the compiled whole step, as _step_compiled calls it
+            self._step_call()
+            return
         hf = self._hfield
         whole = (self._fast_step if self._fast is not None else
                  self._fast_soil_step if self._fast_soil is not None else None)
@@ -390,15 +400,25 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         q = self.data.qpos.tolist()
         v = self.data.qvel.tolist()
         w, x, y, z = q[3:7]
-        r = self.rotation_matrix((x, y, z, w))
+        quat = (x, y, z, w)
+        r = self._rotation(quat)
+        self._last_rotation = (quat, r)  # the caller's body frame (runner.body_frame) asks for it again
         wb = v[3:6]
         ang = (r[0] * wb[0] + r[1] * wb[1] + r[2] * wb[2],
                r[3] * wb[0] + r[4] * wb[1] + r[5] * wb[2],
                r[6] * wb[0] + r[7] * wb[1] + r[8] * wb[2])
-        return (q[0], q[1], q[2]), (x, y, z, w), (v[0], v[1], v[2]), ang
+        return (q[0], q[1], q[2]), quat, (v[0], v[1], v[2]), ang
 
     def rotation_matrix(self, quat: tuple) -> tuple:
         """Row-major 3x3 rotation matrix (body -> world) of a unit quaternion (x, y, z, w)."""
+        last = self._last_rotation
+        if last is not None and quat is last[0]:  # the quaternion base_state returned last: its matrix
+            return last[1]
+        return self._rotation(quat)
+
+    @staticmethod
+    def _rotation(quat: tuple) -> tuple:
+        """:meth:`rotation_matrix`, computed."""
         x, y, z, w = quat
         return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
                 2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
