@@ -25,14 +25,37 @@ def _power_refusal(study, base_dir: Path) -> str | None:
 
 def _check_power_apart(study, base_dir: Path) -> None:
     """check_power in a forked child: it needs pandas, and this process's workers fork from it (issue
-    41: workers hold no pandas or pyarrow). Where fork is not available, here."""
+    41: workers hold no pandas or pyarrow). Where fork is not available, here. The child ignores
+    Ctrl-C (this process stops; the child's ~1 s of work ends on its own) and leaves by returning,
+    never by a signal, so it prints nothing of its own."""
     import multiprocessing
+    import signal
 
     if "fork" not in multiprocessing.get_all_start_methods():  # pragma: no cover - not on Linux
         refusal = _power_refusal(study, base_dir)
     else:
-        with multiprocessing.get_context("fork").Pool(1) as pool:
-            refusal = pool.apply(_power_refusal, (study, base_dir))
+        ctx = multiprocessing.get_context("fork")
+        recv, send = ctx.Pipe(duplex=False)
+
+        def child() -> None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            try:
+                send.send(("ok", _power_refusal(study, base_dir)))
+            except Exception as exc:  # noqa: BLE001 - handed to the parent
+                send.send(("error", f"{type(exc).__name__}: {exc}"))
+
+        proc = ctx.Process(target=child, daemon=True, name="offroadbench-power-check")
+        proc.start()
+        send.close()
+        try:
+            kind, refusal = recv.recv()
+        except EOFError:
+            raise RuntimeError(f"the plan's power check ended without an answer (exit {proc.exitcode})") from None
+        finally:
+            proc.join()
+        if kind == "error":
+            raise RuntimeError(f"the plan's power check failed: {refusal}")
     if refusal is not None:
         raise InputError(refusal)
 

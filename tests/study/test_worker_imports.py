@@ -46,6 +46,7 @@ def test_study_workers_fork_without_the_report_modules(tmp_path):
     held = [json.loads(found) for found in re.findall(r"HELD (\[[^\]]*\])", r.stdout)]
     assert len(held) == 3, r.stdout + r.stderr  # one line per terrain task (3 cells x 1 terrain)
     assert all(h == [] for h in held), f"workers forked holding {held[0]}"
+    assert "Traceback" not in r.stderr, r.stderr  # the power check's child leaves quietly
 
 
 def test_reading_a_study_leaves_the_report_modules_alone():
