@@ -431,6 +431,8 @@ PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
 
 
 VEHICLE_PLANNER_VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
+VP_EARLIER = "vehicle-planner/earlier-2026-11-26"
+"""The earlier vehicle-planner run (2026-11-26, 960 trials, PyBullet), kept beside the confirmatory re-run."""
 
 
 def _vp_trials(folder: Path) -> pd.DataFrame:
@@ -454,29 +456,33 @@ def _vehicle_planner_successes(folder: Path) -> list[float]:
             if (v, p) != ("hunter", "astar") for arm in ("oracle", "mast")]
 
 
-def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
-    """The vehicle-planner plan (each terrain's success, the mean over the vehicles, over the four that
-    A* drives for A*'s two tests; exact sign-flip tests, Holm over the 4): comparison ``which``'s arms'
-    means, effect, interval (confirmatory.csv), p and Holm p."""
+def _vp_old_plan(folder: Path) -> list[list[float]]:
+    """The earlier vehicle-planner run's plan (each terrain's success, the mean over the vehicles, over the
+    four that A* drives for A*'s two tests; exact sign-flip tests, Holm over the 4), in its order: per test the
+    arms' means, effect, interval, p and Holm p. The interval as its report drew it (its confirmatory.csv is in
+    git history only): the plan's one generator, seeded 0, through the tests in order (2000 draws each)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
     arms = [(("mppi", "mast"), ("straight", "mast")), (("astar", "mast"), ("straight", "mast")),
             (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
+    t = _vp_trials(folder)
+    rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+    rate_astar = t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+    rates = [rate_all, rate_astar, rate_astar, rate_all]
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for r, (a, c) in zip(rates, arms, strict=True):
+        d = (r[a] - r[c]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(r[a].mean()), float(r[c].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q)] for row, q in zip(rows, holm(p), strict=True)]
 
-    def compute(folder: Path) -> list[float]:
-        from offroadbench.study.stats.clustered import holm, sign_flip_test
 
-        t = _vp_trials(folder)
-        rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
-        rate_astar = (t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"]
-                      .mean().mul(100))
-        rates = [rate_all, rate_astar, rate_astar, rate_all]
-        diffs = [(r[a] - r[c]).to_numpy(float) for r, (a, c) in zip(rates, arms, strict=True)]
-        p = [sign_flip_test(d) for d in diffs]
-        t_arm, c_arm = arms[which]
-        rate = rates[which]
-        ci = pd.read_csv(folder / "confirmatory.csv").iloc[which]
-        return [float(rate[t_arm].mean()), float(rate[c_arm].mean()), float(diffs[which].mean()),
-                float(ci["ci_low"]), float(ci["ci_high"]), p[which], float(holm(p)[which])]
-    return compute
+def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
+    """The earlier vehicle-planner plan's comparison ``which`` (:func:`_vp_old_plan`): the arms' means, effect,
+    interval, p and Holm p."""
+    return lambda folder: _vp_old_plan(folder)[which]
 
 
 def _vehicle_planner_pooled(folder: Path) -> list[float]:
@@ -687,24 +693,24 @@ SAMPLES = [
              "".join(rf"\| {v} \| {r} \| \d+ / 16 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
                      rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
              _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
-    Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
+    Sample("vehicle-planner earlier: successes per vehicle, planner and sensor", VP_EARLIER,
            "".join(r"\| hunter \| astar \| refused \|[^\n]*\n" if (v, p) == ("hunter", "astar")
                    else rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
                    for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS), _vehicle_planner_successes),
-    Sample("vehicle-planner refused pair", "vehicle-planner",
+    Sample("vehicle-planner earlier: refused pair", VP_EARLIER,
            r"\| hunter \| astar \| refused \| refused \| refused \| refused \| refused \((\d+) faults / (\d+) faults\) \|",
            _vp_refused),
-    *(Sample(f"vehicle-planner plan: {name}", "vehicle-planner",
+    *(Sample(f"vehicle-planner earlier: plan: {name}", VP_EARLIER,
              rf"\| {re.escape(name)} \| {_NUM} / {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
              _vehicle_planner_plan(i))
       for i, name in enumerate(["mppi against the line, through the sensor",
                                 "astar against the line, through the sensor",
                                 "the sensor's cost to astar (mast against oracle)",
                                 "ppo against the line, through the sensor"])),
-    Sample("vehicle-planner pooled per planner and sensor", "vehicle-planner",
+    Sample("vehicle-planner earlier: pooled per planner and sensor", VP_EARLIER,
            "".join(rf"\| {p} \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] "
                    rf"\| \+?{_NUM} \[\+?{_NUM}, \+?{_NUM}\] \|\n" for p in PLANNERS), _vehicle_planner_pooled),
-    Sample("vehicle-planner totals", "vehicle-planner",
+    Sample("vehicle-planner earlier: totals", VP_EARLIER,
            rf"Totals: {_NUM} of the {_NUM} trials with an outcome succeed \(Husky {_NUM} of 96, Sojourner {_NUM} of 96, "
            rf"TALON {_NUM}\s+of 96, Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, "
            rf"{_NUM} `tipped`",
@@ -712,7 +718,7 @@ SAMPLES = [
                       + [float(t.groupby("vehicle")["success"].sum()[v])
                          for v in ("husky", "sojourner", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(_vp_trials(f))),
-    Sample("vehicle-planner totals at D_high 2.6", "vehicle-planner",
+    Sample("vehicle-planner earlier: totals at D_high 2.6", VP_EARLIER,
            rf"Totals at 2.6: {_NUM} of the {_NUM} trials with an outcome succeed \(Sojourner {_NUM} of 96, Husky {_NUM}, "
            rf"TALON {_NUM},\s+Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, {_NUM} `off_map`",
            lambda f: (lambda t: [float(t["success"].sum()), float(len(t))]
@@ -720,7 +726,7 @@ SAMPLES = [
                          for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
                           trial_table(f).query("D_high == 2.6"))),
-    *[Sample(f"vehicle-planner the Husky's success intervals at {lv}", "vehicle-planner",
+    *[Sample(f"vehicle-planner earlier: the Husky's success intervals at {lv}", VP_EARLIER,
              rf"{head}[\s\S]*?" + "".join(rf"\| husky \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| "
                                            rf"{_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
                                            for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
