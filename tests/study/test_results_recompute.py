@@ -431,6 +431,8 @@ PLANNERS = ("straight", "astar", "lattice", "reactive", "mppi", "ppo")
 
 
 VEHICLE_PLANNER_VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
+VP_EARLIER = "vehicle-planner/earlier-2026-11-26"
+"""The earlier vehicle-planner run (2026-11-26, 960 trials, PyBullet), kept beside the confirmatory re-run."""
 
 
 def _vp_trials(folder: Path) -> pd.DataFrame:
@@ -454,29 +456,33 @@ def _vehicle_planner_successes(folder: Path) -> list[float]:
             if (v, p) != ("hunter", "astar") for arm in ("oracle", "mast")]
 
 
-def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
-    """The vehicle-planner plan (each terrain's success, the mean over the vehicles, over the four that
-    A* drives for A*'s two tests; exact sign-flip tests, Holm over the 4): comparison ``which``'s arms'
-    means, effect, interval (confirmatory.csv), p and Holm p."""
+def _vp_old_plan(folder: Path) -> list[list[float]]:
+    """The earlier vehicle-planner run's plan (each terrain's success, the mean over the vehicles, over the
+    four that A* drives for A*'s two tests; exact sign-flip tests, Holm over the 4), in its order: per test the
+    arms' means, effect, interval, p and Holm p. The interval as its report drew it (its confirmatory.csv is in
+    git history only): the plan's one generator, seeded 0, through the tests in order (2000 draws each)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
     arms = [(("mppi", "mast"), ("straight", "mast")), (("astar", "mast"), ("straight", "mast")),
             (("astar", "mast"), ("astar", "oracle")), (("ppo", "mast"), ("straight", "mast"))]
+    t = _vp_trials(folder)
+    rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+    rate_astar = t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
+    rates = [rate_all, rate_astar, rate_astar, rate_all]
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for r, (a, c) in zip(rates, arms, strict=True):
+        d = (r[a] - r[c]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(r[a].mean()), float(r[c].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q)] for row, q in zip(rows, holm(p), strict=True)]
 
-    def compute(folder: Path) -> list[float]:
-        from offroadbench.study.stats.clustered import holm, sign_flip_test
 
-        t = _vp_trials(folder)
-        rate_all = t.groupby(["planner", "sensor", "terrain"])["success"].mean().mul(100)
-        rate_astar = (t[t["vehicle"] != "hunter"].groupby(["planner", "sensor", "terrain"])["success"]
-                      .mean().mul(100))
-        rates = [rate_all, rate_astar, rate_astar, rate_all]
-        diffs = [(r[a] - r[c]).to_numpy(float) for r, (a, c) in zip(rates, arms, strict=True)]
-        p = [sign_flip_test(d) for d in diffs]
-        t_arm, c_arm = arms[which]
-        rate = rates[which]
-        ci = pd.read_csv(folder / "confirmatory.csv").iloc[which]
-        return [float(rate[t_arm].mean()), float(rate[c_arm].mean()), float(diffs[which].mean()),
-                float(ci["ci_low"]), float(ci["ci_high"]), p[which], float(holm(p)[which])]
-    return compute
+def _vehicle_planner_plan(which: int) -> Callable[[Path], list[float]]:
+    """The earlier vehicle-planner plan's comparison ``which`` (:func:`_vp_old_plan`): the arms' means, effect,
+    interval, p and Holm p."""
+    return lambda folder: _vp_old_plan(folder)[which]
 
 
 def _vehicle_planner_pooled(folder: Path) -> list[float]:
@@ -496,6 +502,144 @@ def _vehicle_planner_pooled(folder: Path) -> list[float]:
         d = (rate[(p, "mast")] - rate[(p, "oracle")]).to_numpy(float)
         b = cluster_bootstrap(d, np.mean, np.random.default_rng(0))
         out += [b.estimate, b.low, b.high]
+    return out
+
+
+VP_ENGINES = ("pybullet", "mujoco")
+VP_VEHICLES = ("husky", "jackal", "talon")
+VP_PLANNERS = ("straight", "astar", "mppi", "ppo")
+VP_TESTS = (("mppi", "mppi against the line, through the sensor"), ("astar", "astar against the line, through the sensor"),
+            ("ppo", "ppo against the line, through the sensor"))
+"""The vehicle-planner plan (the confirmatory redesign): (treatment planner, comparison name), each against the line
+through the sensor, on each engine."""
+
+
+def _vp_terrain_differences(folder: Path) -> dict[tuple[str, str], pd.Series]:
+    """Per (engine, treatment planner): per-terrain success difference (points) against the line, each terrain's
+    rate the mean over the three vehicles' rates (the plan's pool)."""
+    t = trial_table(folder)
+    rate = t.groupby(["engine", "planner", "vehicle", "terrain"])["success"].mean().mul(100)
+    pooled = {(e, p): rate[(e, p)].unstack("vehicle").mean(axis=1) for e in VP_ENGINES for p in VP_PLANNERS}
+    return {(e, p): pooled[(e, p)] - pooled[(e, "straight")] for e in VP_ENGINES for p, _ in VP_TESTS}
+
+
+def _vp_plan(folder: Path) -> list[list[float]]:
+    """The plan's 6 tests in confirmatory.csv's order (per comparison, PyBullet then MuJoCo), recomputed from the
+    trial table as the report draws them (one generator seeded 0 through the tests in order: 2000 bootstrap
+    draws, then the sign-flip test, Monte Carlo beyond 20 terrains; Holm over the 6). Per test: terrains, the
+    line's and the treatment's mean per-terrain success, effect, interval, p, Holm p; then the power the plan
+    stated (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
+    t = trial_table(folder)
+    rate = t.groupby(["engine", "planner", "vehicle", "terrain"])["success"].mean().mul(100)
+    pooled = {(e, p): rate[(e, p)].unstack("vehicle").mean(axis=1) for e in VP_ENGINES for p in VP_PLANNERS}
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for i, (tr, name) in enumerate((tr, name) for tr, name in VP_TESTS for _ in VP_ENGINES):
+        e = VP_ENGINES[i % 2]
+        assert conf["comparison"].iloc[i] == name and f"engine = {e}" in conf["stratum"].iloc[i]
+        d = (pooled[(e, tr)] - pooled[(e, "straight")]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(d.size), float(pooled[(e, "straight")].mean()), float(pooled[(e, tr)].mean()),
+                     float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf["power"].iloc[i])] for i, (row, q) in enumerate(zip(rows, holm(p), strict=True))]
+
+
+def _vp_engine_differences(folder: Path) -> list[float]:
+    """Per planned test: the engine difference (per terrain, MuJoCo's difference minus PyBullet's, points) with its
+    terrain-bootstrap interval, a generator of the test's own (offroadbench.study.stats.engines.engine_table)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
+
+    d = _vp_terrain_differences(folder)
+    label = pd.read_csv(folder / "engine_verdicts.csv")["stratum"].iloc[0]
+    out: list[float] = []
+    for tr, name in VP_TESTS:
+        dd = (d[("mujoco", tr)] - d[("pybullet", tr)]).to_numpy(float)
+        b = cluster_bootstrap(dd, np.mean, keyed_rng(0, "engine difference", name, label), 2000, level=0.95)
+        out += [float(dd.mean()), b.low, b.high, float(dd.size)]
+    return out
+
+
+def _vp_new_beside_old(folder: Path) -> list[float]:
+    """The README's new-beside-old table: per old planned test, its effect, interval and Holm p (the earlier
+    folder's trials); for the three kept, the earlier run's three-vehicle mast arms' mean per-terrain difference
+    and the new effect, interval and Holm p on each engine."""
+    old = _vp_old_plan(RESULTS / VP_EARLIER)
+    o = _vp_trials(RESULTS / VP_EARLIER)
+    r3 = (o[o["vehicle"].isin(VP_VEHICLES) & (o["sensor"] == "mast")].groupby(["planner", "terrain"])["success"]
+          .mean().mul(100))
+    new = _vp_plan(folder)
+    out: list[float] = []
+    for i, tr in enumerate(("mppi", "astar", None, "ppo")):
+        out += [old[i][2], old[i][3], old[i][4], old[i][6]]
+        if tr is not None:
+            out.append(float((r3[tr] - r3["straight"]).mean()))
+            k = [j for j, (t_, _) in enumerate(VP_TESTS) if t_ == tr][0]
+            for row in new[2 * k:2 * k + 2]:
+                out += [row[3], row[4], row[5], row[7]]
+    return out
+
+
+def _vp_successes(folder: Path) -> list[float]:
+    """Per vehicle and planner, PyBullet then MuJoCo: successes, rate and its terrain-bootstrap interval (%) as the
+    report computes them (stress.success_by_level over the report's strata: a generator per cell)."""
+    from experiments.rerender import folder_meta
+    from offroadbench.study.report.planners import stress_axes
+    from offroadbench.study.stats.stress import success_by_level
+
+    group, lv, strata = stress_axes(folder_meta(folder))
+    by = success_by_level(trial_table(folder), group, lv, by=strata).set_index([group, "vehicle", "engine"])
+    out: list[float] = []
+    for v in VP_VEHICLES:
+        for p in VP_PLANNERS:
+            for e in VP_ENGINES:
+                r = by.loc[(p, v, e)]
+                out += [float(r["successes"]), 100 * r["success_rate"], 100 * r["ci95_low"], 100 * r["ci95_high"]]
+    return out
+
+
+def _vp_pooled(folder: Path) -> list[float]:
+    """Per planner, PyBullet then MuJoCo: successes and the per-terrain rate over the vehicles with its
+    terrain-bootstrap interval (2000 draws, a generator seeded 0 per entry); then MuJoCo - PyBullet."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap
+
+    t = trial_table(folder)
+    rate = t.groupby(["engine", "planner", "terrain"])["success"].mean().mul(100)
+    out: list[float] = []
+    for p in VP_PLANNERS:
+        for e in VP_ENGINES:
+            b = cluster_bootstrap(rate[(e, p)].to_numpy(float), np.mean, np.random.default_rng(0))
+            out += [float(t.loc[(t["planner"] == p) & (t["engine"] == e), "success"].sum()), b.estimate, b.low, b.high]
+        b = cluster_bootstrap((rate[("mujoco", p)] - rate[("pybullet", p)]).to_numpy(float), np.mean,
+                              np.random.default_rng(0))
+        out += [b.estimate, b.low, b.high]
+    return out
+
+
+def _vp_totals(folder: Path) -> list[float]:
+    """Successes in all and per engine, per vehicle and engine, then the failures per reason and engine."""
+    t = trial_table(folder)
+    se = t.groupby("engine")["success"].sum()
+    sv = t.groupby(["engine", "vehicle"])["success"].sum()
+    fr = t.groupby(["engine", "failure_reason"]).size()
+    return ([float(t["success"].sum()), float(len(t)), float(se["pybullet"]), float(se["mujoco"])]
+            + [float(sv[(e, v)]) for v in VP_VEHICLES for e in VP_ENGINES]
+            + [float(fr.get((e, r), 0)) for r in ("stuck", "timeout", "off_map", "tipped") for e in VP_ENGINES])
+
+
+def _vp_paired_missions(folder: Path) -> list[float]:
+    """Paired missions (vehicle, planner, terrain, mission on both engines): in all, succeeding on both, on
+    neither, only on MuJoCo, only on PyBullet; then per planner only on MuJoCo / only on PyBullet."""
+    w = trial_table(folder).pivot_table(index=["vehicle", "planner", "terrain", "mission"], columns="engine",
+                                        values="success", aggfunc="first").astype(bool)
+    out = [float(len(w)), float((w["mujoco"] & w["pybullet"]).sum()), float((~w["mujoco"] & ~w["pybullet"]).sum()),
+           float((w["mujoco"] & ~w["pybullet"]).sum()), float((w["pybullet"] & ~w["mujoco"]).sum())]
+    for p in VP_PLANNERS:
+        x = w.xs(p, level="planner")
+        out += [float((x["mujoco"] & ~x["pybullet"]).sum()), float((x["pybullet"] & ~x["mujoco"]).sum())]
     return out
 
 
@@ -687,24 +831,53 @@ SAMPLES = [
              "".join(rf"\| {v} \| {r} \| \d+ / 16 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
                      rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
              _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
-    Sample("vehicle-planner successes per vehicle, planner and sensor", "vehicle-planner",
+    Sample("vehicle-planner plan per engine: terrains, means, effect, interval, p, Holm p, power", "vehicle-planner",
+           "".join(rf"\| {re.escape(name)} \| {e} \| {_NUM} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at [+-]\d+ \|\n" for _, name in VP_TESTS for e in VP_ENGINES),
+           lambda f: [v for row in _vp_plan(f) for v in row]),
+    Sample("vehicle-planner engine difference per planned test", "vehicle-planner",
+           r"[\s\S]*?".join(rf"\*\*{re.escape(name)}: holds on [^*]+\*\* \([^)]*\)\. Engine difference \+?{_NUM} points "
+                            rf"\[{_NUM}, {_NUM}\] over {_NUM} terrains" for _, name in VP_TESTS), _vp_engine_differences),
+    Sample("vehicle-planner new beside old", "vehicle-planner",
+           "".join(rf"\| {re.escape(name)} \| \+?{_NUM} \[{_NUM}, {_NUM}\], {_SCI}, not rejected \| "
+                   + (r"- \| not in the new plan[^\n]*\n" if tr is None else
+                      rf"\+?{_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\], {_SCI}, [^|]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\], {_SCI}, [^|]+ \|\n")
+                   for tr, name in (("mppi", VP_TESTS[0][1]), ("astar", VP_TESTS[1][1]),
+                                    (None, "the sensor's cost to astar (mast against oracle)"), ("ppo", VP_TESTS[2][1]))),
+           _vp_new_beside_old),
+    Sample("vehicle-planner successes per vehicle, planner and engine", "vehicle-planner",
+           "".join(rf"\| {v} \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
+                   for v in VP_VEHICLES for p in VP_PLANNERS), _vp_successes),
+    Sample("vehicle-planner pooled per planner and engine", "vehicle-planner",
+           "".join(rf"\| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] "
+                   rf"\| \+?{_NUM} \[\+?{_NUM}, \+?{_NUM}\] \|\n" for p in VP_PLANNERS), _vp_pooled),
+    Sample("vehicle-planner totals", "vehicle-planner",
+           rf"Totals: {_NUM} of the {_NUM} trials succeed \(PyBullet {_NUM} of \d+, MuJoCo {_NUM} of \d+; "
+           rf"Husky {_NUM} / {_NUM},\s+Jackal {_NUM} / {_NUM}, TALON {_NUM} /\s+{_NUM} of \d+, PyBullet / MuJoCo\); "
+           rf"failures `stuck` {_NUM} / {_NUM}, `timeout` {_NUM} / {_NUM}, `off_map` {_NUM} / {_NUM}, `tipped` {_NUM} / {_NUM} "
+           r"\(PyBullet / MuJoCo\)", _vp_totals),
+    Sample("vehicle-planner paired missions on the two engines", "vehicle-planner",
+           rf"Of the {_NUM} paired missions \(same vehicle, planner, terrain\s+and mission\), {_NUM} succeed on both, "
+           rf"{_NUM} on neither,\s+{_NUM} only on MuJoCo and {_NUM} only on PyBullet; by planner \(only\s+MuJoCo / only "
+           rf"PyBullet\): " + r",\s+".join(rf"{p} {_NUM} / {_NUM}" for p in VP_PLANNERS), _vp_paired_missions),
+    Sample("vehicle-planner earlier: successes per vehicle, planner and sensor", VP_EARLIER,
            "".join(r"\| hunter \| astar \| refused \|[^\n]*\n" if (v, p) == ("hunter", "astar")
                    else rf"\| {v} \| {p} \| {_NUM} \| [^|]+ \| {_NUM} \|[^\n]*\n"
                    for v in VEHICLE_PLANNER_VEHICLES for p in PLANNERS), _vehicle_planner_successes),
-    Sample("vehicle-planner refused pair", "vehicle-planner",
+    Sample("vehicle-planner earlier: refused pair", VP_EARLIER,
            r"\| hunter \| astar \| refused \| refused \| refused \| refused \| refused \((\d+) faults / (\d+) faults\) \|",
            _vp_refused),
-    *(Sample(f"vehicle-planner plan: {name}", "vehicle-planner",
+    *(Sample(f"vehicle-planner earlier: plan: {name}", VP_EARLIER,
              rf"\| {re.escape(name)} \| {_NUM} / {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
              _vehicle_planner_plan(i))
       for i, name in enumerate(["mppi against the line, through the sensor",
                                 "astar against the line, through the sensor",
                                 "the sensor's cost to astar (mast against oracle)",
                                 "ppo against the line, through the sensor"])),
-    Sample("vehicle-planner pooled per planner and sensor", "vehicle-planner",
+    Sample("vehicle-planner earlier: pooled per planner and sensor", VP_EARLIER,
            "".join(rf"\| {p} \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} of \d+ \| {_NUM} \[{_NUM}, {_NUM}\] "
                    rf"\| \+?{_NUM} \[\+?{_NUM}, \+?{_NUM}\] \|\n" for p in PLANNERS), _vehicle_planner_pooled),
-    Sample("vehicle-planner totals", "vehicle-planner",
+    Sample("vehicle-planner earlier: totals", VP_EARLIER,
            rf"Totals: {_NUM} of the {_NUM} trials with an outcome succeed \(Husky {_NUM} of 96, Sojourner {_NUM} of 96, "
            rf"TALON {_NUM}\s+of 96, Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, "
            rf"{_NUM} `tipped`",
@@ -712,7 +885,7 @@ SAMPLES = [
                       + [float(t.groupby("vehicle")["success"].sum()[v])
                          for v in ("husky", "sojourner", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "tipped")])(_vp_trials(f))),
-    Sample("vehicle-planner totals at D_high 2.6", "vehicle-planner",
+    Sample("vehicle-planner earlier: totals at D_high 2.6", VP_EARLIER,
            rf"Totals at 2.6: {_NUM} of the {_NUM} trials with an outcome succeed \(Sojourner {_NUM} of 96, Husky {_NUM}, "
            rf"TALON {_NUM},\s+Jackal {_NUM} of 96, HUNTER {_NUM} of 80\); {_NUM} end `stuck`, {_NUM} `timeout`, {_NUM} `off_map`",
            lambda f: (lambda t: [float(t["success"].sum()), float(len(t))]
@@ -720,7 +893,7 @@ SAMPLES = [
                          for v in ("sojourner", "husky", "talon", "jackal", "hunter")]
                       + [float((t["failure_reason"] == r).sum()) for r in ("stuck", "timeout", "off_map")])(
                           trial_table(f).query("D_high == 2.6"))),
-    *[Sample(f"vehicle-planner the Husky's success intervals at {lv}", "vehicle-planner",
+    *[Sample(f"vehicle-planner earlier: the Husky's success intervals at {lv}", VP_EARLIER,
              rf"{head}[\s\S]*?" + "".join(rf"\| husky \| {p} \| {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| "
                                            rf"{_NUM} \[{_NUM}, {_NUM}\] \|[^\n]*\n"
                                            for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
@@ -767,3 +940,22 @@ def test_trials_rebuilt_from_terrain_counts_keep_every_count():
     rates = per_terrain_rate(t, "D_high")
     expect = ter.pivot(index="terrain", columns="D_high", values="success_rate_pct")
     assert np.allclose(rates.to_numpy(), expect.to_numpy())
+
+
+def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
+    """vehicle-planner/README.md's per-test verdicts and yes/no are engine_verdicts.csv's and confirmatory.csv's, and
+    every planned test had power >= 0.8 at its stated effect before the run (issue 42)."""
+    folder = RESULTS / "vehicle-planner"
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    for c in conf.itertuples():
+        engine = re.search(r"engine = (\w+)", c.stratum).group(1)
+        row = rf"\| {re.escape(c.comparison)} \| {engine} \|[^\n]*\| {'yes' if c.reject else 'no'} \| [\d.]+ at [+-]\d+ \|"
+        assert re.search(row, text), (c.comparison, engine)
+    eng = pd.read_csv(folder / "engine_verdicts.csv")
+    assert set(eng["engine"]) == set(VP_ENGINES)
+    for name, verdict in eng.groupby("comparison", sort=False)["verdict"].first().items():
+        assert f"**{name}: {verdict}**" in text, name
+    assert (RESULTS / VP_EARLIER / "README.md").read_text().split("\n")[2].startswith(
+        "**The earlier, exploratory table, superseded for the plan by the [parent folder](../README.md).**")
