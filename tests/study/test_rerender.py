@@ -9,7 +9,7 @@ import pytest
 RESULTS = Path(__file__).resolve().parents[2] / "experiments" / "results"
 
 
-@pytest.mark.parametrize("name", ["engines", "lunar-soil", "planner-stress", "majhor2023-engines"])
+@pytest.mark.parametrize("name", ["engines", "lunar-soil", "planner-stress", "majhor2023-engines", "vehicle-planner"])
 def test_a_rerender_of_a_committed_report_changes_nothing(tmp_path, name):
     from experiments.rerender import rerender
 
