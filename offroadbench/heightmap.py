@@ -50,8 +50,10 @@ class Heightmap:
         from offroadbench.bounds import check_bounds, check_heights
 
         check_bounds(self, "heightmap")  # a physical grid spacing (offroadbench.bounds.CELL_SIZE)
-        check_heights(float(z.min()), float(z.max()))  # physical heights (offroadbench.bounds.HEIGHT_M)
+        z_range = (float(z.min()), float(z.max()))
+        check_heights(*z_range)  # physical heights (offroadbench.bounds.HEIGHT_M)
         z.setflags(write=False)
+        object.__setattr__(self, "_z_range", z_range)  # the read-only map's extremes, found once
         object.__setattr__(self, "z", z)
         object.__setattr__(self, "cell_size_m", cell)
 
@@ -86,11 +88,13 @@ class Heightmap:
 
     @property
     def z_min_m(self) -> float:
-        return float(self.z.min())
+        """The lowest height, metres (found once: the map is read-only)."""
+        return self._z_range[0]
 
     @property
     def z_max_m(self) -> float:
-        return float(self.z.max())
+        """The highest height, metres (found once: the map is read-only)."""
+        return self._z_range[1]
 
     @property
     def relief_m(self) -> float:
