@@ -1025,3 +1025,22 @@ def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
         assert f"**{name}: {verdict}**" in text, name
     assert (RESULTS / VP_EARLIER / "README.md").read_text().split("\n")[2].startswith(
         "**The earlier, exploratory table, superseded for the plan by the [parent folder](../README.md).**")
+
+
+@pytest.mark.parametrize("study", ["majhor2023", "majhor2023-mujoco"])
+def test_majhor_verdicts_are_their_tables(study: str):
+    """The majhor2023 READMEs' yes/no per planned test are confirmatory.csv's, every planned test had power >= 0.8
+    at its stated effect before the run (issue 42), and the both-engine table's verdicts are the two studies'
+    rejections and majhor2023-engines' engine_verdicts.csv."""
+    text = (RESULTS / study / "README.md").read_text()
+    conf = {s: pd.read_csv(RESULTS / s / "confirmatory.csv") for s in ("majhor2023", "majhor2023-mujoco")}
+    assert conf[study]["power"].min() >= 0.8 and not conf[study]["exploratory"].any()
+    verdicts = pd.read_csv(RESULTS / "majhor2023-engines" / "engine_verdicts.csv").groupby("comparison")["verdict"].first()
+    for i, (name, *_) in enumerate(MAJHOR_TESTS):
+        reject = [bool(conf[s]["reject"].iloc[i]) for s in ("majhor2023", "majhor2023-mujoco")]
+        mark = "yes" if conf[study]["reject"].iloc[i] else "no"
+        assert re.search(rf"\| {re.escape(name)} \| \d+ \|[^\n]*\| {mark} \| [\d.]+ at ", text), (study, name)
+        on = {(True, True): "both", (False, False): "neither", (True, False): "PyBullet only",
+              (False, True): "MuJoCo only"}[tuple(reject)]
+        cells = "".join(rf"[^|]*{'yes' if r else 'no'}[^|]*\|" for r in reject)
+        assert re.search(rf"\| {re.escape(name)} \|{cells} {on} \| {verdicts[name]} \|", text), (study, name)
