@@ -172,24 +172,72 @@ def _vp_success_intervals(level: float) -> Callable[[Path], list[float]]:
     return compute
 
 
-def _majhor_engine_rows(folder: Path) -> list[float]:
-    """majhor2023 on both engines (exploratory): per planned success step, each engine's mean per-terrain change
-    (independently, from the two trial tables), its interval and Holm p over the 16 tests, and the engine
-    difference with its interval (experiments/engine_agreement.py, the library's engine_table)."""
-    from experiments.engine_agreement import agreement
+MAJHOR_TESTS = (("D 2.3 -> 2.45", "success_rate_pct", 2.3, 2.45), ("D 2.45 -> 2.6", "success_rate_pct", 2.45, 2.6),
+                *((f"D {lo} -> {hi}: {label}", m, lo, hi)
+                  for label, m in (("vertical acceleration", "rms_vertical_accel_m_s2"), ("pitch rate", "rms_pitch_rate_deg_s"),
+                                   ("roll rate", "rms_roll_rate_deg_s"))
+                  for lo, hi in ((2.3, 2.45), (2.45, 2.6))))
+"""The majhor2023 plans' 8 tests in confirmatory.csv's order: (name, metric, control D_high, treatment D_high)."""
 
-    _, eng = agreement(folder, folder.parent / "majhor2023-mujoco")
-    rates = {e: per_terrain_rate(trial_table(f), "D_high")
-             for e, f in (("pybullet", folder), ("mujoco", folder.parent / "majhor2023-mujoco"))}
+
+def _majhor_terrain_values(t: pd.DataFrame, metric: str, summary: str) -> pd.DataFrame:
+    """Per terrain (rows) and D_high (columns): the success rate (%), or a ride metric's per-terrain ``summary``
+    (median or mean) over the terrain's successful trials."""
+    if metric == "success_rate_pct":
+        return t.groupby(["D_high", "terrain"])["success"].mean().mul(100).unstack("D_high")
+    ok = t[t["success"].astype(bool)]
+    return ok.groupby(["D_high", "terrain"])[metric].agg(summary).unstack("D_high")
+
+
+def _majhor_plan(folder: Path) -> list[list[float]]:
+    """The plan's 8 tests, recomputed from the trial table: terrains, the control's and the treatment's mean
+    per-terrain value, effect, the interval (confirmatory.csv), exact sign-flip p, Holm p over the 8, and the
+    power the plan stated (confirmatory.csv, simulated before the run); the ride tests add the same test on the
+    per-terrain mean (exploratory): effect and p."""
+    from offroadbench.study.stats.clustered import holm, sign_flip_test
+
+    t = trial_table(folder)
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rows, p = [], []
+    for i, (name, metric, lo, hi) in enumerate(MAJHOR_TESTS):
+        assert conf["comparison"].iloc[i] == name
+        v = _majhor_terrain_values(t, metric, "median")[[lo, hi]].dropna()
+        d = (v[hi] - v[lo]).to_numpy(float)
+        p.append(sign_flip_test(d))
+        rows.append([float(d.size), float(v[lo].mean()), float(v[hi].mean()), float(d.mean()),
+                     float(conf["ci_low"].iloc[i]), float(conf["ci_high"].iloc[i]), p[-1]])
     out = []
-    for name, (lo, hi) in (("D 2.3 -> 2.45", (2.3, 2.45)), ("D 2.45 -> 2.6", (2.45, 2.6))):
-        rows = eng[eng["comparison"] == name].set_index("engine")
-        for e in ("pybullet", "mujoco"):
-            out += [float((rates[e][hi] - rates[e][lo]).mean()), rows.loc[e, "ci_low"], rows.loc[e, "ci_high"],
-                    rows.loc[e, "p_adjusted"]]
-        d = (rates["mujoco"][hi] - rates["mujoco"][lo]) - (rates["pybullet"][hi] - rates["pybullet"][lo])
-        out += [float(d.mean()), rows["engine_difference_low"].iloc[0], rows["engine_difference_high"].iloc[0]]
+    for i, (row, q) in enumerate(zip(rows, holm(p), strict=True)):
+        row += [float(q), float(conf["power"].iloc[i])]
+        name, metric, lo, hi = MAJHOR_TESTS[i]
+        if metric != "success_rate_pct":
+            v = _majhor_terrain_values(trial_table(folder), metric, "mean")[[lo, hi]].dropna()
+            d = (v[hi] - v[lo]).to_numpy(float)
+            row += [float(d.mean()), sign_flip_test(d)]
+        out.append(row)
     return out
+
+
+def _majhor_plan_pattern(names=tuple(n for n, *_ in MAJHOR_TESTS)) -> str:
+    """The README rows of the plan's table (see _majhor_plan), in order."""
+    return "".join(
+        rf"\| {re.escape(n)} \| {_NUM} \| {_NUM} -> {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| (?:yes|no) "
+        rf"\| {_NUM} at [+-][\d.]+ \| " + (r"– \|\n" if m == "success_rate_pct" else rf"\+?{_NUM}, p {_SCI} \|\n")
+        for n, m, *_ in MAJHOR_TESTS if n in names)
+
+
+def _majhor_both_plans(folder: Path) -> list[float]:
+    """Per planned test: the effect and Holm p on PyBullet (majhor2023) and on MuJoCo (majhor2023-mujoco), from
+    their confirmatory.csv (each recomputed from its trials by the plan samples)."""
+    pb, mj = (pd.read_csv(RESULTS / s / "confirmatory.csv") for s in ("majhor2023", "majhor2023-mujoco"))
+    return [float(v) for i in range(len(MAJHOR_TESTS))
+            for v in (pb["effect"].iloc[i], pb["p_adjusted"].iloc[i], mj["effect"].iloc[i], mj["p_adjusted"].iloc[i])]
+
+
+def _majhor_both_rows() -> str:
+    """The README rows of the one-line-per-test table on both engines (see _majhor_both_plans), in order."""
+    return "".join(rf"\| {re.escape(n)} \| \+?{_NUM}, Holm {_SCI}, (?:\*\*yes\*\*|no) \| \+?{_NUM}, Holm {_SCI}, "
+                   r"(?:\*\*yes\*\*|no) \|[^\n]*\n" for n, *_ in MAJHOR_TESTS)
 
 
 def _shared_missions(folder: Path) -> list[float]:
@@ -371,6 +419,21 @@ def _one_engine_only(folder: Path) -> list[float]:
     return [float((w["mujoco"] & ~w["pybullet"]).sum()), float((w["pybullet"] & ~w["mujoco"]).sum())]
 
 
+def _paper_run_before_blind_seeds(study: str) -> pd.DataFrame:
+    """The paper study's trial table as the engines README names it (root seed 2023: the majhor2023 run of
+    2026-11-26 afternoon, the majhor2023-mujoco run of 2026-11-28), from git history: the results folders now hold
+    issue 42's blind-seeded re-runs, whose terrains are others (d4d7026 is the last commit that held those runs)."""
+    import io
+    import subprocess
+
+    path = f"d4d7026:experiments/results/{study}/trials.parquet"
+    try:
+        blob = subprocess.run(["git", "show", path], cwd=RESULTS, capture_output=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip(f"git history without {path}")
+    return pd.read_parquet(io.BytesIO(blob))
+
+
 def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
     """Engine trials equal (outcome, simulated time, RMS vertical acceleration) to the trial of the same D,
     terrain and mission seed in the paper study on that engine: PyBullet, then MuJoCo."""
@@ -378,7 +441,7 @@ def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
     out = []
     for engine, study in (("pybullet", "majhor2023"), ("mujoco", "majhor2023-mujoco")):
         keys = ["D_high", "terrain_seed", "mission_seed"]
-        j = pd.merge(t[t["engine"] == engine], trial_table(RESULTS / study), on=keys, suffixes=("", "_paper"))
+        j = pd.merge(t[t["engine"] == engine], _paper_run_before_blind_seeds(study), on=keys, suffixes=("", "_paper"))
         same = ((j["success"] == j["success_paper"]) & np.isclose(j["sim_time_s"], j["sim_time_s_paper"])
                 & np.isclose(j["rms_vertical_accel_m_s2"].fillna(-1), j["rms_vertical_accel_m_s2_paper"].fillna(-1)))
         out.append(float(same.sum()))
@@ -785,10 +848,14 @@ SAMPLES = [
            rf"median RMS vertical acceleration, m/s² \| {_NUM} / {_NUM} / {_NUM} \|",
            _metric_medians("rms_vertical_accel_m_s2")),
     Sample("majhor2023-mujoco quotes PyBullet's successes and vertical acceleration", "majhor2023-mujoco",
-           rf"\(886\) \| {_NUM} / {_NUM} / {_NUM} \({_NUM};[^\n]*\n[^\n]*\n"
+           rf"successful trials \(of 400\) \|[^|]*\|[^|]*\|[^|]*\| {_NUM} / {_NUM} / {_NUM} \({_NUM}\) \|\n[^\n]*\n"
            rf"\| median RMS vertical acceleration, m/s² \|[^|]*\|[^|]*\|[^|]*\| {_NUM} / {_NUM} / {_NUM} \|",
            lambda f: [*_successes(f.parent / "majhor2023"), sum(_successes(f.parent / "majhor2023")),
                       *_metric_medians("rms_vertical_accel_m_s2")(f.parent / "majhor2023")]),
+    Sample("majhor2023-mujoco plan: terrains, means, effect, interval, p, Holm p, power, the other summary",
+           "majhor2023-mujoco", _majhor_plan_pattern(), lambda f: [v for row in _majhor_plan(f) for v in row]),
+    Sample("majhor2023-mujoco each planned test on both engines", "majhor2023-mujoco", _majhor_both_rows(),
+           _majhor_both_plans),
     Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
            "".join(rf"\| {v} \| {r} \| {_NUM} / 16 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
            _vehicle_successes),
@@ -899,10 +966,9 @@ SAMPLES = [
                                            for p in ("straight", "astar", "lattice", "reactive", "mppi", "ppo")),
              _vp_success_intervals(lv))
       for lv, head in ((2.95, "## Success per vehicle, planner and sensor at D_high 2.95"), (2.6, "## D_high 2.6"))],
-    Sample("majhor2023 success steps on both engines", "majhor2023",
-           "".join(rf"\| {name} \| holds on neither \| {_NUM} \[{_NUM}, {_NUM}\], Holm {_NUM} \| {_NUM} \[{_NUM}, {_NUM}\], "
-                   rf"Holm {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \|\n" for name in ("D 2.3 -> 2.45", "D 2.45 -> 2.6")),
-           _majhor_engine_rows),
+    Sample("majhor2023 plan: terrains, means, effect, interval, p, Holm p, power, the other summary", "majhor2023",
+           _majhor_plan_pattern(), lambda f: [v for row in _majhor_plan(f) for v in row]),
+    Sample("majhor2023 each planned test on both engines", "majhor2023", _majhor_both_rows(), _majhor_both_plans),
     Sample("planner-stress straight-line breaking point", "planner-stress",
            rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
            _straight_breaking_point),
@@ -959,3 +1025,22 @@ def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
         assert f"**{name}: {verdict}**" in text, name
     assert (RESULTS / VP_EARLIER / "README.md").read_text().split("\n")[2].startswith(
         "**The earlier, exploratory table, superseded for the plan by the [parent folder](../README.md).**")
+
+
+@pytest.mark.parametrize("study", ["majhor2023", "majhor2023-mujoco"])
+def test_majhor_verdicts_are_their_tables(study: str):
+    """The majhor2023 READMEs' yes/no per planned test are confirmatory.csv's, every planned test had power >= 0.8
+    at its stated effect before the run (issue 42), and the both-engine table's verdicts are the two studies'
+    rejections and majhor2023-engines' engine_verdicts.csv."""
+    text = (RESULTS / study / "README.md").read_text()
+    conf = {s: pd.read_csv(RESULTS / s / "confirmatory.csv") for s in ("majhor2023", "majhor2023-mujoco")}
+    assert conf[study]["power"].min() >= 0.8 and not conf[study]["exploratory"].any()
+    verdicts = pd.read_csv(RESULTS / "majhor2023-engines" / "engine_verdicts.csv").groupby("comparison")["verdict"].first()
+    for i, (name, *_) in enumerate(MAJHOR_TESTS):
+        reject = [bool(conf[s]["reject"].iloc[i]) for s in ("majhor2023", "majhor2023-mujoco")]
+        mark = "yes" if conf[study]["reject"].iloc[i] else "no"
+        assert re.search(rf"\| {re.escape(name)} \| \d+ \|[^\n]*\| {mark} \| [\d.]+ at ", text), (study, name)
+        on = {(True, True): "both", (False, False): "neither", (True, False): "PyBullet only",
+              (False, True): "MuJoCo only"}[tuple(reject)]
+        cells = "".join(rf"[^|]*{'yes' if r else 'no'}[^|]*\|" for r in reject)
+        assert re.search(rf"\| {re.escape(name)} \|{cells} {on} \| {verdicts[name]} \|", text), (study, name)
