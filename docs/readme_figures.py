@@ -280,13 +280,12 @@ QUOTES = (
     "the belts sink {talon.soft_sinkage_expected_mm} mm",
     "(`track_step_bound_m`, {talon.step_expected_m} m)",
     "Of the five shipped vehicles {checks.pybullet.passing} pass every row on PyBullet (failing: "
-    "{checks.pybullet.failing}, its soft-soil rows, above) and {checks.mujoco.passing} on MuJoCo",
+    "{checks.pybullet.failing}) and {checks.mujoco.passing} on MuJoCo (failing: {checks.mujoco.failing})",
     "the drawbar pull at 20 % slip ({husky.soft_pull_n} N against {husky.soft_pull_expected_n} N, the Husky weighing "
     "{husky.soft_weight_n} N there)",
-    "it climbs {hunter.pybullet.soft_grade_deg} deg of regolith against the {hunter.pybullet.soft_grade_expected_deg} "
-    "deg quasi-static limit",
-    "pulls {hunter.pybullet.soft_pull_n} N against {hunter.pybullet.soft_pull_expected_n} N at 20 %",
-    "on MuJoCo the same rows pass ({hunter.mujoco.soft_grade_deg} deg, {hunter.mujoco.soft_pull_n} N)",
+    "it climbs {hunter.pybullet.soft_grade_deg} deg and pulls {hunter.pybullet.soft_pull_n} N on PyBullet "
+    "(against {hunter.pybullet.soft_grade_expected_deg} deg and {hunter.pybullet.soft_pull_expected_n} N), "
+    "{hunter.mujoco.soft_grade_deg} deg and {hunter.mujoco.soft_pull_n} N on MuJoCo",
     "the Husky succeeds on {drive.husky.pybullet.seed0} of 10 and Sojourner on {drive.sojourner.pybullet.seed0}; "
     "the TALON on {drive.talon.pybullet.seed0} (PyBullet; MuJoCo {drive.talon.mujoco.seed0}) and the HUNTER on "
     "{drive.hunter.pybullet.seed0} (PyBullet; MuJoCo {drive.hunter.mujoco.seed0})",

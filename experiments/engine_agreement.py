@@ -1,7 +1,10 @@
 """Each planned test of a study on two engines, from two committed single-engine runs of it (issue 42).
 
 The majhor2023 study ran once on PyBullet (experiments/results/majhor2023) and once on MuJoCo
-(experiments/results/majhor2023-mujoco), with the same root seed, so the same terrains and missions. This
+(experiments/results/majhor2023-mujoco), with the same root seed (2023), so the same terrains and
+missions; since their issue 42 re-runs each has a blind seed of its own, so the committed folders no
+longer pair and the script refuses them (the runs at root seed 2023 are in git history, before
+d4d7026). Two runs pair when every trial has the same terrain and mission seeds in both. This
 script treats the two trial tables as one study with a ``sim.engine`` axis and computes the first run's
 plan on each engine exactly as a study on both engines would (offroadbench.study.stats.plan:
 confirmatory_table over both engines' tests, one Holm family, then engine_table: the verdict per test and
@@ -36,6 +39,10 @@ def agreement(first: Path, second: Path) -> tuple[pd.DataFrame, pd.DataFrame]:
     engines = [str(t["sim.engine"].iloc[0]) for t in trials]
     if len(set(engines)) != 2 or any(t["sim.engine"].nunique() != 1 for t in trials):
         raise SystemExit("the two runs must each be on one engine, and on different ones")
+    seeds = [t.set_index(["cell", "terrain", "mission"])[["terrain_seed", "mission_seed"]].sort_index() for t in trials]
+    if not seeds[0].equals(seeds[1]):
+        raise SystemExit(f"{first} and {second} did not drive the same terrains and missions (their seeds differ): "
+                         "they cannot be paired")
     m0 = metas[0]
     grid = [*m0["study"]["grid"], {"key": ENGINE_KEY, "values": engines}]
     cells, parts = [], []
