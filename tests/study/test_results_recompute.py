@@ -320,6 +320,42 @@ SOIL_MAP_SIMULANT = "soil-map/mare-floors-simulant.toml"
 SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on the simulant": SOIL_MAP_SIMULANT,
                  "crater interiors on the soft deposit": SOIL_MAP_SNOW}
 """The soil-map README table's rows: (row label regex, recipe)."""
+SOIL_MAP_TESTS = {"soft crater interiors against one soil": SOIL_MAP_SNOW,
+                  "simulant crater interiors against one soil": SOIL_MAP_SIMULANT}
+"""The soil-map plan (confirmatory.csv's order): (README name, treatment recipe), each against lunar-mare."""
+def _soil_map_outcomes(folder: Path, recipe: str) -> list[float]:
+    """One soil layout's successes, then its entrapped, stuck, timeout and off_map failures."""
+    t = trial_table(folder).query("recipe == @recipe")
+    counts = t["failure_reason"].value_counts()
+    return [float(t["success"].sum())] + [float(counts.get(r, 0)) for r in ("entrapped", "stuck", "timeout", "off_map")]
+
+
+def _soil_map_flips(folder: Path, recipe: str) -> list[float]:
+    """Missions (terrain, mission) that succeed on one soil and fail on ``recipe``, then the reverse."""
+    w = trial_table(folder).pivot_table(index=["terrain", "mission"], columns="recipe", values="success",
+                                        aggfunc="first").astype(bool)
+    return [float((w["lunar-mare"] & ~w[recipe]).sum()), float((~w["lunar-mare"] & w[recipe]).sum())]
+
+
+def _soil_map_plan(folder: Path) -> list[list[float]]:
+    """The plan's 2 tests, recomputed from the trial table as the report draws them (one generator seeded 0
+    through the tests in order: 2000 bootstrap draws, then the sign-flip test, Monte Carlo beyond 20 terrains;
+    Holm over the 2). Per test: terrains, one soil's and the map's mean per-terrain success, effect, interval,
+    p, Holm p; then the power the plan stated (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
+    rate = trial_table(folder).groupby(["recipe", "terrain"])["success"].mean().mul(100).unstack("recipe")
+    conf = pd.read_csv(folder / "confirmatory.csv").set_index("comparison")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for recipe in SOIL_MAP_TESTS.values():
+        d = (rate[recipe] - rate["lunar-mare"]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(d.size), float(rate["lunar-mare"].mean()), float(rate[recipe].mean()), float(d.mean()),
+                     b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf.loc[f"{name}: success", "power"])]
+            for row, q, name in zip(rows, holm(p), SOIL_MAP_TESTS, strict=True)]
 
 
 LUNAR_SOIL_CELLS = [(e, m, g, a) for e in ("pybullet", "mujoco") for m in ("coulomb", "terramechanics")
@@ -713,18 +749,24 @@ SAMPLES = [
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
-    Sample("soil-map planned effects", "soil-map",
-           rf"Soft crater interiors against one soil: \*\*{_NUM} points\*\*[^\n]*\n[^\n]*simulant crater interiors "
-           rf"against one soil: \*\*{_NUM} points\*\*",
-           lambda f: (_pooled_success_effect("recipe", SOIL_MAP_SNOW, "lunar-mare")(f)
-                      + _pooled_success_effect("recipe", SOIL_MAP_SIMULANT, "lunar-mare")(f))),
+    Sample("soil-map plan: terrains, means, effect, interval, p, Holm p, power", "soil-map",
+           "".join(rf"\| {name} \| {_NUM} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| no \| "
+                   rf"{_NUM} \|\n" for name in SOIL_MAP_TESTS),
+           lambda f: [v for row in _soil_map_plan(f) for v in row]),
     Sample("soil-map outcomes per soil layout", "soil-map",
-           "".join(rf"\| {label} \| {_NUM} \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for label in SOIL_MAP_ROWS),
-           lambda f: [v for r in SOIL_MAP_ROWS.values()
-                      for v in [float(trial_table(f).query("recipe == @r")["success"].sum())]
-                      + _failure_counts(f, f"recipe == '{r}'", ("entrapped", "stuck", "timeout"))]),
+           "".join(rf"\| {label} \|" + rf" {_NUM} \(\d+\) \|" * 5 + "\n" for label in SOIL_MAP_ROWS),
+           lambda f: [v for r in SOIL_MAP_ROWS.values() for v in _soil_map_outcomes(f, r)]),
+    Sample("soil-map missions that flip on the deposit", "soil-map",
+           rf"Mission by mission, {_NUM} missions that succeed on one soil fail\s+on the deposit and {_NUM} go the other way "
+           r"\(old \d+ and \d+\)", lambda f: _soil_map_flips(f, SOIL_MAP_SNOW)),
+    Sample("soil-map simulant floors: flips and slip of the successful trials", "soil-map",
+           rf"The simulant floors lose {_NUM} of the control's successes and gain {_NUM}[\s\S]*?over the successful trials "
+           rf"alone the per-terrain difference is {_NUM}\.",
+           lambda f: _soil_map_flips(f, SOIL_MAP_SIMULANT) + [float(
+               (lambda m: (m[SOIL_MAP_SIMULANT] - m["lunar-mare"]).mean())(
+                   trial_table(f).query("success").groupby(["recipe", "terrain"])["mean_slip"].median().unstack("recipe")))]),
     Sample("soil-map deposit trials outside the model", "soil-map",
-           rf"Outside the soil model: {_NUM} of the 48 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
+           rf"Outside the soil model: {_NUM} of the 144 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
            lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
                                  100 * float(t["outside_model_fraction"].max())])(
                                      trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
