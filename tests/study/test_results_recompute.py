@@ -439,13 +439,26 @@ COMPARED_VEHICLES = (("jackal", "jackal"), ("talon", "talon (tracked)"), ("hunte
 
 
 def _vehicle_comparison_plan(which: int) -> Callable[[Path], list[float]]:
-    """The vehicle-comparison plan's comparison ``which``: effect, interval (confirmatory.csv), p and Holm p."""
+    """The vehicle-comparison plan's comparison ``which``: the Husky's and the vehicle's mean per-terrain success,
+    effect, interval (confirmatory.csv), p and Holm p (exact sign-flip over 16 terrains), the power the plan stated."""
     def compute(folder: Path) -> list[float]:
+        t = trial_table(folder)
         pairs = [(v, "husky") for v, _ in COMPARED_VEHICLES]
-        effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, which)
+        effect, p, p_holm = _sign_flip_plan(t, "vehicle", pairs, which)
+        rate = t.groupby(["vehicle", "terrain"])["success"].mean().mul(100)
         label = COMPARED_VEHICLES[which][1]
         ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc[f"{label} against the husky"]
-        return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+        return [float(rate["husky"].mean()), float(rate[COMPARED_VEHICLES[which][0]].mean()), effect,
+                float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm, float(ci["power"])]
+
+    return compute
+
+
+def _vehicle_kind_differences(vehicle: str) -> Callable[[Path], list[float]]:
+    """Per terrain kind (the README's order): the vehicle's mean per-terrain success minus the Husky's, points."""
+    def compute(folder: Path) -> list[float]:
+        rate = trial_table(folder).groupby(["vehicle", "recipe", "terrain"])["success"].mean().mul(100)
+        return [float((rate[vehicle][r] - rate["husky"][r]).mean()) for r in TERRAIN_KINDS]
 
     return compute
 
@@ -832,10 +845,10 @@ SAMPLES = [
            lambda f: [*_successes(f.parent / "majhor2023"), sum(_successes(f.parent / "majhor2023")),
                       *_metric_medians("rms_vertical_accel_m_s2")(f.parent / "majhor2023")]),
     Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
-           "".join(rf"\| {v} \| {r} \| {_NUM} / 16 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
+           "".join(rf"\| {v} \| {r} \| {_NUM} / 32 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
            _vehicle_successes),
     Sample("vehicle-comparison jackal on the paper terrains", "vehicle-comparison",
-           rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
+           rf"succeeds on {_NUM} of 96 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
     Sample("planner-stress plan: effects, intervals, p and Holm p", "planner-stress",
@@ -858,19 +871,30 @@ SAMPLES = [
     Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
            "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
     *(Sample(f"vehicle-comparison {v} against the husky (plan)", "vehicle-comparison",
-             rf"\| {re.escape(label)} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+             rf"\| {re.escape(label)} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| (?:yes|no) \| "
+             rf"{_NUM} \|",
              _vehicle_comparison_plan(i)) for i, (v, label) in enumerate(COMPARED_VEHICLES)),
     Sample("vehicle-comparison totals per vehicle", "vehicle-comparison",
-           rf"Totals of 64: sojourner {_NUM}, husky {_NUM}, hunter {_NUM}, talon {_NUM}, jackal {_NUM}",
+           rf"Totals of 128: sojourner {_NUM}, husky {_NUM}, hunter {_NUM}, talon {_NUM}, jackal {_NUM}",
            lambda f: [float(trial_table(f).groupby("vehicle")["success"].sum()[v])
                       for v in ("sojourner", "husky", "hunter", "talon", "jackal")]),
     Sample("vehicle-comparison stuck on the paper terrains", "vehicle-comparison",
-           rf"are `stuck` \(talon {_NUM}, hunter {_NUM}, husky {_NUM}, jackal {_NUM}, sojourner {_NUM};",
+           rf"are `stuck` \(jackal {_NUM}, talon {_NUM}, hunter {_NUM}, husky {_NUM}, sojourner {_NUM};",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare' and failure_reason == 'stuck'")
                             .groupby("vehicle").size().get(v, 0))
-                      for v in ("talon", "hunter", "husky", "jackal", "sojourner")]),
+                      for v in ("jackal", "talon", "hunter", "husky", "sojourner")]),
+    *(Sample(f"vehicle-comparison {v} against the husky per terrain kind", "vehicle-comparison",
+             pattern, _vehicle_kind_differences(v)) for v, pattern in (
+        ("talon", rf"Per terrain kind against the Husky \(points,\s+each kind's mean per-terrain difference\): {_NUM} at "
+                  rf"D 2.3, {_NUM} at 2.45, {_NUM} at 2.6, {_NUM} on lunar\s+mare"),
+        ("jackal", rf"\*\*The Jackal loses everywhere, most on lunar mare\*\*: {_NUM} / {_NUM} / {_NUM} points at D 2.3 / "
+                   rf"2.45\s+/ 2.6 and {_NUM} on lunar mare"))),
+    Sample("vehicle-comparison jackal tip-overs on lunar mare", "vehicle-comparison",
+           rf"Its {_NUM} lunar failures are tip-overs {_NUM}-{_NUM} s into the",
+           lambda f: (lambda x: [float(len(x)), float(x["sim_time_s"].min()), float(x["sim_time_s"].max())])(
+               trial_table(f).query("vehicle == 'jackal' and recipe == 'lunar-mare' and failure_reason == 'tipped'"))),
     *(Sample(f"vehicle-comparison {v} ride per terrain", "vehicle-comparison",
-             "".join(rf"\| {v} \| {r} \| \d+ / 16 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
+             "".join(rf"\| {v} \| {r} \| \d+ / 32 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
                      rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
              _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
     Sample("vehicle-planner plan per engine: terrains, means, effect, interval, p, Holm p, power", "vehicle-planner",
@@ -1001,3 +1025,24 @@ def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
         assert f"**{name}: {verdict}**" in text, name
     assert (RESULTS / VP_EARLIER / "README.md").read_text().split("\n")[2].startswith(
         "**The earlier, exploratory table, superseded for the plan by the [parent folder](../README.md).**")
+
+
+PLAN_ROW_LABELS = {"soil-map": lambda name: name.removesuffix(": success"),
+                   "vehicle-comparison": lambda name: name.removesuffix(" against the husky")}
+"""Studies re-run on issue 42's powered plans whose README gives one plan row per test: confirmatory.csv's
+comparison name -> the README row's label."""
+
+
+@pytest.mark.parametrize("study", sorted(PLAN_ROW_LABELS))
+def test_plan_rows_state_the_tables_verdict_and_power(study: str):
+    """Each planned test's README row says rejected yes / no as confirmatory.csv does, with the power the plan
+    stated before the run, which is >= 0.8 for every test (issue 42)."""
+    folder = RESULTS / study
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    for c in conf.itertuples():
+        row = rf"\| {re.escape(PLAN_ROW_LABELS[study](c.comparison))} \|[^\n]*\| {'yes' if c.reject else 'no'} \| {c.power:.2f} \|"
+        assert re.search(row, text), (study, c.comparison)
+        verdict = "rejected" if c.reject else "not rejected"
+        assert f"**{c.comparison}: {verdict} on PyBullet; MuJoCo not run.**" in text, (study, c.comparison)
