@@ -267,22 +267,35 @@ def _torque_pitch_rate_drop(folder: Path) -> list[float]:
     return [float((med[28.0] - med[16.5]).mean())]
 
 
-def _vehicle_sensitivity_pitch_plan(folder: Path) -> list[float]:
-    """The plan's 16.5 N m / 1.0 kg m^2 pitch-rate test: effect, interval (confirmatory.csv), p and Holm p
-    over the plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials),
-    recomputed from the trial table."""
-    from offroadbench.study.stats.clustered import holm, sign_flip_test
+VS_TESTS = [(22.0, 1.0, "success"), (16.5, 1.0, "success"), (28.0, 0.25, "success"), (22.0, 0.25, "success"),
+            (16.5, 0.25, "success"), (16.5, 1.0, "pitch rate"), (28.0, 0.25, "pitch rate")]
+"""The vehicle-sensitivity plan (confirmatory.csv's order): (torque N m, spin inertia kg m^2, metric), each against
+the shipped 28 N m / 1.0 kg m^2."""
+
+
+def _vehicle_sensitivity_plan(folder: Path) -> list[list[float]]:
+    """The plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials), recomputed
+    from the trial table as the report draws them (one generator seeded 0 through the tests in order: 2000
+    bootstrap draws each; exact sign-flip over 20 terrains; Holm over the 7). Per test: the shipped vehicle's and
+    the setting's mean per-terrain value, effect, interval, p, Holm p; then the power the plan stated
+    (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
 
     t = trial_table(folder)
     key = ["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]
-    rate = t.groupby([*key, "terrain"])["success"].mean().mul(100)
-    pitch = t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()
-    shipped = (28.0, 1.0)
-    diffs = [(rate[k] - rate[shipped]).to_numpy(float) for k in _SETTINGS[1:]]
-    diffs += [(pitch[k] - pitch[shipped]).to_numpy(float) for k in ((16.5, 1.0), (28.0, 0.25))]
-    p = [sign_flip_test(d) for d in diffs]
-    ci = pd.read_csv(folder / "confirmatory.csv").iloc[5]
-    return [float(diffs[5].mean()), float(ci["ci_low"]), float(ci["ci_high"]), p[5], float(holm(p)[5])]
+    vals = {"success": t.groupby([*key, "terrain"])["success"].mean().mul(100),
+            "pitch rate": t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()}
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for i, (torque, inertia, metric) in enumerate(VS_TESTS):
+        assert conf["comparison"].iloc[i].startswith(f"{torque:g} N m, {inertia:g} kg m^2") and metric in conf["comparison"].iloc[i]
+        v = vals[metric]
+        d = (v[(torque, inertia)] - v[(28.0, 1.0)]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(v[(28.0, 1.0)].mean()), float(v[(torque, inertia)].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf["power"].iloc[i])] for i, (row, q) in enumerate(zip(rows, holm(p), strict=True))]
 
 
 VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
@@ -830,10 +843,23 @@ SAMPLES = [
            r"\| torque N m / spin inertia kg m\^2 \|[^\n]*\n\|[-|]+\|\n"
            + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
     Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
-           rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
-    Sample("vehicle-sensitivity plan: pitch rate at 16.5 N m", "vehicle-sensitivity",
-           rf"\| 16.5 / 1.0 \| RMS pitch rate, deg/s \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
-           _vehicle_sensitivity_pitch_plan),
+           rf"16.5 N m lowers the per-terrain\s+median pitch rate by {_NUM} deg/s", _torque_pitch_rate_drop),
+    Sample("vehicle-sensitivity plan: means, effect, interval, p, Holm p, power", "vehicle-sensitivity",
+           "".join(rf"\| {torque:g} / {inertia} \| {'success, points' if m == 'success' else 'RMS pitch rate, deg/s'} \| "
+                   rf"{_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| no \| {_NUM} at [+-][\d.]+ \|[^\n]*\n"
+                   for torque, inertia, m in VS_TESTS),
+           lambda f: [v for row in _vehicle_sensitivity_plan(f) for v in row]),
+    Sample("vehicle-sensitivity failures per setting", "vehicle-sensitivity",
+           rf"Every failure is `stuck` \({_NUM}-{_NUM} of 200 per setting",
+           lambda f: (lambda t: [float(t.groupby(["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]).size().min()),
+                                 float(t.groupby(["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]).size().max())]
+                      if (t["failure_reason"] == "stuck").all() else [np.nan, np.nan])(
+                          trial_table(f).query("not success"))),
+    Sample("vehicle-sensitivity missions alike in every setting", "vehicle-sensitivity",
+           rf"{_NUM} of the 200 missions end alike in all six\s+settings",
+           lambda f: (lambda w: [float((w.all(axis=1) | (~w).all(axis=1)).sum())])(
+               trial_table(f).pivot_table(index=["terrain", "mission"], columns=["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"],
+                                          values="success", aggfunc="first").astype(bool))),
     Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
            rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
@@ -1028,7 +1054,10 @@ def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
 
 
 PLAN_ROW_LABELS = {"soil-map": lambda name: name.removesuffix(": success"),
-                   "vehicle-comparison": lambda name: name.removesuffix(" against the husky")}
+                   "vehicle-comparison": lambda name: name.removesuffix(" against the husky"),
+                   "vehicle-sensitivity": lambda name: (lambda m: f"{m[1]} / {float(m[2])} | "
+                                                        + ("success, points" if m[3] == "success" else "RMS pitch rate, deg/s"))(
+                       re.match(r"([\d.]+) N m, ([\d.]+) kg m\^2 against the shipped vehicle: (success|pitch rate)", name))}
 """Studies re-run on issue 42's powered plans whose README gives one plan row per test: confirmatory.csv's
 comparison name -> the README row's label."""
 
@@ -1042,7 +1071,8 @@ def test_plan_rows_state_the_tables_verdict_and_power(study: str):
     conf = pd.read_csv(folder / "confirmatory.csv")
     assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
     for c in conf.itertuples():
-        row = rf"\| {re.escape(PLAN_ROW_LABELS[study](c.comparison))} \|[^\n]*\| {'yes' if c.reject else 'no'} \| {c.power:.2f} \|"
+        row = (rf"\| {re.escape(PLAN_ROW_LABELS[study](c.comparison))} \|[^\n]*\| {'yes' if c.reject else 'no'} "
+               rf"\| {c.power:.2f}(?: at [+-][\d.]+)? \|")
         assert re.search(row, text), (study, c.comparison)
         verdict = "rejected" if c.reject else "not rejected"
         assert f"**{c.comparison}: {verdict} on PyBullet; MuJoCo not run.**" in text, (study, c.comparison)
