@@ -315,22 +315,35 @@ def _torque_pitch_rate_drop(folder: Path) -> list[float]:
     return [float((med[28.0] - med[16.5]).mean())]
 
 
-def _vehicle_sensitivity_pitch_plan(folder: Path) -> list[float]:
-    """The plan's 16.5 N m / 1.0 kg m^2 pitch-rate test: effect, interval (confirmatory.csv), p and Holm p
-    over the plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials),
-    recomputed from the trial table."""
-    from offroadbench.study.stats.clustered import holm, sign_flip_test
+VS_TESTS = [(22.0, 1.0, "success"), (16.5, 1.0, "success"), (28.0, 0.25, "success"), (22.0, 0.25, "success"),
+            (16.5, 0.25, "success"), (16.5, 1.0, "pitch rate"), (28.0, 0.25, "pitch rate")]
+"""The vehicle-sensitivity plan (confirmatory.csv's order): (torque N m, spin inertia kg m^2, metric), each against
+the shipped 28 N m / 1.0 kg m^2."""
+
+
+def _vehicle_sensitivity_plan(folder: Path) -> list[list[float]]:
+    """The plan's 7 tests (5 on success, 2 on the per-terrain median pitch rate of successful trials), recomputed
+    from the trial table as the report draws them (one generator seeded 0 through the tests in order: 2000
+    bootstrap draws each; exact sign-flip over 20 terrains; Holm over the 7). Per test: the shipped vehicle's and
+    the setting's mean per-terrain value, effect, interval, p, Holm p; then the power the plan stated
+    (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
 
     t = trial_table(folder)
     key = ["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]
-    rate = t.groupby([*key, "terrain"])["success"].mean().mul(100)
-    pitch = t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()
-    shipped = (28.0, 1.0)
-    diffs = [(rate[k] - rate[shipped]).to_numpy(float) for k in _SETTINGS[1:]]
-    diffs += [(pitch[k] - pitch[shipped]).to_numpy(float) for k in ((16.5, 1.0), (28.0, 0.25))]
-    p = [sign_flip_test(d) for d in diffs]
-    ci = pd.read_csv(folder / "confirmatory.csv").iloc[5]
-    return [float(diffs[5].mean()), float(ci["ci_low"]), float(ci["ci_high"]), p[5], float(holm(p)[5])]
+    vals = {"success": t.groupby([*key, "terrain"])["success"].mean().mul(100),
+            "pitch rate": t[t["success"].astype(bool)].groupby([*key, "terrain"])["rms_pitch_rate_deg_s"].median()}
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for i, (torque, inertia, metric) in enumerate(VS_TESTS):
+        assert conf["comparison"].iloc[i].startswith(f"{torque:g} N m, {inertia:g} kg m^2") and metric in conf["comparison"].iloc[i]
+        v = vals[metric]
+        d = (v[(torque, inertia)] - v[(28.0, 1.0)]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(v[(28.0, 1.0)].mean()), float(v[(torque, inertia)].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf["power"].iloc[i])] for i, (row, q) in enumerate(zip(rows, holm(p), strict=True))]
 
 
 VEHICLES = ("husky", "jackal", "talon", "hunter", "sojourner")
@@ -368,6 +381,42 @@ SOIL_MAP_SIMULANT = "soil-map/mare-floors-simulant.toml"
 SOIL_MAP_ROWS = {r"lunar-mare \(one soil\)": "lunar-mare", "crater interiors on the simulant": SOIL_MAP_SIMULANT,
                  "crater interiors on the soft deposit": SOIL_MAP_SNOW}
 """The soil-map README table's rows: (row label regex, recipe)."""
+SOIL_MAP_TESTS = {"soft crater interiors against one soil": SOIL_MAP_SNOW,
+                  "simulant crater interiors against one soil": SOIL_MAP_SIMULANT}
+"""The soil-map plan (confirmatory.csv's order): (README name, treatment recipe), each against lunar-mare."""
+def _soil_map_outcomes(folder: Path, recipe: str) -> list[float]:
+    """One soil layout's successes, then its entrapped, stuck, timeout and off_map failures."""
+    t = trial_table(folder).query("recipe == @recipe")
+    counts = t["failure_reason"].value_counts()
+    return [float(t["success"].sum())] + [float(counts.get(r, 0)) for r in ("entrapped", "stuck", "timeout", "off_map")]
+
+
+def _soil_map_flips(folder: Path, recipe: str) -> list[float]:
+    """Missions (terrain, mission) that succeed on one soil and fail on ``recipe``, then the reverse."""
+    w = trial_table(folder).pivot_table(index=["terrain", "mission"], columns="recipe", values="success",
+                                        aggfunc="first").astype(bool)
+    return [float((w["lunar-mare"] & ~w[recipe]).sum()), float((~w["lunar-mare"] & w[recipe]).sum())]
+
+
+def _soil_map_plan(folder: Path) -> list[list[float]]:
+    """The plan's 2 tests, recomputed from the trial table as the report draws them (one generator seeded 0
+    through the tests in order: 2000 bootstrap draws, then the sign-flip test, Monte Carlo beyond 20 terrains;
+    Holm over the 2). Per test: terrains, one soil's and the map's mean per-terrain success, effect, interval,
+    p, Holm p; then the power the plan stated (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
+    rate = trial_table(folder).groupby(["recipe", "terrain"])["success"].mean().mul(100).unstack("recipe")
+    conf = pd.read_csv(folder / "confirmatory.csv").set_index("comparison")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for recipe in SOIL_MAP_TESTS.values():
+        d = (rate[recipe] - rate["lunar-mare"]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(d.size), float(rate["lunar-mare"].mean()), float(rate[recipe].mean()), float(d.mean()),
+                     b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf.loc[f"{name}: success", "power"])]
+            for row, q, name in zip(rows, holm(p), SOIL_MAP_TESTS, strict=True)]
 
 
 LUNAR_SOIL_CELLS = [(e, m, g, a) for e in ("pybullet", "mujoco") for m in ("coulomb", "terramechanics")
@@ -466,13 +515,26 @@ COMPARED_VEHICLES = (("jackal", "jackal"), ("talon", "talon (tracked)"), ("hunte
 
 
 def _vehicle_comparison_plan(which: int) -> Callable[[Path], list[float]]:
-    """The vehicle-comparison plan's comparison ``which``: effect, interval (confirmatory.csv), p and Holm p."""
+    """The vehicle-comparison plan's comparison ``which``: the Husky's and the vehicle's mean per-terrain success,
+    effect, interval (confirmatory.csv), p and Holm p (exact sign-flip over 16 terrains), the power the plan stated."""
     def compute(folder: Path) -> list[float]:
+        t = trial_table(folder)
         pairs = [(v, "husky") for v, _ in COMPARED_VEHICLES]
-        effect, p, p_holm = _sign_flip_plan(trial_table(folder), "vehicle", pairs, which)
+        effect, p, p_holm = _sign_flip_plan(t, "vehicle", pairs, which)
+        rate = t.groupby(["vehicle", "terrain"])["success"].mean().mul(100)
         label = COMPARED_VEHICLES[which][1]
         ci = pd.read_csv(folder / "confirmatory.csv").set_index("comparison").loc[f"{label} against the husky"]
-        return [effect, float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm]
+        return [float(rate["husky"].mean()), float(rate[COMPARED_VEHICLES[which][0]].mean()), effect,
+                float(ci["ci_low"]), float(ci["ci_high"]), p, p_holm, float(ci["power"])]
+
+    return compute
+
+
+def _vehicle_kind_differences(vehicle: str) -> Callable[[Path], list[float]]:
+    """Per terrain kind (the README's order): the vehicle's mean per-terrain success minus the Husky's, points."""
+    def compute(folder: Path) -> list[float]:
+        rate = trial_table(folder).groupby(["vehicle", "recipe", "terrain"])["success"].mean().mul(100)
+        return [float((rate[vehicle][r] - rate["husky"][r]).mean()) for r in TERRAIN_KINDS]
 
     return compute
 
@@ -776,18 +838,24 @@ SAMPLES = [
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
            lambda f: [float(((t := trial_table(f))["failure_reason"] == "entrapped").sum()),
                       float((t["tyre_model"] == "terramechanics").sum())]),
-    Sample("soil-map planned effects", "soil-map",
-           rf"Soft crater interiors against one soil: \*\*{_NUM} points\*\*[^\n]*\n[^\n]*simulant crater interiors "
-           rf"against one soil: \*\*{_NUM} points\*\*",
-           lambda f: (_pooled_success_effect("recipe", SOIL_MAP_SNOW, "lunar-mare")(f)
-                      + _pooled_success_effect("recipe", SOIL_MAP_SIMULANT, "lunar-mare")(f))),
+    Sample("soil-map plan: terrains, means, effect, interval, p, Holm p, power", "soil-map",
+           "".join(rf"\| {name} \| {_NUM} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| no \| "
+                   rf"{_NUM} \|\n" for name in SOIL_MAP_TESTS),
+           lambda f: [v for row in _soil_map_plan(f) for v in row]),
     Sample("soil-map outcomes per soil layout", "soil-map",
-           "".join(rf"\| {label} \| {_NUM} \| {_NUM} \| {_NUM} \| {_NUM} \|\n" for label in SOIL_MAP_ROWS),
-           lambda f: [v for r in SOIL_MAP_ROWS.values()
-                      for v in [float(trial_table(f).query("recipe == @r")["success"].sum())]
-                      + _failure_counts(f, f"recipe == '{r}'", ("entrapped", "stuck", "timeout"))]),
+           "".join(rf"\| {label} \|" + rf" {_NUM} \(\d+\) \|" * 5 + "\n" for label in SOIL_MAP_ROWS),
+           lambda f: [v for r in SOIL_MAP_ROWS.values() for v in _soil_map_outcomes(f, r)]),
+    Sample("soil-map missions that flip on the deposit", "soil-map",
+           rf"Mission by mission, {_NUM} missions that succeed on one soil fail\s+on the deposit and {_NUM} go the other way "
+           r"\(old \d+ and \d+\)", lambda f: _soil_map_flips(f, SOIL_MAP_SNOW)),
+    Sample("soil-map simulant floors: flips and slip of the successful trials", "soil-map",
+           rf"The simulant floors lose {_NUM} of the control's successes and gain {_NUM}[\s\S]*?over the successful trials "
+           rf"alone the per-terrain difference is {_NUM}\.",
+           lambda f: _soil_map_flips(f, SOIL_MAP_SIMULANT) + [float(
+               (lambda m: (m[SOIL_MAP_SIMULANT] - m["lunar-mare"]).mean())(
+                   trial_table(f).query("success").groupby(["recipe", "terrain"])["mean_slip"].median().unstack("recipe")))]),
     Sample("soil-map deposit trials outside the model", "soil-map",
-           rf"Outside the soil model: {_NUM} of the 48 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
+           rf"Outside the soil model: {_NUM} of the 144 deposit trials[^\n]*at most\s+{_NUM} % of the trial",
            lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
                                  100 * float(t["outside_model_fraction"].max())])(
                                      trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
@@ -838,10 +906,23 @@ SAMPLES = [
            r"\| torque N m / spin inertia kg m\^2 \|[^\n]*\n\|[-|]+\|\n"
            + r"".join(r"\| [^|]+ \| \**(\d+)\** / \d+ \|[^\n]*\n" for _ in range(6)), _vehicle_setting_successes),
     Sample("vehicle-sensitivity pitch-rate drop at 16.5 N m", "vehicle-sensitivity",
-           rf"16.5 N m lowers it by\s+{_NUM} deg/s", _torque_pitch_rate_drop),
-    Sample("vehicle-sensitivity plan: pitch rate at 16.5 N m", "vehicle-sensitivity",
-           rf"\| 16.5 / 1.0 \| RMS pitch rate, deg/s \| {_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
-           _vehicle_sensitivity_pitch_plan),
+           rf"16.5 N m lowers the per-terrain\s+median pitch rate by {_NUM} deg/s", _torque_pitch_rate_drop),
+    Sample("vehicle-sensitivity plan: means, effect, interval, p, Holm p, power", "vehicle-sensitivity",
+           "".join(rf"\| {torque:g} / {inertia} \| {'success, points' if m == 'success' else 'RMS pitch rate, deg/s'} \| "
+                   rf"{_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| no \| {_NUM} at [+-][\d.]+ \|[^\n]*\n"
+                   for torque, inertia, m in VS_TESTS),
+           lambda f: [v for row in _vehicle_sensitivity_plan(f) for v in row]),
+    Sample("vehicle-sensitivity failures per setting", "vehicle-sensitivity",
+           rf"Every failure is `stuck` \({_NUM}-{_NUM} of 200 per setting",
+           lambda f: (lambda t: [float(t.groupby(["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]).size().min()),
+                                 float(t.groupby(["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"]).size().max())]
+                      if (t["failure_reason"] == "stuck").all() else [np.nan, np.nan])(
+                          trial_table(f).query("not success"))),
+    Sample("vehicle-sensitivity missions alike in every setting", "vehicle-sensitivity",
+           rf"{_NUM} of the 200 missions end alike in all six\s+settings",
+           lambda f: (lambda w: [float((w.all(axis=1) | (~w).all(axis=1)).sum())])(
+               trial_table(f).pivot_table(index=["terrain", "mission"], columns=["wheel_torque_limit_nm", "wheel_spin_inertia_kg_m2"],
+                                          values="success", aggfunc="first").astype(bool))),
     Sample("majhor2023-mujoco successful trials", "majhor2023-mujoco",
            rf"successful trials \(of 400\) \| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023-mujoco RMS vertical acceleration medians", "majhor2023-mujoco",
@@ -857,10 +938,10 @@ SAMPLES = [
     Sample("majhor2023-mujoco each planned test on both engines", "majhor2023-mujoco", _majhor_both_rows(),
            _majhor_both_plans),
     Sample("vehicle-comparison successes per vehicle and terrain", "vehicle-comparison",
-           "".join(rf"\| {v} \| {r} \| {_NUM} / 16 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
+           "".join(rf"\| {v} \| {r} \| {_NUM} / 32 \|[^\n]*\n" for v in VEHICLES for r in TERRAIN_KINDS),
            _vehicle_successes),
     Sample("vehicle-comparison jackal on the paper terrains", "vehicle-comparison",
-           rf"succeeds on {_NUM} of 48 missions against the Husky's {_NUM}",
+           rf"succeeds on {_NUM} of 96 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
     Sample("planner-stress plan: effects, intervals, p and Holm p", "planner-stress",
@@ -883,19 +964,30 @@ SAMPLES = [
     Sample("planner-stress above-Nyquist variance per D_high", "planner-stress",
            "".join(rf"\| {d} \| {_NUM} % \|[^\n]*\n" for d in ("2.9", "2.95", "2.99")), _above_nyquist_share),
     *(Sample(f"vehicle-comparison {v} against the husky (plan)", "vehicle-comparison",
-             rf"\| {re.escape(label)} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_NUM} \| {_NUM} \| no \|",
+             rf"\| {re.escape(label)} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] \| {_SCI} \| {_SCI} \| (?:yes|no) \| "
+             rf"{_NUM} \|",
              _vehicle_comparison_plan(i)) for i, (v, label) in enumerate(COMPARED_VEHICLES)),
     Sample("vehicle-comparison totals per vehicle", "vehicle-comparison",
-           rf"Totals of 64: sojourner {_NUM}, husky {_NUM}, hunter {_NUM}, talon {_NUM}, jackal {_NUM}",
+           rf"Totals of 128: sojourner {_NUM}, husky {_NUM}, hunter {_NUM}, talon {_NUM}, jackal {_NUM}",
            lambda f: [float(trial_table(f).groupby("vehicle")["success"].sum()[v])
                       for v in ("sojourner", "husky", "hunter", "talon", "jackal")]),
     Sample("vehicle-comparison stuck on the paper terrains", "vehicle-comparison",
-           rf"are `stuck` \(talon {_NUM}, hunter {_NUM}, husky {_NUM}, jackal {_NUM}, sojourner {_NUM};",
+           rf"are `stuck` \(jackal {_NUM}, talon {_NUM}, hunter {_NUM}, husky {_NUM}, sojourner {_NUM};",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare' and failure_reason == 'stuck'")
                             .groupby("vehicle").size().get(v, 0))
-                      for v in ("talon", "hunter", "husky", "jackal", "sojourner")]),
+                      for v in ("jackal", "talon", "hunter", "husky", "sojourner")]),
+    *(Sample(f"vehicle-comparison {v} against the husky per terrain kind", "vehicle-comparison",
+             pattern, _vehicle_kind_differences(v)) for v, pattern in (
+        ("talon", rf"Per terrain kind against the Husky \(points,\s+each kind's mean per-terrain difference\): {_NUM} at "
+                  rf"D 2.3, {_NUM} at 2.45, {_NUM} at 2.6, {_NUM} on lunar\s+mare"),
+        ("jackal", rf"\*\*The Jackal loses everywhere, most on lunar mare\*\*: {_NUM} / {_NUM} / {_NUM} points at D 2.3 / "
+                   rf"2.45\s+/ 2.6 and {_NUM} on lunar mare"))),
+    Sample("vehicle-comparison jackal tip-overs on lunar mare", "vehicle-comparison",
+           rf"Its {_NUM} lunar failures are tip-overs {_NUM}-{_NUM} s into the",
+           lambda f: (lambda x: [float(len(x)), float(x["sim_time_s"].min()), float(x["sim_time_s"].max())])(
+               trial_table(f).query("vehicle == 'jackal' and recipe == 'lunar-mare' and failure_reason == 'tipped'"))),
     *(Sample(f"vehicle-comparison {v} ride per terrain", "vehicle-comparison",
-             "".join(rf"\| {v} \| {r} \| \d+ / 16 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
+             "".join(rf"\| {v} \| {r} \| \d+ / 32 \| [^|]+ \| {_NUM} \[[^]]+\] \| {_NUM} \[[^]]+\] "
                      rf"\| {_NUM} \[[^]]+\] \|[^\n]*\n" for r in TERRAIN_KINDS),
              _vehicle_ride_medians(v)) for v in ("talon", "hunter")),
     Sample("vehicle-planner plan per engine: terrains, means, effect, interval, p, Holm p, power", "vehicle-planner",
@@ -1044,3 +1136,28 @@ def test_majhor_verdicts_are_their_tables(study: str):
               (False, True): "MuJoCo only"}[tuple(reject)]
         cells = "".join(rf"[^|]*{'yes' if r else 'no'}[^|]*\|" for r in reject)
         assert re.search(rf"\| {re.escape(name)} \|{cells} {on} \| {verdicts[name]} \|", text), (study, name)
+
+
+PLAN_ROW_LABELS = {"soil-map": lambda name: name.removesuffix(": success"),
+                   "vehicle-comparison": lambda name: name.removesuffix(" against the husky"),
+                   "vehicle-sensitivity": lambda name: (lambda m: f"{m[1]} / {float(m[2])} | "
+                                                        + ("success, points" if m[3] == "success" else "RMS pitch rate, deg/s"))(
+                       re.match(r"([\d.]+) N m, ([\d.]+) kg m\^2 against the shipped vehicle: (success|pitch rate)", name))}
+"""Studies re-run on issue 42's powered plans whose README gives one plan row per test: confirmatory.csv's
+comparison name -> the README row's label."""
+
+
+@pytest.mark.parametrize("study", sorted(PLAN_ROW_LABELS))
+def test_plan_rows_state_the_tables_verdict_and_power(study: str):
+    """Each planned test's README row says rejected yes / no as confirmatory.csv does, with the power the plan
+    stated before the run, which is >= 0.8 for every test (issue 42)."""
+    folder = RESULTS / study
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    for c in conf.itertuples():
+        row = (rf"\| {re.escape(PLAN_ROW_LABELS[study](c.comparison))} \|[^\n]*\| {'yes' if c.reject else 'no'} "
+               rf"\| {c.power:.2f}(?: at [+-][\d.]+)? \|")
+        assert re.search(row, text), (study, c.comparison)
+        verdict = "rejected" if c.reject else "not rejected"
+        assert f"**{c.comparison}: {verdict} on PyBullet; MuJoCo not run.**" in text, (study, c.comparison)
