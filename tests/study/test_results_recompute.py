@@ -310,6 +310,53 @@ def _crater_density_rows(folder: Path) -> list[float]:
     return out
 
 
+def _plan_rows(folder: Path, diffs: list[pd.DataFrame]) -> list[list[float]]:
+    """Planned tests in confirmatory.csv's order, each from its per-terrain table (columns ``t`` and ``c``, a terrain
+    without a value on one side dropped), as the report draws them (offroadbench.study.stats.plan: one generator
+    seeded 0 through the tests in order, 2000 bootstrap draws, the exact sign-flip test, Holm over the plan). Per
+    test: terrains, the control's and the treatment's mean, effect, interval, p, Holm p; then the power the plan
+    stated (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for both in diffs:
+        both = both.dropna()
+        d = (both["t"] - both["c"]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(d.size), float(both["c"].mean()), float(both["t"].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf["power"].iloc[i])] for i, (row, q) in enumerate(zip(rows, holm(p), strict=True))]
+
+
+CRATER_TESTS = [f"{n} against none: {m}" for m in ("success", "vertical acceleration")
+                for n in ("craters", "more craters", "most craters")]
+"""crater-density's planned tests in confirmatory.csv's order."""
+
+
+def _crater_density_plan(folder: Path) -> list[list[float]]:
+    """crater-density's 6 planned tests: each density against none, success (points) then the per-terrain median
+    RMS vertical acceleration of successful trials (m/s^2)."""
+    t = trial_table(folder)
+    rate = t.groupby(["c", "terrain"])["success"].mean().mul(100).unstack("c")
+    va = t[t["success"].astype(bool)].groupby(["c", "terrain"])["rms_vertical_accel_m_s2"].median().unstack("c")
+    return _plan_rows(folder, [pd.DataFrame({"t": tab[c], "c": tab[0.0]}) for tab in (rate, va)
+                               for c in CRATER_DENSITIES[1:]])
+
+
+@pytest.mark.parametrize("name", ["crater-density"])
+def test_a_re_planned_studys_rejections_and_power_are_its_tables(name):
+    """Issue 42's re-planned studies: the README's yes/no per planned test is confirmatory.csv's, and every planned
+    test had power >= 0.8 at its stated effect before the run."""
+    folder = RESULTS / name
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    rows = re.findall(r"^\| [^|\n]+ \| \d+ \| [^|\n]+ -> [^|\n]+ \|[^|\n]+\|[^|\n]+\|[^|\n]+\| (yes|no) \| [\d.]+ at ", text, re.M)
+    assert rows == ["yes" if r else "no" for r in conf["reject"]]
+
+
 def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
     counts = trial_table(folder).query(where)["failure_reason"].value_counts()
     return [float(counts.get(r, 0)) for r in reasons]
@@ -728,8 +775,6 @@ SAMPLES = [
            lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
                                  100 * float(t["outside_model_fraction"].max())])(
                                      trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
-    Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
-           _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",
            "".join(rf"\| {e} \| {m} \| {g} \| {a} \| {_NUM}{old[e]} \|[^|\n]*\|[^|\n]*\| {_NUM}{old[e]} \| "
                    + (rf"{_NUM}{old[e]} \| {_NUM} / {_NUM}{oldsink[e]} \|\n" if m == "terramechanics"
@@ -745,10 +790,12 @@ SAMPLES = [
                    rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
            _crater_density_rows),
     Sample("crater-density failures at c = 0.3", "crater-density",
-           rf"\| 0.3 \| \d+ \(\d+\) \| {_NUM} stuck, {_NUM} timeout, {_NUM} tipped \|",
+           rf"How the vehicle fails at c = 0.3\*\*: {_NUM} `stuck`, {_NUM} `timeout`, {_NUM} tipped of",
            lambda f: _failure_counts(f, "c == 0.3", ("stuck", "timeout", "tipped"))),
-    Sample("crater-density tip-overs at c = 0.3 now", "crater-density", rf"Tip-overs at c = 0.3 fell from \d+ to {_NUM}",
-           lambda f: _failure_counts(f, "c == 0.3", ("tipped",))),
+    Sample("crater-density plan: terrains, means, effect, interval, p, Holm p, power", "crater-density",
+           "".join(rf"\| {re.escape(name)} \| {_NUM} \| {_NUM} -> {_NUM} \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at [+-][\d.]+ \|\n" for name in CRATER_TESTS),
+           lambda f: [v for row in _crater_density_plan(f) for v in row]),
     Sample("majhor2023 successful trials", "majhor2023",
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
