@@ -371,6 +371,57 @@ def _crater_density_rows(folder: Path) -> list[float]:
     return out
 
 
+def _plan_rows(folder: Path, diffs: list[pd.DataFrame]) -> list[list[float]]:
+    """Planned tests in confirmatory.csv's order, each from its per-terrain table (columns ``t`` and ``c``, a terrain
+    without a value on one side dropped), as the report draws them (offroadbench.study.stats.plan: one generator
+    seeded 0 through the tests in order, 2000 bootstrap draws, the exact sign-flip test, Holm over the plan). Per
+    test: terrains, the control's and the treatment's mean, effect, interval, p, Holm p; then the power the plan
+    stated (confirmatory.csv: simulated before the run from the pilot)."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, holm, sign_flip_test
+
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rng = np.random.default_rng(0)
+    rows, p = [], []
+    for both in diffs:
+        both = both.dropna()
+        d = (both["t"] - both["c"]).to_numpy(float)
+        b = cluster_bootstrap(d, np.mean, rng, 2000, level=0.95)
+        p.append(sign_flip_test(d, rng=rng))
+        rows.append([float(d.size), float(both["c"].mean()), float(both["t"].mean()), float(d.mean()), b.low, b.high, p[-1]])
+    return [row + [float(q), float(conf["power"].iloc[i])] for i, (row, q) in enumerate(zip(rows, holm(p), strict=True))]
+
+
+CRATER_TESTS = [f"{n} against none: {m}" for m in ("success", "vertical acceleration")
+                for n in ("craters", "more craters", "most craters")]
+"""crater-density's planned tests in confirmatory.csv's order."""
+
+
+def _crater_density_plan(folder: Path) -> list[list[float]]:
+    """crater-density's 6 planned tests: each density against none, success (points) then the per-terrain median
+    RMS vertical acceleration of successful trials (m/s^2)."""
+    t = trial_table(folder)
+    rate = t.groupby(["c", "terrain"])["success"].mean().mul(100).unstack("c")
+    va = t[t["success"].astype(bool)].groupby(["c", "terrain"])["rms_vertical_accel_m_s2"].median().unstack("c")
+    return _plan_rows(folder, [pd.DataFrame({"t": tab[c], "c": tab[0.0]}) for tab in (rate, va)
+                               for c in CRATER_DENSITIES[1:]])
+
+
+@pytest.mark.parametrize("name", ["crater-density", "engines"])
+def test_a_re_planned_studys_rejections_and_power_are_its_tables(name):
+    """Issue 42's re-planned studies: the README's yes/no per planned test is confirmatory.csv's, every planned test
+    had power >= 0.8 at its stated effect before the run, and a both-engine study's verdicts are engine_verdicts.csv's."""
+    folder = RESULTS / name
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    rows = re.findall(r"^\| [^|\n]+ \| \d+ \| [^|\n]+ -> [^|\n]+ \|[^|\n]+\|[^|\n]+\|[^|\n]+\| (yes|no) \| [\d.]+ at ", text, re.M)
+    assert rows == ["yes" if r else "no" for r in conf["reject"]]
+    if (folder / "engine_verdicts.csv").is_file():  # one line per per-engine test: its cross-engine verdict
+        eng = pd.read_csv(folder / "engine_verdicts.csv")
+        for comparison, verdict in eng.groupby("comparison", sort=False)["verdict"].first().items():
+            assert f"**{comparison}: {verdict}**" in text, comparison
+
+
 def _failure_counts(folder: Path, where: str, reasons: tuple[str, ...]) -> list[float]:
     counts = trial_table(folder).query(where)["failure_reason"].value_counts()
     return [float(counts.get(r, 0)) for r in reasons]
@@ -468,32 +519,55 @@ def _one_engine_only(folder: Path) -> list[float]:
     return [float((w["mujoco"] & ~w["pybullet"]).sum()), float((w["pybullet"] & ~w["mujoco"]).sum())]
 
 
-def _paper_run_before_blind_seeds(study: str) -> pd.DataFrame:
-    """The paper study's trial table as the engines README names it (root seed 2023: the majhor2023 run of
-    2026-11-26 afternoon, the majhor2023-mujoco run of 2026-11-28), from git history: the results folders now hold
-    issue 42's blind-seeded re-runs, whose terrains are others (d4d7026 is the last commit that held those runs)."""
-    import io
-    import subprocess
-
-    path = f"d4d7026:experiments/results/{study}/trials.parquet"
-    try:
-        blob = subprocess.run(["git", "show", path], cwd=RESULTS, capture_output=True, check=True).stdout
-    except (OSError, subprocess.CalledProcessError):
-        pytest.skip(f"git history without {path}")
-    return pd.read_parquet(io.BytesIO(blob))
+ENGINES_TESTS = (("engine: success", "engine, success (MuJoCo - PyBullet, pooled), points"),
+                 ("engine: roll rate", "engine, RMS roll rate (pooled), deg/s"),
+                 ("D 2.3 -> 2.6: vertical acceleration, per engine", "D 2.3 -> 2.6, RMS vertical acceleration, PyBullet, m/s^2"),
+                 ("D 2.3 -> 2.6: vertical acceleration, per engine", "D 2.3 -> 2.6, RMS vertical acceleration, MuJoCo, m/s^2"),
+                 ("D 2.3 -> 2.6: success, per engine", "D 2.3 -> 2.6, success, PyBullet, points"),
+                 ("D 2.3 -> 2.6: success, per engine", "D 2.3 -> 2.6, success, MuJoCo, points"))
+"""The engines plan in confirmatory.csv's order: (comparison, the README's row label)."""
 
 
-def _engines_trials_in_paper_studies(folder: Path) -> list[float]:
-    """Engine trials equal (outcome, simulated time, RMS vertical acceleration) to the trial of the same D,
-    terrain and mission seed in the paper study on that engine: PyBullet, then MuJoCo."""
+def _engines_plan(folder: Path) -> list[list[float]]:
+    """engines' 6 planned tests: MuJoCo against PyBullet, success and the per-terrain median RMS roll rate, each
+    terrain's value the mean over the three D_high (a terrain without a success at one D_high dropped); then
+    D_high 2.3 -> 2.6 per engine, RMS vertical acceleration (per-terrain median) and success."""
     t = trial_table(folder)
-    out = []
-    for engine, study in (("pybullet", "majhor2023"), ("mujoco", "majhor2023-mujoco")):
-        keys = ["D_high", "terrain_seed", "mission_seed"]
-        j = pd.merge(t[t["engine"] == engine], _paper_run_before_blind_seeds(study), on=keys, suffixes=("", "_paper"))
-        same = ((j["success"] == j["success_paper"]) & np.isclose(j["sim_time_s"], j["sim_time_s_paper"])
-                & np.isclose(j["rms_vertical_accel_m_s2"].fillna(-1), j["rms_vertical_accel_m_s2_paper"].fillna(-1)))
-        out.append(float(same.sum()))
+    ok = t[t["success"].astype(bool)]
+    rate = t.groupby(["engine", "D_high", "terrain"])["success"].mean().mul(100)
+    roll = ok.groupby(["engine", "D_high", "terrain"])["rms_roll_rate_deg_s"].median()
+    va = ok.groupby(["engine", "D_high", "terrain"])["rms_vertical_accel_m_s2"].median()
+
+    def pooled(s: pd.Series, e: str) -> pd.Series:
+        return s[e].unstack("D_high").mean(axis=1, skipna=False)
+
+    def step(s: pd.Series, e: str) -> pd.DataFrame:
+        return pd.DataFrame({"t": s[(e, 2.6)], "c": s[(e, 2.3)]})
+
+    return _plan_rows(folder, [pd.DataFrame({"t": pooled(rate, "mujoco"), "c": pooled(rate, "pybullet")}),
+                               pd.DataFrame({"t": pooled(roll, "mujoco"), "c": pooled(roll, "pybullet")}),
+                               step(va, "pybullet"), step(va, "mujoco"), step(rate, "pybullet"), step(rate, "mujoco")])
+
+
+def _engines_engine_differences(folder: Path) -> list[float]:
+    """Per per-engine planned test (the D_high 2.3 -> 2.6 steps): the engine difference (per terrain, MuJoCo's step
+    minus PyBullet's) with its terrain-bootstrap interval, a generator of the test's own
+    (offroadbench.study.stats.engines.engine_table), and its terrains."""
+    from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
+
+    t = trial_table(folder)
+    ok = t[t["success"].astype(bool)]
+    vals = {"D 2.3 -> 2.6: vertical acceleration, per engine":
+            ok.groupby(["engine", "D_high", "terrain"])["rms_vertical_accel_m_s2"].median(),
+            "D 2.3 -> 2.6: success, per engine": t.groupby(["engine", "D_high", "terrain"])["success"].mean().mul(100)}
+    label = pd.read_csv(folder / "engine_verdicts.csv")["stratum"].iloc[0]
+    out: list[float] = []
+    for name, v in vals.items():
+        step = {e: (v[(e, 2.6)] - v[(e, 2.3)]).dropna() for e in ("pybullet", "mujoco")}
+        common = step["pybullet"].index.intersection(step["mujoco"].index)
+        dd = (step["mujoco"].reindex(common) - step["pybullet"].reindex(common)).to_numpy(float)
+        b = cluster_bootstrap(dd, np.mean, keyed_rng(0, "engine difference", name, label), 2000, level=0.95)
+        out += [float(dd.mean()), b.low, b.high, float(dd.size)]
     return out
 
 
@@ -820,19 +894,21 @@ SAMPLES = [
     Sample("failure-search falsifier's 10th distinct failure", "failure-search",
            rf"this run's falsifier: A\* {_NUM} trials \(failures on {_NUM} terrains\), the straight line {_NUM} "
            rf"\(on {_NUM}\)", _failure_search_first_k),
-    Sample("engines success by engine", "engines",
-           rf"\| engine, success \(MuJoCo - PyBullet, pooled\), points \| 10 \| \+{_NUM} \[",
-           _pooled_success_effect("engine", "mujoco", "pybullet")),
+    Sample("engines plan: terrains, means, effect, interval, p, Holm p, power", "engines",
+           "".join(rf"\| {re.escape(label)} \| {_NUM} \| {_NUM} -> {_NUM} \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at [+-][\d.]+ \|\n" for _, label in ENGINES_TESTS),
+           lambda f: [v for row in _engines_plan(f) for v in row]),
+    Sample("engines engine difference of the per-engine tests", "engines",
+           r"[\s\S]*?".join(rf"\*\*{re.escape(name)}: holds on [^*]+\*\* \([^)]*\)\. Engine difference \(per terrain, "
+                            rf"MuJoCo - PyBullet; exploratory\) \+?{_NUM} \[{_NUM}, {_NUM}\] over {_NUM} terrains"
+                            for name in dict.fromkeys(n for n, _ in ENGINES_TESTS[2:])), _engines_engine_differences),
     Sample("engines successes per engine and D_high", "engines",
-           rf"successful trials \(of 100\) \| {_NUM} / {_NUM} / {_NUM} \([^)]*\) \| {_NUM} / {_NUM} / {_NUM} \(",
+           rf"successful trials \(of \d+; old of \d+\) \| {_NUM} / {_NUM} / {_NUM} \([^)]*\) \| {_NUM} / {_NUM} / {_NUM} \(",
            lambda f: [float(v) for v in trial_table(f).groupby(["engine", "D_high"])["success"].sum()
                       .loc[["pybullet", "mujoco"]]]),
     Sample("engines missions succeeding on one engine only", "engines",
-           rf"{_NUM} of the 300 paired missions succeed only on MuJoCo and {_NUM} only on PyBullet",
+           rf"{_NUM} of the \d+ paired missions succeed only on MuJoCo and {_NUM} only on PyBullet",
            _one_engine_only),
-    Sample("engines trials equal the paper studies' trials", "engines",
-           rf"the {_NUM}\s+PyBullet trials are rows of the \[majhor2023\][^\n]*\n[^\n]*\n{_NUM} MuJoCo trials rows",
-           _engines_trials_in_paper_studies),
     Sample("lunar-soil regolith against rigid ground", "lunar-soil",
            rf"missions succeed {_NUM} points less often on PyBullet and {_NUM} on MuJoCo", _soil_effect_per_engine),
     Sample("lunar-soil entrapped soil trials", "lunar-soil", rf"{_NUM} of the {_NUM} soil trials end `entrapped`",
@@ -859,8 +935,6 @@ SAMPLES = [
            lambda f: (lambda t: [float((t["outside_model_fraction"] > 0).sum()),
                                  100 * float(t["outside_model_fraction"].max())])(
                                      trial_table(f).query("recipe == @SOIL_MAP_SNOW"))),
-    Sample("crater-density success at c = 0.3 against none", "crater-density", rf"c = 0.3 {_NUM} points \[",
-           _pooled_success_effect("c", 0.3, 0.0)),
     Sample("lunar-soil table rows", "lunar-soil",
            "".join(rf"\| {e} \| {m} \| {g} \| {a} \| {_NUM}{old[e]} \|[^|\n]*\|[^|\n]*\| {_NUM}{old[e]} \| "
                    + (rf"{_NUM}{old[e]} \| {_NUM} / {_NUM}{oldsink[e]} \|\n" if m == "terramechanics"
@@ -876,10 +950,12 @@ SAMPLES = [
                    rf"{_NUM} \([\d.]+\) \| {_NUM} \(\d+\) \|\n" for c in ("0", "0.03", "0.1", "0.3")),
            _crater_density_rows),
     Sample("crater-density failures at c = 0.3", "crater-density",
-           rf"\| 0.3 \| \d+ \(\d+\) \| {_NUM} stuck, {_NUM} timeout, {_NUM} tipped \|",
+           rf"How the vehicle fails at c = 0.3\*\*: {_NUM} `stuck`, {_NUM} `timeout`, {_NUM} tipped of",
            lambda f: _failure_counts(f, "c == 0.3", ("stuck", "timeout", "tipped"))),
-    Sample("crater-density tip-overs at c = 0.3 now", "crater-density", rf"Tip-overs at c = 0.3 fell from \d+ to {_NUM}",
-           lambda f: _failure_counts(f, "c == 0.3", ("tipped",))),
+    Sample("crater-density plan: terrains, means, effect, interval, p, Holm p, power", "crater-density",
+           "".join(rf"\| {re.escape(name)} \| {_NUM} \| {_NUM} -> {_NUM} \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at [+-][\d.]+ \|\n" for name in CRATER_TESTS),
+           lambda f: [v for row in _crater_density_plan(f) for v in row]),
     Sample("majhor2023 successful trials", "majhor2023",
            rf"successful trials \(of 400\) \|[^|]*\| \*\*{_NUM} / {_NUM} / {_NUM}\*\*", _successes),
     Sample("majhor2023 median per-terrain success", "majhor2023",
