@@ -11,7 +11,7 @@ RESULTS = Path(__file__).resolve().parents[2] / "experiments" / "results"
 
 @pytest.mark.parametrize("name", ["engines", "lunar-soil", "planner-stress", "majhor2023-engines", "vehicle-planner",
                                   "majhor2023", "majhor2023-mujoco", "soil-map", "vehicle-comparison",
-                                  "vehicle-sensitivity"])
+                                  "vehicle-sensitivity", "crater-density"])
 def test_a_rerender_of_a_committed_report_changes_nothing(tmp_path, name):
     from experiments.rerender import rerender
 
