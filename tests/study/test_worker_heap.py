@@ -10,20 +10,15 @@ import sys
 
 import pytest
 
+from tests.study.test_worker_malloc import MALLINFO
 from tests.terrain.test_bit_identical import NUFFT
 
 # an 8 MB array freed, then a 4 MB one: inside the block it comes from the heap (mallinfo2's hblkhd,
 # the bytes mmapped, does not grow by it), after the block it gets its own mapping again
-THRESHOLDS = """
-import ctypes
+THRESHOLDS = MALLINFO + """
 import numpy as np
 from offroadbench.memory import reusing_freed_blocks
 from offroadbench.study.execution.common import worker_bootstrap
-class Info(ctypes.Structure):
-    _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks",
-                                               "fsmblks", "uordblks", "fordblks", "keepcost")]
-libc = ctypes.CDLL(None)
-libc.mallinfo2.restype = Info
 def mapped_growth():
     a = np.ones(2**20)
     del a

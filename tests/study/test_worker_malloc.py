@@ -12,14 +12,19 @@ import pytest
 
 # an 8 MB array freed raises glibc's default threshold to its size, so a 4 MB array after it comes
 # from the heap; with the threshold held it gets its own mmap (mallinfo2's hblkhd: bytes mmapped)
-CODE = """
-import ctypes, sys
-import numpy as np
+MALLINFO = """
+import ctypes
 class Info(ctypes.Structure):
     _fields_ = [(n, ctypes.c_size_t) for n in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks",
                                                "fsmblks", "uordblks", "fordblks", "keepcost")]
 libc = ctypes.CDLL(None)
 libc.mallinfo2.restype = Info
+"""
+"""A child's glibc allocator statistics: ``libc.mallinfo2().hblkhd`` is the bytes mmapped."""
+
+CODE = MALLINFO + """
+import sys
+import numpy as np
 if sys.argv[1] == "worker":
     from offroadbench.study.execution.common import worker_bootstrap
     worker_bootstrap()
