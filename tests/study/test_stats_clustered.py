@@ -145,6 +145,16 @@ def test_breaking_point_is_unbounded_when_success_does_not_move():
     assert all(math.isnan(v) for v in breaking_point_logistic(sep))
 
 
+def test_one_level_identifies_no_slope():
+    # one studied level (vehicle-planner's single D_high): 2.95 repeated is not centred to exact zeros,
+    # and the old fit returned a slope of order 1e15 there; no slope, no crossing, no interval
+    y = np.random.default_rng(5).random(240) < 0.7
+    fit = fit_logistic(np.full(240, 2.95), y, np.repeat(np.arange(24), 10))
+    assert not fit.converged and math.isnan(fit.slope) and math.isnan(fit.intercept)
+    assert fit.clusters == 24 and fit.n == 240
+    assert all(math.isnan(v) for v in breaking_point_logistic(fit))
+
+
 def test_power_of_the_paired_test_matches_cohens_tables():
     # the textbook one-sample / paired t-test sample sizes (Cohen 1988; G*Power): d = 0.5, two-sided
     # alpha 0.05, power 0.80 -> 34 pairs; d = 0.8 -> 15

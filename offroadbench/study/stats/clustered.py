@@ -249,7 +249,9 @@ def fit_logistic(x: Sequence[float], y: Sequence[float], clusters: Sequence | No
     cluster-robust sandwich covariance over ``clusters`` (default: every trial its own cluster).
 
     ``x`` is centred and scaled inside for a stable fit. ``converged`` is False when the outcomes are
-    separated by x (then the MLE does not exist and the slope runs off to infinity).
+    separated by x (then the MLE does not exist and the slope runs off to infinity), and when x takes
+    fewer than two distinct values (no slope is identified: intercept, slope and covariance are NaN;
+    rounding in the centring would otherwise turn a constant x into a slope of order 1e15).
     """
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -257,6 +259,9 @@ def fit_logistic(x: Sequence[float], y: Sequence[float], clusters: Sequence | No
     ok = np.isfinite(x) & np.isfinite(y)
     x, y, g = x[ok], y[ok], g[ok]
     n = x.size
+    if np.unique(x).size < 2:
+        return LogisticFit(intercept=math.nan, slope=math.nan, cov=np.full((2, 2), math.nan), n=int(n),
+                           clusters=int(np.unique(g).size), converged=False)
     mu_x, sd_x = float(x.mean()) if n else 0.0, float(x.std()) if n else 1.0
     sd_x = sd_x if sd_x > 0 else 1.0
     X = np.column_stack([np.ones(n), (x - mu_x) / sd_x])
