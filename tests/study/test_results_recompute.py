@@ -93,10 +93,10 @@ def _metric_medians(metric: str) -> Callable[[Path], list[float]]:
 
 
 def _planner_successes(folder: Path) -> list[float]:
-    """planner-stress: successes per surface, level, sensor and planner, in the README table's order."""
+    """planner-stress: successes per engine, surface, level, sensor and planner, in the README table's order."""
     t = trial_table(folder)
-    s = t.groupby(["band_limited", "D_high", "sensor", "planner"])["success"].sum()
-    return [float(s[(b, d, arm, p)]) for b in (False, True) for d in (2.9, 2.95, 2.99)
+    s = t.groupby(["engine", "band_limited", "D_high", "sensor", "planner"])["success"].sum()
+    return [float(s[(e, b, d, arm, p)]) for e in PS_ENGINES for b in (False, True) for d in (2.9, 2.95, 2.99)
             for arm in ("mast", "oracle") for p in ("straight", "astar", "lattice")]
 
 
@@ -118,37 +118,72 @@ def _paired_effect(folder: Path, level: float, treatment: dict, control: dict, w
     return float(d.mean())
 
 
+PS_ENGINES = ("pybullet", "mujoco")
+PS_TESTS = [(name, lv) for name in ("astar against the line, through the sensor",
+                                    "lattice against the line, through the sensor",
+                                    "aliasing: the line on the band-limited against the aliased surface")
+            for lv in (2.95, 2.99)]
+"""planner-stress's plan (issue 42 re-run): each comparison at 2.95 and 2.99, each on both engines."""
+
+
+def _ps_differences(trials: pd.DataFrame, name: str, level: float) -> pd.Series:
+    """planner-stress: per-terrain success difference (points) of a planned comparison at ``level``: a planner
+    against the line through the mast sensor on the aliased surface, or the line's oracle arm on the band-limited
+    against the aliased surface."""
+    rate = trials.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
+    if name.startswith("aliasing"):
+        return (rate[("straight", "oracle", True, level)] - rate[("straight", "oracle", False, level)]).dropna()
+    return (rate[(name.split()[0], "mast", False, level)] - rate[("straight", "mast", False, level)]).dropna()
+
+
 def _planner_stress_plan(folder: Path) -> list[list[float]]:
-    """The plan's six tests in the README's order: astar, lattice against the line at 2.95 / 2.99 on the
-    aliased surface through the mast sensor; the line (its oracle arm) on the band-limited against the
-    aliased surface. Per test: effect (points), interval (confirmatory.csv), exact sign-flip p, Holm p."""
+    """The plan's 12 tests in the README's order (confirmatory.csv's): per comparison and level, PyBullet then
+    MuJoCo. Per test: terrains, the arms' means, effect (points), interval (confirmatory.csv), exact sign-flip p,
+    Holm p over the 12, power (confirmatory.csv, fixed before the run)."""
     from offroadbench.study.stats.clustered import holm, sign_flip_test
 
     t = trial_table(folder)
-    rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
-    pairs = [((p, "mast", False, lv), ("straight", "mast", False, lv)) for p in ("astar", "lattice") for lv in (2.95, 2.99)]
-    pairs += [(("straight", "oracle", True, lv), ("straight", "oracle", False, lv)) for lv in (2.95, 2.99)]
-    diffs = [(rate[tr] - rate[co]).dropna().to_numpy(float) for tr, co in pairs]
-    p = [sign_flip_test(d) for d in diffs]
-    ci = pd.read_csv(folder / "confirmatory.csv")
-    return [[float(d.mean()), float(ci["ci_low"].iloc[i]), float(ci["ci_high"].iloc[i]), p[i], float(q)]
-            for i, (d, q) in enumerate(zip(diffs, holm(p), strict=True))]
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    rows, p = [], []
+    for i, ((name, lv), engine) in enumerate((test, e) for test in PS_TESTS for e in PS_ENGINES):
+        c = conf.iloc[i]
+        assert c["comparison"] == name and f"D_high = {lv}" in c["stratum"] and f"engine = {engine}" in c["stratum"]
+        part = t[t["engine"] == engine]
+        d = _ps_differences(part, name, lv)
+        p.append(sign_flip_test(d.to_numpy(float)))
+        rows.append([float(len(d)), float(c["control_mean"]), float(c["treatment_mean"]), float(d.mean()),
+                     float(c["ci_low"]), float(c["ci_high"]), p[-1]])
+        # the arms' means are the per-terrain rates' means
+        assert abs(float(d.mean()) - (c["treatment_mean"] - c["control_mean"])) < 1e-9
+    return [[*r, float(q), float(c)] for r, q, c in zip(rows, holm(p), conf["power"], strict=True)]
+
+
+def _planner_stress_old_plan(folder: Path) -> list[float]:
+    """The previous run's plan (2026-11-26 evening, PyBullet, root seed 41; its trials are the committed pilot):
+    per test, effect (points), exact sign-flip p and Holm p over its 6 tests."""
+    from offroadbench.study.stats.clustered import holm, sign_flip_test
+
+    o = pd.read_csv(RESULTS.parent / "pilots" / "planner-stress-2026-11-26-evening.csv")
+    d = [_ps_differences(o, name, lv) for name, lv in PS_TESTS]
+    p = [sign_flip_test(x.to_numpy(float)) for x in d]
+    return [v for x, pv, q in zip(d, p, holm(p), strict=True) for v in (float(x.mean()), pv, float(q))]
 
 
 def _planner_stress_sensor_cost(folder: Path) -> list[float]:
     """The sensor's cost (mast - oracle, points, as the README names it: mast against the oracle) to astar and
-    lattice on the aliased surface at 2.95 / 2.99: the mean per-terrain difference on the same missions and
-    its terrain-bootstrap interval (as the report draws it: a generator of the row's own, keyed_rng)."""
+    lattice on the aliased surface at 2.95 / 2.99 on each engine: the mean per-terrain difference on the same
+    missions and its terrain-bootstrap interval (as the report draws it: a generator of the row's own, keyed_rng)."""
     from offroadbench.study.stats.clustered import cluster_bootstrap, keyed_rng
 
     t = trial_table(folder)
-    rate = t.groupby(["planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
+    rate = t.groupby(["engine", "planner", "sensor", "band_limited", "D_high", "terrain"])["success"].mean().mul(100)
     out = []
     for p in ("astar", "lattice"):
         for lv in (2.95, 2.99):
-            d = (rate[(p, "mast", False, lv)] - rate[(p, "oracle", False, lv)]).dropna().to_numpy(float)
-            b = cluster_bootstrap(d, np.mean, keyed_rng(0, "arm_table", "sensor", "mast", "oracle", p, False, lv))
-            out += [float(d.mean()), b.low, b.high]
+            for e in PS_ENGINES:
+                d = (rate[(e, p, "mast", False, lv)] - rate[(e, p, "oracle", False, lv)]).dropna().to_numpy(float)
+                b = cluster_bootstrap(d, np.mean, keyed_rng(0, "arm_table", "sensor", "mast", "oracle", p, False, e, lv))
+                out += [float(d.mean()), b.low, b.high]
     return out
 
 
@@ -244,7 +279,7 @@ def _shared_missions(folder: Path) -> list[float]:
     """Band-limited trials whose start and goal equal those of the aliased trial of the same planner,
     level, sensor, terrain and mission."""
     t = trial_table(folder)
-    keys = ["planner", "D_high", "sensor", "terrain", "mission"]
+    keys = ["planner", "D_high", "sensor", "terrain", "mission"] + (["engine"] if "engine" in t else [])
     ends = ["start_x_m", "start_y_m", "goal_x_m", "goal_y_m"]
     a = t[~t["band_limited"].astype(bool)].set_index(keys)[ends]
     b = t[t["band_limited"].astype(bool)].set_index(keys)[ends]
@@ -262,15 +297,17 @@ def _above_nyquist_share(folder: Path) -> list[float]:
 
 
 def _straight_breaking_point(folder: Path) -> list[float]:
-    """planner-stress: the line's breaking point on the paper's surface (oracle arm) and its interval."""
+    """planner-stress: the line's breaking point on the paper's surface (oracle arm) and its interval, on each
+    engine (as the report computes it: a generator per group)."""
     from offroadbench.study.stats.stress import breaking_points
 
-    # as the report computes it: every stratum in one call (the bootstrap draws run on in order)
-    bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "sensor"])
-    row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["sensor"] == "oracle")].iloc[0]
-    # the README says the interval's low end lies below the first level ("below already at 2.9")
-    assert row["ci95_low"] == -np.inf
-    return [float(row["breaking_point"]), float(row["ci95_high"])]
+    bp = breaking_points(trial_table(folder), "planner", "D_high", by=["band_limited", "sensor", "engine"])
+    out = []
+    for e in PS_ENGINES:
+        row = bp[(bp["planner"] == "straight") & (~bp["band_limited"].astype(bool)) & (bp["sensor"] == "oracle")
+                 & (bp["engine"] == e)].iloc[0]
+        out += [float(row["breaking_point"]), float(row["ci95_low"]), float(row["ci95_high"])]
+    return out
 
 
 def _terrain_success_changes(folder: Path) -> list[float]:
@@ -1020,19 +1057,17 @@ SAMPLES = [
            rf"succeeds on {_NUM} of 96 missions against the Husky's {_NUM}",
            lambda f: [float(trial_table(f).query("recipe != 'lunar-mare'").groupby("vehicle")["success"].sum()[v])
                       for v in ("jackal", "husky")]),
-    Sample("planner-stress plan: effects, intervals, p and Holm p", "planner-stress",
-           "".join(rf"\| {re.escape(name)} \| {level} \| \d+ \| [\d.]+ -> [\d.]+ \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
-                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \|\n"
-                   for name, level in [("astar against the line, through the sensor", 2.95),
-                                       ("astar against the line, through the sensor", 2.99),
-                                       ("lattice against the line, through the sensor", 2.95),
-                                       ("lattice against the line, through the sensor", 2.99),
-                                       ("the line (oracle arm), band-limited against aliased surface", 2.95),
-                                       ("the line (oracle arm), band-limited against aliased surface", 2.99)]),
+    Sample("planner-stress plan per engine: terrains, means, effect, interval, p, Holm p, power", "planner-stress",
+           "".join(rf"\| {re.escape(name)} \| {lv} \| {e} \| {_NUM} \| {_NUM} \| {_NUM} \| \+?{_NUM} \[{_NUM}, {_NUM}\] "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at \+\d+ \|\n"
+                   for name, lv in PS_TESTS for e in PS_ENGINES),
            lambda f: [v for row in _planner_stress_plan(f) for v in row]),
+    Sample("planner-stress new beside old: the previous run's effect, p and Holm p", "planner-stress",
+           "".join(rf"\| {re.escape(name)} \| {lv} \| \+?{_NUM}, {_SCI}, {_SCI}, [^|]+\|[^\n]*\n" for name, lv in PS_TESTS),
+           _planner_stress_old_plan),
     Sample("planner-stress the sensor's cost to the planners", "planner-stress",
-           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\]"
-                              for p in ("astar", "lattice") for lv in (2.95, 2.99)),
+           r"[\s\S]*?".join(rf"\| {p} \| aliased \(paper\) \| {lv} \| {e} \| [\d.]+ -> [\d.]+ \| \+?{_NUM} \[{_NUM}, {_NUM}\]"
+                              for p in ("astar", "lattice") for lv in (2.95, 2.99) for e in PS_ENGINES),
            _planner_stress_sensor_cost),
     Sample("planner-stress shared missions", "planner-stress",
            rf"all\s+{_NUM}\s+band-limited\s+trials\s+have\s+the\s+start\s+and\s+goal\s+of\s+their\s+aliased\s+twin",
@@ -1137,12 +1172,13 @@ SAMPLES = [
     Sample("majhor2023 plan: terrains, means, effect, interval, p, Holm p, power, the other summary", "majhor2023",
            _majhor_plan_pattern(), lambda f: [v for row in _majhor_plan(f) for v in row]),
     Sample("majhor2023 each planned test on both engines", "majhor2023", _majhor_both_rows(), _majhor_both_plans),
-    Sample("planner-stress straight-line breaking point", "planner-stress",
-           rf"`straight`, paper's surface, oracle arm: \*\*{_NUM}; 95 % interval \[below already at 2.9, {_NUM}\]",
+    Sample("planner-stress straight-line breaking point per engine", "planner-stress",
+           r"[\s\S]*?".join(rf"\| straight \| oracle \| {e} \| {_NUM} \[{_NUM}, {_NUM}\] \|" for e in PS_ENGINES),
            _straight_breaking_point),
-    Sample("planner-stress successes per surface, level, sensor and planner", "planner-stress",
-           r"\| D_high \| W-M surface \| mast: straight \| astar \| lattice \| oracle: straight \| astar \| lattice \|[^\n]*\n"
-           r"\|[-|]+\|\n" + r"".join(r"\| [\d.]+ \| [^|]+ \|" + rf" {_NUM} \|" * 6 + r"[^\n]*\n" for _ in range(6)),
+    Sample("planner-stress successes per engine, surface, level, sensor and planner", "planner-stress",
+           r"\| engine \| D_high \| W-M surface \| mast: straight \| astar \| lattice \| oracle: straight \| astar \| lattice \|[^\n]*\n"
+           r"\|[-|]+\|\n" + r"".join(rf"\| {e} \| [\d.]+ \| [^|]+ \|" + rf" {_NUM} \|" * 6 + r"[^\n]*\n"
+                                     for e in PS_ENGINES for _ in range(6)),
            _planner_successes),
 ]
 
@@ -1193,6 +1229,28 @@ def test_vehicle_planner_verdicts_and_rejections_are_its_tables():
         assert f"**{name}: {verdict}**" in text, name
     assert (RESULTS / VP_EARLIER / "README.md").read_text().split("\n")[2].startswith(
         "**The earlier, exploratory table, superseded for the plan by the [parent folder](../README.md).**")
+
+
+def test_planner_stress_verdicts_and_rejections_are_its_tables():
+    """planner-stress/README.md's yes/no per planned test and engine are confirmatory.csv's, every planned test had
+    power >= 0.8 at its stated effect before the run, and each test's cross-engine verdict line is
+    engine_verdicts.csv's, in the new-beside-old table too (issue 42)."""
+    folder = RESULTS / "planner-stress"
+    text = (folder / "README.md").read_text()
+    conf = pd.read_csv(folder / "confirmatory.csv")
+    assert conf["power"].min() >= 0.8 and not conf["exploratory"].any()
+    for c in conf.itertuples():
+        engine = re.search(r"engine = (\w+)", c.stratum).group(1)
+        level = re.search(r"D_high = ([\d.]+)", c.stratum).group(1)
+        row = (rf"\| {re.escape(c.comparison)} \| {level} \| {engine} \|[^\n]*\| {'yes' if c.reject else 'no'} "
+               rf"\| {c.power:.2f} at \+\d+ \|")
+        assert re.search(row, text), (c.comparison, level, engine)
+    eng = pd.read_csv(folder / "engine_verdicts.csv")
+    assert set(eng["engine"]) == set(PS_ENGINES)
+    for (name, stratum), verdict in eng.groupby(["comparison", "stratum"], sort=False)["verdict"].first().items():
+        level = re.search(r"D_high = ([\d.]+)", stratum).group(1)
+        assert f"**{name}, D_high {level}: {verdict}**" in text, (name, level)
+        assert re.search(rf"\| {re.escape(name)} \| {level} \|[^\n]*\| {verdict} \|\n", text), (name, level)
 
 
 @pytest.mark.parametrize("study", ["majhor2023", "majhor2023-mujoco"])
