@@ -16,6 +16,8 @@ after the other) in trial steps per second.
     .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu] [--tyre-model terramechanics]
     .venv/bin/python benchmarks/bench_batch.py --smoke      # CI: 2 worlds, short missions; figures mean nothing
 
+``--lunar`` drives on the lunar-soil study's maps (lunar-mare with its relief and craters, lunar
+regolith and the Moon's gravity from the recipe) in place of paper-d2.45's.
 ``--tyre-model terramechanics`` runs every engine with the soil law (Wong-Reece forces on the
 default soil, offroadbench.sim.engines.mujoco_warp.soil_kernels on the batch) in place of the
 ``coulomb`` tyres; ``--compare`` then also compares the median sinkage and the mean slip.
@@ -55,9 +57,15 @@ from offroadbench.sim.trial.pipeline import TrialSettings, drive_terrain, prepar
 from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
 
+#: ``--lunar``: the lunar-soil study's maps (experiments/lunar-soil.toml's recipe overrides but the grid)
+LUNAR = ("lunar-mare", {"layers.base.relief_m": 0.6, "layers.craters.population.d_max_m": 6.0})
+RECIPE = ("paper-d2.45", {})
+
+
 def _prepared(n: int, length_m: float, rows: int):
     """``n`` missions drawn alternately on terrains 0 and 1 of root seed 7 (two PreparedTerrains)."""
-    recipe = apply_overrides(load_recipe("paper-d2.45"), {"grid.rows": rows, "grid.cols": rows})
+    name, overrides = RECIPE
+    recipe = apply_overrides(load_recipe(name), {"grid.rows": rows, "grid.cols": rows, **overrides})
     settings = TrialSettings(missions=MissionConfig(count=n, length_m=length_m, border_m=1.0),
                              roughness=RoughnessConfig(border_m=1.0))
     counts = [(n + 1) // 2, n // 2]
@@ -149,9 +157,14 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true", help="2 worlds, 2 m missions on 129^2 maps (CI)")
     ap.add_argument("--contacts", type=int, default=0, help="count the wheels' contacts in both engines, N missions")
     ap.add_argument("--compare", type=int, default=0, help="trial-by-trial comparison with the MuJoCo engine, N trials")
+    ap.add_argument("--lunar", action="store_true",
+                    help="the lunar-soil study's maps (lunar-mare: regolith and the Moon's gravity from the recipe)")
     ap.add_argument("--tyre-model", default="coulomb", choices=("coulomb", "terramechanics"),
                     help="the tyre model of every engine (terramechanics: the soil law on the default soil)")
     args = ap.parse_args()
+    global RECIPE
+    if args.lunar:
+        RECIPE = LUNAR
     if importlib.util.find_spec("mujoco_warp") is None:
         # the engine is an optional extra: CI installs it only where its kernels' cold compile (~2 min) fits
         print("bench_batch: mujoco_warp is not installed (pip install 'offroadbench[warp]'); nothing measured",
@@ -164,7 +177,7 @@ def main() -> None:
     base = SimConfig(engine="mujoco_warp", tyre_model=args.tyre_model)
     sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device))
     print(f"bench_batch: {platform.processor() or platform.machine()}, device {args.device}, "
-          f"{length:g} m missions on {rows}^2 maps, tyre model {args.tyre_model}", flush=True)
+          f"{length:g} m missions on {rows}^2 {RECIPE[0]} maps, tyre model {args.tyre_model}", flush=True)
     if args.compare:
         compare(args.compare, length, rows, sim)
         return
