@@ -110,7 +110,7 @@ def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
         cols = []
         for m in metrics:
             ratios = [getattr(b, m) / getattr(a, m) for a, b in both]
-            cols.append(f"{np.median([abs(math.log(x)) for x in ratios]):20.4f} {np.median(ratios):6.3f}")
+            cols.append(f"{np.median([abs(math.log(x)) for x in ratios]):20.2e} {np.median(ratios):6.3f}")
         print(f"{name:14s} {flips:5d} " + " ".join(cols) + f"   ({len(both)} trials both finished)", flush=True)
 
 
