@@ -9,11 +9,18 @@ physics of all worlds advanced together once per trial tick. Reported per N: wal
 batch (after a warm-up batch that compiles the kernels), MuJoCo world-steps per second (MuJoCo
 steps of every world, idle ones included, over the wall time), trial steps per second
 (simulated seconds of the trials, settling included, times the physics rate, over the wall time)
-and host exchanges; and, for reference, the MuJoCo engine (one CPU core, the same trials one
+host exchanges, and the CPU seconds of the process (all threads) with world-steps per CPU
+second (the figure to compare on a shared machine); and, for reference, the MuJoCo engine (one CPU core, the same trials one
 after the other) in trial steps per second.
 
-    .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu]
+    .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu] [--tyre-model terramechanics]
     .venv/bin/python benchmarks/bench_batch.py --smoke      # CI: 2 worlds, short missions; figures mean nothing
+
+``--lunar`` drives on the lunar-soil study's maps (lunar-mare with its relief and craters, lunar
+regolith and the Moon's gravity from the recipe) in place of paper-d2.45's.
+``--tyre-model terramechanics`` runs every engine with the soil law (Wong-Reece forces on the
+default soil, offroadbench.sim.engines.mujoco_warp.soil_kernels on the batch) in place of the
+``coulomb`` tyres; ``--compare`` then also compares the median sinkage and the mean slip.
 
 The warm-up batch times the kernels' compile where they are not cached yet (a fresh
 ``WARP_CACHE_PATH``: the cold compile).
@@ -50,9 +57,15 @@ from offroadbench.sim.trial.pipeline import TrialSettings, drive_terrain, prepar
 from offroadbench.terrain.recipe import apply_overrides, load_recipe
 
 
+#: ``--lunar``: the lunar-soil study's maps (experiments/lunar-soil.toml's recipe overrides but the grid)
+LUNAR = ("lunar-mare", {"layers.base.relief_m": 0.6, "layers.craters.population.d_max_m": 6.0})
+RECIPE = ("paper-d2.45", {})
+
+
 def _prepared(n: int, length_m: float, rows: int):
     """``n`` missions drawn alternately on terrains 0 and 1 of root seed 7 (two PreparedTerrains)."""
-    recipe = apply_overrides(load_recipe("paper-d2.45"), {"grid.rows": rows, "grid.cols": rows})
+    name, overrides = RECIPE
+    recipe = apply_overrides(load_recipe(name), {"grid.rows": rows, "grid.cols": rows, **overrides})
     settings = TrialSettings(missions=MissionConfig(count=n, length_m=length_m, border_m=1.0),
                              roughness=RoughnessConfig(border_m=1.0))
     counts = [(n + 1) // 2, n // 2]
@@ -79,23 +92,25 @@ def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
 
     prepared, settings = _prepared(n, length, rows)
     runs = {}
-    for name, variant in (("mujoco", SimConfig(engine="mujoco")),
-                          ("mujoco+0.1mm", SimConfig(engine="mujoco", spawn_clearance_m=0.0201))):
+    soil = sim.tyre_model == "terramechanics"
+    metrics = METRICS + (("sinkage_median_m", "mean_slip") if soil else ())
+    mujoco = SimConfig(engine="mujoco", tyre_model=sim.tyre_model)
+    for name, variant in (("mujoco", mujoco), ("mujoco+0.1mm", dataclasses.replace(mujoco, spawn_clearance_m=0.0201))):
         runs[name] = [r.result for p in prepared for r in drive_terrain(p, settings.replace(sim=variant))]
     batch = drive_batch(prepared, settings.replace(sim=sim), worlds=n)
     runs["mujoco_warp"] = [r.result for rs in batch.records for r in rs]
     for name, res in runs.items():
         print(f"{name}: " + " ".join(r.failure_reason or "ok" for r in res), flush=True)
     ref = runs["mujoco"]
-    print(f"{'variant':14s} {'flips':>5s} " + " ".join(f"{m[:14]:>14s} |log| {'ratio':>6s}" for m in METRICS))
+    print(f"{'variant':14s} {'flips':>5s} " + " ".join(f"{m[:14]:>14s} |log| {'ratio':>6s}" for m in metrics))
     for name in ("mujoco+0.1mm", "mujoco_warp"):
         res = runs[name]
         flips = sum(a.failure_reason != b.failure_reason for a, b in zip(ref, res, strict=True))
         both = [(a, b) for a, b in zip(ref, res, strict=True) if a.success and b.success]
         cols = []
-        for m in METRICS:
+        for m in metrics:
             ratios = [getattr(b, m) / getattr(a, m) for a, b in both]
-            cols.append(f"{np.median([abs(math.log(x)) for x in ratios]):20.4f} {np.median(ratios):6.3f}")
+            cols.append(f"{np.median([abs(math.log(x)) for x in ratios]):20.2e} {np.median(ratios):6.3f}")
         print(f"{name:14s} {flips:5d} " + " ".join(cols) + f"   ({len(both)} trials both finished)", flush=True)
 
 
@@ -106,7 +121,7 @@ def contacts(n: int, length: float, rows: int, sim: SimConfig) -> None:
     from offroadbench.sim.engine import open_world
 
     prepared, _ = _prepared(n, length, rows)
-    for name, variant in (("mujoco", SimConfig(engine="mujoco")), ("mujoco_warp", sim)):
+    for name, variant in (("mujoco", SimConfig(engine="mujoco", tyre_model=sim.tyre_model)), ("mujoco_warp", sim)):
         counts = []
         for p in prepared:
             with open_world(p.hm, "husky", variant) as world:
@@ -142,7 +157,14 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true", help="2 worlds, 2 m missions on 129^2 maps (CI)")
     ap.add_argument("--contacts", type=int, default=0, help="count the wheels' contacts in both engines, N missions")
     ap.add_argument("--compare", type=int, default=0, help="trial-by-trial comparison with the MuJoCo engine, N trials")
+    ap.add_argument("--lunar", action="store_true",
+                    help="the lunar-soil study's maps (lunar-mare: regolith and the Moon's gravity from the recipe)")
+    ap.add_argument("--tyre-model", default="coulomb", choices=("coulomb", "terramechanics"),
+                    help="the tyre model of every engine (terramechanics: the soil law on the default soil)")
     args = ap.parse_args()
+    global RECIPE
+    if args.lunar:
+        RECIPE = LUNAR
     if importlib.util.find_spec("mujoco_warp") is None:
         # the engine is an optional extra: CI installs it only where its kernels' cold compile (~2 min) fits
         print("bench_batch: mujoco_warp is not installed (pip install 'offroadbench[warp]'); nothing measured",
@@ -152,10 +174,10 @@ def main() -> None:
 
     sizes = [2] if args.smoke else [int(v) for v in args.worlds.split(",")]
     length, rows = (2.0, 129) if args.smoke else (args.length, 257)
-    base = SimConfig(engine="mujoco_warp")
+    base = SimConfig(engine="mujoco_warp", tyre_model=args.tyre_model)
     sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device))
     print(f"bench_batch: {platform.processor() or platform.machine()}, device {args.device}, "
-          f"{length:g} m missions on {rows}^2 maps", flush=True)
+          f"{length:g} m missions on {rows}^2 {RECIPE[0]} maps, tyre model {args.tyre_model}", flush=True)
     if args.compare:
         compare(args.compare, length, rows, sim)
         return
@@ -167,20 +189,21 @@ def main() -> None:
     drive_batch(prepared, settings.replace(sim=sim))
     print(f"warm-up batch of 2 worlds (compiles the kernels not yet cached): {time.perf_counter() - t0:.1f} s",
           flush=True)
-    print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s}")
+    print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s} "
+          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s}")
     for n in sizes:
         prepared, settings = _prepared(n, length, rows)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         run = drive_batch(prepared, settings.replace(sim=sim), worlds=n)
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         recs = [r for rs in run.records for r in rs if not isinstance(r, BaseException)]
         ok = sum(r.result.success for r in recs)
         print(f"{n:6d} {wall:8.2f} {run.world_steps / wall:13.0f} {_sim_steps(recs, sim) / wall:13.0f} "
-              f"{run.advances:8d} {ok:>2d}/{n:<2d}", flush=True)
+              f"{run.advances:8d} {ok:>2d}/{n:<2d} {cpu:8.2f} {run.world_steps / cpu:17.0f}", flush=True)
     nref = 1 if args.smoke else args.reference
     if nref:
         prepared, settings = _prepared(nref, length, rows)
-        ref = dataclasses.replace(SimConfig(), engine="mujoco")
+        ref = SimConfig(engine="mujoco", tyre_model=args.tyre_model)
         t0 = time.perf_counter()
         recs = [r for p in prepared for r in drive_terrain(p, settings.replace(sim=ref))]
         wall = time.perf_counter() - t0

@@ -114,7 +114,7 @@ def test_the_batch_is_bit_identical_with_fewer_worlds_than_trials_and_hands_on_e
 
 def test_the_engine_refuses_what_it_does_not_implement():
     with pytest.raises(InputError, match="mujoco_warp"):
-        SimConfig(engine="mujoco_warp", tyre_model="terramechanics")
+        SimConfig(engine="mujoco_warp", tyre_model="bullet")
     with pytest.raises(InputError, match="device"):
         SimConfig(engine="mujoco_warp", mujoco_warp=dataclasses.replace(SimConfig().mujoco_warp, device="tpu"))
 

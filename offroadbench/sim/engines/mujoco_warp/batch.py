@@ -25,7 +25,7 @@ wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no banner, no l
 import mujoco_warp as mjw  # noqa: E402
 
 from offroadbench.errors import InputError
-from offroadbench.sim.engines.mujoco_warp import kernels
+from offroadbench.sim.engines.mujoco_warp import kernels, soil_kernels
 from offroadbench.sim.engines.mujoco_warp.model import BatchModel
 
 __all__ = ["WarpBatch"]
@@ -40,6 +40,10 @@ class HostState:
         self.qvel = np.zeros((nworld, nv))
         self.loads = np.zeros((nworld, nwheel))
         self.penetration = np.zeros(nworld)
+        self.soil = np.zeros((nworld, nwheel, soil_kernels.NCOL))
+        """``terramechanics``: each wheel's soil state (soil_kernels' columns) after the last step."""
+        self.on = np.zeros((nworld, nwheel), dtype=np.int32)
+        """``terramechanics``: 1 where the wheel was on the soil in the last step."""
 
 
 class WarpBatch:
@@ -79,6 +83,17 @@ class WarpBatch:
             self.consts = wp.array(np.array([lay["mu"], lay["dt"], lay["k"], lay["c"]]), dtype=wp.float64)
             self.geom_slot = wp.array(lay["geom_slot"], dtype=wp.int32)
             self.mask = wp.zeros(nworld, dtype=wp.int32)
+            self.soil = None
+            if model.sim.tyre_model == "terramechanics":  # the soil law in place of the tyre law
+                sl = model.soil_layout()
+                self.soil = wp.zeros((nworld, nwheel, soil_kernels.NCOL), dtype=wp.float64)
+                self.on = wp.zeros((nworld, nwheel), dtype=wp.int32)
+                self.soil_consts = wp.array([float(sl["consts"][k]) for k in soil_kernels.CONSTS], dtype=wp.float64)
+                self.soil_ints = wp.array(sl["ints"], dtype=wp.int32)
+                self.soil_tables = wp.array(sl["tables"], dtype=wp.float64)
+                self.heights = wp.array(sl["heights"], dtype=wp.float64)
+                self.terrain_dev = wp.array(self.terrain_of, dtype=wp.int32)
+                self.delta_max_m = sl["delta_max_m"]
         self.chassis = lay["chassis"]
         self.terrain_geom = lay["terrain_geom"]
         self.ctrl = np.zeros((nworld, m.nu))
@@ -97,6 +112,8 @@ class WarpBatch:
         self.host.qvel[world] = 0.0
         self.host.loads[world] = 0.0
         self.host.penetration[world] = 0.0
+        self.host.soil[world] = 0.0
+        self.host.on[world] = 0
 
     def _apply_resets(self) -> None:
         if not self._resets:
@@ -115,6 +132,9 @@ class WarpBatch:
             self.d.qpos.assign(qpos)
             wp.launch(kernels.reset_worlds, dim=(self.nworld, self.nwheel),
                       inputs=[self.mask, self.state, self.touch, self.held, self.pen])
+            if self.soil is not None:
+                self.terrain_dev.assign(self.terrain_of)
+                wp.launch(soil_kernels.reset_soil, dim=(self.nworld, self.nwheel), inputs=[self.mask, self.soil, self.on])
         self._resets.clear()
 
     # ------------------------------------------------------------------ stepping
@@ -126,6 +146,9 @@ class WarpBatch:
         with wp.ScopedDevice(self.device):
             d.ctrl.assign(self.ctrl.astype(np.float32))
             self.push.assign(self.pushed.astype(np.float32))
+            if self.soil is not None:
+                self._advance_soil(trial_steps)
+                return
             con = d.contact
             dim = (self.nworld, self.nwheel)
             for _ in range(trial_steps * self.substeps):
@@ -146,6 +169,29 @@ class WarpBatch:
             host.qvel[:] = d.qvel.numpy()
             host.loads[:] = self.state.numpy()[:, :, kernels.LOAD]
             host.penetration[:] = self.pen.numpy()
+
+    def _advance_soil(self, trial_steps: int) -> None:
+        """:meth:`advance`'s steps under the ``terramechanics`` tyre model: ``step1``, the soil kernel
+        (soil_kernels.apply_soil), ``step2``, as the MuJoCo engine's ``_soil_step_c.step_trial_soil``
+        with ``tyres_each_substep``; no contact is read (the soil carries the wheels), so the wheel
+        loads stay zero and the penetration is the deepest sinkage (_soil_c's readers)."""
+        d, m = self.d, self.m
+        dim = (self.nworld, self.nwheel)
+        inputs = [d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body, self.wheel_qvel,
+                  self.wheel_axis, self.soil_consts, self.soil_ints, self.soil_tables, self.heights,
+                  self.terrain_dev, self.push, self.soil, self.on]
+        for _ in range(trial_steps * self.substeps):
+            mjw.step1(m, d)
+            wp.launch(soil_kernels.apply_soil, dim=dim, inputs=inputs)
+            mjw.step2(m, d)
+        self.steps += trial_steps * self.substeps
+        host = self.host
+        host.qpos[:] = d.qpos.numpy()
+        host.qvel[:] = d.qvel.numpy()
+        host.soil[:] = self.soil.numpy()
+        host.on[:] = self.on.numpy()
+        for w in range(self.nworld):
+            host.penetration[w] = soil_kernels.penetration(host.soil[w], host.on[w])
 
     def base_state(self, w: int) -> tuple[tuple, tuple, tuple, tuple]:
         """World ``w``'s (centre-of-mass position, quaternion xyzw, linear velocity, angular

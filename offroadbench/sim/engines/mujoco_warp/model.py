@@ -129,3 +129,26 @@ class BatchModel(MuJoCoWorld):
                 "terrain_geom": self._terrain_geom, "geom_slot": slot, "n_left": self._n_left,
                 "mu": self.spec.wheel_friction * self.sim.terrain_friction, "dt": dt, "k": k, "c": c}
 
+    def soil_layout(self) -> dict:
+        """What the soil kernels (offroadbench.sim.engines.mujoco_warp.soil_kernels) need under the
+        ``terramechanics`` tyre model: the float64 constants (``soil_kernels.CONSTS``, the MuJoCo
+        engine's own SoilWheels built for this vehicle, soil and step), the grid and table sizes,
+        the soil tables (sinkage, F_z, F_x, T, F_y one after the other, float64), each terrain's
+        heights (row-major, float64, one row per terrain), and the tables' top penetration, m."""
+        from offroadbench.sim.tyre_laws.soil_wheels import MAX_LATERAL_SLIP, RESISTANCE_FADE_M_S
+        from offroadbench.sim.tyre_laws.terramechanics import LAMBDA_SCALE
+
+        soil = self._soil
+        if self.spec.track_contact_length_m:
+            raise InputError(f"engine 'mujoco_warp': vehicle {self.spec.name!r} is tracked; its belts' soil law "
+                             "(belt segments) is not on the device: use engine 'mujoco'")
+        t = soil.tables
+        hm = self.terrains[0]
+        consts = {"radius_m": soil._r, "dt_s": soil._dt, "damping_n_s_m": soil._c, "relaxation_m": soil._sx,
+                  "lateral_relaxation_m": soil._sy, "cell_m": hm.cell_size_m, "delta_max_m": t.delta_max_m,
+                  "k_series_n_m": t.k_series_n_m, "lambda_scale": LAMBDA_SCALE, "max_lateral_slip": MAX_LATERAL_SLIP,
+                  "fade_m_s": RESISTANCE_FADE_M_S}
+        tables = np.concatenate([np.asarray(a, dtype=np.float64).ravel() for a in (t.sinkage, t.fz, t.fx, t.torque, t.fy)])
+        heights = np.stack([np.asarray(h.z, dtype=np.float64).ravel() for h in self.terrains])
+        return {"consts": consts, "ints": [hm.rows, hm.cols, t.n_delta, t.n_slip, t.n_lat], "tables": tables,
+                "heights": heights, "delta_max_m": float(t.delta_max_m)}

@@ -136,6 +136,9 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
         raise InputError("engine 'mujoco_warp': one batch's trials must share the vehicle, the physics settings, "
                          "the gravity and the soil")
     sim = sims.pop()
+    if sim.tyre_model == "terramechanics" and any(p.soil_map_for(s.sim) is not None for p, s in zip(prepared, per, strict=True)):
+        raise InputError("engine 'mujoco_warp' cannot read a soil map (its soil kernels hold one soil's tables); "
+                         "set [sim] soil or use engine 'mujoco'")
     cfg = sim.mujoco_warp
     jobs = [(k, i) for k, p in enumerate(prepared) for i in range(len(p.missions))]
     records: list[list[Any]] = [[None] * len(p.missions) for p in prepared]

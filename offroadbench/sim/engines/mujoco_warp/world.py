@@ -10,8 +10,9 @@ once every world waits, or :class:`WarpWorld`, which advances its batch of one).
 only, so the batch is advanced, and read to the host, once per trial tick.
 
 Not supported here (each an InputError naming it): pushing the chassis (``push_base``) and
-turning gravity (``set_gravity``) inside a lock-step batch; soft soil (the ``terramechanics``
-tyre model, refused by the engine's declaration); vehicles with articulated wheels.
+turning gravity (``set_gravity``) inside a lock-step batch; a soil map (``use_soil_map``: the
+``terramechanics`` soil kernels hold one soil's tables, as the MuJoCo engine's compiled loop,
+which falls back to its Python loop for a map); vehicles with articulated wheels or tracks.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engines.base import settle
+from offroadbench.sim.engines.mujoco_warp import soil_kernels
 from offroadbench.sim.engines.mujoco_warp.batch import WarpBatch, rotation_matrix
 from offroadbench.sim.engines.mujoco_warp.model import BatchModel
 from offroadbench.sim.trial.vehicle import VehicleSpec
@@ -93,20 +95,38 @@ class WorldView:
         return rotation_matrix(quat)
 
     def wheel_penetration_m(self) -> float:
-        """Deepest penetration of any wheel into the terrain in the last MuJoCo step (0 if none), m."""
+        """Deepest penetration of any wheel into the terrain in the last MuJoCo step (0 if none), m;
+        under the ``terramechanics`` tyre model, the deepest soil sinkage."""
         self.sync()
         return float(self.batch.host.penetration[self.world])
 
-    def wheel_slip(self) -> None:
-        """None: the ``coulomb`` tyre model has no soil."""
-        return None
+    def wheel_slip(self) -> float | None:
+        """Mean longitudinal slip of the wheels on the soil in the last MuJoCo step (1: spinning in
+        place), or None under the ``coulomb`` tyre model or with no wheel on the soil."""
+        if self.batch.soil is None:
+            return None
+        self.sync()
+        host = self.batch.host
+        return soil_kernels.slip(host.soil[self.world], host.on[self.world])
 
-    def wheel_outside_model(self) -> None:
-        """None: the ``coulomb`` tyre model has no soil."""
-        return None
+    def wheel_outside_model(self) -> bool | None:
+        """True when a wheel on the soil bottomed out in the last MuJoCo step (outside the soil
+        model), None under the ``coulomb`` tyre model."""
+        if self.batch.soil is None:
+            return None
+        self.sync()
+        host = self.batch.host
+        return soil_kernels.outside(host.soil[self.world], host.on[self.world], self.batch.delta_max_m)
+
+    def use_soil_map(self, soil_map) -> None:
+        """Not supported: the soil kernels hold one soil's tables."""
+        raise InputError("engine 'mujoco_warp' cannot read a soil map (its soil kernels hold one soil's tables); "
+                         "use engine 'mujoco'")
 
     def wheel_loads_n(self) -> tuple[float, ...]:
-        """Each wheel's summed normal force from the terrain in the last MuJoCo step, N (left, then right)."""
+        """Each wheel's summed normal force from the terrain in the last MuJoCo step, N (left, then
+        right); zero under the ``terramechanics`` tyre model (no wheel contact is read, as on the
+        MuJoCo engine)."""
         self.sync()
         return tuple(self.batch.host.loads[self.world].tolist())
 
