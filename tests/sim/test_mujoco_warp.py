@@ -117,6 +117,12 @@ def test_the_engine_refuses_what_it_does_not_implement():
         SimConfig(engine="mujoco_warp", tyre_model="bullet")
     with pytest.raises(InputError, match="device"):
         SimConfig(engine="mujoco_warp", mujoco_warp=dataclasses.replace(SimConfig().mujoco_warp, device="tpu"))
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.sim.engines.mujoco_warp.model import BatchModel
+
+    held = SimConfig(engine="mujoco_warp", mujoco=dataclasses.replace(SimConfig().mujoco, tyres_each_substep=False))
+    with pytest.raises(InputError, match="tyres_each_substep = false is not supported"):
+        BatchModel([Heightmap(z=np.zeros((33, 33)), cell_size_m=0.05)], "husky", held)
 
 
 def test_the_engines_own_world_settles_on_its_wheels_and_reads_its_terrain():

@@ -55,6 +55,9 @@ class BatchModel(MuJoCoWorld):
 
     def __init__(self, terrains: list[Heightmap], vehicle: VehicleSpec | str, sim: SimConfig) -> None:
         self.terrains = list(terrains)
+        if not sim.mujoco.tyres_each_substep:
+            raise InputError("engine 'mujoco_warp': [sim.mujoco] tyres_each_substep = false is not supported (the "
+                             "device kernels apply the tyre and soil forces at every MuJoCo step); allowed: true")
         super().__init__(envelope(self.terrains), vehicle, sim)
         if self._articulated:
             raise InputError(f"engine 'mujoco_warp': vehicle {self.spec.name!r} has steering or suspension joints; "
@@ -122,7 +125,7 @@ class BatchModel(MuJoCoWorld):
         number of left wheels, and the tyre constants (friction coefficient, bristle step s,
         stiffness N/m, damping N s/m) of the MuJoCo engine's CoulombBristles."""
         k, c = bristle_constants(self._mass_kg / len(self._wheel_bodies), self.dt_s)
-        dt = self._dt_mj if self.contact.tyres_each_substep else self.dt_s
+        dt = self._dt_mj  # tyres_each_substep: the only setting this engine accepts (__init__)
         slot = [self._wheel_geom.get(g, -1) for g in range(self.model.ngeom)]
         return {"wheel_bodies": list(self._wheel_bodies), "wheel_qvel": list(self._wheel_qvel),
                 "wheel_axes": [list(a) for a in self._wheel_axis], "chassis": self._chassis,
