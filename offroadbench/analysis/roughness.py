@@ -166,37 +166,42 @@ def _row_runs(se: np.ndarray) -> list[tuple[int, int]] | None:
 def _disk_close(mask: np.ndarray, se: np.ndarray) -> np.ndarray:
     """``scipy.ndimage.binary_closing(mask, structure=se)`` (dilation, then erosion, the border
     ``False`` for both), the same pixels, computed row by row: a dilation (erosion) by a symmetric
-    element whose rows are centred runs is the OR (AND) over its rows of the mask's running maximum
-    (minimum) along the row over the run's width, shifted by the row's offset (van Herk 1992's
-    decomposition into 1-D lines). About 5x faster than scipy's general binary erosion for the
-    11x11 disk of the paper maps (tests/analysis/test_roughness.py compares the two)."""
-    from scipy.ndimage import binary_closing, maximum_filter1d, minimum_filter1d
+    element whose rows are centred runs is the OR (AND) over its rows of whether any (every) pixel
+    of the run's width along the row is set, shifted by the row's offset (van Herk 1992's
+    decomposition into 1-D lines; the runs counted by running sums). About 4x faster than scipy's
+    general binary erosion for the 11x11 disk of the paper maps (tests/analysis/test_roughness.py
+    compares the two)."""
+    from scipy.ndimage import binary_closing
 
     runs = _row_runs(se)
     if runs is None or se.shape[0] % 2 == 0 or se.shape[1] % 2 == 0 or se.shape[0] > mask.shape[0]:
         return binary_closing(mask, structure=se)
-    return _by_rows(_by_rows(mask, runs, maximum_filter1d, np.logical_or),
-                    runs, minimum_filter1d, np.logical_and)
+    return _by_rows(_by_rows(mask, runs, erode=False), runs, erode=True)
 
 
-def _by_rows(mask: np.ndarray, runs, filter1d, combine) -> np.ndarray:
-    """One dilation (``filter1d`` a running maximum, ``combine`` OR) or erosion (minimum, AND) of
-    ``mask`` by the element of ``runs`` (:func:`_row_runs`), pixels outside the map ``False``."""
-    u = np.ascontiguousarray(mask).view(np.uint8)
+def _by_rows(mask: np.ndarray, runs, *, erode: bool) -> np.ndarray:
+    """One dilation (``erode`` False) or erosion of ``mask`` by the element of ``runs``
+    (:func:`_row_runs`), pixels outside the map ``False``."""
+    rows, cols = mask.shape
+    wmax = max(w for _, w in runs)
+    # csum[:, j + wmax + 1] = set pixels of the row up to column j (zeros past either end)
+    csum = np.zeros((rows, cols + 2 * wmax + 1), np.int32)
+    np.cumsum(mask, axis=1, out=csum[:, wmax + 1:cols + wmax + 1])
+    csum[:, cols + wmax + 1:] = csum[:, cols + wmax:cols + wmax + 1]
     lines: dict[int, np.ndarray] = {}
-    erode = combine is np.logical_and
+    combine = np.logical_and if erode else np.logical_or
     out = np.full(mask.shape, erode)
-    n = mask.shape[0]
     for dy, w in runs:
-        if w not in lines:
-            lines[w] = filter1d(u, 2 * w + 1, axis=1, mode="constant", cval=0).view(bool)
+        if w not in lines:  # set pixels in columns j - w .. j + w of each row
+            count = csum[:, wmax + w + 1:wmax + w + 1 + cols] - csum[:, wmax - w:wmax - w + cols]
+            lines[w] = count == 2 * w + 1 if erode else count > 0
         line = lines[w]
         if dy >= 0:  # out[i] takes line[i + dy]; rows past the edge: False
-            combine(out[:n - dy], line[dy:], out=out[:n - dy])
+            combine(out[:rows - dy], line[dy:], out=out[:rows - dy])
             if erode and dy:
-                out[n - dy:] = False
+                out[rows - dy:] = False
         else:
-            combine(out[-dy:], line[:n + dy], out=out[-dy:])
+            combine(out[-dy:], line[:rows + dy], out=out[-dy:])
             if erode:
                 out[:-dy] = False
     return out
