@@ -45,12 +45,8 @@ class MjcfBuilder:
         ET.SubElement(root, "compiler", angle="radian", eulerseq="XYZ", inertiafromgeom="false", autolimits="true")
         option = ET.SubElement(root, "option", timestep=repr(self._dt_mj), ccd_iterations=str(tune.ccd_iterations), gravity=_fmt((0, 0, -sim.gravity_m_s2)),
                       integrator="implicitfast", cone=tune.cone, iterations=str(sim.solver_iterations))
-        flag = ET.SubElement(option, "flag", island="disable")  # stages this model does not need: see below
-        if not spec.suspension_joints:
-            flag.set("spring", "disable")
-            flag.set("damper", "disable")
         if not tune.refsafe:
-            flag.set("refsafe", "disable")
+            ET.SubElement(option, "flag", refsafe="disable")
         size = ET.SubElement(root, "size")
         size.set("memory", f"{max(16, 4 * len(spec.wheel_joints))}M")
         asset = ET.SubElement(root, "asset")
@@ -102,13 +98,23 @@ class MjcfBuilder:
                     g.set("conaffinity", "1")
         return ET.tostring(root, encoding="unicode")
 
-    # MuJoCo stages that do nothing for this model, switched off in <option><flag> (the same bits, less
-    # work; benchmarks/RESULTS.md, branch perf3):
-    # - island: constraint islands (mj_island, the solver per island) for one vehicle, one kinematic
-    #   tree, whose constrained dofs are always one island;
-    # - spring and damper, without suspension struts: no joint has a stiffness or a damping (the
-    #   wheels' damping is 0, the drive train is armature and velocity actuators), so mj_passive's
-    #   forces and implicitfast's passive-damping derivative are zero; both off skip them.
+    def idle_stages(self) -> int:
+        """MuJoCo's disable bits (``mjtDisableBit``) of the stages that do nothing for this model: the
+        same bits with them off, less work (benchmarks/RESULTS.md, branch ``perf3``):
+
+        - ``island``: constraint islands (``mj_island``, the solver per island) for one vehicle, one
+          kinematic tree, whose constrained dofs are always one island;
+        - ``spring`` and ``damper``, without suspension struts: no joint has a stiffness or a damping
+          (the wheels' damping is 0; the drive train is armature and velocity actuators), so
+          ``mj_passive``'s forces and implicitfast's passive-damping derivative are zero; both off
+          skip them."""
+        import mujoco
+
+        bits = mujoco.mjtDisableBit
+        off = int(bits.mjDSBL_ISLAND)
+        if not self.spec.suspension_joints:
+            off |= int(bits.mjDSBL_SPRING) | int(bits.mjDSBL_DAMPER)
+        return off
 
     def _articulate(self, root, act, links, by_name) -> None:
         """Steering servos after the wheel motors (position actuators, stiff against the steered

@@ -99,6 +99,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         except ValueError as exc:
             raise InputError(f"vehicle {self.spec.name!r}: MuJoCo cannot compile its model ({exc})") from None
         self._write_heights()
+        if type(self) is MuJoCoWorld:  # this engine's own steps (a subclass, the Warp batch's host model, keeps them)
+            self.model.opt.disableflags |= self.idle_stages()
         self.data = mujoco.MjData(self.model)
         self._index()
         self._hfield = hfield_functions(contact.hfield_collision, self.model, self.data)
