@@ -132,6 +132,7 @@ def replay_child(missions: int, rows: int | None) -> dict:
             spawned.append(len(states) - 1)
 
         world.step, world.spawn = recording_step, recording_spawn
+        world.advance = None  # every trial step through world.step (the replay's Python: the loop stepping one by one)
         recorded = [drive_mission(world, m, settings=settings, classes=prepared.maps.closed).telemetry
                     for m in prepared.missions]
         at = [0]

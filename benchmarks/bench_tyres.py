@@ -187,13 +187,13 @@ def breakdown(missions: int, rows: int | None = None) -> None:
 
             assert world.contact.tyres_each_substep and world._fast is not None
             for mi in prepared.missions:
-                world.step, world.spawn = step, spawn
+                world.step, world.spawn, world.advance = step, spawn, None  # each trial step through step
                 t0 = clk()
                 drive_mission(world, mi, settings=settings, classes=prepared.maps.closed)
                 acc["trial"] += clk() - t0
                 n_trials += 1
                 # the same trial again, untimed, with MuJoCo's own timers
-                del world.step, world.spawn  # the class's own methods again
+                del world.step, world.spawn, world.advance  # the class's own methods again
                 mujoco.set_mjcb_time(time.process_time)
                 try:
                     drive_mission(world, mi, settings=settings, classes=prepared.maps.closed)

@@ -130,8 +130,6 @@ def close_rough(classes: np.ndarray, radius_m: float, cell_size_m: float) -> np.
     Applied per level: the semi-or-high set and the high set are each closed, so rough areas
     grow into the thin low gaps between them and the class order is kept. Returns a new map.
     """
-    from scipy.ndimage import binary_closing
-
     radius_px = radius_m / cell_size_m
     if radius_px < 1:
         return classes.copy()
@@ -144,8 +142,68 @@ def close_rough(classes: np.ndarray, radius_m: float, cell_size_m: float) -> np.
     for level in (SEMI, HIGH):
         # pad with 'not rough' so closing does not invent rough pixels at the map edge
         mask = np.pad(classes >= level, pad, mode="constant", constant_values=False)
-        closed = binary_closing(mask, structure=se)[pad:-pad, pad:-pad]
+        closed = _disk_close(mask, se)[pad:-pad, pad:-pad]
         out[closed] = level
+    return out
+
+
+def _row_runs(se: np.ndarray) -> list[tuple[int, int]] | None:
+    """(row offset, half-width) of each row of the odd, centred structuring element ``se`` whose true
+    pixels form one run centred on the middle column (a disk's rows do); None if a row does not."""
+    r, c = se.shape[0] // 2, se.shape[1] // 2
+    runs = []
+    for k, row in enumerate(se):
+        idx = np.flatnonzero(row)
+        if idx.size == 0:
+            continue
+        w = c - int(idx[0])
+        if int(idx[-1]) != c + w or idx.size != 2 * w + 1:
+            return None
+        runs.append((k - r, w))
+    return runs
+
+
+def _disk_close(mask: np.ndarray, se: np.ndarray) -> np.ndarray:
+    """``scipy.ndimage.binary_closing(mask, structure=se)`` (dilation, then erosion, the border
+    ``False`` for both), the same pixels, computed row by row: a dilation (erosion) by a symmetric
+    element whose rows are centred runs is the OR (AND) over its rows of whether any (every) pixel
+    of the run's width along the row is set, shifted by the row's offset (van Herk 1992's
+    decomposition into 1-D lines; the runs counted by running sums). About 4x faster than scipy's
+    general binary erosion for the 11x11 disk of the paper maps (tests/analysis/test_roughness.py
+    compares the two)."""
+    from scipy.ndimage import binary_closing
+
+    runs = _row_runs(se)
+    if runs is None or se.shape[0] % 2 == 0 or se.shape[1] % 2 == 0 or se.shape[0] > mask.shape[0]:
+        return binary_closing(mask, structure=se)
+    return _by_rows(_by_rows(mask, runs, erode=False), runs, erode=True)
+
+
+def _by_rows(mask: np.ndarray, runs, *, erode: bool) -> np.ndarray:
+    """One dilation (``erode`` False) or erosion of ``mask`` by the element of ``runs``
+    (:func:`_row_runs`), pixels outside the map ``False``."""
+    rows, cols = mask.shape
+    wmax = max(w for _, w in runs)
+    # csum[:, j + wmax + 1] = set pixels of the row up to column j (zeros past either end)
+    csum = np.zeros((rows, cols + 2 * wmax + 1), np.int32)
+    np.cumsum(mask, axis=1, out=csum[:, wmax + 1:cols + wmax + 1])
+    csum[:, cols + wmax + 1:] = csum[:, cols + wmax:cols + wmax + 1]
+    lines: dict[int, np.ndarray] = {}
+    combine = np.logical_and if erode else np.logical_or
+    out = np.full(mask.shape, erode)
+    for dy, w in runs:
+        if w not in lines:  # set pixels in columns j - w .. j + w of each row
+            count = csum[:, wmax + w + 1:wmax + w + 1 + cols] - csum[:, wmax - w:wmax - w + cols]
+            lines[w] = count == 2 * w + 1 if erode else count > 0
+        line = lines[w]
+        if dy >= 0:  # out[i] takes line[i + dy]; rows past the edge: False
+            combine(out[:rows - dy], line[dy:], out=out[:rows - dy])
+            if erode and dy:
+                out[rows - dy:] = False
+        else:
+            combine(out[-dy:], line[:rows + dy], out=out[-dy:])
+            if erode:
+                out[:-dy] = False
     return out
 
 

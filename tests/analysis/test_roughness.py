@@ -91,3 +91,30 @@ def test_vectorised_on_paper_size(rng):
     hm = Heightmap(rng.normal(size=(1009, 1009)) * 0.01, 0.05)
     classes = classify(hm)
     assert classes.shape == (1009, 1009) and classes.dtype == np.uint8
+
+
+@pytest.mark.parametrize("radius_px", [1.0, 1.5, 2.3, 5.0, 7.7])
+def test_row_closing_is_scipys_binary_closing(rng, radius_px):
+    """close_rough's closing by rows (roughness._disk_close) gives scipy's binary_closing pixel for
+    pixel, at the map's edges too, for sparse, dense and blobby masks and for disks of any radius."""
+    from scipy.ndimage import binary_closing, gaussian_filter
+
+    from offroadbench.analysis.roughness import _disk_close, disk
+
+    se = disk(radius_px)
+    masks = [rng.random(shape) < p for p in (0.05, 0.3, 0.6, 0.95) for shape in ((40, 57), (13, 90), (2, 30))]
+    masks.append(gaussian_filter(rng.random((150, 170)), 3) > 0.5)
+    for mask in masks:
+        np.testing.assert_array_equal(_disk_close(mask, se), binary_closing(mask, structure=se))
+
+
+def test_row_closing_rejects_no_element_shape():
+    """An element whose rows are not centred runs goes to scipy's own closing: the same pixels."""
+    from scipy.ndimage import binary_closing
+
+    from offroadbench.analysis.roughness import _disk_close, _row_runs
+
+    se = np.array([[1, 0, 1], [1, 1, 1], [0, 1, 0]], dtype=bool)
+    assert _row_runs(se) is None
+    mask = np.random.default_rng(3).random((30, 30)) < 0.4
+    np.testing.assert_array_equal(_disk_close(mask, se), binary_closing(mask, structure=se))

@@ -222,9 +222,16 @@ class TrialLoop:
         """Physics steps up to the next control tick (its state read, not yet recorded), recording
         the telemetry ticks on the way; True when the trial has ended on the way."""
         world, tel_every, ctrl_every = self.world, self.tel_every, self.ctrl_every
+        advance = getattr(world, "advance", None)  # n steps in one call (TrialWorld.step n times), if it can
         while True:
+            k = self.k
+            # the steps before the next telemetry or control tick (or the timeout) do nothing but step
+            n = min(tel_every - k % tel_every, ctrl_every - k % ctrl_every, max(1, self.n_steps - k))
+            if n > 1 and advance is not None:
+                advance(n - 1)
+                self.k = k = k + n - 1
             world.step()
-            self.k = k = self.k + 1
+            self.k = k = k + 1
             tel, ctrl = k % tel_every == 0, k % ctrl_every == 0
             if tel or ctrl:
                 self._read()

@@ -3,6 +3,7 @@ ignore Ctrl-C), the per-trial time limit and how a failed or hung task becomes a
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import signal
@@ -33,14 +34,27 @@ def die_with_parent(parent_pid: int) -> None:
         os._exit(1)
 
 
+#: a worker's cyclic-collector thresholds (gc.set_threshold: allocations before a young collection,
+#: young collections before a middle one, middle ones before a full one; Python's default is 700, 10, 10)
+WORKER_GC_THRESHOLDS = (700, 10, 100)
+
+
 def worker_bootstrap() -> None:
-    """What every worker process does first: import pybullet without its banner, and have malloc
-    give a freed terrain's arrays back to the system (offroadbench.memory.release_large_blocks)."""
+    """What every worker process does first: import pybullet without its banner, have malloc give a
+    freed terrain's arrays back to the system (offroadbench.memory.release_large_blocks), and make
+    the cyclic garbage collector's full collections ten times rarer (:data:`WORKER_GC_THRESHOLDS`;
+    the objects inherited from the coordinator frozen, ``gc.freeze``). A full collection walks every
+    tracked object, ~140 k once numba's and MuJoCo's modules are loaded (~60 ms each); the trial
+    loop's few cycles wait longer for it. Measured on 60 MuJoCo paper missions in one process: the
+    collector's CPU while driving 0.110 -> 0.029 s of 7.1-7.3 s (benchmarks/RESULTS.md, branch
+    ``perf3``); results do not depend on when garbage is collected."""
     from offroadbench.memory import release_large_blocks
     from offroadbench.sim import import_pybullet_quietly
 
     import_pybullet_quietly()
     release_large_blocks()
+    gc.freeze()
+    gc.set_threshold(*WORKER_GC_THRESHOLDS)
 
 
 def error_message(key: tuple[int, int], exc: BaseException, tb: str) -> tuple:

@@ -98,6 +98,24 @@ class MjcfBuilder:
                     g.set("conaffinity", "1")
         return ET.tostring(root, encoding="unicode")
 
+    def idle_stages(self) -> int:
+        """MuJoCo's disable bits (``mjtDisableBit``) of the stages that do nothing for this model: the
+        same bits with them off, less work (benchmarks/RESULTS.md, branch ``perf3``):
+
+        - ``island``: constraint islands (``mj_island``, the solver per island) for one vehicle, one
+          kinematic tree, whose constrained dofs are always one island;
+        - ``spring`` and ``damper``, without suspension struts: no joint has a stiffness or a damping
+          (the wheels' damping is 0; the drive train is armature and velocity actuators), so
+          ``mj_passive``'s forces and implicitfast's passive-damping derivative are zero; both off
+          skip them."""
+        import mujoco
+
+        bits = mujoco.mjtDisableBit
+        off = int(bits.mjDSBL_ISLAND)
+        if not self.spec.suspension_joints:
+            off |= int(bits.mjDSBL_SPRING) | int(bits.mjDSBL_DAMPER)
+        return off
+
     def _articulate(self, root, act, links, by_name) -> None:
         """Steering servos after the wheel motors (position actuators, stiff against the steered
         link's inertia about the steering axis, limited to the spec's steering torque) and the

@@ -11,6 +11,16 @@ import numpy as np
 class MuJoCoTyres:
     """The tyre half of offroadbench.sim.engines.mujoco.world.MuJoCoWorld: contacts in, forces out."""
 
+    def advance(self, n: int) -> None:
+        """``n`` trial steps (:meth:`step` ``n`` times, the same bits): with the compiled whole step
+        and the tyres at each MuJoCo step, one compiled call of ``n * substeps`` MuJoCo steps (the
+        trial loop's steps between two control ticks: offroadbench.sim.trial.runner.TrialLoop)."""
+        if n > 1 and self._steps_call is not None and self._base_force is None:
+            self._steps_call(n * self.substeps, True)
+            return
+        for _ in range(n):
+            self.step()
+
     def _step_compiled(self) -> None:
         """:meth:`step` with the compiled tyre loop (offroadbench.sim.engines.mujoco._tyres_c): the same
         sequence, the contacts read and the forces applied outside the interpreter; where MuJoCo's

@@ -99,6 +99,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         except ValueError as exc:
             raise InputError(f"vehicle {self.spec.name!r}: MuJoCo cannot compile its model ({exc})") from None
         self._write_heights()
+        if type(self) is MuJoCoWorld:  # this engine's own steps (a subclass, the Warp batch's host model, keeps them)
+            self.model.opt.disableflags |= self.idle_stages()
         self.data = mujoco.MjData(self.model)
         self._index()
         self._hfield = hfield_functions(contact.hfield_collision, self.model, self.data)
@@ -109,6 +111,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         self._step_arrays = None  # (qvel, xmat, xipos, xfrc_applied) views, for the compiled loop
         self._fast_step = None  # (mjModel, mjData addresses, MuJoCo's step functions, StepLayout tuple, table entries)
         self._step_call = None  # the compiled whole trial step with its arguments bound, for a step without a push
+        self._steps_call = None  # the same for n trial steps in one call (its last two arguments: substeps, True)
         tc = None
         if sim.tyre_model == "coulomb":
             # the bristle of the PyBullet world (stiffness and damping from the trial's step, so the
@@ -130,6 +133,8 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
             if self._fast_step is not None:  # the whole step's call with every argument bound (they never change)
                 self._step_call = functools.partial(tc.STEP, *self._fast_step, *self._step_arrays, f, ist,
                                                     self.substeps, contact.tyres_each_substep)
+                if contact.tyres_each_substep:  # every MuJoCo step alike: n trial steps are n * substeps of them
+                    self._steps_call = functools.partial(tc.STEP, *self._fast_step, *self._step_arrays, f, ist)
         self._soil = None
         self._fast_soil = None  # the compiled soil loop's (module, float state, int state, tables), if used
         self._fast_soil_step = None  # (_soil_step_c.STEP, mjModel and mjData addresses, step functions, entries)
@@ -175,6 +180,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
         """Drop the model and data (MuJoCo frees them with the objects). Safe to call twice."""
         self.data = None
         self._fast_step = self._fast_soil_step = self._step_arrays = None  # the data's addresses and views
+        self._step_call = self._steps_call = None
 
     def __enter__(self) -> MuJoCoWorld:
         return self
