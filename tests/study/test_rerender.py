@@ -9,7 +9,7 @@ import pytest
 RESULTS = Path(__file__).resolve().parents[2] / "experiments" / "results"
 
 
-@pytest.mark.parametrize("name", ["engines", "lunar-soil", "planner-stress", "majhor2023-engines", "vehicle-planner",
+@pytest.mark.parametrize("name", ["engines", "lunar-soil", "planner-stress", "majhor2023-engines", "vehicle-planner", "engines-warp",
                                   "majhor2023", "majhor2023-mujoco", "soil-map", "vehicle-comparison",
                                   "vehicle-sensitivity", "crater-density"])
 def test_a_rerender_of_a_committed_report_changes_nothing(tmp_path, name):

@@ -443,7 +443,7 @@ def _crater_density_plan(folder: Path) -> list[list[float]]:
                                for c in CRATER_DENSITIES[1:]])
 
 
-@pytest.mark.parametrize("name", ["crater-density", "engines"])
+@pytest.mark.parametrize("name", ["crater-density", "engines", "engines-warp"])
 def test_a_re_planned_studys_rejections_and_power_are_its_tables(name):
     """Issue 42's re-planned studies: the README's yes/no per planned test is confirmatory.csv's, every planned test
     had power >= 0.8 at its stated effect before the run, and a both-engine study's verdicts are engine_verdicts.csv's."""
@@ -911,6 +911,50 @@ def _failure_search_first_k(folder: Path) -> list[float]:
     return out
 
 
+WARP_TESTS = (("MuJoCo Warp - MuJoCo: success", "MuJoCo Warp - MuJoCo, success (pooled), points"),
+              ("MuJoCo Warp - MuJoCo: vertical acceleration",
+               "MuJoCo Warp - MuJoCo, RMS vertical acceleration (pooled), m/s^2"))
+"""The engines-warp plan in confirmatory.csv's order: (comparison, the README's row label)."""
+
+
+def _warp_plan(folder: Path) -> list[list[float]]:
+    """engines-warp's 2 planned tests: MuJoCo Warp against MuJoCo, success and the per-terrain median RMS vertical
+    acceleration of the successful trials, each terrain's value the mean over the three D_high (a terrain without a
+    success at one D_high dropped)."""
+    t = trial_table(folder)
+    ok = t[t["success"].astype(bool)]
+    rate = t.groupby(["engine", "D_high", "terrain"])["success"].mean().mul(100)
+    va = ok.groupby(["engine", "D_high", "terrain"])["rms_vertical_accel_m_s2"].median()
+
+    def pooled(s: pd.Series, e: str) -> pd.Series:
+        return s[e].unstack("D_high").mean(axis=1, skipna=False)
+
+    return _plan_rows(folder, [pd.DataFrame({"t": pooled(s, "mujoco_warp"), "c": pooled(s, "mujoco")}) for s in (rate, va)])
+
+
+def _warp_one_engine_only(folder: Path) -> list[float]:
+    """Paired missions (same D, terrain and mission): on both engines, on MuJoCo Warp only, on MuJoCo only, on
+    neither."""
+    w = trial_table(folder).pivot_table(index=["D_high", "terrain", "mission"], columns="engine", values="success",
+                                        aggfunc="first").astype(bool)
+    a, b = w["mujoco_warp"], w["mujoco"]
+    return [float((a & b).sum()), float((a & ~b).sum()), float((b & ~a).sum()), float((~a & ~b).sum())]
+
+
+def _warp_ride_ratios(folder: Path) -> list[float]:
+    """Missions that succeed on both engines: their count, then per ride metric (vertical acceleration, pitch rate,
+    roll rate) the median of MuJoCo Warp's value over MuJoCo's, as a percentage change."""
+    t = trial_table(folder)
+    key = ["D_high", "terrain", "mission"]
+    w = t.pivot_table(index=key, columns="engine", values="success", aggfunc="first").astype(bool)
+    both = w.index[w["mujoco"] & w["mujoco_warp"]]
+    out = [float(both.size)]
+    for m in ("rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s"):
+        v = t.pivot_table(index=key, columns="engine", values=m, aggfunc="first").loc[both]
+        out.append(float(100 * ((v["mujoco_warp"] / v["mujoco"]).median() - 1)))
+    return out
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
            rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
@@ -1180,6 +1224,26 @@ SAMPLES = [
            r"\|[-|]+\|\n" + r"".join(rf"\| {e} \| [\d.]+ \| [^|]+ \|" + rf" {_NUM} \|" * 6 + r"[^\n]*\n"
                                      for e in PS_ENGINES for _ in range(6)),
            _planner_successes),
+    Sample("engines-warp plan: terrains, means, effect, interval, p, Holm p, power", "engines-warp",
+           "".join(rf"\| {re.escape(label)} \| {_NUM} \| {_NUM} -> {_NUM} \| \**\+?{_NUM} \[{_NUM}, {_NUM}\]\** "
+                   rf"\| {_SCI} \| {_SCI} \| (?:yes|no) \| {_NUM} at [+-][\d.]+ \|\n" for _, label in WARP_TESTS),
+           lambda f: [v for row in _warp_plan(f) for v in row]),
+    Sample("engines-warp successes per engine and D_high", "engines-warp",
+           rf"successful trials \(of \d+\) \| {_NUM} / {_NUM} / {_NUM} \| {_NUM} / {_NUM} / {_NUM} \|",
+           lambda f: [float(v) for v in trial_table(f).groupby(["engine", "D_high"])["success"].sum()
+                      .loc[["mujoco", "mujoco_warp"]]]),
+    Sample("engines-warp failures per engine and reason", "engines-warp",
+           rf"failures `stuck` \| {_NUM} / {_NUM} / {_NUM} \| {_NUM} / {_NUM} / {_NUM} \|\n"
+           rf"\| failures `tipped` \| {_NUM} / {_NUM} / {_NUM} \| {_NUM} / {_NUM} / {_NUM} \|",
+           lambda f: [float(((t := trial_table(f))["engine"].eq(e) & t["D_high"].eq(d) & t["failure_reason"].eq(r)).sum())
+                      for r in ("stuck", "tipped") for e in ("mujoco", "mujoco_warp") for d in (2.3, 2.45, 2.6)]),
+    Sample("engines-warp paired missions by engine", "engines-warp",
+           rf"{_NUM} succeed on both, {_NUM} on MuJoCo Warp only, {_NUM} on MuJoCo only and {_NUM} on neither",
+           _warp_one_engine_only),
+    Sample("engines-warp ride of the missions both engines complete", "engines-warp",
+           rf"On the {_NUM} missions both engines complete, MuJoCo Warp's values differ from MuJoCo's by a median of\s+"
+           rf"\+?{_NUM} % \(RMS vertical acceleration\), \+?{_NUM} % \(pitch rate\) and \+?{_NUM} % \(roll rate\)",
+           _warp_ride_ratios),
 ]
 
 
@@ -1295,3 +1359,42 @@ def test_plan_rows_state_the_tables_verdict_and_power(study: str):
         assert re.search(row, text), (study, c.comparison)
         verdict = "rejected" if c.reject else "not rejected"
         assert f"**{c.comparison}: {verdict} on PyBullet; MuJoCo not run.**" in text, (study, c.comparison)
+
+
+def test_the_warp_arms_mujoco_trials_are_the_engines_studys():
+    """engines-warp (issue 48) is paired with the committed engines study: its root seed is the engines study's
+    resolved blind seed, and every one of its MuJoCo trials (terrains 0-9) is the engines study's MuJoCo trial of the same D_high,
+    terrain and mission, bit for bit (seeds, outcome, every metric); MuJoCo Warp drove the same missions."""
+    from offroadbench.config import load_toml
+    from offroadbench.study.spec.config import study_from_dict
+
+    root = RESULTS.parent
+    warp = study_from_dict(load_toml(root / "engines-warp.toml"), where="engines-warp.toml")
+    engines = study_from_dict(load_toml(root / "engines.toml"), where="engines.toml")
+    assert warp.root_seed == engines.root_seed and warp.paired_terrains and engines.paired_terrains
+    key = ["D_high", "terrain", "mission"]
+    new, old = (trial_table(RESULTS / n) for n in ("engines-warp", "engines"))
+    cols = [c for c in old.columns if c in new.columns and c != "cell"]
+    mine = new[new["engine"] == "mujoco"][cols].sort_values(key).reset_index(drop=True)
+    assert warp.terrains_per_cell == 10 and engines.terrains_per_cell == 12  # its terrains 0-9 of the engines study's
+    theirs = old[(old["engine"] == "mujoco") & (old["terrain"] < 10)][cols].sort_values(key).reset_index(drop=True)
+    assert len(mine) == len(theirs) == 300
+    pd.testing.assert_frame_equal(mine, theirs, check_exact=True)
+    arm = new[new["engine"] == "mujoco_warp"].set_index(key).sort_index()
+    twin = mine.set_index(key).sort_index()
+    assert arm.index.equals(twin.index)
+    for c in ("terrain_seed", "mission_seed", "start_x_m", "start_y_m", "goal_x_m", "goal_y_m"):
+        assert (arm[c] == twin[c]).all(), c
+
+
+def test_the_warp_arms_plan_has_the_power_its_toml_states():
+    """engines-warp's 2 planned tests have the power experiments/engines-warp.toml's comments state (0.95 and 1.00 at
+    10 terrains, from its committed pilot), what `study run` checked, and confirmatory.csv kept it."""
+    from offroadbench.study import load_study
+    from offroadbench.study.stats.power import check_power
+
+    path = RESULTS.parent / "engines-warp.toml"
+    study, _ = load_study(path)
+    table = check_power(study, path.parent)
+    assert [float(v) for v in table["power"]] == pytest.approx([0.95, 1.00], abs=0.011)
+    assert list(pd.read_csv(RESULTS / "engines-warp" / "confirmatory.csv")["power"]) == list(table["power"])
