@@ -19,7 +19,7 @@ from typing import Iterator
 
 from offroadbench.errors import Stopped
 
-__all__ = ["check", "handled"]
+__all__ = ["check", "deferred", "handled"]
 
 _asked: list[int] = []  # the signals received while handled(), in order
 
@@ -58,3 +58,18 @@ def handled(signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Itera
             signal.signal(s, h)
         sys.unraisablehook = old_hook
         _asked.clear()
+
+
+@contextlib.contextmanager
+def deferred(signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
+    """Hold ``signals`` back while inside (a few statements that must not be cut in two, such as
+    writing a session's row and keeping its id): one that comes meanwhile is delivered, and its
+    exception raised, just after. Outside the main thread nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, signals)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)

@@ -250,6 +250,7 @@ class RunSession:
         try:
             self._prepare()
         except BaseException as exc:
+            self._finish(exc)  # a stop after the session's row was written: the row says so
             replacement = self._close(exc)
             if replacement is not None:
                 raise replacement from None
@@ -274,8 +275,9 @@ class RunSession:
         repair_telemetry(store, self.run_dir, self.telemetry)
         self.stored = store.counts()[0] + len(store.faulted_trials())
         report(self.progress, self.stored, self.total)
-        self.run_id = store.start_run(self.executor_name, self.executor.workers, self.meta.get("version", ""),
-                                      platform_fingerprint())
+        with stop.deferred():  # a Ctrl-C between the row's insert and keeping its id would leave it "running"
+            self.run_id = store.start_run(self.executor_name, self.executor.workers, self.meta.get("version", ""),
+                                          platform_fingerprint())
 
     def stored_keys(self) -> set[tuple[int, int, int]]:
         """(cell, terrain, mission) of every trial stored, as an outcome or as a fault."""
@@ -334,18 +336,23 @@ class RunSession:
 
     # ------------------------------------------------------------------ closing
     def __exit__(self, exc_type, exc: BaseException | None, tb) -> bool:
+        self._finish(exc)
+        replacement = self._close(exc)
+        if replacement is not None:
+            raise replacement from None
+        return False
+
+    def _finish(self, exc: BaseException | None) -> None:
+        """Close this session's row (when it was written): interrupted, failed or finished."""
+        if self.run_id is None:
+            return
         if isinstance(exc, KeyboardInterrupt):
             status, error = "interrupted", None
         elif exc is not None:
             status, error = "failed", f"{type(exc).__name__}: {exc}"
         else:
             status, error = "finished", None
-        if self.run_id is not None:
-            self.store.finish_run(self.run_id, status, error)
-        replacement = self._close(exc)
-        if replacement is not None:
-            raise replacement from None
-        return False
+        self.store.finish_run(self.run_id, status, error)
 
     def _close(self, exc: BaseException | None) -> BaseException | None:
         """Close the store and release the lock (a store that holds nothing after a failure is

@@ -200,3 +200,32 @@ def test_a_swallowed_stop_ends_a_dask_run_within_one_poll(tmp_path):
         finally:
             _RELEASE.set()
     assert not (tmp_path / "run" / "study.sqlite").exists()  # a stop before any trial leaves no store
+
+
+def test_a_stop_just_after_the_session_row_is_written_records_it_interrupted(tmp_path, capsys, monkeypatch):
+    """SIGINT arriving right after ``start_run`` wrote the session's row, before its id was kept (CI
+    hit this window once in the random Ctrl-C test): the row must say ``interrupted``, not stay
+    ``running`` (shown later as ``killed``). The first session stores the trials, so the second's
+    store is kept whatever it stores."""
+    import os
+
+    from offroadbench.cli import main
+    from tests.conftest import TINY_STUDY_TOML
+
+    path = tmp_path / "study.toml"
+    path.write_text(TINY_STUDY_TOML.format(name="stop-at-row", root_seed=3, terrains=2, missions=3))
+    out = tmp_path / "run"
+    assert main(["study", "run", str(path), "--out", str(out), "--executor", "inline", "--no-report"]) == 0
+    capsys.readouterr()
+    real = Store.start_run
+
+    def signalled(self, *args, **kwargs):
+        run_id = real(self, *args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)  # delivered at the next bytecode: before the caller keeps run_id
+        return run_id
+
+    monkeypatch.setattr(Store, "start_run", signalled)
+    assert main(["study", "run", str(path), "--out", str(out), "--executor", "inline", "--no-report"]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("offroadbench: interrupted; ")
+    assert [r["status"] for r in load_meta(out)["runs"]][-1] == "interrupted"
