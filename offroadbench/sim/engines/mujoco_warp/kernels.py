@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import warp as wp
 
-__all__ = ["apply_tyres", "clear_sums", "read_contacts", "release_untouched", "reset_worlds"]
+__all__ = ["apply_tyres", "clear_sums", "read_contacts", "release_untouched", "reset_worlds", "rotate"]
 
 # per (world, wheel) float64 state columns: the sums (0..6), the bristle (7..9), the load (10)
 ACC, BRISTLE, LOAD, NCOL = 0, 7, 10, 11
@@ -121,8 +121,9 @@ def release_untouched(touch: wp.array2d(dtype=wp.int32), held: wp.array2d(dtype=
 
 
 @wp.func
-def _rot(r: wp.mat33, a: wp.vec3d) -> wp.vec3d:
-    """``r a`` with the float32 matrix widened, summed in _tyres_c's order."""
+def rotate(r: wp.mat33, a: wp.vec3d) -> wp.vec3d:
+    """``r a`` with the float32 matrix widened, summed in the compiled loops' order (_tyres_c, _soil_c;
+    the soil kernels use it too)."""
     return wp.vec3d(wp.float64(r[0, 0]) * a[0] + wp.float64(r[0, 1]) * a[1] + wp.float64(r[0, 2]) * a[2],
                     wp.float64(r[1, 0]) * a[0] + wp.float64(r[1, 1]) * a[1] + wp.float64(r[1, 2]) * a[2],
                     wp.float64(r[2, 0]) * a[0] + wp.float64(r[2, 1]) * a[1] + wp.float64(r[2, 2]) * a[2])
@@ -150,7 +151,7 @@ def apply_tyres(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.ma
         return
     r = xmat[w, chassis]
     wb = wp.vec3d(wp.float64(qvel[w, 3]), wp.float64(qvel[w, 4]), wp.float64(qvel[w, 5]))
-    om = _rot(r, wb)
+    om = rotate(r, wb)
     c0 = xipos[w, chassis]
     cw = xipos[w, body]
     cx = wp.float64(cw[0])
@@ -162,7 +163,7 @@ def apply_tyres(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.ma
     vx = wp.float64(qvel[w, 0]) + om[1] * rz - om[2] * ry
     vy = wp.float64(qvel[w, 1]) + om[2] * rx - om[0] * rz
     vz = wp.float64(qvel[w, 2]) + om[0] * ry - om[1] * rx
-    a = _rot(r, wheel_axis[i])
+    a = rotate(r, wheel_axis[i])
     s = wp.float64(qvel[w, wheel_qvel[i]])
     wx = om[0] + a[0] * s
     wy = om[1] + a[1] * s

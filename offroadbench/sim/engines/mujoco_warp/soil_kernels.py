@@ -34,6 +34,8 @@ from __future__ import annotations
 
 import warp as wp
 
+from offroadbench.sim.engines.mujoco_warp.kernels import rotate
+
 __all__ = ["CONSTS", "NCOL", "apply_soil", "outside", "penetration", "reset_soil", "slip"]
 
 # per (world, wheel) float64 state columns
@@ -188,14 +190,6 @@ def _lateral(consts: wp.array(dtype=wp.float64), ints: wp.array(dtype=wp.int32),
     return total
 
 
-@wp.func
-def _rot(r: wp.mat33, a: wp.vec3d) -> wp.vec3d:
-    """``r a`` with the float32 matrix widened, summed in _soil_c's order."""
-    return wp.vec3d(wp.float64(r[0, 0]) * a[0] + wp.float64(r[0, 1]) * a[1] + wp.float64(r[0, 2]) * a[2],
-                    wp.float64(r[1, 0]) * a[0] + wp.float64(r[1, 1]) * a[1] + wp.float64(r[1, 2]) * a[2],
-                    wp.float64(r[2, 0]) * a[0] + wp.float64(r[2, 1]) * a[1] + wp.float64(r[2, 2]) * a[2])
-
-
 @wp.kernel
 def apply_soil(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.mat33),
                xipos: wp.array2d(dtype=wp.vec3), xfrc: wp.array2d(dtype=wp.spatial_vector),
@@ -217,7 +211,7 @@ def apply_soil(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.mat
     on[w, i] = 0
     r = xmat[w, chassis]
     wb = wp.vec3d(wp.float64(qvel[w, 3]), wp.float64(qvel[w, 4]), wp.float64(qvel[w, 5]))
-    om = _rot(r, wb)
+    om = rotate(r, wb)
     c0 = xipos[w, chassis]
     cw = xipos[w, body]
     cx = wp.float64(cw[0])
@@ -229,7 +223,7 @@ def apply_soil(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.mat
     vx = wp.float64(qvel[w, 0]) + om[1] * rz - om[2] * ry
     vy = wp.float64(qvel[w, 1]) + om[2] * rx - om[0] * rz
     vz = wp.float64(qvel[w, 2]) + om[0] * ry - om[1] * rx
-    a = _rot(r, wheel_axis[i])
+    a = rotate(r, wheel_axis[i])
     ax = a[0]
     ay = a[1]
     az = a[2]
