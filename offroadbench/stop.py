@@ -63,13 +63,27 @@ def handled(signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Itera
 @contextlib.contextmanager
 def deferred(signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> Iterator[None]:
     """Hold ``signals`` back while inside (a few statements that must not be cut in two, such as
-    writing a session's row and keeping its id): one that comes meanwhile is delivered, and its
-    exception raised, just after. Outside the main thread nothing changes."""
+    writing a session's row and keeping its id): one that comes meanwhile is noted, and raised again
+    just after, so its exception comes once the statements are done. Outside the main thread nothing
+    changes.
+
+    Not a signal mask: ``pthread_sigmask`` holds a signal back from the main thread only, and the
+    kernel hands a signal sent to the process to any thread that does not block it (a Dask, tqdm or
+    thread-pool thread), whose C handler then has the main thread raise at its next bytecode, inside
+    the statements. Python runs every handler in the main thread, so a noting handler defers it
+    whichever thread the kernel chose."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, signals)
+    got: list[int] = []
+    old = {s: signal.getsignal(s) for s in signals}
+    held = [s for s, h in old.items() if h is not None]  # a handler set outside Python cannot be restored
+    for s in held:
+        signal.signal(s, lambda signum, frame: got.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for s in held:
+            signal.signal(s, old[s])
+        for s in got[:1]:  # one stop is one stop: raised once, by the handler that was there before
+            signal.raise_signal(s)
