@@ -38,11 +38,22 @@ def towed_pull_n(soil, radius_m: float, width_m: float, load_n: float) -> float:
         h = static_sinkage(soil, radius_m, width_m, load_n, slip)
         return wheel_forces(soil, radius_m, width_m, h, slip)
 
-    lo, hi = -0.5, 0.5  # the torque rises with the slip: negative when skidding, positive when driving
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if float(forces(mid)[2]) < 0.0 else (lo, mid)
-    return float(forces(0.5 * (lo + hi))[1])
+    # the torque rises with the slip: negative when skidding, positive when driving
+    slip = _rising_root(lambda x: float(forces(x)[2]), -0.5, 0.5)
+    return float(forces(slip)[1])
+
+
+def _rising_root(f, lo: float, hi: float) -> float:
+    """Where ``f`` (rising over [lo, hi]) crosses 0, to 1e-12 (Brent's method: ~10 calls of ``f``
+    where a bisection to that width takes 40; each call here is a sinkage solve); ``lo`` where f is
+    already >= 0 there, ``hi`` where it is still < 0 there."""
+    from scipy.optimize import brentq
+
+    if f(lo) >= 0.0:
+        return lo
+    if f(hi) < 0.0:
+        return hi
+    return float(brentq(f, lo, hi, xtol=1e-12))
 
 
 def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, g: float, slip: float,
@@ -62,13 +73,9 @@ def soil_climb_limit_deg(soil, radius_m: float, width_m: float, mass_kg: float, 
             pull += (n_wheels - driven) * towed_pull_n(soil, radius_m, width_m, load)
         return pull - mass_kg * g * math.sin(theta)
 
-    lo, hi = 0.0, 0.5 * math.pi
-    if margin(lo) < 0.0:
+    if margin(0.0) < 0.0:
         return 0.0
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
-    return math.degrees(lo)
+    return math.degrees(_rising_root(lambda theta: -margin(theta), 0.0, 0.5 * math.pi))  # the margin falls with the grade
 
 
 def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float, g: float, slip: float,
@@ -90,13 +97,9 @@ def track_climb_limit_deg(soil, width_m: float, length_m: float, mass_kg: float,
             soil, width_m, track_sinkage_m(soil, width_m, length_m, w))
         return 2.0 * pull - mass_kg * g * math.sin(theta)
 
-    lo, hi = 0.0, 0.5 * math.pi
-    if margin(lo) < 0.0:
+    if margin(0.0) < 0.0:
         return 0.0
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if margin(mid) >= 0.0 else (lo, mid)
-    return math.degrees(lo)
+    return math.degrees(_rising_root(lambda theta: -margin(theta), 0.0, 0.5 * math.pi))  # the margin falls with the grade
 
 
 def tow_pull(world: TrialWorld, slip: float, seconds: float = 8.0) -> float:
