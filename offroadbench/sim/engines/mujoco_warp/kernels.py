@@ -29,10 +29,46 @@ from __future__ import annotations
 
 import warp as wp
 
-__all__ = ["apply_tyres", "clear_sums", "read_contacts", "release_untouched", "reset_worlds", "rotate"]
+__all__ = ["DOWN_TOLERANCE", "apply_tyres", "clear_sums", "drop_downward_contacts", "read_contacts", "release_untouched",
+           "reset_worlds", "rotate"]
 
 # per (world, wheel) float64 state columns: the sums (0..6), the bristle (7..9), the load (10)
 ACC, BRISTLE, LOAD, NCOL = 0, 7, 10, 11
+
+DOWN_TOLERANCE = 0.01
+"""A terrain contact whose normal (from the terrain to the other geom) has a vertical component
+below ``-DOWN_TOLERANCE`` (unit normal) points into the ground: not a height field's contact."""
+
+_CONSTRAINT = 1  # mujoco_warp's ContactType.CONSTRAINT bit
+
+
+@wp.kernel
+def drop_downward_contacts(nacon: wp.array(dtype=wp.int32), worldid: wp.array(dtype=wp.int32),
+                           geom: wp.array(dtype=wp.vec2i), frame: wp.array(dtype=wp.mat33),
+                           ctype: wp.array(dtype=wp.int32), terrain: wp.int32,
+                           dropped: wp.array(dtype=wp.int32)):
+    """Take out of the constraint solver (clear ``ContactType.CONSTRAINT``) every terrain contact
+    whose normal, oriented from the terrain to the other geom, points down (z below
+    ``-DOWN_TOLERANCE``), and count it in ``dropped[world]``. Run between MuJoCo Warp's collision
+    and its constraint rows. A height field's surface is the top of prisms that reach down to its
+    base, so a body above its base is pushed out up or sideways, never down: MuJoCo's own
+    ``mjc_ConvexHField`` gives such normals a z >= 0. MuJoCo Warp 4.0's prism-by-prism GJK/EPA
+    (float32, ``collision_convex.ccd_hfield_kernel``) now and then returns a contact of the chassis
+    box with normal (0, 0, -1) and a depth of a box height (0.23 m) where the box barely touches a
+    prism: that one contact launched the engines-warp trials that tipped (docs/mujoco-warp.md).
+    Grid: the contact array."""
+    k = wp.tid()
+    if k >= nacon[0]:
+        return
+    g = geom[k]
+    nz = frame[k][0, 2]
+    if g[1] == terrain:
+        nz = -nz
+    elif g[0] != terrain:
+        return
+    if nz < -wp.float32(DOWN_TOLERANCE):
+        ctype[k] = ctype[k] - (ctype[k] & _CONSTRAINT)
+        wp.atomic_add(dropped, worldid[k], 1)
 
 
 @wp.kernel
