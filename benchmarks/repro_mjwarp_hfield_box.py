@@ -14,7 +14,7 @@ and the box's top face (0.732 m): a separation read as a penetration. The same p
 sample patch gives it too; with the base at 0.01-2 m (same cell) it does not. Seen with the box only
 (the wheels, spheres, never gave one in the trial looked at). The workaround in offroadbench: drop every
 height-field contact whose normal points down before the constraint rows are made
-(offroadbench/sim/engines/mujoco_warp/kernels.py, drop_downward_contacts).
+(offroadbench/sim/engines/mujoco_warp/kernels.py, drop_false_contacts).
 """
 
 from __future__ import annotations

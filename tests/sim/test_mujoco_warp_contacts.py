@@ -8,7 +8,7 @@ and the trial's height-field size (3.84 m relief and base), shifted to the map's
 collision gives the box 7 contacts there, the deepest 7.1 mm, every normal level or up; MuJoCo
 Warp's gives two more of 0.236 m with normal (0, 0, -1), which, left in, turn the chassis at
 -7 rad/s within one MuJoCo step. The batch takes such contacts out of the solver
-(offroadbench.sim.engines.mujoco_warp.kernels.drop_downward_contacts), so one trial step from rest
+(offroadbench.sim.engines.mujoco_warp.kernels.drop_false_contacts), so one trial step from rest
 moves the chassis as two MuJoCo steps do.
 """
 

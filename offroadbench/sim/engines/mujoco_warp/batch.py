@@ -45,8 +45,7 @@ class HostState:
         self.on = np.zeros((nworld, nwheel), dtype=np.int32)
         """``terramechanics``: 1 where the wheel was on the soil in the last step."""
         self.dropped = np.zeros(nworld, dtype=np.int32)
-        """Terrain contacts with a downward normal taken out of the solver since the world's reset
-        (WarpBatch.step1)."""
+        """Terrain contacts taken out of the solver since the world's reset (WarpBatch.step1)."""
 
 
 class WarpBatch:
@@ -147,8 +146,9 @@ class WarpBatch:
     # ------------------------------------------------------------------ stepping
     def step1(self) -> None:
         """MuJoCo Warp's ``step1`` with its collision run first and checked: the kinematics, the
-        collision, then every terrain contact whose normal points down taken out of the constraint
-        solver (kernels.drop_downward_contacts; counted in :attr:`HostState.dropped`), then
+        collision, then every terrain contact that cannot be the height field's (its normal points
+        down, or its witness point on the terrain lies above it) taken out of the constraint solver
+        (kernels.drop_false_contacts; counted in :attr:`HostState.dropped`), then
         ``step1`` itself, which makes the constraint rows from these contacts (the model's
         ``opt.run_collision_detection`` is off: MuJoCo Warp's way for contacts set by its user).
         The kinematics is computed twice; the contacts and every bit downstream are ``step1``'s
@@ -157,8 +157,10 @@ class WarpBatch:
         mjw.kinematics(m, d)
         mjw.collision(m, d)
         con = d.contact
-        wp.launch(kernels.drop_downward_contacts, dim=d.naconmax,
-                  inputs=[d.nacon, con.worldid, con.geom, con.frame, con.type, self.terrain_geom, self.dropped])
+        wp.launch(kernels.drop_false_contacts, dim=d.naconmax,
+                  inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, self.terrain_geom,
+                          d.geom_xpos, m.geom_dataid, m.hfield_adr, m.hfield_nrow, m.hfield_ncol, m.hfield_size,
+                          m.hfield_data, self.dropped])
         mjw.step1(m, d)
 
     def advance(self, trial_steps: int) -> None:
@@ -183,7 +185,7 @@ class WarpBatch:
                 mjw.step2(m, d)
                 wp.launch(kernels.clear_sums, dim=dim, inputs=[self.state, self.touch, self.pen])
                 wp.launch(kernels.read_contacts, dim=d.naconmax,
-                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.efc_address,
+                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, con.efc_address,
                                   d.efc.force, self.terrain_geom, self.geom_slot, self.state, self.touch, self.pen])
                 wp.launch(kernels.release_untouched, dim=dim, inputs=[self.touch, self.held])
             self.steps += trial_steps * self.substeps
