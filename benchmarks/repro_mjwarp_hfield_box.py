@@ -11,9 +11,10 @@ engines-warp cell 3, terrain 1, column 583, row 585, at MuJoCo step 1865 of miss
 (``collision``, Warp's CPU device, float32) gives 2: one of those and one 0.2297 m deep with normal
 (0, 0, -1) at a point 10 cm beyond the cell, whose witness points are the prism's top sample (0.502 m)
 and the box's top face (0.732 m): a separation read as a penetration. The same pose against a 36 x 23
-sample patch gives it too; with the base at 0.01-2 m (same cell) it does not. Seen with the box only
-(the wheels, spheres, never gave one in the trial looked at). The workaround in offroadbench: drop every
-height-field contact whose normal points down before the constraint rows are made
+sample patch gives it too; with the base at 0.01-2 m (same cell) it does not. A sphere (a wheel) gets
+one too, with normal (0, 0, 1) (tests/sim/test_mujoco_warp_contacts.py). The workaround in
+offroadbench: before the constraint rows are made, drop every height-field contact whose normal
+points down or whose terrain-side witness point lies above the terrain
 (offroadbench/sim/engines/mujoco_warp/kernels.py, drop_false_contacts).
 """
 
