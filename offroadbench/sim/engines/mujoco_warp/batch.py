@@ -3,7 +3,7 @@
 :class:`WarpBatch` puts the host model (offroadbench.sim.engines.mujoco_warp.model.BatchModel: K
 height fields) on a Warp device (``[sim.mujoco_warp] device``) with ``geom_dataid`` batched per
 world, so world w's terrain geom reads terrain ``terrain_of[w]``. A trial step of every world is
-``substeps`` MuJoCo steps, each ``step1``, the tyre kernel (offroadbench.sim.engines.mujoco_warp.
+``substeps`` MuJoCo steps, each ``step1`` (its collision checked: :meth:`WarpBatch.step1`), the tyre kernel (offroadbench.sim.engines.mujoco_warp.
 kernels.apply_tyres), ``step2`` and the contact read: the sequence of the MuJoCo engine's
 ``MuJoCoTyres._step_compiled`` with ``tyres_each_substep``. The host talks to the device once per
 :meth:`advance` (the commands and any resets go down, the state comes back in :attr:`host`), not
@@ -44,6 +44,8 @@ class HostState:
         """``terramechanics``: each wheel's soil state (soil_kernels' columns) after the last step."""
         self.on = np.zeros((nworld, nwheel), dtype=np.int32)
         """``terramechanics``: 1 where the wheel was on the soil in the last step."""
+        self.dropped = np.zeros(nworld, dtype=np.int32)
+        """Terrain contacts taken out of the solver since the world's reset (WarpBatch.step1)."""
 
 
 class WarpBatch:
@@ -68,6 +70,7 @@ class WarpBatch:
         self.terrain_of = np.asarray(terrain_of, dtype=np.int32)
         with wp.ScopedDevice(self.device):
             self.m = mjw.put_model(m, batch_sizes={"geom_dataid": nworld})
+            self.m.opt.run_collision_detection = False  # collision runs in self.step1, checked
             dataid = self.m.geom_dataid.numpy()
             dataid[:, lay["terrain_geom"]] = self.terrain_of
             self.m.geom_dataid.assign(dataid)
@@ -83,6 +86,7 @@ class WarpBatch:
             self.consts = wp.array(np.array([lay["mu"], lay["dt"], lay["k"], lay["c"]]), dtype=wp.float64)
             self.geom_slot = wp.array(lay["geom_slot"], dtype=wp.int32)
             self.mask = wp.zeros(nworld, dtype=wp.int32)
+            self.dropped = wp.zeros(nworld, dtype=wp.int32)
             self.soil = None
             if model.sim.tyre_model == "terramechanics":  # the soil law in place of the tyre law
                 sl = model.soil_layout()
@@ -114,6 +118,7 @@ class WarpBatch:
         self.host.penetration[world] = 0.0
         self.host.soil[world] = 0.0
         self.host.on[world] = 0
+        self.host.dropped[world] = 0
 
     def _apply_resets(self) -> None:
         if not self._resets:
@@ -126,6 +131,7 @@ class WarpBatch:
             dataid[:, self.terrain_geom] = self.terrain_of
             self.m.geom_dataid.assign(dataid)
             mjw.reset_data(self.m, self.d, wp.array(mask.astype(bool), dtype=bool))
+            self.dropped.assign(np.where(mask == 1, 0, self.dropped.numpy()).astype(np.int32))
             qpos = self.d.qpos.numpy()
             for w, q in self._resets.items():
                 qpos[w] = q
@@ -138,6 +144,25 @@ class WarpBatch:
         self._resets.clear()
 
     # ------------------------------------------------------------------ stepping
+    def step1(self) -> None:
+        """MuJoCo Warp's ``step1`` with its collision run first and checked: the kinematics, the
+        collision, then every terrain contact that cannot be the height field's (its normal points
+        down, or its witness point on the terrain lies above it) taken out of the constraint solver
+        (kernels.drop_false_contacts; counted in :attr:`HostState.dropped`), then
+        ``step1`` itself, which makes the constraint rows from these contacts (the model's
+        ``opt.run_collision_detection`` is off: MuJoCo Warp's way for contacts set by its user).
+        The kinematics is computed twice; the contacts and every bit downstream are ``step1``'s
+        own when no contact is dropped."""
+        m, d = self.m, self.d
+        mjw.kinematics(m, d)
+        mjw.collision(m, d)
+        con = d.contact
+        wp.launch(kernels.drop_false_contacts, dim=d.naconmax,
+                  inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, self.terrain_geom,
+                          d.geom_xpos, m.geom_dataid, m.hfield_adr, m.hfield_nrow, m.hfield_ncol, m.hfield_size,
+                          m.hfield_data, self.dropped])
+        mjw.step1(m, d)
+
     def advance(self, trial_steps: int) -> None:
         """Every world ``trial_steps`` trial steps ahead (``substeps`` MuJoCo steps each) with the
         commands in :attr:`ctrl` and :attr:`pushed`, then the state read into :attr:`host`."""
@@ -152,7 +177,7 @@ class WarpBatch:
             con = d.contact
             dim = (self.nworld, self.nwheel)
             for _ in range(trial_steps * self.substeps):
-                mjw.step1(m, d)
+                self.step1()
                 wp.launch(kernels.apply_tyres, dim=dim,
                           inputs=[d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body,
                                   self.wheel_qvel, self.wheel_axis, self.consts, self.push, self.state,
@@ -160,7 +185,7 @@ class WarpBatch:
                 mjw.step2(m, d)
                 wp.launch(kernels.clear_sums, dim=dim, inputs=[self.state, self.touch, self.pen])
                 wp.launch(kernels.read_contacts, dim=d.naconmax,
-                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.efc_address,
+                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, con.efc_address,
                                   d.efc.force, self.terrain_geom, self.geom_slot, self.state, self.touch, self.pen])
                 wp.launch(kernels.release_untouched, dim=dim, inputs=[self.touch, self.held])
             self.steps += trial_steps * self.substeps
@@ -169,6 +194,7 @@ class WarpBatch:
             host.qvel[:] = d.qvel.numpy()
             host.loads[:] = self.state.numpy()[:, :, kernels.LOAD]
             host.penetration[:] = self.pen.numpy()
+            host.dropped[:] = self.dropped.numpy()
 
     def _advance_soil(self, trial_steps: int) -> None:
         """:meth:`advance`'s steps under the ``terramechanics`` tyre model: ``step1``, the soil kernel
@@ -181,7 +207,7 @@ class WarpBatch:
                   self.wheel_axis, self.soil_consts, self.soil_ints, self.soil_tables, self.heights,
                   self.terrain_dev, self.push, self.soil, self.on]
         for _ in range(trial_steps * self.substeps):
-            mjw.step1(m, d)
+            self.step1()
             wp.launch(soil_kernels.apply_soil, dim=dim, inputs=inputs)
             mjw.step2(m, d)
         self.steps += trial_steps * self.substeps
@@ -190,6 +216,7 @@ class WarpBatch:
         host.qvel[:] = d.qvel.numpy()
         host.soil[:] = self.soil.numpy()
         host.on[:] = self.on.numpy()
+        host.dropped[:] = self.dropped.numpy()
         for w in range(self.nworld):
             host.penetration[w] = soil_kernels.penetration(host.soil[w], host.on[w])
 

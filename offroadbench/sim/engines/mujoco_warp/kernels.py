@@ -10,6 +10,9 @@ offroadbench.sim.tyre_laws.coulomb.bristle_constants).
   normal, which MuJoCo Warp's height-field collision gives now and then at zero depth, is left
   out: its normal sum would be zero and the law's normal undefined); :func:`release_untouched`
   drops the bristle of a wheel with no loaded contact.
+- :func:`drop_false_contacts` (between MuJoCo Warp's collision and its constraint rows,
+  offroadbench.sim.engines.mujoco_warp.batch.WarpBatch.step1): terrain contacts that cannot be
+  the height field's (MuJoCo Warp 4.0's float32 GJK/EPA gives some) taken out of the solver.
 - :func:`apply_tyres` (after ``step1``): each touched wheel's friction force from those sums and
   the current velocities, with its moment about the wheel's centre of mass, into
   ``xfrc_applied``; the chassis row gets the pushed force (the vehicle check's drawbar rig).
@@ -29,10 +32,79 @@ from __future__ import annotations
 
 import warp as wp
 
-__all__ = ["apply_tyres", "clear_sums", "read_contacts", "release_untouched", "reset_worlds", "rotate"]
+__all__ = ["ABOVE_TOLERANCE_M", "DOWN_TOLERANCE", "apply_tyres", "clear_sums", "drop_false_contacts", "read_contacts",
+           "release_untouched", "reset_worlds", "rotate"]
 
 # per (world, wheel) float64 state columns: the sums (0..6), the bristle (7..9), the load (10)
 ACC, BRISTLE, LOAD, NCOL = 0, 7, 10, 11
+
+DOWN_TOLERANCE = 0.01
+"""A terrain contact whose unit normal (from the terrain to the other geom) has a vertical component
+below ``-DOWN_TOLERANCE`` points into the ground: not a height field's contact."""
+ABOVE_TOLERANCE_M = 0.01
+"""A terrain contact whose terrain-side witness point lies more than this above every height sample
+around it (m) is not on the terrain: not a height field's contact."""
+
+_CONSTRAINT = 1  # mujoco_warp's ContactType.CONSTRAINT bit
+
+
+@wp.kernel
+def drop_false_contacts(nacon: wp.array(dtype=wp.int32), worldid: wp.array(dtype=wp.int32),
+                        geom: wp.array(dtype=wp.vec2i), dist: wp.array(dtype=wp.float32),
+                        pos: wp.array(dtype=wp.vec3), frame: wp.array(dtype=wp.mat33),
+                        ctype: wp.array(dtype=wp.int32), terrain: wp.int32,
+                        geom_xpos: wp.array2d(dtype=wp.vec3), geom_dataid: wp.array2d(dtype=wp.int32),
+                        hfield_adr: wp.array(dtype=wp.int32), hfield_nrow: wp.array(dtype=wp.int32),
+                        hfield_ncol: wp.array(dtype=wp.int32), hfield_size: wp.array(dtype=wp.vec4),
+                        hfield_data: wp.array(dtype=wp.float32), dropped: wp.array(dtype=wp.int32)):
+    """Take out of the constraint solver (clear ``ContactType.CONSTRAINT``) every terrain contact
+    that cannot be one of the height field's, and count it in ``dropped[world]``; run between MuJoCo
+    Warp's collision and its constraint rows. A height field is the tops of prisms that reach down
+    to its base, and a contact's witness point on it lies on a prism's top or side, so for a body
+    above the base (MuJoCo's own ``mjc_ConvexHField`` never gives otherwise):
+
+    - its normal, from the terrain to the other geom, points up or sideways, never down (z below
+      ``-DOWN_TOLERANCE``);
+    - its terrain-side witness point, ``pos - n dist / 2`` (MuJoCo Warp's ``pos`` is the midpoint
+      of the two witness points, ``n`` from the terrain), is no higher than the highest of the 4 x 4
+      height samples around it, give or take ``ABOVE_TOLERANCE_M``.
+
+    MuJoCo Warp 4.0's prism-by-prism GJK/EPA (float32, ``collision_convex.ccd_hfield_kernel``) now
+    and then breaks both: a contact along a coordinate axis whose depth is the vertical distance
+    between a prism's top sample and the far face of the geom (0.23 m under the chassis box with
+    normal (0, 0, -1), 0.24 m under a wheel with normal (0, 0, 1), where MuJoCo finds at most 7 mm
+    or no contact): single contacts that launched the engines-warp trials that tipped
+    (docs/mujoco-warp.md). The terrain geom is not rotated (MuJoCoWorld's MJCF). Grid: the contact
+    array."""
+    k = wp.tid()
+    if k >= nacon[0]:
+        return
+    g = geom[k]
+    f = frame[k]
+    n = wp.vec3(f[0, 0], f[0, 1], f[0, 2])
+    if g[1] == terrain:
+        n = -n
+    elif g[0] != terrain:
+        return
+    w = worldid[k]
+    false = n[2] < -wp.float32(DOWN_TOLERANCE)
+    if not false:
+        hf = geom_dataid[w % geom_dataid.shape[0], terrain]
+        size = hfield_size[hf]
+        nrow = hfield_nrow[hf]
+        ncol = hfield_ncol[hf]
+        p = pos[k] - n * (dist[k] * wp.float32(0.5)) - geom_xpos[w, terrain]  # the witness, field frame
+        c = int(wp.floor((p[0] + size[0]) * float(ncol - 1) / (wp.float32(2.0) * size[0])))
+        r = int(wp.floor((p[1] + size[1]) * float(nrow - 1) / (wp.float32(2.0) * size[1])))
+        top = float(-1.0e30)
+        for i in range(r - 1, r + 3):
+            for j in range(c - 1, c + 3):
+                if i >= 0 and i < nrow and j >= 0 and j < ncol:
+                    top = wp.max(top, hfield_data[hfield_adr[hf] + i * ncol + j] * size[2])
+        false = top > float(-1.0e30) and p[2] > top + wp.float32(ABOVE_TOLERANCE_M)
+    if false:
+        ctype[k] = ctype[k] - (ctype[k] & _CONSTRAINT)
+        wp.atomic_add(dropped, w, 1)
 
 
 @wp.kernel
@@ -68,14 +140,19 @@ def clear_sums(state: wp.array3d(dtype=wp.float64), touch: wp.array2d(dtype=wp.i
 def read_contacts(nacon: wp.array(dtype=wp.int32), worldid: wp.array(dtype=wp.int32),
                   geom: wp.array(dtype=wp.vec2i), dist: wp.array(dtype=wp.float32),
                   pos: wp.array(dtype=wp.vec3), frame: wp.array(dtype=wp.mat33),
+                  ctype: wp.array(dtype=wp.int32),
                   efc_address: wp.array2d(dtype=wp.int32), efc_force: wp.array2d(dtype=wp.float32),
                   terrain: wp.int32, geom_slot: wp.array(dtype=wp.int32),
                   state: wp.array3d(dtype=wp.float64), touch: wp.array2d(dtype=wp.int32),
                   pen: wp.array(dtype=wp.float64)):
     """Add contact ``tid`` (if it is a wheel's terrain contact with a positive normal force) into
-    its wheel's sums: the Python loop's ``MuJoCoTyres._read_contacts``. Grid: the contact array."""
+    its wheel's sums: the Python loop's ``MuJoCoTyres._read_contacts``. A contact taken out of the
+    solver (:func:`drop_false_contacts`) is no contact: not in the sums, nor in the penetration.
+    Grid: the contact array."""
     k = wp.tid()
     if k >= nacon[0]:
+        return
+    if (ctype[k] & _CONSTRAINT) == 0:
         return
     g = geom[k]
     slot = int(-1)
