@@ -53,7 +53,7 @@ class WarpBatch:
     terrain ``terrain_of[w]`` (an index into ``model.terrains``)."""
 
     def __init__(self, model: BatchModel, terrain_of, device: str = "cpu", nconmax: int = 64,
-                 njmax: int = 256) -> None:
+                 njmax: int = 256, cuda_graph: bool = True) -> None:
         wp.init()
         self.model = model
         found = [str(d) for d in wp.get_devices()]
@@ -105,6 +105,9 @@ class WarpBatch:
         self._resets: dict[int, np.ndarray] = {}
         self.host = HostState(nworld, m.nq, m.nv, nwheel)
         self.steps = 0
+        self.cuda_graph = cuda_graph
+        """On a CUDA device: run :meth:`trial_step` as one captured CUDA graph (:meth:`advance`)."""
+        self._graph = None
         """MuJoCo steps taken by every world so far (a world-step count is this times nworld)."""
 
     # ------------------------------------------------------------------ host -> device
@@ -163,60 +166,76 @@ class WarpBatch:
                           m.hfield_data, self.dropped])
         mjw.step1(m, d)
 
-    def advance(self, trial_steps: int) -> None:
-        """Every world ``trial_steps`` trial steps ahead (``substeps`` MuJoCo steps each) with the
-        commands in :attr:`ctrl` and :attr:`pushed`, then the state read into :attr:`host`."""
-        self._apply_resets()
+    def trial_step(self) -> None:
+        """One trial step of every world, kernel launches only (no host exchange, so a CUDA graph can
+        hold it): ``substeps`` times :meth:`step1`, the tyre law (kernels.apply_tyres) or the soil law
+        (soil_kernels.apply_soil), ``step2`` and, for the tyres, the contact sums (``clear_sums``,
+        ``read_contacts``, ``release_untouched``): the MuJoCo engine's ``_step_compiled`` /
+        ``step_trial_soil`` with ``tyres_each_substep``. Under ``terramechanics`` no contact is read
+        (the soil carries the wheels)."""
         d, m = self.d, self.m
+        con = d.contact
+        dim = (self.nworld, self.nwheel)
+        for _ in range(self.substeps):
+            self.step1()
+            if self.soil is not None:
+                wp.launch(soil_kernels.apply_soil, dim=dim,
+                          inputs=[d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body,
+                                  self.wheel_qvel, self.wheel_axis, self.soil_consts, self.soil_ints,
+                                  self.soil_tables, self.heights, self.terrain_dev, self.push, self.soil, self.on])
+                mjw.step2(m, d)
+                continue
+            wp.launch(kernels.apply_tyres, dim=dim,
+                      inputs=[d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body,
+                              self.wheel_qvel, self.wheel_axis, self.consts, self.push, self.state,
+                              self.touch, self.held])
+            mjw.step2(m, d)
+            wp.launch(kernels.clear_sums, dim=dim, inputs=[self.state, self.touch, self.pen])
+            wp.launch(kernels.read_contacts, dim=d.naconmax,
+                      inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, con.efc_address,
+                              d.efc.force, self.terrain_geom, self.geom_slot, self.state, self.touch, self.pen])
+            wp.launch(kernels.release_untouched, dim=dim, inputs=[self.touch, self.held])
+
+    def advance(self, trial_steps: int) -> None:
+        """Every world ``trial_steps`` trial steps ahead with the commands in :attr:`ctrl` and
+        :attr:`pushed`, then the state read into :attr:`host`: one host exchange.
+
+        On a CUDA device with ``cuda_graph`` (``[sim.mujoco_warp] cuda_graph``, the default) the
+        trial step is captured once as a CUDA graph (Warp's ScopedCapture, as MuJoCo Warp's own
+        benchmarks capture ``step``) and launched ``trial_steps`` times; elsewhere its launches are
+        issued one by one. Both run the same kernels on the same arrays in the same order."""
+        self._apply_resets()
+        d = self.d
         with wp.ScopedDevice(self.device):
             d.ctrl.assign(self.ctrl.astype(np.float32))
             self.push.assign(self.pushed.astype(np.float32))
-            if self.soil is not None:
-                self._advance_soil(trial_steps)
-                return
-            con = d.contact
-            dim = (self.nworld, self.nwheel)
-            for _ in range(trial_steps * self.substeps):
-                self.step1()
-                wp.launch(kernels.apply_tyres, dim=dim,
-                          inputs=[d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body,
-                                  self.wheel_qvel, self.wheel_axis, self.consts, self.push, self.state,
-                                  self.touch, self.held])
-                mjw.step2(m, d)
-                wp.launch(kernels.clear_sums, dim=dim, inputs=[self.state, self.touch, self.pen])
-                wp.launch(kernels.read_contacts, dim=d.naconmax,
-                          inputs=[d.nacon, con.worldid, con.geom, con.dist, con.pos, con.frame, con.type, con.efc_address,
-                                  d.efc.force, self.terrain_geom, self.geom_slot, self.state, self.touch, self.pen])
-                wp.launch(kernels.release_untouched, dim=dim, inputs=[self.touch, self.held])
+            if self.cuda_graph and self.device.is_cuda:
+                if self._graph is None:
+                    with wp.ScopedCapture(device=self.device) as capture:
+                        self.trial_step()
+                    self._graph = capture.graph
+                for _ in range(trial_steps):
+                    wp.capture_launch(self._graph)
+            else:
+                for _ in range(trial_steps):
+                    self.trial_step()
             self.steps += trial_steps * self.substeps
-            host = self.host
-            host.qpos[:] = d.qpos.numpy()
-            host.qvel[:] = d.qvel.numpy()
-            host.loads[:] = self.state.numpy()[:, :, kernels.LOAD]
-            host.penetration[:] = self.pen.numpy()
-            host.dropped[:] = self.dropped.numpy()
+            self._read_host()
 
-    def _advance_soil(self, trial_steps: int) -> None:
-        """:meth:`advance`'s steps under the ``terramechanics`` tyre model: ``step1``, the soil kernel
-        (soil_kernels.apply_soil), ``step2``, as the MuJoCo engine's ``_soil_step_c.step_trial_soil``
-        with ``tyres_each_substep``; no contact is read (the soil carries the wheels), so the wheel
-        loads stay zero and the penetration is the deepest sinkage (_soil_c's readers)."""
-        d, m = self.d, self.m
-        dim = (self.nworld, self.nwheel)
-        inputs = [d.qvel, d.xmat, d.xipos, d.xfrc_applied, self.chassis, self.wheel_body, self.wheel_qvel,
-                  self.wheel_axis, self.soil_consts, self.soil_ints, self.soil_tables, self.heights,
-                  self.terrain_dev, self.push, self.soil, self.on]
-        for _ in range(trial_steps * self.substeps):
-            self.step1()
-            wp.launch(soil_kernels.apply_soil, dim=dim, inputs=inputs)
-            mjw.step2(m, d)
-        self.steps += trial_steps * self.substeps
-        host = self.host
+    def _read_host(self) -> None:
+        """The state after an advance into :attr:`host` (the device's float32 widened): poses and
+        velocities, the dropped-contact counts, and the tyres' loads and penetration or the soil's
+        state, its on-soil flags and the deepest sinkage (_soil_c's readers; the wheel loads stay zero)."""
+        d, host = self.d, self.host
         host.qpos[:] = d.qpos.numpy()
         host.qvel[:] = d.qvel.numpy()
+        host.dropped[:] = self.dropped.numpy()
+        if self.soil is None:
+            host.loads[:] = self.state.numpy()[:, :, kernels.LOAD]
+            host.penetration[:] = self.pen.numpy()
+            return
         host.soil[:] = self.soil.numpy()
         host.on[:] = self.on.numpy()
-        host.dropped[:] = self.dropped.numpy()
         for w in range(self.nworld):
             host.penetration[w] = soil_kernels.penetration(host.soil[w], host.on[w])
 

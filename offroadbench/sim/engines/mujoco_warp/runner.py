@@ -149,7 +149,8 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
             raise InputError(f"planner {s.planner.name!r} needs the terrain's class map; prepare the terrain first")
     model = BatchModel([p.hm for p in prepared], per[0].vehicle, sim)
     n = min(len(jobs), worlds or cfg.worlds)
-    batch = WarpBatch(model, [jobs[w][0] for w in range(n)], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax)
+    batch = WarpBatch(model, [jobs[w][0] for w in range(n)], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax,
+                       cuda_graph=cfg.cuda_graph)
     sched = Lockstep(batch)
     queue = list(reversed(jobs))
     taking = threading.Lock()

@@ -31,6 +31,11 @@ class MuJoCoWarpConfig:
     the 99th percentile, 57 at most."""
     njmax: int = 256
     """Constraint rows allocated per world (MuJoCo Warp's ``njmax``)."""
+    cuda_graph: bool = True
+    """On a CUDA device, capture the trial step (its MuJoCo steps, tyre or soil law and contact sums)
+    once as a CUDA graph and launch that graph, instead of issuing its kernel launches one by one
+    from Python; ignored on ``cpu``. Not yet run on a GPU here (docs/mujoco-warp.md): ``false`` is
+    the way back if a GPU refuses the capture."""
 
     def __post_init__(self) -> None:
         dev = self.device
@@ -39,3 +44,5 @@ class MuJoCoWarpConfig:
         check_int(self, "worlds", self.worlds, lo=1, hi=1_000_000)
         check_int(self, "nconmax", self.nconmax, lo=8, hi=100_000)
         check_int(self, "njmax", self.njmax, lo=8, hi=100_000)
+        if not isinstance(self.cuda_graph, bool):
+            raise InputError(f"MuJoCoWarpConfig.cuda_graph = {self.cuda_graph!r}: allowed true or false")

@@ -155,7 +155,8 @@ class WarpWorld(WorldView):
     def __init__(self, hm: Heightmap, vehicle: VehicleSpec | str = "husky", sim: SimConfig = SimConfig()) -> None:
         cfg = sim.mujoco_warp
         model = BatchModel([hm], vehicle, sim)
-        batch = WarpBatch(model, [0], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax)
+        batch = WarpBatch(model, [0], device=cfg.device, nconmax=cfg.nconmax, njmax=cfg.njmax,
+                      cuda_graph=cfg.cuda_graph)
         super().__init__(batch, 0, 0, WarpWorld._advance)
         self._push = False
 
