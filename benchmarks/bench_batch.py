@@ -10,8 +10,11 @@ batch (after a warm-up batch that compiles the kernels), MuJoCo world-steps per 
 steps of every world, idle ones included, over the wall time), trial steps per second
 (simulated seconds of the trials, settling included, times the physics rate, over the wall time)
 host exchanges, and the CPU seconds of the process (all threads) with world-steps per CPU
-second (the figure to compare on a shared machine); and, for reference, the MuJoCo engine (one CPU core, the same trials one
-after the other) in trial steps per second.
+second (the figure to compare on a shared machine); the host's share of the wall time (``host_s``:
+the wall time outside the batch's advances, i.e. the trials' per-tick code in their slots and its
+scheduling) and that per world and advance (``host_us/world``: what bounds a GPU's throughput,
+where the advances themselves cost little); and, for reference, the MuJoCo engine (one CPU core,
+the same trials one after the other) in trial steps per second.
 
     .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu] [--tyre-model terramechanics]
     .venv/bin/python benchmarks/bench_batch.py --smoke      # CI: 2 worlds, short missions; figures mean nothing
@@ -62,14 +65,14 @@ LUNAR = ("lunar-mare", {"layers.base.relief_m": 0.6, "layers.craters.population.
 RECIPE = ("paper-d2.45", {})
 
 
-def _prepared(n: int, length_m: float, rows: int):
+def _prepared(n: int, length_m: float, rows: int, recipe: tuple = RECIPE):
     """``n`` missions drawn alternately on terrains 0 and 1 of root seed 7 (two PreparedTerrains)."""
-    name, overrides = RECIPE
-    recipe = apply_overrides(load_recipe(name), {"grid.rows": rows, "grid.cols": rows, **overrides})
+    name, overrides = recipe
+    loaded = apply_overrides(load_recipe(name), {"grid.rows": rows, "grid.cols": rows, **overrides})
     settings = TrialSettings(missions=MissionConfig(count=n, length_m=length_m, border_m=1.0),
                              roughness=RoughnessConfig(border_m=1.0))
     counts = [(n + 1) // 2, n // 2]
-    prepared = [prepare_terrain(recipe, terrain_seed(7, j), settings, [(k, mission_seed(7, j, k)) for k in range(c)])
+    prepared = [prepare_terrain(loaded, terrain_seed(7, j), settings, [(k, mission_seed(7, j, k)) for k in range(c)])
                 for j, c in enumerate(counts) if c]
     return prepared, settings
 
@@ -82,7 +85,7 @@ def _sim_steps(records, sim: SimConfig) -> int:
 METRICS = ("rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
 
 
-def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
+def compare(n: int, length: float, rows: int, sim: SimConfig, recipe: tuple = RECIPE) -> None:
     """The trial-by-trial comparison of ``--compare``."""
     import math
 
@@ -90,7 +93,7 @@ def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
 
     from offroadbench.sim.engines.mujoco_warp.runner import drive_batch
 
-    prepared, settings = _prepared(n, length, rows)
+    prepared, settings = _prepared(n, length, rows, recipe)
     runs = {}
     soil = sim.tyre_model == "terramechanics"
     metrics = METRICS + (("sinkage_median_m", "mean_slip") if soil else ())
@@ -114,13 +117,13 @@ def compare(n: int, length: float, rows: int, sim: SimConfig) -> None:
         print(f"{name:14s} {flips:5d} " + " ".join(cols) + f"   ({len(both)} trials both finished)", flush=True)
 
 
-def contacts(n: int, length: float, rows: int, sim: SimConfig) -> None:
+def contacts(n: int, length: float, rows: int, sim: SimConfig, recipe: tuple = RECIPE) -> None:
     """The contact count of ``--contacts``."""
     import numpy as np
 
     from offroadbench.sim.engine import open_world
 
-    prepared, _ = _prepared(n, length, rows)
+    prepared, _ = _prepared(n, length, rows, recipe)
     for name, variant in (("mujoco", SimConfig(engine="mujoco", tyre_model=sim.tyre_model)), ("mujoco_warp", sim)):
         counts = []
         for p in prepared:
@@ -162,9 +165,7 @@ def main() -> None:
     ap.add_argument("--tyre-model", default="coulomb", choices=("coulomb", "terramechanics"),
                     help="the tyre model of every engine (terramechanics: the soil law on the default soil)")
     args = ap.parse_args()
-    global RECIPE
-    if args.lunar:
-        RECIPE = LUNAR
+    recipe = LUNAR if args.lunar else RECIPE
     if importlib.util.find_spec("mujoco_warp") is None:
         # the engine is an optional extra: CI installs it only where its kernels' cold compile (~2 min) fits
         print("bench_batch: mujoco_warp is not installed (pip install 'offroadbench[warp]'); nothing measured",
@@ -177,32 +178,34 @@ def main() -> None:
     base = SimConfig(engine="mujoco_warp", tyre_model=args.tyre_model)
     sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device))
     print(f"bench_batch: {platform.processor() or platform.machine()}, device {args.device}, "
-          f"{length:g} m missions on {rows}^2 {RECIPE[0]} maps, tyre model {args.tyre_model}", flush=True)
+          f"{length:g} m missions on {rows}^2 {recipe[0]} maps, tyre model {args.tyre_model}", flush=True)
     if args.compare:
-        compare(args.compare, length, rows, sim)
+        compare(args.compare, length, rows, sim, recipe)
         return
     if args.contacts:
-        contacts(args.contacts, length, rows, sim)
+        contacts(args.contacts, length, rows, sim, recipe)
         return
-    prepared, settings = _prepared(2, length, rows)
+    prepared, settings = _prepared(2, length, rows, recipe)
     t0 = time.perf_counter()
     drive_batch(prepared, settings.replace(sim=sim))
     print(f"warm-up batch of 2 worlds (compiles the kernels not yet cached): {time.perf_counter() - t0:.1f} s",
           flush=True)
     print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s} "
-          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s}")
+          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s} {'host_s':>7s} {'host_us/world':>14s}")
     for n in sizes:
-        prepared, settings = _prepared(n, length, rows)
+        prepared, settings = _prepared(n, length, rows, recipe)
         t0, c0 = time.perf_counter(), time.process_time()
         run = drive_batch(prepared, settings.replace(sim=sim), worlds=n)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         recs = [r for rs in run.records for r in rs if not isinstance(r, BaseException)]
         ok = sum(r.result.success for r in recs)
+        host = wall - run.advance_s
         print(f"{n:6d} {wall:8.2f} {run.world_steps / wall:13.0f} {_sim_steps(recs, sim) / wall:13.0f} "
-              f"{run.advances:8d} {ok:>2d}/{n:<2d} {cpu:8.2f} {run.world_steps / cpu:17.0f}", flush=True)
+              f"{run.advances:8d} {ok:>2d}/{n:<2d} {cpu:8.2f} {run.world_steps / cpu:17.0f} {host:7.2f} "
+              f"{1e6 * host / (run.advances * n):14.1f}", flush=True)
     nref = 1 if args.smoke else args.reference
     if nref:
-        prepared, settings = _prepared(nref, length, rows)
+        prepared, settings = _prepared(nref, length, rows, recipe)
         ref = SimConfig(engine="mujoco", tyre_model=args.tyre_model)
         t0 = time.perf_counter()
         recs = [r for p in prepared for r in drive_terrain(p, settings.replace(sim=ref))]

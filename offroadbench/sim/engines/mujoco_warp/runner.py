@@ -22,6 +22,7 @@ exception in place of its record; the other trials go on.
 from __future__ import annotations
 
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
@@ -46,6 +47,8 @@ class Lockstep:
         self._running = 0
         self.advances = 0
         """Times the batch was advanced (each one host exchange)."""
+        self.advance_s = 0.0
+        """Wall seconds spent in those advances (the physics and the exchange)."""
 
     def wait(self, view: WorldView) -> None:
         """Called in a slot's thread: block until the batch has run ``view``'s counted steps."""
@@ -88,7 +91,9 @@ class Lockstep:
                 if not self._waiting:
                     break
                 steps = min(v.pending for v in self._waiting.values())
+                t0 = time.perf_counter()
                 self.batch.advance(steps)
+                self.advance_s += time.perf_counter() - t0
                 self.advances += 1
                 for w, v in list(self._waiting.items()):
                     v.pending -= steps
@@ -114,6 +119,9 @@ class BatchRun:
     """MuJoCo steps summed over the worlds (idle worlds included), what the batch computed."""
     advances: int
     """Host exchanges (one per lock-step advance)."""
+    advance_s: float = 0.0
+    """Wall seconds inside those advances (the device's steps and the exchange); the rest of a
+    batch's wall time is the host's: the trials' per-tick code in the slots and their scheduling."""
 
 
 def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = None,
@@ -187,7 +195,7 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
             report(progress, done[0], len(jobs))
 
     sched.run([slot] * n, between=hand_on)
-    return BatchRun(records, n, batch.steps * n, sched.advances)
+    return BatchRun(records, n, batch.steps * n, sched.advances, sched.advance_s)
 
 
 def drive_terrain_batched(prepared: Any, settings: Any, *, progress: ProgressFn | None = None) -> Iterator[Any]:
