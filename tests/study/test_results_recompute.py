@@ -955,6 +955,84 @@ def _warp_ride_ratios(folder: Path) -> list[float]:
     return out
 
 
+WARP_FIRST_RUN = "1fda3d7"
+"""The commit whose experiments/results/engines-warp/ holds the first engines-warp run (before MuJoCo Warp's false
+height-field contacts were dropped); its README's "New beside old" table quotes it."""
+
+
+def _warp_failures(folder: Path, reason: str) -> list[float]:
+    """MuJoCo Warp's trials ending ``reason`` at D_high 2.3, 2.45 and 2.6."""
+    t = trial_table(folder)
+    return [float((t["engine"].eq("mujoco_warp") & t["D_high"].eq(d) & t["failure_reason"].eq(reason)).sum())
+            for d in (2.3, 2.45, 2.6)]
+
+
+def _warp_beside(folder: Path) -> list[list[float]]:
+    """One engines-warp run's values in the README's "New beside old" table, row by row: per planned test the
+    effect, interval, p and Holm p; MuJoCo Warp's successes, `tipped` and `stuck` per D_high; the paired missions;
+    the ride of the missions both engines complete."""
+    t = trial_table(folder)
+    ok = [float(v) for v in t[t["engine"] == "mujoco_warp"].groupby("D_high")["success"].sum()]
+    return ([row[3:8] for row in _warp_plan(folder)]
+            + [ok, _warp_failures(folder, "tipped"), _warp_failures(folder, "stuck"), _warp_one_engine_only(folder),
+               _warp_ride_ratios(folder)])
+
+
+def _warp_fix_changes(old: Path, new: Path) -> list[float]:
+    """What dropping the false contacts changed, mission by mission (MuJoCo Warp's trials, first run against
+    re-run): the missions that tipped, how they end now (successful, `stuck`), their MuJoCo twins (successful,
+    `stuck`), those now successful whose twin is `stuck`; the trials that did not tip, those identical in every
+    column, those that differ, in outcome, successes now failed, failures now successful."""
+    key = ["D_high", "terrain", "mission"]
+    a, b, mj = (trial_table(f) for f in (old, new, new))
+    a, b = (x[x["engine"] == "mujoco_warp"].drop(columns="cell").set_index(key).sort_index() for x in (a, b))
+    mj = mj[mj["engine"] == "mujoco"].set_index(key).sort_index()
+    tip = a["failure_reason"] == "tipped"
+    ok_b, ok_a, ok_mj = (x["success"].astype(bool) for x in (b, a, mj))
+    same = pd.Series([a.loc[i].equals(b.loc[i]) for i in a.index], index=a.index)
+    flip = ok_a != ok_b
+    return [float(v) for v in (tip.sum(), (tip & ok_b).sum(), (tip & ~ok_b).sum(), (tip & ok_mj).sum(),
+                               (tip & ~ok_mj).sum(), (tip & ok_b & ~ok_mj).sum(), (~tip).sum(), (~tip & same).sum(),
+                               (~tip & ~same).sum(), (~tip & flip).sum(), (~tip & flip & ok_a).sum(),
+                               (~tip & flip & ~ok_a).sum())]
+
+
+def _warp_medians(folder: Path) -> list[float]:
+    """The side-by-side table's medians over the successful trials, per metric, engine and D_high."""
+    t = trial_table(folder)
+    med = t[t["success"].astype(bool)].groupby(["engine", "D_high"])[
+        ["rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s", "traversal_time_s"]].median()
+    return [float(med.loc[(e, d), m]) for m in med.columns for e in ("mujoco", "mujoco_warp") for d in (2.3, 2.45, 2.6)]
+
+
+def _warp_terrains_up_down(folder: Path) -> list[float]:
+    """Terrains where MuJoCo Warp's success (pooled over D_high) is higher than MuJoCo's, lower, equal."""
+    t = trial_table(folder)
+    r = t.groupby(["engine", "terrain"])["success"].mean().unstack("engine")
+    d = r["mujoco_warp"] - r["mujoco"]
+    return [float((d > 0).sum()), float((d < 0).sum()), float((d == 0).sum())]
+
+
+_VERDICT = r"(?:not )?rejected"
+_EFFECT = r"\+?{n} \[{n}, {n}\], p {s}, Holm {s}, " + _VERDICT
+_TRIPLE = r"{n} / {n} / {n}"
+
+
+def _warp_beside_pattern() -> str:
+    """The README's "New beside old" rows: old column then new column; the regex groups are in _warp_beside's
+    order, old run first."""
+    n, s = r"(-?\d+(?:\.\d+)?)", r"(\d+(?:\.\d+)?(?:e-\d+)?)"
+    eff, tri = _EFFECT.format(n=n, s=s), _TRIPLE.format(n=n)
+    rows = [(re.escape(label), eff) for _, label in WARP_TESTS] + [
+        (r"MuJoCo Warp successes at D 2\.3 / 2\.45 / 2\.6 \(of 100\)", tri),
+        (r"MuJoCo Warp `tipped` at D 2\.3 / 2\.45 / 2\.6", tri),
+        (r"MuJoCo Warp `stuck` at D 2\.3 / 2\.45 / 2\.6", tri),
+        (r"paired missions: both / MuJoCo Warp only / MuJoCo only / neither", rf"{n} / {n} / {n} / {n}"),
+        (r"missions both complete: median % change of vertical acceleration / pitch rate / roll rate",
+         rf"{n}: \+?{n} / \+?{n} / \+?{n}")]
+    return "".join(rf"\| {label} \| {cell} \| {cell} \|\n" for label, cell in rows)
+
+
 _NUM = r"(-?\d+(?:\.\d+)?)"
 _FS_ROW = (rf"\*\*{_NUM}\*\* \({_NUM} / {_NUM}; 95 % CI {_NUM}-{_NUM}; rel\. error {_NUM}\) \| {_NUM} \({_NUM} "
            rf"failures in its {_NUM} final draws; 95 % interval {_NUM}-{_NUM}; rel\. error {_NUM}\) \| \*\*{_NUM}x\*\*")
@@ -1244,6 +1322,12 @@ SAMPLES = [
            rf"On the {_NUM} missions both engines complete, MuJoCo Warp's values differ from MuJoCo's by a median of\s+"
            rf"\+?{_NUM} % \(RMS vertical acceleration\), \+?{_NUM} % \(pitch rate\) and \+?{_NUM} % \(roll rate\)",
            _warp_ride_ratios),
+    Sample("engines-warp side-by-side medians", "engines-warp",
+           r"".join(rf"\| median {m}, [^|]+ \| {_NUM} / {_NUM} / {_NUM} \| {_NUM} / {_NUM} / {_NUM} \|\n"
+                    for m in ("RMS vertical acceleration", "RMS pitch rate", "RMS roll rate", "traversal time")),
+           _warp_medians),
+    Sample("engines-warp terrains where MuJoCo Warp's success is higher, lower, equal", "engines-warp",
+           rf"success is higher on {_NUM} of 10 terrains, lower on {_NUM}, equal on {_NUM}", _warp_terrains_up_down),
 ]
 
 
@@ -1398,3 +1482,40 @@ def test_the_warp_arms_plan_has_the_power_its_toml_states():
     table = check_power(study, path.parent)
     assert [float(v) for v in table["power"]] == pytest.approx([0.95, 1.00], abs=0.011)
     assert list(pd.read_csv(RESULTS / "engines-warp" / "confirmatory.csv")["power"]) == list(table["power"])
+
+
+def test_the_warp_arms_new_beside_old_recomputes_from_both_runs(tmp_path: Path):
+    """engines-warp/README.md's "New beside old" table: the old column from the first run's tables as committed in
+    WARP_FIRST_RUN (git history), the new column from the committed folder, every number to the README's rounding;
+    and the first run's MuJoCo trials are this run's, bit for bit."""
+    import subprocess
+
+    old = tmp_path / "engines-warp"
+    old.mkdir()
+    for name in ("trials.parquet", "confirmatory.csv"):
+        got = subprocess.run(["git", "show", f"{WARP_FIRST_RUN}:experiments/results/engines-warp/{name}"],
+                             cwd=RESULTS, capture_output=True)
+        if got.returncode != 0:
+            pytest.skip(f"the first engines-warp run is not in this checkout's git history ({WARP_FIRST_RUN})")
+        (old / name).write_bytes(got.stdout)
+    readme = (RESULTS / "engines-warp" / "README.md").read_text()
+    hit = re.search(_warp_beside_pattern(), readme)
+    assert hit, "engines-warp/README.md no longer has its New beside old table: re-point the test"
+    computed = [v for o, n in zip(_warp_beside(old), _warp_beside(RESULTS / "engines-warp"), strict=True)
+                for v in o + n]
+    stated = hit.groups()
+    assert len(stated) == len(computed)
+    for text, value in zip(stated, computed, strict=True):
+        assert abs(float(text) - value) <= 0.5 * 10.0 ** -_decimals(text) + 1e-9, (
+            f"engines-warp New beside old: README says {text}, the tables give {value:.4g}")
+    fix = re.search(r"The {n} missions that tipped on MuJoCo Warp now end {n} successful and {n} `stuck`\s+"
+                    r"\(their MuJoCo twins: {n} successful, {n} `stuck`; {n} now succeed where MuJoCo gets stuck\)\. "
+                    r"Of the {n} MuJoCo Warp\s+trials that did not tip, {n} are the first run's bit for bit and {n} "
+                    r"differ: {n} in outcome \({n} successes now\s+`stuck`, {n} `stuck` now successful\)"
+                    .replace("{n}", r"(\d+)"), readme)
+    assert fix, "engines-warp/README.md no longer says what the fix changed: re-point the test"
+    assert [float(v) for v in fix.groups()] == _warp_fix_changes(old, RESULTS / "engines-warp")
+    key = ["D_high", "terrain", "mission"]
+    a, b = (trial_table(f) for f in (old, RESULTS / "engines-warp"))
+    a, b = (x[x["engine"] == "mujoco"].sort_values(key).reset_index(drop=True) for x in (a, b))
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
