@@ -216,6 +216,27 @@ def test_a_cosmetic_change_is_accepted_and_recorded(tmp_path):
         run_study(*cells_of(real), tmp_path, executor="inline", trial_fn=fake_trials)
 
 
+def test_a_store_from_before_a_key_that_cannot_change_a_trial_resumes(tmp_path):
+    """``[sim.mujoco_warp] cuda_graph`` came after stores were made; a store whose recorded trial
+    settings lack it resumes (it cannot change a trial), while a change of a key that can is refused."""
+    data = small()
+    run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)
+    with Store(tmp_path) as store:  # an unfinished study: drop one trial so the resume has work
+        store.drop_trials([(0, 0, 2, 1)])
+    con = sqlite3.connect(tmp_path / "study.sqlite")
+    recorded = json.loads(con.execute("SELECT value FROM meta WHERE key='trial_inputs'").fetchone()[0])
+    for entry in recorded["settings"]:
+        del entry["sim"]["mujoco_warp"]["cuda_graph"]  # as a store made before the key existed holds it
+    con.execute("UPDATE meta SET value=? WHERE key='trial_inputs'", (json.dumps(recorded),))
+    con.commit()
+    con.close()
+    assert run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials).ran == 1
+    other = copy.deepcopy(data)
+    other["sim"] = {"mujoco_warp": {"nconmax": 128}}
+    with pytest.raises(InputError, match=r"trial settings: .*sim.mujoco_warp.nconmax 64 -> 128"):
+        run_study(*cells_of(other), tmp_path, executor="inline", trial_fn=fake_trials)
+
+
 def test_a_store_without_recorded_inputs_names_the_study_key_that_differs(tmp_path):
     data = small()
     run_study(*cells_of(data), tmp_path, executor="inline", trial_fn=fake_trials)

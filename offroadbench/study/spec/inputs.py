@@ -301,17 +301,29 @@ _WHAT = {"design": "the study design", "recipes": "the terrain recipe", "recipe_
          "planner": "the planner or policy (its package version or code)",
          "engine": "the physics engine or its version"}
 
-#: per component, keys whose change cannot change a trial
-_COSMETIC_INPUT_KEYS = {"soil": ("description",)}
+#: per component, keys (dotted: inside nested tables) whose change cannot change a trial, so a
+#: store made before such a key existed resumes: ``sim.mujoco_warp.cuda_graph`` runs the same
+#: kernels on the same arrays in the same order, captured or not
+_COSMETIC_INPUT_KEYS = {"soil": ("description",), "settings": ("sim.mujoco_warp.cuda_graph",)}
 
 
 def _without(value: Any, keys: Sequence[str]) -> Any:
-    """A component's value (a dict or a list of dicts) without ``keys`` in its dicts."""
-    if isinstance(value, dict):
-        return {k: v for k, v in value.items() if k not in keys}
+    """A component's value (a dict or a list of dicts) without ``keys`` in its dicts; a dotted key
+    ``a.b`` is ``b`` inside the table ``a``."""
     if isinstance(value, list):
         return [_without(v, keys) if isinstance(v, dict) else v for v in value]
-    return value
+    if not isinstance(value, dict):
+        return value
+    out = dict(value)
+    for key in keys:
+        head, _, rest = key.partition(".")
+        if head not in out:
+            continue
+        if not rest:
+            del out[head]
+        elif isinstance(out[head], dict):
+            out[head] = _without(out[head], (rest,))
+    return out
 
 
 def _entries(value: Any) -> list:
