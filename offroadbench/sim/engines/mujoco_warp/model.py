@@ -15,7 +15,6 @@ vehicle is put down clear of its own terrain, as MuJoCoWorld.spawn does) and by 
 
 from __future__ import annotations
 
-import threading
 import xml.etree.ElementTree as ET
 
 import mujoco
@@ -63,8 +62,6 @@ class BatchModel(MuJoCoWorld):
             raise InputError(f"engine 'mujoco_warp': vehicle {self.spec.name!r} has steering or suspension joints; "
                              "only vehicles whose wheels hang straight off the chassis are supported")
         self.hfield_ids = tuple(range(len(self.terrains)))
-        self.lock = threading.Lock()
-        """Held while the host MuJoCo data is used (the batch's slots spawn from their own threads)."""
 
     def _mjcf(self) -> str:
         """The MuJoCo engine's MJCF with K - 1 more height fields of the same size."""
@@ -89,24 +86,21 @@ class BatchModel(MuJoCoWorld):
         """The vehicle's joint positions at a spawn on terrain ``terrain``: at (x, y) facing
         ``heading_rad``, rolled by ``roll_rad``, its lowest point ``sim.spawn_clearance_m`` above
         the terrain within its reach: MuJoCoWorld.spawn's pose, before the settle."""
-        with self.lock:
-            self._place(self.terrains[terrain], x_m, y_m, heading_rad, roll_rad)
-            return self.data.qpos.copy()
+        self._place(self.terrains[terrain], x_m, y_m, heading_rad, roll_rad)
+        return self.data.qpos.copy()
 
     def centre_of_mass_at(self, qpos) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass at joint positions ``qpos``, m (host kinematics)."""
         m, d = self.model, self.data
-        with self.lock:
-            d.qpos[:] = qpos
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_comPos(m, d)
-            return tuple(d.subtree_com[self._chassis].tolist())
+        d.qpos[:] = qpos
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        return tuple(d.subtree_com[self._chassis].tolist())
 
     def ray_height(self, terrain: int, x_m: float, y_m: float) -> float:
         """Height of terrain ``terrain``'s collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
         m = self.model
-        with self.lock:
-            return self._ray_height(m, terrain, x_m, y_m)
+        return self._ray_height(m, terrain, x_m, y_m)
 
     def _ray_height(self, m, terrain: int, x_m: float, y_m: float) -> float:
         m.geom_dataid[self._terrain_geom] = self.hfield_ids[terrain]

@@ -1,30 +1,35 @@
 """Many trials at once: the trial runner's own per-tick code in every world of a MuJoCo Warp batch,
 the physics of all worlds advanced together once per trial tick.
 
-Each world of the batch is a slot: a thread that takes the next pending trial, drives it with
+Each world of the batch is a slot: a greenlet (a coroutine of the ``greenlet`` package, switched
+in this thread) that takes the next pending trial, drives it with
 offroadbench.sim.trial.runner.drive_mission on its :class:`~offroadbench.sim.engines.mujoco_warp.world.WorldView`
 (the spawn, planner, pure pursuit, speed loop, failure rules, telemetry and metrics: the very code
 and row definitions of the one-world engines), and takes the next when it ends. A view only counts
 its physics steps; when the trial reads the state (at its 20 Hz telemetry and control ticks) the
-slot waits. Once every busy slot waits, :class:`Lockstep` advances the whole batch by the fewest
-steps any of them waits for, reads the state to the host once, and wakes the slots whose steps are
-done. The batch is touched by the main thread only while every slot waits; the woken slots run
-side by side until they wait again, each reading and writing only its own world's rows (the host
-MuJoCo data they share for a spawn's kinematics is behind BatchModel.lock). So a trial's row does
-not depend on which slot ran it, on the other trials of the batch, on the threads' timing or on
+slot switches back to :class:`Lockstep`. Once every busy slot waits, the scheduler advances the
+whole batch by the fewest steps any of them waits for, reads the state to the host once, and runs
+the slots whose steps are done, one after the other in world order, each until it waits again.
+Nothing runs concurrently, so no lock is needed: a trial reads and writes only its own world's
+rows, and its row does not depend on which slot ran it, on the other trials of the batch or on
 the number of worlds (on Warp's CPU device: bit for bit; offroadbench.sim.engines.mujoco_warp.kernels
 on the order of the sums).
 
+Greenlets and not threads: a switch costs well under a microsecond, where handing the GIL between
+threads cost several per world and tick (benchmarks/RESULTS.md, 'the host's share of a batch').
+
 A trial that raises (TrialFault: thrown while settling; PluginError: the planner failed) gives its
-exception in place of its record; the other trials go on.
+exception in place of its record; the other trials go on. An interrupt (KeyboardInterrupt,
+SystemExit), in whichever slot it lands, ends the batch at once.
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
+
+from greenlet import greenlet
 
 from offroadbench.progress import ProgressFn, report
 from offroadbench.sim.engines.mujoco_warp.batch import WarpBatch
@@ -35,76 +40,56 @@ __all__ = ["BatchRun", "Lockstep", "drive_batch", "drive_terrain_batched"]
 
 
 class Lockstep:
-    """The scheduler of a batch's slots: :meth:`run` starts one thread per slot and advances the
+    """The scheduler of a batch's slots: :meth:`run` runs one greenlet per slot and advances the
     batch whenever every busy slot waits for its counted steps (:meth:`wait`)."""
 
     def __init__(self, batch: WarpBatch) -> None:
         self.batch = batch
-        self._lock = threading.Lock()
-        self._all_waiting = threading.Condition(self._lock)
-        self._wake = [threading.Event() for _ in range(batch.nworld)]
+        self._hub: greenlet | None = None
         self._waiting: dict[int, WorldView] = {}
-        self._running = 0
         self.advances = 0
         """Times the batch was advanced (each one host exchange)."""
         self.advance_s = 0.0
         """Wall seconds spent in those advances (the physics and the exchange)."""
 
     def wait(self, view: WorldView) -> None:
-        """Called in a slot's thread: block until the batch has run ``view``'s counted steps."""
-        event = self._wake[view.world]
-        with self._lock:
-            self._waiting[view.world] = view
-            self._running -= 1
-            if self._running == 0:
-                self._all_waiting.notify()
-        event.wait()
-        event.clear()
+        """Called in a slot: return once the batch has run ``view``'s counted steps."""
+        self._waiting[view.world] = view
+        self._hub.switch()
 
     def run(self, slots: Sequence[Any], between: Callable[[], None] | None = None) -> None:
-        """Run ``slots`` (callables taking the slot's world index) to the end, one thread each;
-        ``between()`` is called in this thread whenever every slot waits (and once at the end): the
-        place to hand finished work on while no slot runs."""
-        errors: list[BaseException] = []
+        """Run ``slots`` (callables taking the slot's world index) to the end, one greenlet each;
+        ``between()`` is called whenever every slot waits (and once at the end): the place to hand
+        finished work on. An exception a slot lets out ends the run and is raised here."""
+        self._hub = greenlet.getcurrent()
 
         def body(w: int, fn) -> None:
             try:
                 fn(w)
-            except BaseException as exc:  # noqa: BLE001 - handed to the main thread
-                errors.append(exc)
             finally:
-                with self._lock:
-                    self._running -= 1
-                    self.batch.ctrl[w] = 0.0  # an idle world stands still
-                    if self._running == 0:
-                        self._all_waiting.notify()
+                self.batch.ctrl[w] = 0.0  # an idle world stands still
 
-        self._running = len(slots)
-        threads = [threading.Thread(target=body, args=(w, fn), daemon=True) for w, fn in enumerate(slots)]
-        for t in threads:
-            t.start()
-        with self._lock:
-            while True:
-                self._all_waiting.wait_for(lambda: self._running == 0)
-                if between is not None:
-                    between()
-                if not self._waiting:
-                    break
-                steps = min(v.pending for v in self._waiting.values())
-                t0 = time.perf_counter()
-                self.batch.advance(steps)
-                self.advance_s += time.perf_counter() - t0
-                self.advances += 1
-                for w, v in list(self._waiting.items()):
-                    v.pending -= steps
-                    if v.pending == 0:
-                        del self._waiting[w]
-                        self._running += 1
-                        self._wake[w].set()
-        for t in threads:
-            t.join()
-        if errors:
-            raise errors[0]
+        lets = [greenlet(body) for _ in slots]
+        ready = [(w, (w, fn)) for w, fn in enumerate(slots)]  # (slot, arguments of its first switch)
+        while True:
+            for w, args in ready:
+                lets[w].switch(*args)  # returns when the slot waits or has ended (an exception: raised here)
+            if between is not None:
+                between()
+            if not self._waiting:
+                break
+            steps = min(v.pending for v in self._waiting.values())
+            t0 = time.perf_counter()
+            self.batch.advance(steps)
+            self.advance_s += time.perf_counter() - t0
+            self.advances += 1
+            ready = []
+            for w in sorted(self._waiting):
+                v = self._waiting[w]
+                v.pending -= steps
+                if v.pending == 0:
+                    del self._waiting[w]
+                    ready.append((w, ()))
 
 
 @dataclass(frozen=True)
@@ -161,7 +146,6 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
                        cuda_graph=cfg.cuda_graph)
     sched = Lockstep(batch)
     queue = list(reversed(jobs))
-    taking = threading.Lock()
     done = [0]
     left = [len(p.missions) for p in prepared]  # missions of each terrain not ended yet
     ended: list[int] = []  # terrains whose missions all ended, not yet handed to on_terrain
@@ -173,10 +157,9 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
 
     def slot(w: int) -> None:
         while True:
-            with taking:
-                if not queue:
-                    return
-                k, i = queue.pop()
+            if not queue:
+                return
+            k, i = queue.pop()
             p, s = prepared[k], per[k]
             view = WorldView(batch, w, k, sched.wait)
             try:
@@ -186,12 +169,11 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
                 raise
             except Exception as exc:  # noqa: BLE001 - the trial's outcome is its fault
                 rec = exc
-            with taking:
-                records[k][i] = rec
-                done[0] += 1
-                left[k] -= 1
-                if left[k] == 0:
-                    ended.append(k)
+            records[k][i] = rec
+            done[0] += 1
+            left[k] -= 1
+            if left[k] == 0:
+                ended.append(k)
             report(progress, done[0], len(jobs))
 
     sched.run([slot] * n, between=hand_on)
