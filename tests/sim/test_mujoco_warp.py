@@ -112,6 +112,23 @@ def test_the_batch_is_bit_identical_with_fewer_worlds_than_trials_and_hands_on_e
     assert handed[0][0] == 0 and handed[0][1] < 2 * MISSIONS  # terrain 0 handed on while terrain 1 still ran
 
 
+def test_an_interrupt_in_one_slot_ends_the_batch_at_once(setup):
+    """Ctrl-C lands in whichever slot runs (here: the progress callback of the first trial to end,
+    inside its slot): the batch stops there and raises it, no other trial ends after it."""
+    from offroadbench.sim.engines.mujoco_warp.runner import drive_batch
+
+    prepared, settings = setup
+    calls = []
+
+    def interrupt(done, total):
+        calls.append(done)
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        drive_batch(prepared, settings.replace(sim=SimConfig(engine="mujoco_warp")), worlds=3, progress=interrupt)
+    assert calls == [1]
+
+
 def test_the_engine_refuses_what_it_does_not_implement():
     with pytest.raises(InputError, match="mujoco_warp"):
         SimConfig(engine="mujoco_warp", tyre_model="bullet")
