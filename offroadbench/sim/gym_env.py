@@ -71,7 +71,10 @@ terrain, as a study's are), with the generator Gymnasium seeds in ``reset(seed=.
   nose-up positive, as in :mod:`offroadbench.navigation.metrics`), so that
   a user can check the dynamics against the commands (e.g. the yaw rate against ``omega``).
 - **Planner** (optional): ``planner="astar"`` (any registered planner, name or
-  :class:`~offroadbench.navigation.planners.PlannerChoice`) plans each episode's mission on the class map;
+  :class:`~offroadbench.navigation.planners.PlannerChoice`) plans each episode's mission on the class map,
+  with the vehicle limits a study's trial gives it (a name: as ``[planner] name = "astar"``, the
+  maker's published limits by default, offroadbench.navigation.perception ``limits``), so its path is
+  the trial runner's for that mission;
   the waypoints are in ``info["path_xy"]`` after ``reset`` and drawn by ``render``.
 - **Rendering**: ``render_mode="rgb_array"`` returns the view of a replay animation
   (:class:`offroadbench.plots.animate.TrialView`, uint8, H x W x 3): the hillshade under the closed
@@ -111,9 +114,9 @@ from offroadbench.navigation.missions import Mission, MissionConfig, MissionSite
 from offroadbench.navigation.observation import (STATE_FIELDS, UNKNOWN_FILL_M, ObservationConfig, finite_observation,
                                                  height_patch, observation)
 from offroadbench.navigation.perception import PerceptionConfig
-from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem
+from offroadbench.navigation.planners import PLANNERS, PlannerChoice, PlanningProblem, planner_from_table
 from offroadbench.navigation.rules import FailureRules
-from offroadbench.navigation.sensor import make_sensing
+from offroadbench.navigation.sensor import make_sensing, sheet_envelope
 from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain, terrain_body
@@ -249,8 +252,9 @@ class TraverseEnv(gym.Env):
                 raise InputError(f"TraverseEnv: give {', '.join(given)} inside settings, not beside it")
             config = _config_of(config, settings)
         control_steps(settings.sim.physics_rate_hz, config.control_rate_hz, "TraverseConfig.control_rate_hz")
-        if isinstance(planner, str):
-            planner = PlannerChoice(planner, PLANNERS.get(planner).config())
+        if isinstance(planner, str):  # as a study's [planner] table names it (its default limits included)
+            PLANNERS.get(planner)  # a policy's or an unknown name: the registry's one-line error
+            planner = planner_from_table({"name": planner}, where="TraverseEnv planner")
         self.perception = _perception(settings.planner.perception if perception is None else perception)
         """What the agent observes through (None: the oracle; see the module docstring, Sensor)."""
         self.planner = planner
@@ -272,6 +276,9 @@ class TraverseEnv(gym.Env):
         self.sim = self._world.sim
         """The physics the world runs (the terrain's gravity and soil filled in)."""
         self.envelope = vehicle_envelope(self._world)
+        limits = planner.perception.limits if planner is not None and planner.perception is not None else "measured"
+        self._plan_envelope = sheet_envelope(self.envelope, spec) if limits == "sheet" else self.envelope
+        """The limits the planner plans with: the trial runner's (drive_mission) for this PlannerChoice."""
         self.dt_s = 1.0 / config.control_rate_hz
         self._fill_m = hm.z_min_m - settings.rules.fall_depth_m
 
@@ -314,7 +321,7 @@ class TraverseEnv(gym.Env):
         self.path_xy = None
         if self.planner is not None:
             problem = PlanningProblem(hm=self.hm, classes=self.closed_classes, start_xy=m.start_xy_m,
-                                      goal_xy=m.goal_xy_m, border_m=self.cfg.border_m, vehicle=self.envelope)
+                                      goal_xy=m.goal_xy_m, border_m=self.cfg.border_m, vehicle=self._plan_envelope)
             self.path_xy = plan_within_limits(self.planner, problem)
         self._goal = np.asarray(m.goal_xy_m, dtype=float)
         s = self.settings
