@@ -19,6 +19,10 @@ the same trials one after the other) in trial steps per second.
     .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu] [--tyre-model terramechanics]
     .venv/bin/python benchmarks/bench_batch.py --smoke      # CI: 2 worlds, short missions; figures mean nothing
 
+``--hash`` adds a digest of each batch's rows and telemetry (give the same N twice to see whether
+the device repeats itself); ``--cuda-graph off`` launches the trial step's kernels one by one on a
+CUDA device instead of as the captured graph.
+
 ``--lunar`` drives on the lunar-soil study's maps (lunar-mare with its relief and craters, lunar
 regolith and the Moon's gravity from the recipe) in place of paper-d2.45's.
 ``--tyre-model terramechanics`` runs every engine with the soil law (Wong-Reece forces on the
@@ -80,6 +84,25 @@ def _prepared(n: int, length_m: float, rows: int, recipe: tuple = RECIPE):
 def _sim_steps(records, sim: SimConfig) -> int:
     """Trial steps the records simulated (each trial's time plus its settle), at the physics rate."""
     return sum(round((r.result.sim_time_s + sim.settle_time_s) * sim.physics_rate_hz) for r in records)
+
+
+def _digest(records) -> str:
+    """16 hex digits of SHA-256 over the batch's results and telemetry, in mission order (a trial's
+    exception by its text)."""
+    import hashlib
+
+    import numpy as np
+
+    h = hashlib.sha256()
+    for rs in records:
+        for r in rs:
+            if isinstance(r, BaseException):
+                h.update(repr(r).encode())
+                continue
+            h.update(repr(r.result).encode())
+            for k in sorted(r.telemetry):
+                h.update(np.ascontiguousarray(r.telemetry[k]).tobytes())
+    return h.hexdigest()[:16]
 
 
 METRICS = ("rms_vertical_accel_m_s2", "rms_pitch_rate_deg_s", "rms_roll_rate_deg_s")
@@ -162,6 +185,10 @@ def main() -> None:
     ap.add_argument("--compare", type=int, default=0, help="trial-by-trial comparison with the MuJoCo engine, N trials")
     ap.add_argument("--lunar", action="store_true",
                     help="the lunar-soil study's maps (lunar-mare: regolith and the Moon's gravity from the recipe)")
+    ap.add_argument("--hash", action="store_true",
+                    help="print a digest of each batch's rows and telemetry (the same N twice: is the device deterministic?)")
+    ap.add_argument("--cuda-graph", default="on", choices=("on", "off"),
+                    help="[sim.mujoco_warp] cuda_graph on a CUDA device (default on)")
     ap.add_argument("--tyre-model", default="coulomb", choices=("coulomb", "terramechanics"),
                     help="the tyre model of every engine (terramechanics: the soil law on the default soil)")
     args = ap.parse_args()
@@ -176,7 +203,8 @@ def main() -> None:
     sizes = [2] if args.smoke else [int(v) for v in args.worlds.split(",")]
     length, rows = (2.0, 129) if args.smoke else (args.length, 257)
     base = SimConfig(engine="mujoco_warp", tyre_model=args.tyre_model)
-    sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device))
+    sim = dataclasses.replace(base, mujoco_warp=dataclasses.replace(base.mujoco_warp, device=args.device,
+                                                                    cuda_graph=args.cuda_graph == "on"))
     print(f"bench_batch: {platform.processor() or platform.machine()}, device {args.device}, "
           f"{length:g} m missions on {rows}^2 {recipe[0]} maps, tyre model {args.tyre_model}", flush=True)
     if args.compare:
@@ -191,7 +219,7 @@ def main() -> None:
     print(f"warm-up batch of 2 worlds (compiles the kernels not yet cached): {time.perf_counter() - t0:.1f} s",
           flush=True)
     print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s} "
-          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s} {'host_s':>7s} {'host_us/world':>14s}")
+          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s} {'host_s':>7s} {'host_us/world':>14s}" + (" digest" if args.hash else ""))
     for n in sizes:
         prepared, settings = _prepared(n, length, rows, recipe)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -202,7 +230,7 @@ def main() -> None:
         host = wall - run.advance_s
         print(f"{n:6d} {wall:8.2f} {run.world_steps / wall:13.0f} {_sim_steps(recs, sim) / wall:13.0f} "
               f"{run.advances:8d} {ok:>2d}/{n:<2d} {cpu:8.2f} {run.world_steps / cpu:17.0f} {host:7.2f} "
-              f"{1e6 * host / (run.advances * n):14.1f}", flush=True)
+              f"{1e6 * host / (run.advances * n):14.1f}" + (f" {_digest(run.records)}" if args.hash else ""), flush=True)
     nref = 1 if args.smoke else args.reference
     if nref:
         prepared, settings = _prepared(nref, length, rows, recipe)

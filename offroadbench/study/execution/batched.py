@@ -89,14 +89,18 @@ def build_terrains(tasks: Sequence[TerrainTask], workers: int) -> Iterator[tuple
     try:
         yield from pool.imap(build_terrain, tasks)
         pool.close()
-    finally:
+    except BaseException:  # an error, a stop, or the caller done early: the builders go at once
         pool.terminate()
+        raise
+    finally:
         pool.join()
 
 
 def _build_worker() -> None:
-    """A terrain builder's start: Ctrl-C is the coordinator's; the local executor's bootstrap."""
+    """A terrain builder's start, as a local executor's worker: Ctrl-C is the coordinator's, SIGTERM
+    (the pool's terminate) ends it without the coordinator's stop handler."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     worker_bootstrap()
 
 
