@@ -14,7 +14,9 @@ set -euo pipefail
 root=$(git rev-parse --show-toplevel)
 cd "$root"
 py=${PY:-.venv/bin/python}
-grep -qxF '/.gpu/' .git/info/exclude 2>/dev/null || echo '/.gpu/' >> .git/info/exclude
+exclude=$(git rev-parse --git-path info/exclude)
+mkdir -p "$(dirname "$exclude")"
+grep -qxF '/.gpu/' "$exclude" 2>/dev/null || echo '/.gpu/' >> "$exclude"
 rm -rf .gpu && mkdir -p .gpu/wheels
 pins=()
 for name in mujoco mujoco-core glfw pyopengl mujoco-warp warp-lang ruckig greenlet finufft; do
