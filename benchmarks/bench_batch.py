@@ -12,8 +12,9 @@ steps of every world, idle ones included, over the wall time), trial steps per s
 host exchanges, and the CPU seconds of the process (all threads) with world-steps per CPU
 second (the figure to compare on a shared machine); the host's share of the wall time (``host_s``:
 the wall time outside the batch's advances, i.e. the trials' per-tick code in their slots and its
-scheduling) and that per world and advance (``host_us/world``: what bounds a GPU's throughput,
-where the advances themselves cost little); and, for reference, the MuJoCo engine (one CPU core,
+scheduling) and that per world and advance (``host_us/world``, idle worlds counted) and per busy
+world's trial tick (``ticks``, ``host_us/tick``: what bounds a GPU's throughput, where the advances
+themselves cost little; a world whose trial has ended costs the host nothing); and, for reference, the MuJoCo engine (one CPU core,
 the same trials one after the other) in trial steps per second.
 
     .venv/bin/python benchmarks/bench_batch.py [--worlds 1,4,16,64] [--device cpu] [--tyre-model terramechanics]
@@ -219,7 +220,7 @@ def main() -> None:
     print(f"warm-up batch of 2 worlds (compiles the kernels not yet cached): {time.perf_counter() - t0:.1f} s",
           flush=True)
     print(f"{'worlds':>6s} {'wall_s':>8s} {'world-steps/s':>13s} {'trial-steps/s':>13s} {'advances':>8s} {'ok':>5s} "
-          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s} {'host_s':>7s} {'host_us/world':>14s}" + (" digest" if args.hash else ""))
+          f"{'cpu_s':>8s} {'world-steps/cpu-s':>17s} {'host_s':>7s} {'host_us/world':>14s} {'ticks':>7s} {'host_us/tick':>12s}" + (" digest" if args.hash else ""))
     for n in sizes:
         prepared, settings = _prepared(n, length, rows, recipe)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -230,7 +231,7 @@ def main() -> None:
         host = wall - run.advance_s
         print(f"{n:6d} {wall:8.2f} {run.world_steps / wall:13.0f} {_sim_steps(recs, sim) / wall:13.0f} "
               f"{run.advances:8d} {ok:>2d}/{n:<2d} {cpu:8.2f} {run.world_steps / cpu:17.0f} {host:7.2f} "
-              f"{1e6 * host / (run.advances * n):14.1f}" + (f" {_digest(run.records)}" if args.hash else ""), flush=True)
+              f"{1e6 * host / (run.advances * n):14.1f} {run.ticks:7d} {1e6 * host / run.ticks:12.1f}" + (f" {_digest(run.records)}" if args.hash else ""), flush=True)
     nref = 1 if args.smoke else args.reference
     if nref:
         prepared, settings = _prepared(nref, length, rows, recipe)

@@ -51,10 +51,13 @@ class Lockstep:
         """Times the batch was advanced (each one host exchange)."""
         self.advance_s = 0.0
         """Wall seconds spent in those advances (the physics and the exchange)."""
+        self.ticks = 0
+        """Times a slot waited for its steps: the busy worlds' trial ticks (an idle world has none)."""
 
     def wait(self, view: WorldView) -> None:
         """Called in a slot: return once the batch has run ``view``'s counted steps."""
         self._waiting[view.world] = view
+        self.ticks += 1
         self._hub.switch()
 
     def run(self, slots: Sequence[Any], between: Callable[[], None] | None = None) -> None:
@@ -107,6 +110,9 @@ class BatchRun:
     advance_s: float = 0.0
     """Wall seconds inside those advances (the device's steps and the exchange); the rest of a
     batch's wall time is the host's: the trials' per-tick code in the slots and their scheduling."""
+    ticks: int = 0
+    """The busy worlds' trial ticks (each a slot's turn between two advances): what the host's
+    time is spent on, where ``advances * worlds`` also counts the worlds whose trials have ended."""
 
 
 def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = None,
@@ -177,7 +183,7 @@ def drive_batch(prepared: Sequence[Any], settings: Any, *, worlds: int | None = 
             report(progress, done[0], len(jobs))
 
     sched.run([slot] * n, between=hand_on)
-    return BatchRun(records, n, batch.steps * n, sched.advances, sched.advance_s)
+    return BatchRun(records, n, batch.steps * n, sched.advances, sched.advance_s, sched.ticks)
 
 
 def drive_terrain_batched(prepared: Any, settings: Any, *, progress: ProgressFn | None = None) -> Iterator[Any]:
