@@ -85,6 +85,10 @@ class WorldView:
         """Count one trial step (run at the next :meth:`sync`)."""
         self.pending += 1
 
+    def advance(self, n: int) -> None:
+        """Count ``n`` trial steps (TrialWorld.step n times; the trial runner's steps between ticks)."""
+        self.pending += n
+
     def base_state(self) -> tuple[tuple, tuple, tuple, tuple]:
         """(centre-of-mass position, quaternion xyzw, linear velocity, angular velocity), world frame."""
         self.sync()
