@@ -16,7 +16,7 @@ the number of worlds (on Warp's CPU device: bit for bit; offroadbench.sim.engine
 on the order of the sums).
 
 Greenlets and not threads: a switch costs well under a microsecond, where handing the GIL between
-threads cost several per world and tick (benchmarks/RESULTS.md, 'the host's share of a batch').
+threads cost more than the trial code it ran (benchmarks/RESULTS.md, 'the batch's slots as greenlets').
 
 A trial that raises (TrialFault: thrown while settling; PluginError: the planner failed) gives its
 exception in place of its record; the other trials go on. An interrupt (KeyboardInterrupt,
