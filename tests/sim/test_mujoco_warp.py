@@ -166,8 +166,9 @@ def test_the_engines_own_world_settles_on_its_wheels_and_reads_its_terrain():
 
 
 def test_a_study_batched_across_terrains_stores_the_table_of_one_batch_per_terrain(tmp_path, write_tiny_study):
-    """``--executor batched`` (one batch of every terrain's missions) and ``inline`` (one batch per
-    terrain) store the same table on ``mujoco_warp``: a trial does not depend on its batch."""
+    """``--executor batched`` (one batch of every terrain's missions; with 2 workers, each of two
+    spawned processes one batch of half the terrains) and ``inline`` (one batch per terrain) store
+    the same table on ``mujoco_warp``: a trial does not depend on its batch."""
     import pandas as pd
 
     from offroadbench.study import load, load_study, run_study
@@ -176,7 +177,9 @@ def test_a_study_batched_across_terrains_stores_the_table_of_one_batch_per_terra
     path.write_text(path.read_text() + '\n[sim]\nengine = "mujoco_warp"\n')
     study, cells = load_study(path)
     run_study(study, cells, tmp_path / "inline", executor="inline")
-    run_study(study, cells, tmp_path / "batched", executor="batched")
+    run_study(study, cells, tmp_path / "batched", executor="batched", workers=1)
+    run_study(study, cells, tmp_path / "batched2", executor="batched", workers=2)
     table = load(tmp_path / "inline")
     assert len(table) == 4
     pd.testing.assert_frame_equal(load(tmp_path / "batched"), table)
+    pd.testing.assert_frame_equal(load(tmp_path / "batched2"), table)

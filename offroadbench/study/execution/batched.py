@@ -9,7 +9,10 @@ core), groups the terrains whose
 trials can share one model (the same vehicle and physics, the same grid), and drives each group's
 missions as one batch (the module's ``drive_batch``): a paper study's 60 terrains x 20 missions
 are then one batch of 1,200 worlds, where the ``local`` executor gives the engine one terrain's 20
-at a time. Every trial's row is the trial runner's, so the study's table is the one ``inline``
+at a time. With ``--workers N`` given, a group is split into up to N batches of whole terrains
+with about the same number of missions, each driven in a spawned process of its own (a fresh
+interpreter: no device state is inherited; each loads the engine's kernels, ~10 s); a trial's
+row does not depend on its batch, so the table is the same. Every trial's row is the trial runner's, so the study's table is the one ``inline``
 gives on the same engine. A trial that could not give an outcome (TrialFault, PlannerRefusal) is
 a TrialFaulted message, as under the other executors.
 
@@ -26,7 +29,7 @@ import os
 import signal
 from typing import Iterator, Sequence
 
-from offroadbench.errors import InputError, TrialFault
+from offroadbench.errors import InputError, StudyError, TrialFault
 from offroadbench.navigation.problem import PlannerRefusal
 from offroadbench.sim.engine import engine_capabilities
 from offroadbench.study.execution.common import Handle, worker_bootstrap
@@ -37,9 +40,12 @@ __all__ = ["BatchedExecutor"]
 
 
 class BatchedExecutor:
-    """Run a study's trials as batches of a batched engine, in this process; its terrains are built
-    by ``workers`` forked processes (default: the number of cores) before the batches start (the
-    engine's device does the trials' parallel work)."""
+    """Run a study's trials as batches of a batched engine. Its terrains are built first, by
+    ``workers`` forked processes (default: the number of cores). Then each group of terrains that
+    share a model is one batch in this process (the default: the engine's device does the trials'
+    parallel work), or, with ``workers`` given, split into up to ``workers`` batches of whole
+    terrains, each in a spawned process of its own (on Warp's CPU device, which runs one core a
+    batch, the way to use every core)."""
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None,
                  trial_timeout_s: float | None = None) -> None:
@@ -48,6 +54,8 @@ class BatchedExecutor:
         if trial_timeout_s is not None:
             raise InputError("--trial-timeout-s is not for --executor batched (a batch's trials end together)")
         self.workers = workers or os.cpu_count() or 1
+        self.batches = workers or 1
+        """How many batches (processes) a group of terrains is split into."""
 
     def run(self, tasks: Sequence[TerrainTask], trial_fn: TrialFn | None, handle: Handle) -> None:
         groups: dict[tuple, list] = {}
@@ -70,9 +78,92 @@ class BatchedExecutor:
                    prepared.hm.cell_size_m)
             groups.setdefault(key, []).append((task, prepared, settings))
         for (module, *_), members in groups.items():
-            importlib.import_module(module).drive_batch(
-                [p for _, p, _ in members], [s for _, _, s in members],
-                on_terrain=lambda k, records, members=members: _send(members[k][0], records, handle))
+            chunks = split_terrains(members, self.batches)
+            if len(chunks) == 1:
+                drive_members(module, members, handle)
+            else:
+                _drive_in_processes(module, chunks, handle)
+
+
+def split_terrains(members: Sequence, parts: int) -> list[list]:
+    """``members`` (task, prepared, settings) in at most ``parts`` runs of whole terrains, in order,
+    with about the same number of missions each: a terrain goes to the run whose share of the
+    missions holds its middle mission."""
+    parts = max(1, min(parts, len(members)))
+    sizes = [len(p.missions) for _, p, _ in members]
+    total, before = sum(sizes), 0
+    chunks: list[list] = [[] for _ in range(parts)]
+    for member, n in zip(members, sizes, strict=True):
+        chunks[min(parts - 1, int(parts * (before + n / 2) / total))].append(member)
+        before += n
+    return [c for c in chunks if c]
+
+
+def drive_members(module: str, members: Sequence, handle: Handle) -> None:
+    """Drive the missions of ``members`` (task, prepared, settings) as one batch of ``module``'s
+    engine, each terrain's messages handled as soon as its missions have ended."""
+    importlib.import_module(module).drive_batch(
+        [p for _, p, _ in members], [s for _, _, s in members],
+        on_terrain=lambda k, records: _send(members[k][0], records, handle))
+
+
+def _drive_in_processes(module: str, chunks: list[list], handle: Handle) -> None:
+    """Each chunk of terrains as its own batch in its own spawned process (a fresh interpreter: no
+    device state is inherited), their messages handled here as they come; an error in one ends
+    the run, and a stop here ends the processes."""
+    import multiprocessing as mp
+    from multiprocessing.connection import wait
+
+    from offroadbench import stop
+    from offroadbench.study.execution.common import task_failure
+
+    ctx = mp.get_context("spawn")
+    procs = {}
+    try:
+        for chunk in chunks:
+            reader, writer = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_batch_worker, args=(module, chunk, writer), daemon=True)
+            proc.start()
+            writer.close()
+            procs[reader] = proc
+        while procs:
+            stop.check()
+            for reader in wait(list(procs), timeout=0.5):
+                try:
+                    msg = reader.recv()
+                except EOFError:  # the process died without its last message
+                    proc = procs.pop(reader)
+                    proc.join()
+                    raise StudyError(f"a batch process ended with exit code {proc.exitcode} before its trials did") from None
+                if isinstance(msg, tuple) and msg[0] == "done":
+                    procs.pop(reader).join()
+                elif isinstance(msg, tuple) and msg[0] == "error":
+                    raise task_failure(msg[1], msg[2], msg[3], msg[4])
+                else:
+                    handle(msg)
+    finally:
+        for proc in procs.values():
+            proc.terminate()
+        for proc in procs.values():
+            proc.join()
+
+
+def _batch_worker(module: str, members: list, conn) -> None:
+    """A batch process: drive ``members`` as one batch, sending every message through ``conn``,
+    then ("done",); an exception as an ("error", ...) message. Ctrl-C is the coordinator's."""
+    import traceback
+
+    from offroadbench.study.execution.common import error_message
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    worker_bootstrap()
+    try:
+        drive_members(module, members, conn.send)
+    except BaseException as exc:  # report and stop: the coordinator decides
+        task = members[0][0]
+        conn.send(error_message((task.cell.index, task.terrain), exc, traceback.format_exc()))
+        return
+    conn.send(("done",))
 
 
 def build_terrains(tasks: Sequence[TerrainTask], workers: int) -> Iterator[tuple]:
