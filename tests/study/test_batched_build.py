@@ -43,3 +43,22 @@ def test_a_build_error_in_a_worker_is_raised_in_the_coordinator():
     tasks[2] = dataclasses.replace(bad, cell=dataclasses.replace(bad.cell, settings=settings))
     with pytest.raises(InputError, match="too small for 40 m missions"):
         list(build_terrains(tasks, 2))
+
+
+def test_terrains_are_split_into_runs_of_about_equal_missions_in_order():
+    from types import SimpleNamespace
+
+    from offroadbench.study.execution.batched import split_terrains
+
+    def members(*counts):
+        return [(k, SimpleNamespace(missions=[None] * n), None) for k, n in enumerate(counts)]
+
+    def split(counts, parts):
+        return [[k for k, _, _ in chunk] for chunk in split_terrains(members(*counts), parts)]
+
+    assert split([20] * 6, 2) == [[0, 1, 2], [3, 4, 5]]
+    assert split([20] * 6, 4) == [[0], [1, 2], [3], [4, 5]]  # 6 terrains in 4 runs: 1-2-1-2
+    assert split([3, 3, 3], 1) == [[0, 1, 2]]
+    assert split([3, 3], 8) == [[0], [1]]  # never more runs than terrains
+    assert split([1, 1, 1, 9], 2) == [[0, 1, 2], [3]]  # by missions, not by terrains
+    assert sum(split([5, 2, 7, 1, 4, 4, 6], 3), []) == list(range(7))  # every terrain once, in order
