@@ -64,6 +64,11 @@ from offroadbench.sim.trial.vehicle import VehicleSpec
 __all__ = ["pure_pursuit_omega", "SpeedProfile", "speed_loop", "LineTracker", "PathTracker", "make_tracker"]
 
 
+#: ruckig's results of a trajectory going on or arrived (looked up once: a pybind11 enum's attribute
+#: costs more than the whole membership test)
+_RUNNING = (Result.Working, Result.Finished)
+
+
 def _dot2(x: float, y: float, unit) -> float:
     """``x * unit[0] + y * unit[1]`` in plain Python floats.
 
@@ -151,7 +156,7 @@ class SpeedProfile:
             self._inp.current_acceleration = [0.0]
             return
         result = self._otg.update(self._inp, self._out)
-        if result not in (Result.Working, Result.Finished):
+        if result not in _RUNNING:
             p, v, a = self.reference
             raise RuntimeError(f"ruckig failed with {result} from reference progress {p:.3f} m, speed {v:.3f} m/s, "
                                f"acceleration {a:.3f} m/s^2")
