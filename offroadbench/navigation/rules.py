@@ -62,9 +62,7 @@ import math
 import statistics
 from dataclasses import dataclass
 
-
 from offroadbench.config import check_range
-from offroadbench.navigation import metrics
 
 __all__ = ["FAILURE_REASONS", "FailureRules", "trial_timeout_s", "stuck_window_s", "unreachable", "end_reason",
            "RuleChecker"]
@@ -185,7 +183,10 @@ def _end_reason(limits: tuple[float, ...], goal_xy, pos, roll: float, pitch: flo
         first = xy_hist[-window - 1]
         # cheap test first: only a vehicle back near where it was a window ago can be stuck
         if math.hypot(pos[0] - first[0], pos[1] - first[1]) < stuck_distance:
-            if metrics.stuck_index(xy_hist[-window - 1:], window, stuck_distance) is not None:
+            # metrics.stuck_index on the last window + 1 samples (its one end: every sample of the
+            # window within the distance of the first), on the samples as they are, not an array's copy
+            x0, y0 = first
+            if all(math.hypot(x - x0, y - y0) < stuck_distance for x, y in xy_hist[-window:]):
                 return "stuck"
     return None
 

@@ -233,3 +233,24 @@ def test_viewshed_with_cached_rays_gives_the_bits_of_the_per_scan_arithmetic():
             got, want = viewshed(hm, xy, z0, range_m), _viewshed_before(hm, xy, z0, range_m)
             assert want[0].size > 0
             assert [a.tobytes() for a in got] == [a.tobytes() for a in want]
+
+
+@pytest.mark.parametrize("outlier", [None, 0, 1, 2, 20, 39, 40])
+def test_stuck_rule_judges_every_sample_of_the_window_as_before(outlier):
+    # a vehicle that stays within 0.15 m of where it started, except for one sample (index in the
+    # window + 1 samples) 0.25 m away from the start: stuck exactly when there is no outlier
+    rules = FailureRules(stuck_window_s=2.0)
+    checker = RuleChecker(rules, (10.0, 10.0, -0.5), (9.0, 9.0), timeout_s=20.0, sample_rate_hz=20, mission_length_m=5.0)
+    window = checker.window
+    assert window == 40
+    rng = np.random.default_rng(outlier or 0)
+    hist, got = [], None
+    for i in range(window + 1):
+        a = rng.uniform(0.0, 2.0 * math.pi)
+        r = 0.25 if i == outlier else rng.uniform(0.0, 0.15) if i else 0.0
+        pos = [5.0 + r * math.cos(a), 5.0 + r * math.sin(a), 0.0]
+        hist.append((pos[0], pos[1]))
+        got = checker.check(pos, 0.0, 0.0)
+        want = _end_reason_before(rules, checker.bounds, checker.goal, pos, 0.0, 0.0, hist, window)
+        assert got == want
+    assert got == ("stuck" if outlier is None else None)
