@@ -16,6 +16,13 @@ and the trial code also per trial step (physics step of the runner). Each tree (
 this checkout: e.g. a ``git worktree`` of main to compare with) runs in its own fresh process, the
 trees alternated ``--rounds`` times, so a before/after comparison shares the machine's moments.
 
+``--stub``: the trial loop alone, for the default case's vehicle (the Husky on MuJoCo): a world
+whose physics calls are stubs returning a canned state that moves 0.1 mm per tick (no physics, no
+engine Python), 20,000 control ticks of the runner's loop as :func:`drive_mission` runs it (oracle
+sensing, the line tracker, command, record, step to the next control tick), CPU microseconds per
+control tick per tree: the cleanest figure of the per-tick Python (what wrapper timing cannot
+resolve on a loaded machine).
+
 ``--digest``: a sha256 of every case's TrialRecords (the result row's repr, every telemetry column's
 bytes, the path, the belief) per tree: the figure an optimisation must keep (README,
 "Reproducibility"). ``--profile``: cProfile of the first case's missions, top 25 by own time.
@@ -182,9 +189,59 @@ def child(case: str, missions: int, smoke: bool, profile: bool) -> dict:
     return out
 
 
+def stub_child(ticks: int) -> dict:
+    """``--stub`` in this (fresh) process, with the tree first on sys.path."""
+    import time
+
+    import numpy as np
+
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.missions import Mission
+    from offroadbench.navigation.sensor import Oracle
+    from offroadbench.sim import open_world
+    from offroadbench.sim.config import SimConfig
+    from offroadbench.sim.trial import runner
+    from offroadbench.sim.trial.steering import make_vehicle_tracker
+
+    hm = Heightmap(np.zeros((401, 401)), 0.05)
+    with open_world(hm, "husky", SimConfig(engine="mujoco")) as world:
+        mission = Mission.between(0, (2.0, 10.0), (18.0, 10.0))
+        settings = runner.settings_of(world)
+        tracker = make_vehicle_tracker(np.array([mission.start_xy_m, mission.goal_xy_m]), world.spec,
+                                       settings.controller, world)
+        quat, lin, ang = (0.0, 0.0, 0.0, 1.0), [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]
+        rot, k = world.rotation_matrix(quat), [0]
+
+        def base_state():
+            k[0] += 1
+            return [2.0 + 1e-4 * k[0], 10.0, 0.3], quat, lin, ang
+
+        stubs = {"step": lambda: None, "advance": lambda n: None, "spawn": lambda *a, **kw: None,
+                 "base_state": base_state, "rotation_matrix": lambda q: rot, "wheel_penetration_m": lambda: 0.0,
+                 "wheel_slip": lambda: None, "wheel_outside_model": lambda: None, "command_wheels": lambda l, r: None}
+        for name, fn in stubs.items():
+            setattr(world, name, fn)
+        loop = runner.TrialLoop(world, mission, settings, length_m=tracker.length_m)
+        loop.n_steps = loop.checker.window = 10**9  # neither the timeout nor the stuck rule ends it
+        sensing, progress = Oracle(hm.z), tracker.progress
+        t0 = time.process_time()
+        for _ in range(ticks):
+            pos, quat_, lin_, ang_, roll, pitch, yaw, rates = loop.state
+            bx, by, byaw = sensing.update(pos, yaw)
+            v, w, _ = tracker.command((bx, by), byaw, lin_[:2])
+            loop.command(v, w)
+            if loop.record(progress) or loop.step_to_next_control(progress):
+                raise RuntimeError("the stub trial ended")
+        cpu = time.process_time() - t0
+    return {"ticks": ticks, "us_per_tick": cpu / ticks * 1e6}
+
+
 def _run_child(tree: str, case: str, args) -> dict | None:
-    argv = ["--child", case, "--missions", str(args.missions)] + (["--smoke"] if args.smoke else []) + (
-        ["--profile"] if args.profile else [])
+    if case == "stub":
+        argv = ["--child-stub", "--missions", str(args.missions)] + (["--smoke"] if args.smoke else [])
+    else:
+        argv = ["--child", case, "--missions", str(args.missions)] + (["--smoke"] if args.smoke else []) + (
+            ["--profile"] if args.profile else [])
     code = (f"import sys; sys.path.insert(0, {tree!r}); sys.argv[1:] = {argv!r}; "
             f"sys.path.insert(1, {str(ROOT / 'benchmarks')!r}); import bench_tick; bench_tick.main()")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tree)
@@ -204,10 +261,15 @@ def main() -> None:
     ap.add_argument("--digest", action="store_true", help="every case once per tree: the trials' digests")
     ap.add_argument("--profile", action="store_true", help="cProfile of the first case (top 25 by own time)")
     ap.add_argument("--smoke", action="store_true", help="one round, two short missions (CI)")
+    ap.add_argument("--stub", action="store_true", help="the trial loop alone on stubbed physics (see the docstring)")
     ap.add_argument("--child", choices=sorted(CASES), help=argparse.SUPPRESS)
+    ap.add_argument("--child-stub", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.smoke:
         args.missions, args.rounds = 2, 1
+    if args.child_stub:
+        print("RESULT " + json.dumps(stub_child(2_000 if args.smoke else 20_000)))
+        return
     if args.child:
         print("RESULT " + json.dumps(child(args.child, args.missions, args.smoke, args.profile)))
         return
@@ -221,6 +283,15 @@ def main() -> None:
         cases, rounds = args.case or [DEFAULT_CASE], args.rounds
     if args.profile:
         cases, rounds, trees = cases[:1], 1, trees[:1]
+    if args.stub or args.smoke:  # the smoke mode runs both
+        print("tree | control ticks | trial loop us per control tick (stubbed physics)")
+        for _ in range(rounds):
+            for tree in trees:
+                r = _run_child(tree, "stub", args)
+                if r is not None:
+                    print(f"{tree} | {r['ticks']} | {r['us_per_tick']:.2f}", flush=True)
+        if args.stub:
+            return
     print("tree | case | control ticks | trial steps | trial code us per control tick | per trial step | "
           "engine calls us per control tick | planning s | digest")
     digests: dict[str, set] = {}
