@@ -23,12 +23,17 @@ sensing, the line tracker, command, record, step to the next control tick), CPU 
 control tick per tree: the cleanest figure of the per-tick Python (what wrapper timing cannot
 resolve on a loaded machine).
 
+``--scan``: the mast sensor's scan (offroadbench.navigation.sensor.MastSensor, default settings: 8 m
+range) at 20 positions on a 1009^2 map at 5 cm (the paper's size), CPU ms per scan per tree, with a
+digest of the maps it built.
+
 ``--digest``: a sha256 of every case's TrialRecords (the result row's repr, every telemetry column's
 bytes, the path, the belief) per tree: the figure an optimisation must keep (README,
 "Reproducibility"). ``--profile``: cProfile of the first case's missions, top 25 by own time.
 
-Prints figures; record them in benchmarks/RESULTS.md. Not a test. ``--smoke``: one round of one
-case with two short missions, digest included (seconds; its figures mean nothing).
+Prints figures; record them in benchmarks/RESULTS.md. Not a test. ``--smoke``: one round of each
+mode, small: the scan on a 201^2 map, 2,000 stub ticks, the default case with two short missions
+(seconds; its figures mean nothing).
 """
 
 from __future__ import annotations
@@ -236,8 +241,33 @@ def stub_child(ticks: int) -> dict:
     return {"ticks": ticks, "us_per_tick": cpu / ticks * 1e6}
 
 
+def scan_child(rows: int) -> dict:
+    """``--scan`` in this (fresh) process, with the tree first on sys.path."""
+    import hashlib
+    import time
+
+    import numpy as np
+
+    from offroadbench.heightmap import Heightmap
+    from offroadbench.navigation.perception import PerceptionConfig
+    from offroadbench.navigation.sensor import MastSensor
+
+    y, x = np.mgrid[0:rows, 0:rows] * 0.05
+    hm = Heightmap(0.3 * np.sin(x / 1.3) + 0.2 * np.sin((x + y) / 0.9), 0.05)
+    centre, digest = 0.025 * rows, hashlib.sha256()
+    t0 = time.process_time()
+    sensor = MastSensor(hm, PerceptionConfig(sensor="mast"), np.random.default_rng(3), (centre, centre), 0.3)
+    for i in range(20):
+        sensor._scan(np.array((centre + 0.1 * i, centre + 0.05 * i)))
+        digest.update(sensor.z.tobytes())
+    cpu = time.process_time() - t0
+    return {"scans": 21, "ms_per_scan": cpu / 21 * 1e3, "digest": digest.hexdigest()[:16]}
+
+
 def _run_child(tree: str, case: str, args) -> dict | None:
-    if case == "stub":
+    if case == "scan":
+        argv = ["--child-scan"] + (["--smoke"] if args.smoke else [])
+    elif case == "stub":
         argv = ["--child-stub", "--missions", str(args.missions)] + (["--smoke"] if args.smoke else [])
     else:
         argv = ["--child", case, "--missions", str(args.missions)] + (["--smoke"] if args.smoke else []) + (
@@ -263,10 +293,15 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true", help="one round, two short missions (CI)")
     ap.add_argument("--stub", action="store_true", help="the trial loop alone on stubbed physics (see the docstring)")
     ap.add_argument("--child", choices=sorted(CASES), help=argparse.SUPPRESS)
+    ap.add_argument("--scan", action="store_true", help="the mast sensor's scan on a 1009^2 map (see the docstring)")
     ap.add_argument("--child-stub", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--child-scan", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.smoke:
         args.missions, args.rounds = 2, 1
+    if args.child_scan:
+        print("RESULT " + json.dumps(scan_child(201 if args.smoke else 1009)))
+        return
     if args.child_stub:
         print("RESULT " + json.dumps(stub_child(2_000 if args.smoke else 20_000)))
         return
@@ -283,6 +318,18 @@ def main() -> None:
         cases, rounds = args.case or [DEFAULT_CASE], args.rounds
     if args.profile:
         cases, rounds, trees = cases[:1], 1, trees[:1]
+    if args.scan or args.smoke:  # the smoke mode runs every mode
+        print("tree | scans | CPU ms per scan | digest of the maps")
+        scans = set()
+        for _ in range(rounds):
+            for tree in trees:
+                r = _run_child(tree, "scan", args)
+                if r is not None:
+                    scans.add(r["digest"])
+                    print(f"{tree} | {r['scans']} | {r['ms_per_scan']:.2f} | {r['digest']}", flush=True)
+        print(f"same maps for every tree: {len(scans) == 1}")
+        if args.scan:
+            return
     if args.stub or args.smoke:  # the smoke mode runs both
         print("tree | control ticks | trial loop us per control tick (stubbed physics)")
         for _ in range(rounds):
