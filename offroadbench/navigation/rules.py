@@ -62,10 +62,7 @@ import math
 import statistics
 from dataclasses import dataclass
 
-import numpy as np
-
 from offroadbench.config import check_range
-from offroadbench.navigation import metrics
 
 __all__ = ["FAILURE_REASONS", "FailureRules", "trial_timeout_s", "stuck_window_s", "unreachable", "end_reason",
            "RuleChecker"]
@@ -160,20 +157,36 @@ def end_reason(rules: FailureRules, bounds: tuple[float, float, float], goal_xy,
     ``roll``, ``pitch`` in radians; ``xy_hist`` the (x, y) samples so far, the current one last;
     ``window`` the stuck window in samples.
     """
+    return _end_reason(_limits(rules, bounds), goal_xy, pos, roll, pitch, xy_hist, window)
+
+
+def _limits(rules: FailureRules, bounds) -> tuple[float, ...]:
+    """What :func:`end_reason` compares against, worked out once per trial: (tip angle rad, its
+    cosine, map width, map height, the off-map floor z, goal tolerance, stuck distance), metres."""
     tip = math.radians(rules.tip_angle_deg)
-    if abs(roll) > tip or abs(pitch) > tip or math.cos(roll) * math.cos(pitch) < math.cos(tip):
-        return "tipped"
     width, height, z_min = bounds
-    if not (0.0 <= pos[0] <= width and 0.0 <= pos[1] <= height) or pos[2] < z_min - rules.fall_depth_m:
+    return (tip, math.cos(tip), width, height, z_min - rules.fall_depth_m, rules.goal_tolerance_m,
+            rules.stuck_distance_m)
+
+
+def _end_reason(limits: tuple[float, ...], goal_xy, pos, roll: float, pitch: float, xy_hist,
+                window: int) -> str | None:
+    """:func:`end_reason` with its :func:`_limits`."""
+    tip, cos_tip, width, height, floor_z, goal_tolerance, stuck_distance = limits
+    if abs(roll) > tip or abs(pitch) > tip or math.cos(roll) * math.cos(pitch) < cos_tip:
+        return "tipped"
+    if not (0.0 <= pos[0] <= width and 0.0 <= pos[1] <= height) or pos[2] < floor_z:
         return "off_map"
-    if math.hypot(pos[0] - goal_xy[0], pos[1] - goal_xy[1]) <= rules.goal_tolerance_m:
+    if math.hypot(pos[0] - goal_xy[0], pos[1] - goal_xy[1]) <= goal_tolerance:
         return ""
     if len(xy_hist) > window:
         first = xy_hist[-window - 1]
         # cheap test first: only a vehicle back near where it was a window ago can be stuck
-        if math.hypot(pos[0] - first[0], pos[1] - first[1]) < rules.stuck_distance_m:
-            recent = np.asarray(xy_hist[-window - 1:])
-            if metrics.stuck_index(recent, window, rules.stuck_distance_m) is not None:
+        if math.hypot(pos[0] - first[0], pos[1] - first[1]) < stuck_distance:
+            # metrics.stuck_index on the last window + 1 samples (its one end: every sample of the
+            # window within the distance of the first), on the samples as they are, not an array's copy
+            x0, y0 = first
+            if all(math.hypot(x - x0, y - y0) < stuck_distance for x, y in xy_hist[-window:]):
                 return "stuck"
     return None
 
@@ -200,6 +213,7 @@ class RuleChecker:
                  mission_length_m: float, wheel_radius_m: float | None = None) -> None:
         self.rules = rules
         self.bounds = tuple(bounds)
+        self._limits = _limits(rules, self.bounds)
         self.goal = (float(goal_xy[0]), float(goal_xy[1]))
         self.window_s = stuck_window_s(rules, timeout_s)
         self.window = max(1, int(round(self.window_s * sample_rate_hz)))
@@ -218,7 +232,7 @@ class RuleChecker:
         ``slip`` (mean wheel slip) and ``sinkage_m`` (deepest wheel sinkage) feed the ``entrapped``
         rule when the checker knows the wheel radius; None skips it."""
         self.xy_hist.append((pos[0], pos[1]))
-        reason = end_reason(self.rules, self.bounds, self.goal, pos, roll, pitch, self.xy_hist, self.window)
+        reason = _end_reason(self._limits, self.goal, pos, roll, pitch, self.xy_hist, self.window)
         if reason is None or reason == "stuck":
             if self._entrapped(pos, slip, sinkage_m):
                 return "entrapped"

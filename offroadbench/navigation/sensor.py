@@ -36,6 +36,7 @@ instead of those measured in the simulator.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 from typing import Any
@@ -80,12 +81,10 @@ def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.n
     from scipy.ndimage import map_coordinates
 
     cell = hm.cell_size_m
-    n_r = max(1, int(range_m / cell))
-    n_a = max(8, int(math.ceil(2.0 * math.pi * range_m / cell)))
-    r = (np.arange(1, n_r + 1) * cell)[None, :]
-    phi = (np.arange(n_a) * (2.0 * math.pi / n_a))[:, None]
-    x = xy[0] + r * np.cos(phi)
-    y = xy[1] + r * np.sin(phi)
+    r, ray_x, ray_y = _rays(cell, range_m)
+    n_a = ray_x.shape[0]
+    x = xy[0] + ray_x
+    y = xy[1] + ray_y
     col, row = x / cell, y / cell
     on = (col >= 0) & (col <= hm.cols - 1) & (row >= 0) & (row <= hm.rows - 1)
     z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
@@ -96,6 +95,20 @@ def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.n
     vis = on & (tan >= before - 1e-12) & np.cumprod(on, axis=1, dtype=bool)
     rr = np.broadcast_to(r, x.shape)
     return x[vis], y[vis], z[vis], rr[vis]
+
+
+@functools.lru_cache(maxsize=8)
+def _rays(cell_m: float, range_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The viewshed's sample offsets from the sensor, the same for every scan of a map: the ranges
+    ``r`` (1, R) and ``r cos(phi)``, ``r sin(phi)`` (A, R), m (read-only)."""
+    n_r = max(1, int(range_m / cell_m))
+    n_a = max(8, int(math.ceil(2.0 * math.pi * range_m / cell_m)))
+    r = (np.arange(1, n_r + 1) * cell_m)[None, :]
+    phi = (np.arange(n_a) * (2.0 * math.pi / n_a))[:, None]
+    out = (r, r * np.cos(phi), r * np.sin(phi))
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 class MastSensor:
@@ -131,11 +144,13 @@ class MastSensor:
         row = np.rint(qy / hm.cell_size_m).astype(np.int64)
         ok = (col >= 0) & (col < hm.cols) & (row >= 0) & (row < hm.rows)
         flat = row[ok] * hm.cols + col[ok]
-        sums = np.bincount(flat, weights=z[ok], minlength=hm.z.size)
-        counts = np.bincount(flat, minlength=hm.z.size)
         new = self.z.copy().ravel()
-        hit = counts > 0
-        new[hit] = sums[hit] / counts[hit]
+        if flat.size:  # the sums and counts over the cells from the first hit on, not the whole map
+            lo = int(flat.min())
+            sums = np.bincount(flat - lo, weights=z[ok])
+            counts = np.bincount(flat - lo)
+            hit = counts > 0
+            new[lo:lo + len(counts)][hit] = sums[hit] / counts[hit]
         self.z = new.reshape(hm.shape)
         self.scans += 1
         self._scanned_at = true_xy.copy()

@@ -56,20 +56,14 @@ class BicycleTracker:
     def progress(self, pos_xy: np.ndarray) -> float:
         return self.base.progress(pos_xy)
 
-    def _lookahead_point(self, s_m: float) -> np.ndarray:
-        base = self.base
-        ahead = max(s_m, 0.0) + self.cfg.lookahead_m
-        if hasattr(base, "point_at"):
-            return base.point_at(ahead)
-        return base.start + base.unit * min(ahead, base.length_m)
-
     def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
         """(v, omega, progress) for the measured position (of the base), yaw and horizontal velocity."""
         v, _, s = self.base.command(pos_xy, yaw_rad, vel_xy)
-        target = self._lookahead_point(s)
-        d = target - np.asarray(pos_xy, dtype=float)
-        alpha = math.atan2(d[1], d[0]) - yaw_rad
-        want = bicycle_steer_rad(alpha, math.hypot(d[0], d[1]), self.wheelbase_m, self.max_steer_rad)
+        # the look-ahead point: the path's point_at (clamped to the path), or on a line capped at the goal
+        tx, ty = self.base.point_xy(max(s, 0.0) + self.cfg.lookahead_m)
+        dx, dy = tx - float(pos_xy[0]), ty - float(pos_xy[1])
+        alpha = math.atan2(dy, dx) - yaw_rad
+        want = bicycle_steer_rad(alpha, math.hypot(dx, dy), self.wheelbase_m, self.max_steer_rad)
         step = self.max_step_rad
         self.steer_rad = max(self.steer_rad - step, min(self.steer_rad + step, want))
         return v, v * math.tan(self.steer_rad) / self.wheelbase_m, s

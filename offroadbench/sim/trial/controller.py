@@ -51,6 +51,7 @@ regolith the Husky was commanded 0.6-0.7 m/s instead of 1 m/s (issue 28).
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -61,6 +62,11 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial.vehicle import VehicleSpec
 
 __all__ = ["pure_pursuit_omega", "SpeedProfile", "speed_loop", "LineTracker", "PathTracker", "make_tracker"]
+
+
+#: ruckig's results of a trajectory going on or arrived (looked up once: a pybind11 enum's attribute
+#: costs more than the whole membership test)
+_RUNNING = (Result.Working, Result.Finished)
 
 
 def _dot2(x: float, y: float, unit) -> float:
@@ -150,7 +156,7 @@ class SpeedProfile:
             self._inp.current_acceleration = [0.0]
             return
         result = self._otg.update(self._inp, self._out)
-        if result not in (Result.Working, Result.Finished):
+        if result not in _RUNNING:
             p, v, a = self.reference
             raise RuntimeError(f"ruckig failed with {result} from reference progress {p:.3f} m, speed {v:.3f} m/s, "
                                f"acceleration {a:.3f} m/s^2")
@@ -214,6 +220,12 @@ class LineTracker:
         self._lookahead_m = float(cfg.lookahead_m)
         self._w_max = float(spec.max_yaw_rate_rad_s)
 
+    def point_xy(self, s_m: float) -> tuple[float, float]:
+        """The point ``s_m`` along the line, capped at the goal (not at the start), two floats: ``start
+        + unit * min(s_m, length)`` element-wise."""
+        m = min(s_m, self.length_m)
+        return self._sx + self._ux * m, self._sy + self._uy * m
+
     def progress(self, pos_xy) -> float:
         """Distance along the line of the projection of ``pos_xy`` (x, y, ...), metres."""
         return (float(pos_xy[0]) - self._sx) * self._ux + (float(pos_xy[1]) - self._sy) * self._uy
@@ -267,49 +279,65 @@ class PathTracker:
         self._s = 0.0
         self._window_m = cfg.lookahead_m + 2.0
         self.speed = speed_loop(self.length_m, spec, cfg)
+        # the per-tick arithmetic on plain floats (element-wise, the same operations as on the arrays)
+        self._pts = [tuple(p) for p in self.points.tolist()]
+        self._units = [tuple(u) for u in self._unit.tolist()]
+        self._lens = self._seg_len.tolist()
+        self._cums = self._cum.tolist()
+        self._goal_xy = self._pts[-1]
 
     def _project(self, pos_xy: np.ndarray) -> tuple[int, float]:
         """(segment index, arc length) of the nearest point within the search window."""
-        last = len(self._seg_len) - 1
-        best = (math.inf, self._seg, 0.0)
-        k = self._seg
-        while k <= last and (k == self._seg or self._cum[k] <= self._s + self._window_m):
-            t = _dot2(pos_xy[0] - self.points[k][0], pos_xy[1] - self.points[k][1], self._unit[k])
-            t_c = t if (k == 0 and t < 0) or (k == last and t > 0) else min(max(t, 0.0), self._seg_len[k])
-            foot = self.points[k] + t_c * self._unit[k]
-            d = math.hypot(pos_xy[0] - foot[0], pos_xy[1] - foot[1])
-            if d < best[0]:
-                best = (d, k, float(self._cum[k] + t_c))
+        pts, units, lens, cums = self._pts, self._units, self._lens, self._cums
+        px, py = float(pos_xy[0]), float(pos_xy[1])
+        last = len(lens) - 1
+        best_d, best_k, best_s = math.inf, self._seg, 0.0
+        k = first = self._seg
+        reach = self._s + self._window_m
+        while k <= last and (k == first or cums[k] <= reach):
+            (ax, ay), (ux, uy) = pts[k], units[k]
+            t = (px - ax) * ux + (py - ay) * uy  # _dot2
+            t_c = t if (k == 0 and t < 0) or (k == last and t > 0) else min(max(t, 0.0), lens[k])
+            d = math.hypot(px - (ax + t_c * ux), py - (ay + t_c * uy))  # to the foot
+            if d < best_d:
+                best_d, best_k, best_s = d, k, cums[k] + t_c
             k += 1
-        return best[1], best[2]
+        return best_k, best_s
 
     def point_at(self, s_m: float) -> np.ndarray:
         """The path point at arc length ``s_m`` (clamped to the path)."""
+        return np.array(self.point_xy(s_m))
+
+    def point_xy(self, s_m: float) -> tuple[float, float]:
+        """:meth:`point_at` as two floats (the same operations)."""
         s = min(max(s_m, 0.0), self.length_m)
-        k = min(int(np.searchsorted(self._cum, s, side="right")) - 1, len(self._seg_len) - 1)
-        return self.points[k] + (s - self._cum[k]) * self._unit[k]
+        k = min(bisect.bisect_right(self._cums, s) - 1, len(self._lens) - 1)  # np.searchsorted(side="right")
+        (ax, ay), (ux, uy), t = self._pts[k], self._units[k], s - self._cums[k]
+        return ax + t * ux, ay + t * uy
 
     def progress(self, pos_xy: np.ndarray) -> float:
         """Arc length along the path of the projection of ``pos_xy``, metres."""
-        self._seg, self._s = self._project(np.asarray(pos_xy, dtype=float))
+        self._seg, self._s = self._project(pos_xy)
         return self._s
 
     def command(self, pos_xy: np.ndarray, yaw_rad: float, vel_xy: np.ndarray) -> tuple[float, float, float]:
         """(v, omega, progress) for the measured position, yaw and horizontal velocity."""
         s = self.progress(pos_xy)
-        p = np.asarray(pos_xy, dtype=float)
-        to_goal = math.hypot(self.points[-1][0] - p[0], self.points[-1][1] - p[1])
+        px, py = float(pos_xy[0]), float(pos_xy[1])
+        gx, gy = self._goal_xy
+        to_goal = math.hypot(gx - px, gy - py)
         # the speed profile plans to the goal, not to the foot of the projection: a vehicle that
         # has run past the path's end (or cut a hairpin) away from the goal keeps driving back to it
-        v = self.speed.command(min(s, self.length_m - to_goal), _dot2(vel_xy[0], vel_xy[1], self._unit[self._seg]))
-        target = self.point_at(max(s, 0.0) + self.cfg.lookahead_m)
-        d = target - np.asarray(pos_xy, dtype=float)
-        alpha = (math.atan2(d[1], d[0]) - yaw_rad + math.pi) % (2.0 * math.pi) - math.pi
+        ux, uy = self._units[self._seg]
+        v = self.speed.command(min(s, self.length_m - to_goal), float(vel_xy[0]) * ux + float(vel_xy[1]) * uy)
+        tx, ty = self.point_xy(max(s, 0.0) + self.cfg.lookahead_m)
+        dx, dy = tx - px, ty - py
+        alpha = (math.atan2(dy, dx) - yaw_rad + math.pi) % (2.0 * math.pi) - math.pi
+        w_max = self.spec.max_yaw_rate_rad_s
         if abs(alpha) > 0.5 * math.pi:  # behind: the tightest arc, curvature 2 / l, toward it
-            w_max = self.spec.max_yaw_rate_rad_s
-            omega = max(-w_max, min(w_max, math.copysign(2.0 * v / max(math.hypot(d[0], d[1]), 1e-9), alpha)))
+            omega = max(-w_max, min(w_max, math.copysign(2.0 * v / max(math.hypot(dx, dy), 1e-9), alpha)))
         else:
-            omega = pure_pursuit_omega(pos_xy, yaw_rad, target, v, self.spec.max_yaw_rate_rad_s)
+            omega = _pursuit(dx, dy, yaw_rad, v, w_max)  # pure_pursuit_omega
         return v, omega, s
 
 

@@ -39,7 +39,7 @@ from offroadbench.navigation.sensor import Belief, make_sensing, sheet_envelope
 from offroadbench.navigation.problem import PlanningProblem, VehicleEnvelope
 from offroadbench.navigation.rules import FAILURE_REASONS, FailureRules, RuleChecker, trial_timeout_s
 from offroadbench.sim.config import ControllerConfig
-from offroadbench.sim.trial.steering import drive_twist, make_vehicle_tracker, min_turn_radius_m, reference_layout
+from offroadbench.sim.trial.steering import make_vehicle_tracker, min_turn_radius_m, reference_layout, twist_driver
 from offroadbench.sim.engine import TrialWorld
 from offroadbench.sim.engines.base import max_height_near
 from offroadbench.bounds import check_settled
@@ -52,6 +52,7 @@ __all__ = ["TrialResult", "TrialRecord", "TrialLoop", "FAILURE_REASONS", "TELEME
 
 #: where the commands (v, omega) sit in a telemetry row: by name (TELEMETRY_COLUMNS), not by position
 _CMD_V, _CMD_OMEGA = TELEMETRY_COLUMNS.index("cmd_v_m_s"), TELEMETRY_COLUMNS.index("cmd_omega_rad_s")
+assert _CMD_OMEGA == _CMD_V + 1, "TrialLoop.command rewrites the two commands as one slice of a row"
 
 
 def control_steps(sim_physics_rate_hz: int, control_rate_hz: int,
@@ -159,6 +160,13 @@ class TrialLoop:
         self.end_step = self.n_steps
         self.k = 0
         world.spawn(mission.start_xy_m[0], mission.start_xy_m[1], mission.heading_rad, roll_rad=spawn_roll_rad)
+        # what every tick calls, looked up once: the world's methods, the drive's mapping (its wheel
+        # layout worked out once), the physics step
+        self._drive = twist_driver(world)
+        self._step, self._advance_n = world.step, getattr(world, "advance", None)
+        self._base_state, self._rotation = world.base_state, world.rotation_matrix
+        self._penetration, self._slip = world.wheel_penetration_m, world.wheel_slip
+        self._dt_s = world.dt_s
         self._read()
         # a vehicle thrown while settling is a fault, not a trial (offroadbench.bounds)
         check_settled(self.state[0], self.state[2],
@@ -166,9 +174,14 @@ class TrialLoop:
                       size_m=spec.track_m + 2 * spec.wheel_radius_m, where=f"mission {mission.index}")
 
     def _read(self) -> None:
-        pos, quat, lin, ang = self.world.base_state()
-        roll, pitch, yaw, *rates = body_frame(self.world, quat, ang)
-        self.state = (pos, quat, lin, ang, roll, pitch, yaw, rates)
+        pos, quat, lin, ang = self._base_state()
+        # body_frame, inline (the same operations)
+        r = self._rotation(quat)  # row-major 3x3, body -> world
+        wx, wy, wz = ang
+        self.state = (pos, quat, lin, ang, math.atan2(r[7], r[8]), math.asin(max(-1.0, min(1.0, r[6]))),
+                      math.atan2(r[3], r[0]),
+                      [r[0] * wx + r[3] * wy + r[6] * wz, r[1] * wx + r[4] * wy + r[7] * wz,
+                       r[2] * wx + r[5] * wy + r[8] * wz])
         """(position, quaternion, linear and angular velocity, roll, pitch, yaw, body rates) at the
         last control or telemetry tick (offroadbench.sim.engine.TrialWorld.base_state, body_frame)."""
 
@@ -186,32 +199,34 @@ class TrialLoop:
         """Drive at (v, omega) from this tick (the vehicle's steering kind maps it to joint commands:
         offroadbench.sim.trial.steering); a row already recorded at this tick takes the command."""
         self.cmd_v, self.cmd_w = v_m_s, omega_rad_s
-        drive_twist(self.world, v_m_s, omega_rad_s)
+        self._drive(v_m_s, omega_rad_s)
         if self._row_k == self.k:
-            row = list(self.rows[-1])
-            row[_CMD_V], row[_CMD_OMEGA] = v_m_s, omega_rad_s
-            self.rows[-1] = tuple(row)
+            row = self.rows[-1]
+            self.rows[-1] = (*row[:_CMD_V], v_m_s, omega_rad_s, *row[_CMD_OMEGA + 1:])
 
     def record(self, progress_m) -> bool:
         """At a telemetry tick, the row and the failure rules; then the timeout. True when the trial
         has ended here."""
-        k, world = self.k, self.world
+        k = self.k
         if k % self.tel_every == 0:
             pos, quat, lin, ang, roll, pitch, yaw, rates = self.state
-            _check_state(self.name, k * world.dt_s, pos, quat, lin, ang)
-            self.rows.append((k * world.dt_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
-                              self.cmd_v, self.cmd_w, progress_m(pos), world.wheel_penetration_m()))
+            t_s = k * self._dt_s
+            _check_state(self.name, t_s, pos, quat, lin, ang)
+            progress = progress_m(pos)
+            penetration = self._penetration()
+            self.rows.append((t_s, *pos, *quat, roll, pitch, yaw, *lin, *rates,
+                              self.cmd_v, self.cmd_w, progress, penetration))
             self._row_k = k
-            slip = world.wheel_slip()
+            slip = self._slip()
             self.slips.append(math.nan if slip is None else slip)  # one per telemetry row
             outside = self._outside() if self._outside is not None else None
             self.outside.append(math.nan if outside is None else float(outside))
-            done = self.checker.check(pos, roll, pitch, slip, self.rows[-1][-1])
+            done = self.checker.check(pos, roll, pitch, slip, penetration)
             if done is not None:
                 self.reason = done
                 self.end_step = k
                 if done == "":
-                    self.traversal_time_s = k * world.dt_s
+                    self.traversal_time_s = t_s
                 return True
         if k >= self.n_steps:
             self.reason = "timeout"
@@ -221,16 +236,16 @@ class TrialLoop:
     def step_to_next_control(self, progress_m) -> bool:
         """Physics steps up to the next control tick (its state read, not yet recorded), recording
         the telemetry ticks on the way; True when the trial has ended on the way."""
-        world, tel_every, ctrl_every = self.world, self.tel_every, self.ctrl_every
-        advance = getattr(world, "advance", None)  # n steps in one call (TrialWorld.step n times), if it can
+        tel_every, ctrl_every, n_steps = self.tel_every, self.ctrl_every, self.n_steps
+        advance, step = self._advance_n, self._step  # advance: n steps in one call (TrialWorld.step n times), if it can
         while True:
             k = self.k
             # the steps before the next telemetry or control tick (or the timeout) do nothing but step
-            n = min(tel_every - k % tel_every, ctrl_every - k % ctrl_every, max(1, self.n_steps - k))
+            n = min(tel_every - k % tel_every, ctrl_every - k % ctrl_every, max(1, n_steps - k))
             if n > 1 and advance is not None:
                 advance(n - 1)
                 self.k = k = k + n - 1
-            world.step()
+            step()
             self.k = k = k + 1
             tel, ctrl = k % tel_every == 0, k % ctrl_every == 0
             if tel or ctrl:
@@ -335,10 +350,13 @@ def drive_mission(
         length = mission.length_m
     fill_m = hm.z_min_m - settings.rules.fall_depth_m if policy is not None else None  # a policy's map fill
 
-    def progress_m(pos) -> float:
-        if replanner is None and tracker is not None:
-            return tracker.progress(pos[:2])
-        return mission.length_m - math.hypot(goal[0] - pos[0], goal[1] - pos[1])
+    if replanner is None and tracker is not None:
+        progress_m = tracker.progress  # reads pos[0] and pos[1] only
+    else:
+        straight_m, gx, gy = mission.length_m, float(goal[0]), float(goal[1])
+
+        def progress_m(pos) -> float:
+            return straight_m - math.hypot(gx - pos[0], gy - pos[1])
 
     loop = TrialLoop(world, mission, settings, length_m=length, name=planner.name, spawn_roll_rad=spawn_roll_rad)
     while True:

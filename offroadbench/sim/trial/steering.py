@@ -31,7 +31,7 @@ from offroadbench.sim.config import ControllerConfig
 from offroadbench.sim.trial import skid_steer
 from offroadbench.sim.trial.vehicle import VehicleSpec
 
-__all__ = ["drive_twist", "steered_commands", "achievable", "min_turn_radius_m", "reference_layout",
+__all__ = ["drive_twist", "twist_driver", "steered_commands", "achievable", "min_turn_radius_m", "reference_layout",
            "make_vehicle_tracker"]
 
 
@@ -126,14 +126,64 @@ def achievable(v_m_s: float, omega_rad_s: float, spec: VehicleSpec, layout=None)
 
 def drive_twist(world, v_m_s: float, omega_rad_s: float) -> None:
     """Command ``world``'s joints for the body twist (v, omega) (module docstring)."""
+    twist_driver(world)(v_m_s, omega_rad_s)
+
+
+def twist_driver(world):
+    """:func:`drive_twist` for ``world`` as a function of (v, omega), with what depends only on the
+    vehicle (its wheel layout, the minimum turning radius, the steering limit) worked out once: the
+    trial loop calls it at every control tick. The same floating-point operations, in the same order,
+    as :func:`skid_steer.wheel_speeds` and :func:`steered_commands`."""
     spec = world.spec
+    v_max, radius = spec.max_speed_m_s, spec.wheel_radius_m
     if spec.steering == "skid":
-        world.command_wheels(*skid_steer.wheel_speeds(v_m_s, omega_rad_s, spec))
-        return
+        half = 0.5 * spec.skid_track_factor * spec.track_m
+        command_wheels = world.command_wheels
+
+        def drive_skid(v_m_s: float, omega_rad_s: float) -> None:
+            left, right = v_m_s - omega_rad_s * half, v_m_s + omega_rad_s * half
+            fastest = max(abs(left), abs(right))
+            if fastest > v_max:
+                scale = v_max / fastest
+                left, right = left * scale, right * scale
+            command_wheels(left / radius, right / radius)
+        return drive_skid
+
     layout = reference_layout(spec, world.geometry.wheel_centres_m)
-    speeds, angles = steered_commands(v_m_s, omega_rad_s, spec, layout)
-    world.command_steering(angles)
-    world.command_wheel_speeds(speeds)
+    r_min = min_turn_radius_m(spec, layout)
+    limit = math.radians(spec.max_steer_angle_deg)
+    steer_of = {w: i for i, w in enumerate(spec.steered_wheel_joints)}
+    # per wheel: (its index among the steered wheels or None, x, y), as _rigid_turn walks them
+    wheels = tuple((steer_of.get(name), x, y) for name, (x, y) in zip(spec.wheel_joints, layout, strict=True))
+    n_steer = len(spec.steer_joints)
+    half_pi = 0.5 * math.pi
+    command_steering, command_wheel_speeds = world.command_steering, world.command_wheel_speeds
+
+    def drive_steered(v_m_s: float, omega_rad_s: float) -> None:
+        if not r_min <= 0.0:  # _turn_limited (its test, NaN included)
+            cap = abs(v_m_s) / r_min
+            omega_rad_s = max(-cap, min(cap, omega_rad_s))
+        speeds, angles = [], [0.0] * n_steer  # _rigid_turn
+        for i, x, y in wheels:
+            vx, vy = v_m_s - omega_rad_s * y, omega_rad_s * x
+            if i is None:
+                speeds.append(vx)
+                continue
+            if abs(vx) < 1e-12 and abs(vy) < 1e-12:
+                speeds.append(0.0)
+                continue
+            a, sp = math.atan2(vy, vx), math.hypot(vx, vy)
+            if a > half_pi:
+                a, sp = a - math.pi, -sp
+            elif a < -half_pi:
+                a, sp = a + math.pi, -sp
+            angles[i] = max(-limit, min(limit, a))
+            speeds.append(sp)
+        fastest = max(abs(s) for s in speeds)  # _speed_scale
+        scale = v_max / fastest if fastest > v_max else 1.0
+        command_steering(angles)
+        command_wheel_speeds([s * scale / radius for s in speeds])
+    return drive_steered
 
 
 def make_vehicle_tracker(waypoints, spec: VehicleSpec, cfg: ControllerConfig, world=None):
