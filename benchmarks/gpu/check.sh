@@ -8,13 +8,16 @@
 #
 # The checks, each under its own time limit so that the call ends inside its 10 minutes:
 #   1. the device: nvidia-smi, Warp's CUDA devices;
-#   2. bench_batch.py --device cuda: world-steps/s and the host's share at 256 / 1024 / 4096 worlds
-#      (the warm-up batch compiles the CUDA kernels: ~2 min cold), 1024 twice with --hash (does the
-#      GPU repeat itself? MuJoCo Warp 4.0 does not order contacts deterministically), and 1024 with
-#      the trial step's CUDA graph off (what the graph gains);
-#   3. the paper study end to end (experiments/majhor2023-mujoco.toml on mujoco_warp, cuda, one batch
-#      of 1,200 worlds, --executor batched with 16 terrain builders): wall time, and the success
-#      count per D beside the MuJoCo engine's committed results.
+#   2. bench_batch.py --device cuda: world-steps/s and the host's share at 1024 / 4096 worlds (the
+#      warm-up batch compiles the CUDA kernels: ~2 min cold), 256 twice with --hash (does the GPU
+#      repeat itself? MuJoCo Warp 4.0 does not order contacts deterministically), and 256 with the
+#      trial step's CUDA graph off (what the graph gains);
+#   3. the paper study end to end (experiments/majhor2023-mujoco.toml on mujoco_warp, cuda,
+#      --executor batched, the terrains built by one process per core): as one batch of 1,200
+#      worlds, then split into 4 batches in 4 processes (--workers 4); each one's wall time and
+#      success count per D beside the MuJoCo engine's committed results.
+# Each step runs under its own limit and what is left of a 560 s budget (CHECK_BUDGET_S): a step
+# the budget no longer holds is skipped, so the call ends inside its 10 minutes.
 set -uo pipefail
 export PYTHONUNBUFFERED=1 MPLBACKEND=Agg
 out=${OUT:-/tmp/gpu-out}
@@ -22,11 +25,18 @@ mkdir -p "$out"
 log=$out/log.txt
 : > "$log"
 say() { echo "== $* ($(date -u +%T))" | tee -a "$log"; }
-run() { local limit=$1; shift; timeout "$limit" "$@" 2>&1 | tee -a "$log"; echo "(exit ${PIPESTATUS[0]})" | tee -a "$log"; }
+deadline=$(( $(date +%s) + ${CHECK_BUDGET_S:-560} ))  # the device call's 10 minutes, less the transfers
+run() {  # run LIMIT CMD...: under LIMIT seconds or what is left of the budget, whichever is less
+  local limit=$1 left=$(( deadline - $(date +%s) )); shift
+  [ "$left" -lt "$limit" ] && limit=$left
+  if [ "$limit" -lt 20 ]; then echo "(skipped: the budget is spent) $*" | tee -a "$log"; return; fi
+  timeout "$limit" "$@" 2>&1 | tee -a "$log"; echo "(exit ${PIPESTATUS[0]})" | tee -a "$log"
+}
 
 if [ "${1:-}" = --cpu ]; then
   py=$PWD/.venv/bin/python; ob=$PWD/.venv/bin/offroadbench; dev=cpu
   sizes=(2 4); twice=4; study_toml=experiments/smoke.toml; study_set=(); workers=2
+  deadline=$(( $(date +%s) + 1200 ))
 else
   dev=cuda
   mkdir -p /tmp/gpu
@@ -43,8 +53,8 @@ else
     /tmp/gpu/wheels/*.whl 2>&1 | tail -n 3 | tee -a "$log"
   export PYTHONPATH=/tmp/site WARP_CACHE_PATH=/tmp/warp-cache
   py=python3; ob="python3 -c 'from offroadbench.cli import main; main()'"
-  sizes=(256 1024 4096); twice=1024; study_toml=experiments/majhor2023-mujoco.toml
-  study_set=(--set sim.mujoco_warp.worlds=1200); workers=16
+  sizes=(1024 4096); twice=256; study_toml=experiments/majhor2023-mujoco.toml
+  study_set=(--set sim.mujoco_warp.worlds=1200); workers=4
   say "device"
   run 30 nvidia-smi -L
 fi
@@ -56,21 +66,27 @@ say "bench_batch: $twice worlds twice with digests, then with the CUDA graph off
 (cd benchmarks && run 150 "$py" bench_batch.py --device "$dev" --worlds "$twice,$twice" --reference 0 --hash)
 (cd benchmarks && run 90 "$py" bench_batch.py --device "$dev" --worlds "$twice" --reference 0 --cuda-graph off)
 
-say "study end to end: $study_toml on mujoco_warp, $dev, --executor batched"
-rm -rf /tmp/gpu-study
-start=$(date +%s%N)
-run 300 bash -c "$ob study run $study_toml --set sim.engine=mujoco_warp --set sim.mujoco_warp.device=$dev ${study_set[*]} --executor batched --workers $workers --out /tmp/gpu-study"
-echo "study wall: $(( ($(date +%s%N) - start) / 1000000 )) ms" | tee -a "$log"
-run 60 "$py" - "$study_toml" <<'PY'
+study() {  # study OUTDIR [--workers N]: the study end to end, timed, its successes beside the committed run's
+  local dir=$1; shift
+  say "study end to end: $study_toml on mujoco_warp, $dev, --executor batched $*"
+  rm -rf "$dir"
+  local start; start=$(date +%s%N)
+  run 240 bash -c "$ob study run $study_toml --set sim.engine=mujoco_warp --set sim.mujoco_warp.device=$dev ${study_set[*]} --executor batched $* --out $dir"
+  echo "study wall: $(( ($(date +%s%N) - start) / 1000000 )) ms" | tee -a "$log"
+  [ -f "$dir/report/summary.csv" ] || return
+  run 60 "$py" - "$study_toml" "$dir" <<'PY'
 import sys
 from pathlib import Path
 import pandas as pd
 cols = ["group", "trials", "successes"]
-new = pd.read_csv("/tmp/gpu-study/report/summary.csv")[cols]
+new = pd.read_csv(Path(sys.argv[2]) / "report" / "summary.csv")[cols]
 ref = Path("experiments/results") / Path(sys.argv[1]).stem / "summary.csv"
 if ref.is_file():  # the committed run of the same study on its own engine
     new = new.merge(pd.read_csv(ref)[cols], on="group", suffixes=("", "_committed"))
 print(new.to_string(index=False))
 PY
-cp -r /tmp/gpu-study/report/report.md "$out/study-report.md" 2>/dev/null
+}
+study /tmp/gpu-study                       # one batch of every terrain (the builders: one per core)
+cp /tmp/gpu-study/report/report.md "$out/study-report.md" 2>/dev/null
+study /tmp/gpu-study-split --workers "$workers"   # the worlds split into batches, one process each
 say "done"
