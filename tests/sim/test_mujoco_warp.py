@@ -129,6 +129,27 @@ def test_an_interrupt_in_one_slot_ends_the_batch_at_once(setup):
     assert calls == [1]
 
 
+def test_the_base_states_of_all_worlds_at_once_are_each_worlds_scalar_arithmetic_to_the_bit():
+    """WarpBatch.base_state reads every world's state from one element-wise pass (batch.base_states):
+    the same bits as one world's arithmetic in Python floats (MuJoCoWorld.base_state's), on random
+    poses stored as float32 (as the device keeps them) and widened."""
+    from offroadbench.sim.engines.mujoco_warp.batch import base_states, rotation_matrix
+
+    rng = np.random.default_rng(3)
+    qpos = rng.normal(size=(97, 11)).astype(np.float32).astype(float)
+    qvel = rng.normal(size=(97, 10)).astype(np.float32).astype(float)
+    table = np.column_stack(base_states(qpos, qvel)).tolist()
+    for w in range(97):
+        q, v = qpos[w].tolist(), qvel[w].tolist()
+        qw, x, y, z = q[3:7]
+        n = math.sqrt(qw * qw + x * x + y * y + z * z)
+        qw, x, y, z = qw / n, x / n, y / n, z / n
+        r = rotation_matrix((x, y, z, qw))
+        ang = [r[0] * v[3] + r[1] * v[4] + r[2] * v[5], r[3] * v[3] + r[4] * v[4] + r[5] * v[5],
+               r[6] * v[3] + r[7] * v[4] + r[8] * v[5]]
+        assert table[w] == [*q[:3], x, y, z, qw, *v[:3], *ang]
+
+
 def test_the_engine_refuses_what_it_does_not_implement():
     with pytest.raises(InputError, match="mujoco_warp"):
         SimConfig(engine="mujoco_warp", tyre_model="bullet")

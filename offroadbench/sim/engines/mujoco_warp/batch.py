@@ -16,7 +16,6 @@ MuJoCo engine's ``mj_resetData`` before every spawn.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import warp as wp
@@ -104,6 +103,8 @@ class WarpBatch:
         self.pushed = np.zeros((nworld, 3))
         self._resets: dict[int, np.ndarray] = {}
         self.host = HostState(nworld, m.nq, m.nv, nwheel)
+        self._states: list | None = None
+        """Every world's base state as lists (:meth:`base_state`), None until next asked for."""
         self.steps = 0
         self.cuda_graph = cuda_graph
         """On a CUDA device: run :meth:`trial_step` as one captured CUDA graph (:meth:`advance`)."""
@@ -122,6 +123,7 @@ class WarpBatch:
         self.host.soil[world] = 0.0
         self.host.on[world] = 0
         self.host.dropped[world] = 0
+        self._states = None
 
     def _apply_resets(self) -> None:
         if not self._resets:
@@ -227,6 +229,7 @@ class WarpBatch:
         velocities, the dropped-contact counts, and the tyres' loads and penetration or the soil's
         state, its on-soil flags and the deepest sinkage (_soil_c's readers; the wheel loads stay zero)."""
         d, host = self.d, self.host
+        self._states = None  # base_state's table, made again at its next call
         host.qpos[:] = d.qpos.numpy()
         host.qvel[:] = d.qvel.numpy()
         host.dropped[:] = self.dropped.numpy()
@@ -241,22 +244,33 @@ class WarpBatch:
 
     def base_state(self, w: int) -> tuple[tuple, tuple, tuple, tuple]:
         """World ``w``'s (centre-of-mass position, quaternion xyzw, linear velocity, angular
-        velocity) in the world frame, from :attr:`host`: MuJoCoWorld.base_state's arithmetic."""
-        q = self.host.qpos[w].tolist()
-        v = self.host.qvel[w].tolist()
-        qw, x, y, z = q[3:7]
-        n = math.sqrt(qw * qw + x * x + y * y + z * z)  # float32 storage: renormalised in float64
-        qw, x, y, z = qw / n, x / n, y / n, z / n
-        r = rotation_matrix((x, y, z, qw))
-        wb = v[3:6]
-        ang = (r[0] * wb[0] + r[1] * wb[1] + r[2] * wb[2],
-               r[3] * wb[0] + r[4] * wb[1] + r[5] * wb[2],
-               r[6] * wb[0] + r[7] * wb[1] + r[8] * wb[2])
-        return (q[0], q[1], q[2]), (x, y, z, qw), (v[0], v[1], v[2]), ang
+        velocity) in the world frame, from :attr:`host` (:func:`base_states`, computed for every
+        world at once after an advance or a reset)."""
+        if self._states is None:
+            self._states = np.column_stack(base_states(self.host.qpos, self.host.qvel)).tolist()
+        s = self._states[w]
+        return (s[0], s[1], s[2]), (s[3], s[4], s[5], s[6]), (s[7], s[8], s[9]), (s[10], s[11], s[12])
+
+
+def base_states(qpos: np.ndarray, qvel: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Every world's base state from its free joint's rows (``qpos`` (n, nq), ``qvel`` (n, nv),
+    float64): 13 columns, the centre-of-mass position (3), the quaternion x, y, z, w renormalised
+    (float32 storage on the device; 4), the linear (3) and the angular velocity (3) in the world
+    frame: MuJoCoWorld.base_state's arithmetic, element-wise, each operation the one a world's
+    scalar code does in the same order (numpy's +, -, *, / and sqrt round as Python's floats do),
+    so the same bits."""
+    qw, x, y, z = qpos[:, 3], qpos[:, 4], qpos[:, 5], qpos[:, 6]
+    n = np.sqrt(qw * qw + x * x + y * y + z * z)
+    qw, x, y, z = qw / n, x / n, y / n, z / n
+    r = rotation_matrix((x, y, z, qw))
+    w0, w1, w2 = qvel[:, 3], qvel[:, 4], qvel[:, 5]
+    return (qpos[:, 0], qpos[:, 1], qpos[:, 2], x, y, z, qw, qvel[:, 0], qvel[:, 1], qvel[:, 2],
+            r[0] * w0 + r[1] * w1 + r[2] * w2, r[3] * w0 + r[4] * w1 + r[5] * w2, r[6] * w0 + r[7] * w1 + r[8] * w2)
 
 
 def rotation_matrix(quat: tuple) -> tuple:
-    """Row-major 3x3 rotation matrix (body -> world) of a unit quaternion (x, y, z, w)."""
+    """Row-major 3x3 rotation matrix (body -> world) of a unit quaternion (x, y, z, w): floats, or
+    arrays of many quaternions' components (element-wise, the same operations)."""
     x, y, z, w = quat
     return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
             2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
