@@ -168,3 +168,18 @@ def test_a_soil_map_and_a_tracked_vehicle_are_refused_in_one_line(lunar):
         drive_batch(mapped, settings.replace(sim=SimConfig(engine="mujoco_warp", tyre_model="terramechanics")))
     with pytest.raises(InputError, match="mujoco_warp.*talon"):
         WarpBatch(BatchModel(_terrains(), "talon", SOIL), [0])
+
+
+def test_every_worlds_deepest_sinkage_at_once_is_each_worlds_maximum():
+    """soil_kernels.penetrations (all worlds of an advance in one pass) is, world by world, the
+    deepest sinkage of its wheels on the soil, 0 where none is on it (_soil_c.penetration's rule),
+    negative sinkages and worlds with no wheel on the soil included."""
+    from offroadbench.sim.engines.mujoco_warp.soil_kernels import NCOL, SINK, penetrations
+
+    rng = np.random.default_rng(5)
+    soil = rng.normal(scale=0.05, size=(200, 4, NCOL))
+    on = (rng.random((200, 4)) < 0.4).astype(np.int32)
+    on[:20] = 0  # no wheel on the soil
+    got = penetrations(soil, on)
+    for w in range(200):
+        assert got[w] == max((float(soil[w, k, SINK]) for k in range(4) if on[w, k]), default=0.0)

@@ -239,8 +239,7 @@ class WarpBatch:
             return
         host.soil[:] = self.soil.numpy()
         host.on[:] = self.on.numpy()
-        for w in range(self.nworld):
-            host.penetration[w] = soil_kernels.penetration(host.soil[w], host.on[w])
+        host.penetration[:] = soil_kernels.penetrations(host.soil, host.on)
 
     def base_state(self, w: int) -> tuple[tuple, tuple, tuple, tuple]:
         """World ``w``'s (centre-of-mass position, quaternion xyzw, linear velocity, angular

@@ -32,11 +32,12 @@ are _soil_c's, over one world's rows.
 
 from __future__ import annotations
 
+import numpy as np
 import warp as wp
 
 from offroadbench.sim.engines.mujoco_warp.kernels import rotate
 
-__all__ = ["CONSTS", "NCOL", "apply_soil", "outside", "penetration", "reset_soil", "slip"]
+__all__ = ["CONSTS", "NCOL", "apply_soil", "outside", "penetrations", "reset_soil", "slip"]
 
 # per (world, wheel) float64 state columns
 UX, UY, SINK, SLIP, DELTA, FORCE, NCOL = 0, 1, 2, 3, 4, 5, 11
@@ -350,10 +351,13 @@ def apply_soil(qvel: wp.array2d(dtype=wp.float32), xmat: wp.array2d(dtype=wp.mat
 
 
 # ---------------------------------------------------------------------------- host readers
-def penetration(rows, on) -> float:
-    """The deepest soil sinkage of one world's wheels on the soil in the last step (0 if none), m:
-    _soil_c.penetration over ``rows`` (that world's state rows, host) and ``on`` (its flags)."""
-    return max((float(rows[k][SINK]) for k in range(len(on)) if on[k]), default=0.0)
+def penetrations(soil: np.ndarray, on: np.ndarray) -> np.ndarray:
+    """Every world's deepest soil sinkage of its wheels on the soil in the last step (0 where none),
+    m: _soil_c.penetration, over ``soil`` (nworld, nwheel, state; host) and ``on`` (nworld, nwheel
+    flags). A maximum is exact, so the same value as one world's scalar maximum."""
+    on = on.astype(bool)
+    deepest = np.where(on, soil[:, :, SINK], -np.inf).max(axis=1, initial=-np.inf)
+    return np.where(on.any(axis=1), deepest, 0.0)
 
 
 def slip(rows, on) -> float | None:
