@@ -1,3 +1,8 @@
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -82,3 +87,18 @@ def stored_trials():
             return 0
 
     return count
+
+
+@pytest.fixture(scope="session")
+def example_plugin_site(tmp_path_factory) -> Path:
+    """The example plug-in package (examples/offroadbench-example-planner): a copy built and installed
+    with pip into a temporary target folder (not the source tree), once per session; the folder to
+    put on PYTHONPATH. The tests only read it."""
+    example = Path(__file__).resolve().parents[1] / "examples" / "offroadbench-example-planner"
+    tmp = tmp_path_factory.mktemp("example-plugin")
+    src, site = tmp / "src", tmp / "site"
+    shutil.copytree(example, src)
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--target",
+                    str(site), str(src)], check=True, capture_output=True)
+    assert (site / "offroadbench_example_planner" / "__init__.py").is_file()
+    return site

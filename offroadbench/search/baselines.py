@@ -43,6 +43,7 @@ parameters inactive: offroadbench.search.modes.sensitivity).
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -50,7 +51,7 @@ from typing import Callable
 import numpy as np
 from scipy import stats
 
-from offroadbench.search.estimators import distinct_failures
+from offroadbench.search.estimators import distinct_failure_indices
 from offroadbench.search.space import SearchConfig, SearchParam
 
 __all__ = ["trials_to_k", "median_interval", "ratio_interval", "pool_streams", "MeasuredBoundary",
@@ -62,10 +63,13 @@ def trials_to_k(failed: np.ndarray, k: int, unit_x: np.ndarray | None = None,
     """Trials a stream (in its order) spent until its k-th failure, or its k-th distinct failure
     when ``unit_x`` (parameters scaled to [0, 1]) and ``min_distance`` are given; inf if never."""
     f = np.asarray(failed, dtype=bool).ravel()
-    counts = (np.cumsum(f) if min_distance is None
-              else distinct_failures(np.asarray(unit_x, dtype=float), f, float(min_distance)))
-    hit = np.nonzero(counts >= k)[0]
-    return float(hit[0] + 1) if len(hit) else math.inf
+    if min_distance is None or k < 1:
+        hit = np.nonzero(np.cumsum(f) >= k)[0]
+        return float(hit[0] + 1) if len(hit) else math.inf
+    # the distinct failures one by one, up to the k-th: the trials after it are not compared
+    kth = next(itertools.islice(distinct_failure_indices(np.asarray(unit_x, dtype=float), f, float(min_distance)),
+                                k - 1, None), None)
+    return math.inf if kth is None else float(kth + 1)
 
 
 def median_interval(values: np.ndarray, level: float = 0.95) -> tuple[float, float, float]:

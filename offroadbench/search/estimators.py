@@ -94,13 +94,13 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
 import numpy as np
 from scipy import special, stats
 
 __all__ = ["Estimate", "GaussianProposal", "POOL_WEIGHTS", "mixture_log_weight", "ce_update", "ce_update_pooled", "ce_adapt", "initial_proposal", "mc_estimate", "is_estimate", "ce_is",
-           "CEResult", "trials_for_rel_error", "distinct_failures", "best_is_gain", "binned_failure_rate",
+           "CEResult", "trials_for_rel_error", "distinct_failures", "distinct_failure_indices", "best_is_gain", "binned_failure_rate",
            "Z_BIN_EDGES", "is_gain", "bootstrap_t_interval", "N_BOOT"]
 
 _LOG_2PI = math.log(2 * math.pi)
@@ -434,16 +434,26 @@ def binned_failure_rate(z: np.ndarray, failed: np.ndarray, edges: Sequence[float
 
 
 # ---------------------------------------------------------------------------- falsification counts
-def distinct_failures(unit_x: np.ndarray, failed: np.ndarray, min_distance: float) -> np.ndarray:
-    """Cumulative count of distinct failures after each trial (in the given order): a failure is
-    distinct when its parameters (scaled to [0, 1]) differ from every earlier distinct failure by
-    at least ``min_distance`` in some coordinate (Chebyshev distance)."""
+def distinct_failure_indices(unit_x: np.ndarray, failed: np.ndarray, min_distance: float) -> Iterator[int]:
+    """The trials (indices, in the given order) that are distinct failures: a failure is distinct
+    when its parameters (scaled to [0, 1]) differ from every earlier distinct failure by at least
+    ``min_distance`` in some coordinate (Chebyshev distance). Lazy: a caller that needs only the
+    first k stops there."""
     x = np.atleast_2d(np.asarray(unit_x, dtype=float))
     f = np.asarray(failed, dtype=bool).ravel()
-    seen: list[np.ndarray] = []
-    out = np.zeros(len(f), dtype=int)
-    for i in range(len(f)):
-        if f[i] and all(np.max(np.abs(x[i] - s)) >= min_distance for s in seen):
-            seen.append(x[i])
-        out[i] = len(seen)
-    return out
+    seen = np.empty((int(f.sum()), x.shape[1]))
+    n = 0
+    for i in np.flatnonzero(f):
+        if n == 0 or bool((np.max(np.abs(x[i] - seen[:n]), axis=1) >= min_distance).all()):
+            seen[n] = x[i]
+            n += 1
+            yield int(i)
+
+
+def distinct_failures(unit_x: np.ndarray, failed: np.ndarray, min_distance: float) -> np.ndarray:
+    """Cumulative count of distinct failures after each trial (in the given order), under the rule
+    of :func:`distinct_failure_indices`."""
+    f = np.asarray(failed, dtype=bool).ravel()
+    new = np.zeros(len(f), dtype=int)
+    new[list(distinct_failure_indices(unit_x, f, min_distance))] = 1
+    return np.cumsum(new)

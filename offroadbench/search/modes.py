@@ -114,23 +114,18 @@ def single_linkage(u: np.ndarray, h: float) -> np.ndarray:
     """Mode label of each row of ``u`` (points in [0, 1] units): connected components of the graph
     joining points closer than ``h`` (Chebyshev), labelled 0, 1, ... in order of each component's
     first row."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     u = np.atleast_2d(np.asarray(u, dtype=float))
     n = len(u)
-    parent = np.arange(n)
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        close = np.nonzero(np.max(np.abs(u[i + 1:] - u[i]), axis=1) < h)[0] + i + 1 if u.shape[1] else np.arange(i + 1, n)
-        for j in close:
-            a, b = find(i), find(int(j))
-            if a != b:
-                parent[max(a, b)] = min(a, b)
-    roots = np.array([find(i) for i in range(n)])
+    if n == 0:
+        return np.empty(0, dtype=int)
+    pairs = [(np.nonzero(np.max(np.abs(u[i + 1:] - u[i]), axis=1) < h)[0] + i + 1 if u.shape[1]
+              else np.arange(i + 1, n)) for i in range(n)]
+    rows = np.repeat(np.arange(n), [len(c) for c in pairs])
+    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, np.concatenate(pairs))), shape=(n, n))
+    _, roots = connected_components(graph, directed=False)
     labels = np.empty(n, dtype=int)
     seen: dict[int, int] = {}
     for i, r in enumerate(roots):

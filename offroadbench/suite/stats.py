@@ -53,10 +53,20 @@ def barn_score(success: bool, actual_s: float, nominal_s: float, low: float = 1.
     return nominal_s / min(max(actual_s, low * nominal_s), high * nominal_s)
 
 
-def iqm(values: Sequence[float]) -> float:
-    """Interquartile mean: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``)."""
+def iqm(values: Sequence[float], axis: int | None = None):
+    """Interquartile mean: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``); with
+    ``axis``, an array of them along that axis (what a vectorized bootstrap calls)."""
     x = np.asarray(values, dtype=float)
+    if axis is not None:
+        return _st.trim_mean(x, 0.25, axis=axis)
     return float(_st.trim_mean(x, 0.25)) if x.size else math.nan
+
+
+def _takes_axis(fn: Callable) -> bool:
+    try:
+        return "axis" in inspect.signature(fn).parameters
+    except (TypeError, ValueError):  # a builtin without a signature
+        return False
 
 
 def _rng_kw(fn: Callable, rng: np.random.Generator) -> dict:
@@ -70,17 +80,23 @@ def stratified_interval(strata: Sequence[Sequence[float]], statistic: Callable[[
                         confidence: float = CONFIDENCE) -> tuple[float, float]:
     """Percentile bootstrap interval of ``statistic`` over the values of all strata pooled, each
     stratum resampled on its own (a stratum of one value is kept as it is). (nan, nan) if no stratum
-    has two values."""
+    has two values. A ``statistic`` that takes ``axis`` (``np.mean``, :func:`iqm`) gets every
+    resample at once, one per row (the same resamples and numbers as one call per resample)."""
     arrays = [np.asarray(s, dtype=float) for s in strata if len(s)]
     varied = tuple(a for a in arrays if a.size >= 2)
     fixed = [a for a in arrays if a.size < 2]
     if not varied:
         return math.nan, math.nan
+    vectorized = _takes_axis(statistic)
 
-    def pooled(*samples: np.ndarray) -> float:
-        return statistic(np.concatenate([*samples, *fixed]))
+    def pooled(*samples: np.ndarray, axis: int = -1) -> float:
+        if not vectorized:
+            return statistic(np.concatenate([*samples, *fixed]))
+        rows = samples[0].shape[:-1]  # the resamples' shape; each fixed value repeated on every row
+        return statistic(np.concatenate([*samples, *(np.broadcast_to(f, rows + f.shape) for f in fixed)], axis=-1),
+                         axis=-1)
 
-    res = _st.bootstrap(varied, pooled, vectorized=False, paired=False, method="percentile",
+    res = _st.bootstrap(varied, pooled, vectorized=vectorized, paired=False, method="percentile",
                         n_resamples=n_resamples, confidence_level=confidence, **_rng_kw(_st.bootstrap, np.random.default_rng(seed)))
     return float(res.confidence_interval.low), float(res.confidence_interval.high)
 

@@ -3,14 +3,11 @@
 ``offroadbench drive --planner`` and ``offroadbench study run``; a failed trial replays bit for bit."""
 
 import os
-import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "offroadbench-example-planner"
 
 STUDY = """
 [study]
@@ -39,16 +36,11 @@ border_m = 1.0
 
 
 @pytest.fixture(scope="module")
-def installed(tmp_path_factory):
-    """pip install of a copy of the example package into a target folder, and an env to use it."""
+def installed(tmp_path_factory, example_plugin_site):
+    """A working folder, and an env that finds the example package pip installed into a target folder
+    (tests/conftest.py)."""
     tmp = tmp_path_factory.mktemp("plugin")
-    src = tmp / "src"
-    shutil.copytree(EXAMPLE, src)
-    site = tmp / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation",
-                    "--target", str(site), str(src)], check=True, capture_output=True)
-    assert (site / "offroadbench_example_planner" / "__init__.py").is_file()
-    env = dict(os.environ, PYTHONPATH=str(site))
+    env = dict(os.environ, PYTHONPATH=str(example_plugin_site))
     return tmp, env
 
 

@@ -120,6 +120,35 @@ def test_raised_centre_of_mass_fails_the_stability_row(tmp_path):
     assert climb.expected < 25.0  # the pitch-over angle atan(a / h) caps the climb
 
 
+def test_a_step_attempt_ends_when_the_vehicle_turns_over(tmp_path, monkeypatch):
+    """The Husky with its centre of mass 0.5 m higher goes over backwards at a 0.1 m step: the attempt
+    is not a climb, and it ends there (about 3 s in), not after the 10 s an attempt may take."""
+    import contextlib
+    import dataclasses
+
+    from offroadbench.sim import SimConfig
+    from offroadbench.sim.rigs import vehicle_check
+    from offroadbench.sim.trial.vehicle import load_vehicle
+
+    steps = []
+    real_open = vehicle_check.open_world
+
+    @contextlib.contextmanager
+    def counted(*args, **kwargs):
+        with real_open(*args, **kwargs) as world:
+            real = world.step
+            world.step = lambda: (steps.append(1), real())[1]
+            yield world
+
+    monkeypatch.setattr(vehicle_check, "open_world", counted)
+    sim = dataclasses.replace(SimConfig(), settle_time_s=0.5)
+    spec = _broken(load_vehicle("husky"), tmp_path, com_raise_m=0.5)
+    assert not vehicle_check._climbs_step(spec, sim, 0.1)
+    assert 0 < len(steps) < 5.0 * sim.physics_rate_hz
+    steps.clear()
+    assert vehicle_check._climbs_step(load_vehicle("husky"), sim, 0.1)  # upright, it climbs the same step
+
+
 def test_results_are_plain_json_rows(checked):
     _, rows = checked
     for r in rows:

@@ -3,21 +3,14 @@ installed with pip into a temporary folder and ``suite run --planner via`` score
 
 import json
 import os
-import shutil
 import subprocess
 import sys
-from pathlib import Path
-
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "offroadbench-example-planner"
 
 
-def test_an_installed_plugin_planner_runs_the_suite_and_gets_a_card(tmp_path):
+def test_an_installed_plugin_planner_runs_the_suite_and_gets_a_card(tmp_path, example_plugin_site):
     from .conftest import suite_text
 
-    src, site = tmp_path / "src", tmp_path / "site"
-    shutil.copytree(EXAMPLE, src)
-    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation", "--target",
-                    str(site), str(src)], check=True, capture_output=True)
+    site = example_plugin_site
     (tmp_path / "tiny-v1.toml").write_text(suite_text())
     code = "import sys; from offroadbench.cli import main; sys.exit(main(sys.argv[1:]))"
     args = ["suite", "run", "--suite", "tiny-v1.toml", "--planner", "via", "--out", "via", "--executor", "inline"]

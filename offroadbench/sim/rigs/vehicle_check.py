@@ -344,7 +344,9 @@ def _step_world(height_m: float, spec: VehicleSpec) -> Heightmap:
 
 def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float, speed_m_s: float | None = None) -> bool:
     """Whether the vehicle, driven straight at ``speed_m_s`` (None: cruise, 1 m/s or its top speed)
-    from 1.5 m before it, gets over a step of ``height_m``."""
+    from 1.5 m before it, gets over a step of ``height_m`` (its body reaches 1.5 m past the edge)
+    on its wheels: one turned past 90 deg (its body's up axis pointing below the horizon, on its
+    side or roof) has not, and the attempt ends there."""
     hm = _step_world(height_m, spec)
     with open_world(hm, spec, sim) as world:
         world.spawn(2.5, hm.height_m / 2.0, 0.0)
@@ -353,8 +355,11 @@ def _climbs_step(spec: VehicleSpec, sim: SimConfig, height_m: float, speed_m_s: 
         # 10 s, or twice the time the 3 m to the finish take at cruise speed for a slower vehicle
         for _ in range(int(round(max(10.0, 6.0 / v) * sim.physics_rate_hz))):
             world.step()
-            if world.base_state()[0][0] > 5.5:
+            pos, (qx, qy, _, _), _, _ = world.base_state()
+            if pos[0] > 5.5:
                 return True
+            if 1.0 - 2.0 * (qx * qx + qy * qy) < 0.0:  # the body's up axis, world z (quaternion xyzw)
+                return False
     return False
 
 

@@ -119,9 +119,12 @@ def sign_flip_test(d: Sequence[float], *, rng: np.random.Generator | None = None
     if x.size == 0 or not np.any(x != 0):
         return 1.0
     if x.size <= EXACT_MAX_CLUSTERS:
-        sums = np.zeros(1)
-        for v in x:
-            sums = np.concatenate([sums + v, sums - v])
+        sums = np.zeros(2 ** x.size)  # filled in place: after k differences, the first 2^k
+        n = 1
+        for v in x:  # [s + v for s in sums] then [s - v for s in sums], as a concatenation would give
+            np.subtract(sums[:n], v, out=sums[n:2 * n])
+            np.add(sums[:n], v, out=sums[:n])
+            n *= 2
         obs = abs(float(x.sum()))
         return float(np.mean(np.abs(sums) >= obs * (1 - 1e-12) - 1e-300))
     from scipy.stats import permutation_test
