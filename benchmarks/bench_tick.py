@@ -41,9 +41,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
+
+from _timing import run_in_tree
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -272,14 +273,7 @@ def _run_child(tree: str, case: str, args) -> dict | None:
     else:
         argv = ["--child", case, "--missions", str(args.missions)] + (["--smoke"] if args.smoke else []) + (
             ["--profile"] if args.profile else [])
-    code = (f"import sys; sys.path.insert(0, {tree!r}); sys.argv[1:] = {argv!r}; "
-            f"sys.path.insert(1, {str(ROOT / 'benchmarks')!r}); import bench_tick; bench_tick.main()")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tree)
-    line = [ln for ln in out.stdout.splitlines() if ln.startswith("RESULT ")]
-    if out.returncode or not line:
-        print(f"{tree} ({case}): failed\n{out.stderr[-2000:]}")
-        return None
-    return json.loads(line[0][7:])
+    return run_in_tree(tree, "bench_tick", argv, case)
 
 
 def main() -> None:

@@ -28,9 +28,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
+
+from _timing import run_in_tree
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -179,15 +180,8 @@ def replay_child(missions: int, rows: int | None) -> dict:
 
 
 def _run_child(tree: str, mode: str, args, smoke: bool) -> dict | None:
-    code = (f"import sys; sys.path.insert(0, {tree!r}); "
-            f"sys.argv[1:] = {['--child', mode, '--missions', str(args.missions)] + (['--smoke'] if smoke else [])!r}; "
-            f"sys.path.insert(1, {str(ROOT / 'benchmarks')!r}); import bench_trial_step; bench_trial_step.main()")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tree)
-    line = [ln for ln in out.stdout.splitlines() if ln.startswith("RESULT ")]
-    if out.returncode or not line:
-        print(f"{tree} ({mode}): failed\n{out.stderr[-2000:]}")
-        return None
-    return json.loads(line[0][7:])
+    argv = ['--child', mode, '--missions', str(args.missions)] + (['--smoke'] if smoke else [])
+    return run_in_tree(tree, "bench_trial_step", argv, mode)
 
 
 def _replay_rounds(trees: list[str], args, rows: int | None) -> None:
