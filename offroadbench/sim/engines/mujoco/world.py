@@ -71,6 +71,7 @@ from offroadbench.sim.engines.mujoco.settings import MUJOCO_CONTACT, ContactTuni
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 from offroadbench.sim.engines.mujoco.kernels import compiled_loop, hfield_functions, soil_step, whole_step
 from offroadbench.sim.engines.mujoco.mjcf import MjcfBuilder
+from offroadbench.sim.engines.mujoco.queries import hfield_ray_height, subtree_com
 from offroadbench.sim.engines.mujoco.tyres import MuJoCoTyres
 
 __all__ = ["MuJoCoWorld", "ContactTuning", "MUJOCO_CONTACT"]
@@ -476,10 +477,7 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
 
     def centre_of_mass_m(self) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass in the world, m."""
-        m, d = self.model, self.data
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        return tuple(d.subtree_com[self._chassis].tolist())
+        return subtree_com(self.model, self.data, self._chassis)
 
     def push_base(self, fx: float, fy: float, fz: float) -> None:
         """An external force on the chassis at its centre of mass during the next step, N (world frame)."""
@@ -491,8 +489,5 @@ class MuJoCoWorld(MuJoCoTyres, MjcfBuilder):
 
     def ray_height(self, x_m: float, y_m: float) -> float:
         """Height of the terrain's collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
-        top = self.hm.z_max_m + 1.0
-        dist = mujoco.mj_rayHfield(self.model, self.data, self._terrain_geom, np.array([x_m, y_m, top]),
-                                   np.array([0.0, 0.0, -1.0]))
-        return float("nan") if dist < 0 else top - dist
+        return hfield_ray_height(self.model, self.data, self._terrain_geom, x_m, y_m, self.hm.z_max_m + 1.0)
 

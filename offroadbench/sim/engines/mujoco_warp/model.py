@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-import mujoco
 import numpy as np
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
 from offroadbench.sim.config import SimConfig
+from offroadbench.sim.engines.mujoco.queries import hfield_ray_height, subtree_com
 from offroadbench.sim.engines.mujoco.world import MuJoCoWorld
 from offroadbench.sim.trial.vehicle import VehicleSpec
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
@@ -91,11 +91,8 @@ class BatchModel(MuJoCoWorld):
 
     def centre_of_mass_at(self, qpos) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass at joint positions ``qpos``, m (host kinematics)."""
-        m, d = self.model, self.data
-        d.qpos[:] = qpos
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        return tuple(d.subtree_com[self._chassis].tolist())
+        self.data.qpos[:] = qpos
+        return subtree_com(self.model, self.data, self._chassis)
 
     def ray_height(self, terrain: int, x_m: float, y_m: float) -> float:
         """Height of terrain ``terrain``'s collision surface at (x, y) by a vertical ray, m (NaN off the map)."""
@@ -105,13 +102,10 @@ class BatchModel(MuJoCoWorld):
     def _ray_height(self, m, terrain: int, x_m: float, y_m: float) -> float:
         m.geom_dataid[self._terrain_geom] = self.hfield_ids[terrain]
         try:
-            mujoco.mj_kinematics(m, self.data)
-            top = self.terrains[terrain].z_max_m + 1.0
-            dist = mujoco.mj_rayHfield(m, self.data, self._terrain_geom, np.array([x_m, y_m, top]),
-                                       np.array([0.0, 0.0, -1.0]))
+            return hfield_ray_height(m, self.data, self._terrain_geom, x_m, y_m, self.terrains[terrain].z_max_m + 1.0,
+                                     kinematics=True)
         finally:
             m.geom_dataid[self._terrain_geom] = self.hfield_ids[0]
-        return float("nan") if dist < 0 else top - dist
 
     def layout(self) -> dict:
         """What the device kernels need of the model: wheel bodies, their spin dofs' qvel addresses
