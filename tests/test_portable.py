@@ -224,7 +224,7 @@ def test_pinned_terrain_hashes_hold_on_a_baseline_cpu():
     """tests/terrain/test_bit_identical.py's pinned hashes, recomputed with the dispatch switched down."""
     here = Path(__file__).parent
     proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(here / "terrain" / "test_bit_identical.py")],
+        [sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", str(here / "terrain" / "test_bit_identical.py")],
         env={**os.environ, **BASELINE_ENV}, capture_output=True, text=True, timeout=900, cwd=here.parent,
     )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
