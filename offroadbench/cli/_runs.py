@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import signal
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
@@ -14,7 +15,7 @@ from typing import Any, Callable, Iterator, Mapping
 from offroadbench.errors import InputError, RunInterrupted, StudyError
 
 __all__ = ["add_run_options", "check_run_args", "run_dir", "run_workers", "run_options", "prepare_run",
-           "RunBar", "run_bar", "run_totals", "fault_lines", "say_run", "report_due", "stop_signals"]
+           "RunBar", "run_bar", "run_totals", "fault_lines", "say_run", "report_due", "run_command", "stop_signals", "write_report_folder"]
 
 
 # --------------------------------------------------------------------------- options
@@ -114,6 +115,18 @@ def run_options(args: argparse.Namespace, workers: int | None) -> dict[str, Any]
             "retry_faults": args.retry_faults}
 
 
+def run_command(run: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+    """A command that runs trials (the ``run`` of study, search and suite): inside stop_signals, so
+    Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
+
+    @functools.wraps(run)
+    def command(args: argparse.Namespace) -> int:
+        with stop_signals():
+            return run(args)
+
+    return command
+
+
 @contextlib.contextmanager
 def stop_signals() -> Iterator[None]:
     """While inside: Ctrl-C and SIGTERM end the run (offroadbench.stop: noted, so never lost;
@@ -203,3 +216,26 @@ def report_due(args: argparse.Namespace, summary) -> bool:
     """Whether the report is written now: every trial stored (as an outcome or a fault), at least
     one outcome (a run of faults only has no statistics), and no --no-report."""
     return summary.done + summary.faults >= summary.total and summary.done > 0 and not args.no_report
+
+
+def write_report_folder(report, out: Path, toml: str | None, toml_name: str,
+                        html: Callable[[], str] | None = None) -> Path:
+    """Write a run's report (a study's or a search's: ``figures``, ``tables``, ``markdown``) into the
+    folder ``out`` whole: its figures (PNG), tables (CSV), the run's TOML as ``toml_name``, report.md
+    and, with ``html`` (a function giving the page), report.html. All or nothing: the folder is
+    written beside its place and swapped in whole, so a killed report never leaves figures without
+    report.md, nor a new report.md over old figures. Returns the path of the page written last."""
+    from offroadbench.cli._common import created_dirs, save_figure
+    from offroadbench.io.export import staged_dir
+
+    with created_dirs(out.parent), staged_dir(out) as stage:
+        for name, fig in report.figures.items():
+            save_figure(fig, stage / name, dpi=110)
+        for name, df in report.tables.items():
+            df.to_csv(stage / name, index=False)
+        if toml:
+            (stage / toml_name).write_text(toml)
+        (stage / "report.md").write_text(report.markdown)
+        if html is not None:
+            (stage / "report.html").write_text(html(), encoding="utf-8")
+    return out / ("report.html" if html is not None else "report.md")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from offroadbench.cli._runs import run_command
 from offroadbench.errors import InputError
 
 
@@ -37,37 +38,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def write_search_report(run_dir: Path, out: Path, html: bool = False) -> Path:
     """Build the report of a search run directory and write it whole (Markdown, PNGs, CSVs, the TOML;
     ``html`` also the self-contained report.html)."""
-    from offroadbench.cli._common import created_dirs, save_figure
-    from offroadbench.io.export import staged_dir
+    from offroadbench.cli._runs import write_report_folder
     from offroadbench.search.report import build_search_report
     from offroadbench.study.store.results import load_meta
 
     report = build_search_report(run_dir)
-    toml = load_meta(run_dir).get("study_toml")
-    with created_dirs(out.parent), staged_dir(out) as stage:
-        for name, fig in report.figures.items():
-            save_figure(fig, stage / name, dpi=110)
-        for name, df in report.tables.items():
-            df.to_csv(stage / name, index=False)
-        if toml:
-            (stage / "search.toml").write_text(toml)
-        (stage / "report.md").write_text(report.markdown)
-        if html:
-            from offroadbench.search.report import search_report_html
+    page = None
+    if html:
+        from offroadbench.search.report import search_report_html
 
-            (stage / "report.html").write_text(search_report_html(run_dir, report), encoding="utf-8")
-    return out / ("report.html" if html else "report.md")
+        def page() -> str:
+            return search_report_html(run_dir, report)
+
+    return write_report_folder(report, out, load_meta(run_dir).get("study_toml"), "search.toml", page)
 
 
+@run_command
 def cmd_run(args: argparse.Namespace) -> int:
-    """``search run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
-    from offroadbench.cli._runs import stop_signals
-
-    with stop_signals():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
+    """``search run`` (Ctrl-C and SIGTERM end it with one line: offroadbench.cli._runs.run_command)."""
     from offroadbench.cli._runs import check_run_args, prepare_run, report_due, run_bar, run_dir, say_run
     from offroadbench.io.inputs import check_input_file
     from offroadbench.search import load_search, run_search

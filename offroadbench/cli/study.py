@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from offroadbench.cli._runs import run_command
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path, atomic_paths
 
@@ -151,15 +152,9 @@ def _flat_keys(table: dict, prefix: str = "") -> list[str]:
     return keys
 
 
+@run_command
 def cmd_run(args: argparse.Namespace) -> int:
-    """``study run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
-    from offroadbench.cli._runs import stop_signals
-
-    with stop_signals():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
+    """``study run`` (Ctrl-C and SIGTERM end it with one line: offroadbench.cli._runs.run_command)."""
     from offroadbench.cli._runs import check_run_args, prepare_run, report_due, run_bar, run_dir, say_run
     from offroadbench.config import load_toml
     from offroadbench.io.inputs import check_input_file
@@ -238,30 +233,19 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
 def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
     """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
     ``html`` also the self-contained report.html) to ``out``."""
+    from offroadbench.cli._runs import write_report_folder
     from offroadbench.study.report.markdown import build_report
     from offroadbench.study.store.results import load_meta
 
-    from offroadbench.cli._common import created_dirs, save_figure
-
-    from offroadbench.io.export import staged_dir
-
     report = build_report(run_dir, fig4=fig4)
-    toml = load_meta(run_dir).get("study_toml")
-    # all or nothing: the report is written beside its folder and swapped in whole, so a killed
-    # report never leaves figures without report.md, nor a new report.md over old figures
-    with created_dirs(out.parent), staged_dir(out) as stage:
-        for name, fig in report.figures.items():
-            save_figure(fig, stage / name, dpi=110)
-        for name, df in report.tables.items():
-            df.to_csv(stage / name, index=False)
-        if toml:
-            (stage / "study.toml").write_text(toml)
-        (stage / "report.md").write_text(report.markdown)
-        if html:
-            from offroadbench.study.report.html import report_html
+    page = None
+    if html:
+        from offroadbench.study.report.html import report_html
 
-            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
-    return out / ("report.html" if html else "report.md")
+        def page() -> str:
+            return report_html(run_dir, report)
+
+    return write_report_folder(report, out, load_meta(run_dir).get("study_toml"), "study.toml", page)
 
 
 def cmd_report(args: argparse.Namespace) -> int:

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from offroadbench.cli._runs import run_command
 from offroadbench.errors import InputError
 
 DEFAULT_SUITE = "offroadbench-v1"
@@ -85,16 +86,9 @@ def _tier_size(suite, cat, tier: str) -> str:
     return f"{cells} x {t} terrains x {m} missions = {cells * t * m:>3} tasks"
 
 
+@run_command
 def cmd_run(args: argparse.Namespace) -> int:
-    """``suite run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to
-    resume), as ``study run``."""
-    from offroadbench.cli._runs import stop_signals
-
-    with stop_signals():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
+    """``suite run`` (Ctrl-C and SIGTERM end it with one line: offroadbench.cli._runs.run_command)."""
     from offroadbench.cli._common import check_output_dir
     from offroadbench.cli._runs import check_run_args, prepare_run, run_bar, run_dir, run_totals, say_run
     from offroadbench.study.runner import check_study_size
