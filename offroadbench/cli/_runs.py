@@ -14,8 +14,9 @@ from typing import Any, Callable, Iterator, Mapping
 
 from offroadbench.errors import InputError, RunInterrupted, StudyError
 
-__all__ = ["add_run_options", "check_run_args", "run_dir", "run_workers", "run_options", "prepare_run",
-           "RunBar", "run_bar", "run_totals", "fault_lines", "say_run", "report_due", "run_command", "stop_signals", "write_report_folder"]
+__all__ = ["add_run_options", "trial_timeout_arg", "check_run_args", "run_dir", "run_workers", "run_options",
+           "prepare_run", "run_command", "stop_signals", "RunBar", "run_bar", "run_totals", "fault_lines", "say_run",
+           "report_due", "write_report_folder"]
 
 
 # --------------------------------------------------------------------------- options
