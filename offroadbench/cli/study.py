@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from offroadbench.cli._runs import run_command
 from offroadbench.errors import InputError
 from offroadbench.io.atomic import atomic_path, atomic_paths
 
@@ -61,37 +62,21 @@ def _check_power_apart(study, base_dir: Path) -> None:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``study`` command group."""
-    from offroadbench.cli._common import float_at_least, int_at_least
-    from offroadbench.study.execution.executors import EXECUTORS
+    from offroadbench.cli._runs import add_run_options
 
     p = subparsers.add_parser("study", help="run, export and report Monte Carlo studies")
     sub = p.add_subparsers(dest="study_command", required=True)
 
     run = sub.add_parser("run", help="run (or resume) a study TOML; finished trials are skipped")
     run.add_argument("study", help="study TOML, e.g. experiments/smoke.toml")
-    run.add_argument("--out", help="run directory (default: runs/<study name>)")
-    run.add_argument("--workers", type=int_at_least(1, "--workers"), default=None,
-                     help="worker processes (default: as many as both the cores and the memory allow)")
-    run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
-    run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
+    add_run_options(run, out_help="run directory (default: runs/<study name>)", goes_on="the study goes on")
     run.add_argument("--no-report", action="store_true", help="do not write the report when the study is complete")
-    run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: a trial running longer than this, s, is stored as a fault (its worker "
-                          "replaced where the trial cannot be stopped; on dask a worker silent for this plus 10 s "
-                          "too) and the study goes on (default: generous against the trials' nominal time; at "
-                          "most 30 days; at least the study's shortest possible trial)")
-    run.add_argument("--retry-faults", action="store_true",
-                     help="run the trials stored as faults (past their limit, thrown while settling) once more; "
-                          "a resume skips them otherwise")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="change the study before it runs (a new study id, so use a new --out): study.FIELD "
                           "([study]), SECTION.FIELD for the settings tables (sim, controller, rules, roughness, "
                           "vehicle, planner, missions), SECTION.TABLE.FIELD for a nested one (sim.mujoco, sim.mujoco_warp), "
                           "any other key is a recipe override (as drive --set), e.g. --set study.terrains_per_cell=2 "
                           "--set sim.engine=mujoco --set sim.mujoco.hfield_collision=exact; repeatable")
-    run.add_argument("--force", action="store_true",
-                     help="skip the up-front memory and study-size estimate checks (memory also "
-                          "OFFROADBENCH_NO_MEMORY_CHECK=1)")
     run.set_defaults(func=cmd_run)
 
     exp = sub.add_parser("export", help="write the trial and terrain tables of a run directory")
@@ -167,34 +152,18 @@ def _flat_keys(table: dict, prefix: str = "") -> list[str]:
     return keys
 
 
+@run_command
 def cmd_run(args: argparse.Namespace) -> int:
-    """``study run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to resume)."""
-    from offroadbench.cli._runs import stop_signals
-
-    with stop_signals():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from offroadbench.cli._common import bar, check_output_dir
-    from offroadbench.cli._runs import check_dir_name, fault_lines, run_workers
-    from offroadbench.io.inputs import check_input_file
+    """``study run`` (Ctrl-C and SIGTERM end it with one line: offroadbench.cli._runs.run_command)."""
+    from offroadbench.cli._runs import check_run_args, prepare_run, report_due, run_bar, run_dir, say_run
     from offroadbench.config import load_toml
+    from offroadbench.io.inputs import check_input_file
     from offroadbench.study import run_study
     from offroadbench.study.runner import check_study_size
     from offroadbench.study.spec.config import plan_cells, study_from_dict
 
+    check_run_args(args)
     path = check_input_file(args.study, "study TOML")
-    if args.scheduler and args.executor != "dask":
-        raise InputError("--scheduler needs --executor dask")
-    if args.trial_timeout_s is not None and args.executor == "inline":
-        raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    from offroadbench.study.execution.executors import check_trial_timeout
-
-    try:
-        check_trial_timeout(args.trial_timeout_s)
-    except InputError as exc:
-        raise InputError(f"--trial-timeout-s: {exc}") from None
     study = study_from_dict(apply_sets(load_toml(path), args.set), where=str(path))
     check_study_size(study, args.force)  # before the cells are resolved: a huge grid takes long to load
     if study.analysis is not None and study.analysis.pilot:
@@ -203,38 +172,17 @@ def _run(args: argparse.Namespace) -> int:
         plans = plan_cells(study, base_dir=path.parent)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
-    from offroadbench.study.execution.common import check_trial_floor
-
-    check_trial_floor(args.trial_timeout_s, plans)  # a limit no trial can meet (issue 44)
-    if not args.out:
-        check_dir_name(study.name, path)
-    out = check_output_dir(args.out if args.out else Path("runs") / study.name, "--out")
-    workers = run_workers(args, plans)
-    options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
+    out = run_dir(args.out, Path("runs"), study.name, f"{path}: [study] name")
+    options = prepare_run(args, plans)  # a --trial-timeout-s no trial can meet is refused here (issue 44)
     text = path.read_text() + "".join(f"\n# run with: study run --set {item}" for item in args.set or [])
-    counts = {"new": 0, "ok": 0}
-
-    def success() -> dict:
-        return {"success": f"{100.0 * counts['ok'] / counts['new']:.0f}%"} if counts["new"] else {}
-
-    def on_trial(row) -> None:
-        counts["new"] += 1
-        counts["ok"] += bool(row["success"])
-
-    with bar(study.name, unit="trial", postfix=success) as progress:
-        summary = run_study(study, plans, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                            executor_options=options, source_text=text, progress=progress, on_trial=on_trial,
-                            retry_faults=args.retry_faults)
-    lines = fault_lines(summary, out)  # every trial of this run faulted: one line, exit 1
+    with run_bar(study.name) as bar:
+        summary = run_study(study, plans, out, **options, source_text=text, progress=bar.progress,
+                            on_trial=bar.on_trial)
     faults = (f"; {summary.faults} fault(s), excluded from the statistics (see the report; --retry-faults runs "
               "them again)") if summary.faults else ""
-    print(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}; "
-          f"this run: {summary.ran} trials in {summary.wall_s:.1f} s ({summary.trials_per_s:.2f} trials/s)")
-    for line in lines:
-        print(line)
-    if summary.complete and summary.done and not args.no_report:  # (a study of faults only has no statistics)
-        path = write_report(out, out / "report")
-        print(f"report: {path}")
+    say_run(f"{summary.done} / {summary.total} trials in {out} ({summary.successes} successful){faults}", summary, out)
+    if report_due(args, summary):
+        print(f"report: {write_report(out, out / 'report')}")
     return 0
 
 
@@ -285,30 +233,19 @@ def _parse_fig4(text: str | None) -> tuple[int, int] | None:
 def write_report(run_dir: Path, out: Path, fig4: tuple[int, int] | None = None, html: bool = False) -> Path:
     """Build the report of ``run_dir`` and write it (Markdown, PNGs, CSVs, the study TOML; with
     ``html`` also the self-contained report.html) to ``out``."""
+    from offroadbench.cli._runs import write_report_folder
     from offroadbench.study.report.markdown import build_report
     from offroadbench.study.store.results import load_meta
 
-    from offroadbench.cli._common import created_dirs, save_figure
-
-    from offroadbench.io.export import staged_dir
-
     report = build_report(run_dir, fig4=fig4)
-    toml = load_meta(run_dir).get("study_toml")
-    # all or nothing: the report is written beside its folder and swapped in whole, so a killed
-    # report never leaves figures without report.md, nor a new report.md over old figures
-    with created_dirs(out.parent), staged_dir(out) as stage:
-        for name, fig in report.figures.items():
-            save_figure(fig, stage / name, dpi=110)
-        for name, df in report.tables.items():
-            df.to_csv(stage / name, index=False)
-        if toml:
-            (stage / "study.toml").write_text(toml)
-        (stage / "report.md").write_text(report.markdown)
-        if html:
-            from offroadbench.study.report.html import report_html
+    page = None
+    if html:
+        from offroadbench.study.report.html import report_html
 
-            (stage / "report.html").write_text(report_html(run_dir, report), encoding="utf-8")
-    return out / ("report.html" if html else "report.md")
+        def page() -> str:
+            return report_html(run_dir, report)
+
+    return write_report_folder(report, out, load_meta(run_dir).get("study_toml"), "study.toml", page)
 
 
 def cmd_report(args: argparse.Namespace) -> int:

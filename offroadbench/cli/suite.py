@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from offroadbench.cli._runs import run_command
 from offroadbench.errors import InputError
 
 DEFAULT_SUITE = "offroadbench-v1"
@@ -13,8 +14,7 @@ DEFAULT_SUITE = "offroadbench-v1"
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``suite`` command group."""
-    from offroadbench.cli._common import float_at_least, int_at_least
-    from offroadbench.study.execution import EXECUTORS
+    from offroadbench.cli._runs import add_run_options
 
     p = subparsers.add_parser("suite", help="run a versioned task suite and score a planner against the baselines")
     sub = p.add_subparsers(dest="suite_command", required=True, parser_class=subparsers._parser_class)
@@ -27,21 +27,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--planner", required=True, help="a registered planner or policy (plug-ins included), e.g. astar")
     run.add_argument("--tier", default="quick", help="the tier (default: quick; `suite list` shows them)")
     run.add_argument("--suite", default=DEFAULT_SUITE, help=f"suite name or suite TOML (default: {DEFAULT_SUITE})")
-    run.add_argument("--out", help="run folder: one study run directory per category (default: "
-                                   "runs/suite/<suite>-<tier>-<planner>); the same command again resumes")
+    add_run_options(run, out_help="run folder: one study run directory per category (default: "
+                                   "runs/suite/<suite>-<tier>-<planner>); the same command again resumes",
+                    goes_on="the suite goes on", fault_note=" (scored 0)",
+                    force_checks="memory and size estimate checks")
     run.add_argument("--card-out", help="folder of the score card (score.json, score.md, score.html, profile.png; "
                                         "default: --out)")
     run.add_argument("--baselines", metavar="DIR", help="folder of the score cards set beside this one "
                                                           "(<suite>/<tier>/<planner>/score.json; default: the shipped "
                                                           "suites/scores)")
-    run.add_argument("--workers", type=int_at_least(1, "--workers"), default=None,
-                     help="worker processes (default: as many as both the cores and the memory allow)")
-    run.add_argument("--executor", default="local", choices=sorted(EXECUTORS), help="where trials run (default: local)")
-    run.add_argument("--scheduler", help="Dask scheduler address (with --executor dask; default: a LocalCluster)")
-    run.add_argument("--trial-timeout-s", type=float_at_least(0, "--trial-timeout-s", open_=True), default=None,
-                     help="local and dask: a trial running longer than this, s, is stored as a fault (scored 0)")
-    run.add_argument("--retry-faults", action="store_true", help="run the trials stored as faults again")
-    run.add_argument("--force", action="store_true", help="skip the up-front memory and size estimate checks")
     run.set_defaults(func=cmd_run)
 
     sc = sub.add_parser("score", help="write the score card of a finished suite run again (against the current "
@@ -92,59 +86,29 @@ def _tier_size(suite, cat, tier: str) -> str:
     return f"{cells} x {t} terrains x {m} missions = {cells * t * m:>3} tasks"
 
 
-def _workers(args: argparse.Namespace, planned) -> int | None:
-    """--workers, or as many as both the cores and the memory allow for the largest category."""
-    from offroadbench.memory import check_memory, format_bytes, workers_that_fit
-    from offroadbench.study.runner import worker_memory_bytes
-
-    if args.executor == "inline" or (args.executor == "dask" and args.scheduler):
-        return args.workers
-    per_worker = max(worker_memory_bytes(list(p.plans)) for p in planned)
-    workers = args.workers if args.workers is not None else workers_that_fit(per_worker)
-    check_memory(workers * per_worker, f"{workers} worker(s) of about {format_bytes(per_worker)} each", args.force,
-                 per_process_bytes=per_worker)
-    return workers
-
-
+@run_command
 def cmd_run(args: argparse.Namespace) -> int:
-    """``suite run``: Ctrl-C and SIGTERM end it at any moment with one line (what is kept, how to
-    resume), as ``study run``."""
-    from offroadbench.cli._runs import stop_signals
-
-    with stop_signals():
-        return _run(args)
-
-
-def _run(args: argparse.Namespace) -> int:
-    from offroadbench.cli._common import bar, check_output_dir
-    from offroadbench.study.execution import check_trial_timeout
+    """``suite run`` (Ctrl-C and SIGTERM end it with one line: offroadbench.cli._runs.run_command)."""
+    from offroadbench.cli._common import check_output_dir
+    from offroadbench.cli._runs import check_run_args, prepare_run, run_bar, run_dir, run_totals, say_run
     from offroadbench.study.runner import check_study_size
     from offroadbench.suite import load_suite, plan_suite, run_suite, suite_trials
 
-    if args.scheduler and args.executor != "dask":
-        raise InputError("--scheduler needs --executor dask")
-    if args.trial_timeout_s is not None and args.executor == "inline":
-        raise InputError("--trial-timeout-s applies to --executor local and dask, not inline")
-    try:
-        check_trial_timeout(args.trial_timeout_s)
-    except InputError as exc:
-        raise InputError(f"--trial-timeout-s: {exc}") from None
+    check_run_args(args)
     suite, path = load_suite(args.suite)
     suite.tier(args.tier)
     planned = plan_suite(suite, args.tier, args.planner)
     for p in planned:
         check_study_size(p.study, args.force)
-    out = check_output_dir(args.out or Path("runs") / "suite" / f"{suite.name}-{args.tier}-{args.planner}", "--out")
+    out = run_dir(args.out, Path("runs") / "suite", f"{suite.name}-{args.tier}-{args.planner}",
+                  f"{path}: the suite run's name SUITE-TIER-PLANNER")
     card_out = check_output_dir(args.card_out, "--card-out") if args.card_out else out
-    workers = _workers(args, planned)
-    options = {} if args.trial_timeout_s is None else {"trial_timeout_s": args.trial_timeout_s}
-    with bar(f"{suite.name} {args.tier} {args.planner}", unit="trial") as progress:
-        runs = run_suite(planned, out, executor=args.executor, workers=workers, scheduler=args.scheduler,
-                         executor_options=options, progress=progress, retry_faults=args.retry_faults)
-    ran = sum(r.summary.ran for r in runs)
-    wall = sum(r.summary.wall_s for r in runs)
-    print(f"{suite.name} {args.tier} tier, planner {args.planner}: {suite_trials(planned)} tasks in {out} "
-          f"(this run: {ran} trials in {wall:.1f} s)")
+    options = prepare_run(args, [cell for p in planned for cell in p.plans])  # every category's cells
+    with run_bar(f"{suite.name} {args.tier} {args.planner}") as bar:
+        runs = run_suite(planned, out, **options, progress=bar.progress, on_trial=bar.on_trial)
+    # a fault is a task scored 0, so a run of faults only still has its card
+    say_run(f"{suite.name} {args.tier} tier, planner {args.planner}: {suite_trials(planned)} tasks in {out}",
+            run_totals([r.summary for r in runs], out), out, outcomes_needed=False)
     incomplete = [r.category for r in runs if not r.summary.complete]
     if incomplete:  # pragma: no cover - run_study raises before leaving a category incomplete
         sys.stderr.write(f"offroadbench: categories not complete: {', '.join(incomplete)}; run again to resume\n")
