@@ -64,7 +64,7 @@ def recorded(tmp_path_factory):
 
 def test_the_report_counts_the_mujoco_warp_trials_with_a_dropped_contact_and_their_outcomes(recorded):
     line = _line(build_report(recorded).markdown)
-    assert "2 of 3 MuJoCo Warp trials had a contact dropped (7 in all, counted per MuJoCo step; outcomes: success 1, stuck 1)." in line
+    assert "2 of 3 MuJoCo Warp trials had a contact dropped (7 in all, counted per MuJoCo step; outcomes: stuck 1, success 1)." in line
 
 
 def test_the_html_trial_table_shows_the_count_where_recorded(recorded):
@@ -81,3 +81,20 @@ def test_rows_from_before_the_column_are_not_recorded(tmp_path):
 def test_a_study_without_mujoco_warp_has_no_line(tmp_path):
     rep = build_report(_run(tmp_path / "none", engines=("mujoco", "pybullet")))
     assert _line(rep.markdown) == "" and "dropped_contacts" not in report_html(tmp_path / "none", rep)
+
+
+def test_a_run_resumed_across_the_column_says_how_many_rows_predate_it(recorded, monkeypatch):
+    """A store with MuJoCo Warp rows from before the column and after (a run resumed across it):
+    the line counts the recorded ones and says how many are not."""
+    from offroadbench.study.report import markdown
+    from offroadbench.study.store.results import load
+
+    def mixed(run_dir):
+        trials = load(run_dir)
+        trials.loc[(trials["engine"] == "mujoco_warp") & (trials["mission"] == 2), "dropped_contacts"] = math.nan
+        return trials
+
+    monkeypatch.setattr(markdown, "load", mixed)
+    line = _line(build_report(recorded).markdown)
+    assert ("1 of 2 MuJoCo Warp trials (1 more from before the count was kept) had a contact dropped "
+            "(2 in all, counted per MuJoCo step; outcomes: success 1).") in line
