@@ -88,6 +88,13 @@ class TrialWorld(Protocol):
 
     Frames: world x east, y north, z up, the map's sample (r, c) at (c * cell, r * cell, z[r, c]);
     quaternions (x, y, z, w); angular velocities in the world frame.
+
+    Optional, not a member (an engine without it is still a TrialWorld; the trial runner reads it
+    with ``getattr`` at a trial's end): ``dropped_contacts() -> int | None``, the terrain contacts
+    the engine took out of its solver since the last :meth:`spawn` (settling included), summed
+    over its physics steps up to the last state read (a contact dropped in n steps counts n
+    times); absent or None where the engine drops none by design (the row's
+    TrialResult.dropped_contacts NaN).
     """
 
     hm: Heightmap

@@ -86,6 +86,8 @@ def test_a_batch_of_8_worlds_on_2_terrains_agrees_with_the_mujoco_engine_within_
              for rec in drive_terrain(p, settings.replace(sim=SimConfig(engine="mujoco", spawn_clearance_m=0.0201)))]
     assert [r.mission_index for r in warp] == [r.mission_index for r in ref]
     assert [(r.start_x_m, r.start_y_m) for r in warp] == [(r.start_x_m, r.start_y_m) for r in ref]  # same missions
+    # the batch's rows count its dropped false contacts (a number, each trial's own), MuJoCo's none (NaN)
+    assert all(r.dropped_contacts >= 0 for r in warp) and all(math.isnan(r.dropped_contacts) for r in ref + chaos)
     flips = sum(a.failure_reason != b.failure_reason for a, b in zip(ref, warp, strict=True))
     assert flips <= 1, [(a.failure_reason, b.failure_reason) for a, b in zip(ref, warp, strict=True)]
     for metric in METRICS:

@@ -133,3 +133,27 @@ def test_a_wheel_with_no_contact_on_mujoco_gets_none_on_the_batch():
     # measured: both (0.009, 0.015, -0.159) m/s, (0.080, 0.050, 0.061) rad/s, a free fall
     np.testing.assert_allclose(warp_v, mj_v, atol=0.01)
     assert batch.host.dropped[0] > 0, UPSTREAM
+
+
+def test_the_dropped_count_is_each_worlds_own_and_starts_again_at_its_spawn(case):
+    """Two worlds of one batch at the false-contact state: each counts its own dropped contacts
+    (WorldView.dropped_contacts, what a trial's row records as ``dropped_contacts``); resetting one
+    world (a new trial's spawn) sets its count to 0 and leaves the other's running."""
+    from offroadbench.sim.engines.mujoco_warp.batch import WarpBatch
+    from offroadbench.sim.engines.mujoco_warp.world import WorldView
+
+    model, qpos = case
+    batch = WarpBatch(model, [0, 0])
+    views = [WorldView(batch, w, 0, lambda view: None) for w in (0, 1)]
+    for w in (0, 1):
+        batch.reset(w, qpos, 0)
+    batch.advance(1)
+    first = [v.dropped_contacts() for v in views]
+    assert first[0] == first[1] > 0, UPSTREAM  # the same state, the same count (per world, not shared)
+    high = qpos.copy()
+    high[2] += 1.0  # 1 m up: no contact at all in the next trial step
+    batch.reset(0, high, 0)
+    assert views[0].dropped_contacts() == 0  # from the reset on, before the batch advances
+    batch.advance(1)
+    assert views[0].dropped_contacts() == 0
+    assert views[1].dropped_contacts() >= first[1]  # not reset: its count runs on from its own spawn

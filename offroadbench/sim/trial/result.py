@@ -81,6 +81,14 @@ class TrialResult:
     alone carrying it; offroadbench.sim.tyre_laws.terramechanics.SoilTables.outside), 0-1 (the
     ``terramechanics`` tyre model; NaN with the other models). Above 0, the trial's soil forces
     there are not the Wong-Reece model's."""
+    dropped_contacts: float = float("nan")
+    """Terrain contacts the engine took out of its constraint solver during the trial, from the
+    spawn (settling included) to the trial's last state read, summed over its physics steps (a
+    contact dropped in n steps counts n times): the ``mujoco_warp`` engine's false height-field
+    contacts (offroadbench.sim.engines.mujoco_warp.kernels.drop_false_contacts;
+    docs/mujoco-warp.md, 'Not done' item 5); NaN on the engines that drop none by design
+    (``pybullet``, ``mujoco``: TrialWorld.dropped_contacts absent or None). Above 0, the trial
+    ran through a contact the engine's collision gave and the solver never saw."""
 
     def as_row(self) -> dict:
         return dataclasses.asdict(self)

@@ -270,6 +270,9 @@ class TrialLoop:
                                          sinkage_median_m=median, sinkage_p95_m=p95)
         if any(map(math.isfinite, self.outside)):  # the fraction of the whole trial, every tick
             result = dataclasses.replace(result, outside_model_fraction=float(np.nanmean(self.outside)))
+        dropped = getattr(self.world, "dropped_contacts", lambda: None)()  # optional: TrialWorld.dropped_contacts
+        if dropped is not None:  # since the spawn, settling included
+            result = dataclasses.replace(result, dropped_contacts=float(dropped))
         return result
 
     def telemetry(self) -> dict[str, np.ndarray]:

@@ -18,7 +18,7 @@ import pandas as pd
 
 from offroadbench.study.spec.inputs import driver_files  # noqa: F401  (re-exported: the report's header shows them)
 
-__all__ = ["held_fixed", "report_title", "settings_columns", "driver_files", "soil_conditions"]
+__all__ = ["cell_engine", "held_fixed", "report_title", "settings_columns", "driver_files", "soil_conditions"]
 
 #: (table, field, label) of the settings every report header lists
 _SHOWN = (
@@ -86,6 +86,13 @@ def soil_conditions(meta: dict[str, Any], cell: int) -> dict[str, Any]:
     return {"soil": getattr(sim, "soil", None), "soil_source": source("soil", soil),
             "gravity_m_s2": getattr(sim, "gravity_m_s2", None), "gravity_source": source("gravity_m_s2", gravity),
             "soil_map": mapped}
+
+
+def cell_engine(meta: dict[str, Any], cell: int) -> str | None:
+    """The physics engine a cell's trials ran on (``[sim] engine``, a grid axis or fixed), None where
+    the store's settings do not say."""
+    sim = _sections(meta, cell)["sim"]
+    return sim.get("engine") if isinstance(sim, dict) else getattr(sim, "engine", None)
 
 
 @functools.lru_cache(maxsize=None)

@@ -234,6 +234,8 @@ def trial_table_html(trials: pd.DataFrame, replays: Sequence[ReplayMedia], run_d
     have = {r.key for r in replays}
     cols = [c for c in _TRIAL_COLUMNS if c in trials.columns]
     cols[3:3] = [c for c in grid_columns if c in trials.columns and c not in cols]
+    if "dropped_contacts" in trials.columns and trials["dropped_contacts"].astype(float).notna().any():
+        cols.append("dropped_contacts")  # MuJoCo Warp's false contacts, where recorded
     header = [*cols, "replay"]
     rows = []
     for rec in trials[cols].itertuples(index=False):

@@ -203,6 +203,30 @@ def _outside_model_line(trials: pd.DataFrame) -> str:
             f"Wong-Reece model's): {len(some)} of {len(frac)} soil trials"
             + (f", for {100 * float(some.median()):.1f} % of their time (median)." if len(some) else "."))
 
+def _dropped_contacts_line(meta: dict[str, Any], trials: pd.DataFrame) -> list[str]:
+    """One line for a study with trials on ``mujoco_warp``: how many had a false height-field contact
+    dropped (TrialResult.dropped_contacts; docs/mujoco-warp.md, 'Not done' item 5) and their outcomes;
+    runs from before the column: not recorded. Nothing for a study on the other engines."""
+    from offroadbench.study.report.header import cell_engine
+
+    warp = [c for c in sorted(set(trials["cell"])) if cell_engine(meta, int(c)) == "mujoco_warp"]
+    if not warp:
+        return []
+    on = trials[trials["cell"].isin(warp)]
+    counts = on["dropped_contacts"].astype(float) if "dropped_contacts" in on else pd.Series([], dtype=float)
+    counts = counts[np.isfinite(counts)]
+    head = ("MuJoCo Warp's false height-field contacts (taken out of its solver, `dropped_contacts`; "
+            "docs/mujoco-warp.md, 'Not done' item 5): ")
+    if counts.empty:
+        return [head + f"not recorded in this run ({len(on)} MuJoCo Warp trials).", ""]
+    hit = on.loc[counts.index[counts > 0]]
+    outcomes = hit["failure_reason"].replace("", "success").value_counts().sort_index()
+    unrecorded = f" ({len(on) - len(counts)} more from before the count was kept)" if len(counts) < len(on) else ""
+    return [head + f"{len(hit)} of {len(counts)} MuJoCo Warp trials{unrecorded} had a contact dropped"
+            + (f" ({int(counts.sum())} in all, counted per MuJoCo step; outcomes: " + ", ".join(f"{k} {v}" for k, v in outcomes.items()) + ")."
+               if len(hit) else "."), ""]
+
+
 def _header_lines(meta: dict[str, Any], trials: pd.DataFrame, fixed: pd.DataFrame, sessions: pd.DataFrame,
                   n_faults: int) -> list[str]:
     """The report's title, what ran, the run's facts (trials, grid, seed, provenance, wall time) and
@@ -395,7 +419,8 @@ def build_report(run_dir: str | Path, fig4: tuple[int, int] | None = None) -> Re
     change_lines, change_tables = _group_change_sections(meta, trials, terrains, summary, labels)
     lines += change_lines
     tables.update(change_tables)
-    lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), ""]
+    lines += ["## Outcomes and failure reasons", "", markdown_table(failures.reset_index()), "",
+              *_dropped_contacts_line(meta, trials)]
     soil_lines, soil_figures = _soil_section(meta, trials, labels)
     lines += soil_lines
     figures.update(soil_figures)

@@ -122,6 +122,13 @@ class WorldView:
         host = self.batch.host
         return soil_kernels.outside(host.soil[self.world], host.on[self.world], self.batch.delta_max_m)
 
+    def dropped_contacts(self) -> int:
+        """Terrain contacts the batch took out of the solver in this world since its spawn (settling
+        included; kernels.drop_false_contacts, summed over the MuJoCo steps: HostState.dropped), as
+        of the last state read: not synced, so the steps counted since then (a trial's last steps
+        to its timeout, never read) are not run for it, and a batch advances as it would without."""
+        return int(self.batch.host.dropped[self.world])
+
     def use_soil_map(self, soil_map) -> None:
         """Not supported: the soil kernels hold one soil's tables."""
         raise InputError("engine 'mujoco_warp' cannot read a soil map (its soil kernels hold one soil's tables); "
