@@ -304,6 +304,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if not rep.identical:
         diff = [k for k in rep.stored if str(rep.stored[k]) != str(r.as_row().get(k))]
         print(f"differs in: {', '.join(diff)}", file=sys.stderr)
+    if rep.unrecorded:
+        print(f"not in the stored row (columns newer than the run, not compared): {', '.join(rep.unrecorded)}")
     note = _platform_note(run_dir, args.cell, args.terrain, args.mission, rep.cell.recipe().grid.quantise)
     if note:
         print(note)

@@ -40,6 +40,29 @@ def test_replay_that_differs_names_the_fields_and_exits_1(tiny_run, capsys):
     assert captured.err.strip() == "differs in: rms_pitch_rate_deg_s"
 
 
+def test_a_row_stored_before_a_column_was_added_replays_identical_and_names_the_column(tiny_run, capsys):
+    """A run stored before TrialResult gained a column (``dropped_contacts``, 2026-11-29) still replays as
+    identical on the fields it has; the newer column is named, not compared. A stored field the new row
+    lacks is a difference."""
+    original = _stored_row(tiny_run, 0)
+    row = dict(original)
+    assert "dropped_contacts" in row
+    del row["dropped_contacts"]
+    with sqlite3.connect(tiny_run / "study.sqlite") as con:
+        con.execute("UPDATE trials SET row=? WHERE cell=0 AND terrain=0 AND mission=0", (json.dumps(row),))
+    assert main(["study", "replay", str(tiny_run), "--cell", "0", "--terrain", "0", "--mission", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "identical to the stored row: yes" in out
+    assert "not in the stored row (columns newer than the run, not compared): dropped_contacts" in out
+    row["a_column_since_removed"] = 1.0
+    with sqlite3.connect(tiny_run / "study.sqlite") as con:
+        con.execute("UPDATE trials SET row=? WHERE cell=0 AND terrain=0 AND mission=0", (json.dumps(row),))
+    assert main(["study", "replay", str(tiny_run), "--cell", "0", "--terrain", "0", "--mission", "0"]) == 1
+    assert capsys.readouterr().err.strip() == "differs in: a_column_since_removed"
+    with sqlite3.connect(tiny_run / "study.sqlite") as con:  # as stored, for the module's other tests
+        con.execute("UPDATE trials SET row=? WHERE cell=0 AND terrain=0 AND mission=0", (json.dumps(original),))
+
+
 def test_replay_plot_follows_the_output_path_policy(tiny_run, tmp_path, capsys):
     """``--out`` is checked before the replay (a path below a file: exit 2, nothing written) and
     its missing folders are created only when the figure is written."""

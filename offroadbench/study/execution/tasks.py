@@ -271,10 +271,14 @@ class Replay:
     stored: Mapping[str, Any]
     """The stored row of the trial."""
     identical: bool
-    """Whether every field of the new row equals the stored one (NaN equal to NaN)."""
+    """Whether every field of the stored row equals the new row's (NaN equal to NaN). A field the new
+    row has and the stored one lacks (a column added after the run, e.g. ``dropped_contacts``) is not
+    compared: it is in :attr:`unrecorded`."""
     prepared: PreparedTerrain
     """The terrain, its class maps and the one mission, as driven."""
     cell: CellPlan
+    unrecorded: tuple[str, ...] = ()
+    """The new row's fields that the stored row predates (not compared)."""
 
     @property
     def hm(self):
@@ -323,5 +327,6 @@ def replay_trial(run_dir, cell: int, terrain: int, mission: int) -> Replay:
     prepared, _ = prepare_cell(plan, tseed, [(mission, mseed)])
     rec = next(iter(drive_terrain(prepared, settings)))
     new = json.loads(json.dumps(rec.result.as_row()))  # the stored row went through JSON too
-    identical = set(new) == set(stored) and all(_same(new[k], stored[k]) for k in new)
-    return Replay(record=rec, stored=stored, identical=identical, prepared=prepared, cell=plan)
+    identical = set(stored) <= set(new) and all(_same(new[k], stored[k]) for k in stored)
+    unrecorded = tuple(k for k in new if k not in stored)  # columns added to TrialResult after the run
+    return Replay(record=rec, stored=stored, identical=identical, prepared=prepared, cell=plan, unrecorded=unrecorded)
