@@ -136,15 +136,21 @@ def test_height_patch_gives_the_bits_of_its_per_call_grid(seed):
     hm = Heightmap(rng.standard_normal((rows, cols)), float(rng.uniform(0.02, 0.2)))
     sensed = hm.z.copy()
     sensed[rng.random(hm.shape) < 0.2] = np.nan
-    for i in range(80):
+    kinds = set()
+    for i in range(120):
         cells, spacing = int(rng.integers(1, 20)), float(rng.choice([0.1, rng.uniform(0.01, 0.5)]))
         x, y = rng.uniform(-1.0, hm.width_m + 1.0), rng.uniform(-1.0, hm.height_m + 1.0)
+        if i % 2:  # near the middle: no sample off the map, the mask skipped
+            cells, spacing = int(rng.integers(1, 8)), 0.5 * hm.cell_size_m
+            x, y = 0.5 * hm.width_m + rng.uniform(-0.1, 0.1), 0.5 * hm.height_m + rng.uniform(-0.1, 0.1)
         yaw = float(rng.uniform(-4.0, 4.0))
         z_m = sensed if i % 3 == 0 else None
         new = height_patch(hm, x, y, yaw, cells, spacing, -7.5, z_m)
         old = _old_height_patch(hm, x, y, yaw, cells, spacing, -7.5, z_m)
         assert new.shape == old.shape == (cells, cells) and _hex(new) == _hex(old), (seed, i)
+        kinds.add(bool(np.any(_old_height_patch(hm, x, y, yaw, cells, spacing, np.inf) == np.inf)))
         new[...] = 99.0  # the caller owns the patch: the next call's grid is not touched
+    assert kinds == {True, False}  # patches with samples off the map and patches without
     cfg = ObservationConfig()
     for _ in range(20):
         args = ((3.0, 2.0), (rng.uniform(0, hm.width_m), rng.uniform(0, hm.height_m), 0.2), 0.01, -0.02,
