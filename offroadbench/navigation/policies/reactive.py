@@ -69,9 +69,12 @@ class ReactivePolicy:
         reach = self._centre * self._ds
         self._s = np.linspace(0.0, max(reach, self._ds), 10)
         self._half_track = 0.5 * context.track_m
+        self._track_sign = np.array([[self._half_track], [-self._half_track]])  # left, right: +h, -h (m)
         # the fixed candidates' curvatures (1/m) and their tracks' patch coordinates, once per policy
         self._k_fixed = np.linspace(-cfg.max_curvature_1_m, cfg.max_curvature_1_m, cfg.candidates)
-        self._fixed_rc = np.concatenate([self._track_coords(float(k)) for k in self._k_fixed], axis=1)
+        # the coordinates of every arc's samples: the pure-pursuit arc's first (written each tick)
+        self._rc = np.concatenate([np.zeros((2, 2 * self._s.size))]
+                                  + [self._track_coords(float(k)) for k in self._k_fixed], axis=1)
 
     def reset(self, problem: PlanningProblem) -> None:
         """Nothing to remember between missions."""
@@ -82,27 +85,35 @@ class ReactivePolicy:
         s = self._s
         if abs(kappa) < 1e-9:
             x, y, th = s, 0.0 * s, 0.0 * s
+            sin, cos = np.sin(th), np.cos(th)
         else:
             th = kappa * s
-            x, y = np.sin(th) / kappa, (1.0 - np.cos(th)) / kappa
-        nx, ny = -np.sin(th), np.cos(th)
-        h = self._half_track
-        xb = np.concatenate((x + h * nx, x - h * nx))
-        yb = np.concatenate((y + h * ny, y - h * ny))
-        return np.stack((yb / self._ds + self._centre, xb / self._ds + self._centre))
+            sin, cos = np.sin(th), np.cos(th)
+            x, y = sin / kappa, (1.0 - cos) / kappa
+        # [y; x] (2, 1, 10) + [h; -h] (2, 1) * the track normal [n_y; n_x] = [cos; -sin] (2, 1, 10): the
+        # left and right tracks' (2, 2, 10), each entry the one sum (x - h n_x is x + (-h) n_x in IEEE)
+        n = s.size
+        yx, normal = np.empty((2, 1, n)), np.empty((2, 1, n))
+        yx[0, 0], yx[1, 0], normal[0, 0] = y, x, cos
+        np.negative(sin, out=normal[1, 0])
+        tracks = yx + self._track_sign * normal
+        return (tracks / self._ds + self._centre).reshape(2, 2 * n)
 
     def _roughness(self, patch: np.ndarray, k_star: float) -> np.ndarray:
         """Roughness of the pure-pursuit arc ``k_star`` (1/m) then of each fixed candidate, one
         interpolation for all their samples (each sample's value is that of its own call)."""
         from scipy.ndimage import map_coordinates
 
-        rc = np.concatenate((self._track_coords(k_star), self._fixed_rc), axis=1)
-        z = map_coordinates(patch, rc, order=1, mode="nearest").reshape(-1, 2, self._s.size)
+        rc, n = self._rc, self._s.size
+        rc[:, :2 * n] = self._track_coords(k_star)
+        z = map_coordinates(patch, rc, order=1, mode="nearest").reshape(-1, 2, n)
         s, h = self._s, self._half_track
         step = s[1] - s[0]
         m = self.ctx.vehicle.max_slope
-        along = np.minimum(np.abs(np.diff(z, axis=2)) / (step * m), 2.0).mean(axis=2).max(axis=1)
-        cross = np.minimum(np.abs(z[:, 0] - z[:, 1]) / (2.0 * h * m), 2.0).mean(axis=1)
+        # ndarray.mean is add.reduce then a division by the count, np.diff the subtraction of the slices
+        along = np.minimum(np.abs(z[:, :, 1:] - z[:, :, :-1]) / (step * m), 2.0)
+        along = np.maximum.reduce(np.add.reduce(along, axis=2) / (n - 1), axis=1)
+        cross = np.add.reduce(np.minimum(np.abs(z[:, 0] - z[:, 1]) / (2.0 * h * m), 2.0), axis=1) / n
         return np.where(cross > along, cross, along)  # max(along, cross), NaN as Python's max
 
     def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
