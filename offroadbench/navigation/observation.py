@@ -21,6 +21,7 @@ two apart. :func:`nan_observation` turns the env's form back into the runner's, 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Mapping
@@ -72,17 +73,31 @@ def height_patch(hm: Heightmap, x_m: float, y_m: float, yaw_rad: float, cells: i
     """
     from scipy.ndimage import map_coordinates
 
-    offs = (np.arange(cells) - (cells - 1) / 2.0) * spacing_m
-    yb, xb = np.meshgrid(offs, offs, indexing="ij")
+    yb, xb, reach = _body_grid(cells, spacing_m)
     cos, sin = math.cos(yaw_rad), math.sin(yaw_rad)
     xw = x_m + cos * xb - sin * yb
     yw = y_m + sin * xb + cos * yb
-    col = xw / hm.cell_size_m
-    row = yw / hm.cell_size_m
+    cell = hm.cell_size_m
+    col = xw / cell
+    row = yw / cell
     z = map_coordinates(hm.z if z_m is None else z_m, [row, col], order=1, mode="nearest")
-    outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
-    z[outside] = fill_m
+    # a patch a cell or more inside the map on every side has no sample outside it (the samples lie
+    # within ``reach`` of the centre): the mask is then all false and is skipped
+    margin = reach + cell
+    if not (margin <= x_m <= (hm.cols - 1) * cell - margin and margin <= y_m <= (hm.rows - 1) * cell - margin):
+        outside = (col < 0) | (col > hm.cols - 1) | (row < 0) | (row > hm.rows - 1)
+        z[outside] = fill_m
     return z
+
+
+@functools.lru_cache(maxsize=8)
+def _body_grid(cells: int, spacing_m: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The height patch's body-frame offsets (y_b, x_b: cells x cells, m; read-only) and the largest
+    distance of a sample from the centre, m (over-estimated by 1 %), computed once per size."""
+    offs = (np.arange(cells) - (cells - 1) / 2.0) * spacing_m
+    yb, xb = np.meshgrid(offs, offs, indexing="ij")
+    yb.flags.writeable = xb.flags.writeable = False
+    return yb, xb, 1.01 * math.sqrt(2.0) * abs(float(offs[0]))
 
 
 def observation(hm: Heightmap, cfg: ObservationConfig, goal_xy, pos, roll: float, pitch: float, yaw: float,

@@ -69,31 +69,52 @@ class ReactivePolicy:
         reach = self._centre * self._ds
         self._s = np.linspace(0.0, max(reach, self._ds), 10)
         self._half_track = 0.5 * context.track_m
+        self._track_sign = np.array([[self._half_track], [-self._half_track]])  # left, right: +h, -h (m)
+        # the fixed candidates' curvatures (1/m) and their tracks' patch coordinates, once per policy
+        self._k_fixed = np.linspace(-cfg.max_curvature_1_m, cfg.max_curvature_1_m, cfg.candidates)
+        # the coordinates of every arc's samples: the pure-pursuit arc's first (written each tick)
+        self._rc = np.concatenate([np.zeros((2, 2 * self._s.size))]
+                                  + [self._track_coords(float(k)) for k in self._k_fixed], axis=1)
 
     def reset(self, problem: PlanningProblem) -> None:
         """Nothing to remember between missions."""
 
-    def _heights(self, patch: np.ndarray, xb: np.ndarray, yb: np.ndarray) -> np.ndarray:
-        from scipy.ndimage import map_coordinates
-
-        return map_coordinates(patch, [yb / self._ds + self._centre, xb / self._ds + self._centre], order=1, mode="nearest")
-
-    def _roughness(self, patch: np.ndarray, kappa: float) -> float:
+    def _track_coords(self, kappa: float) -> np.ndarray:
+        """The patch coordinates (row; column: 2 x 20, samples) of the left then the right wheel
+        track's 10 points along the arc of curvature ``kappa`` (1/m)."""
         s = self._s
         if abs(kappa) < 1e-9:
             x, y, th = s, 0.0 * s, 0.0 * s
+            sin, cos = np.sin(th), np.cos(th)
         else:
             th = kappa * s
-            x, y = np.sin(th) / kappa, (1.0 - np.cos(th)) / kappa
-        nx, ny = -np.sin(th), np.cos(th)
-        h = self._half_track
-        zl = self._heights(patch, x + h * nx, y + h * ny)
-        zr = self._heights(patch, x - h * nx, y - h * ny)
+            sin, cos = np.sin(th), np.cos(th)
+            x, y = sin / kappa, (1.0 - cos) / kappa
+        # [y; x] (2, 1, 10) + [h; -h] (2, 1) * the track normal [n_y; n_x] = [cos; -sin] (2, 1, 10): the
+        # left and right tracks' (2, 2, 10), each entry the one sum (x - h n_x is x + (-h) n_x in IEEE)
+        n = s.size
+        yx, normal = np.empty((2, 1, n)), np.empty((2, 1, n))
+        yx[0, 0], yx[1, 0], normal[0, 0] = y, x, cos
+        np.negative(sin, out=normal[1, 0])
+        tracks = yx + self._track_sign * normal
+        return (tracks / self._ds + self._centre).reshape(2, 2 * n)
+
+    def _roughness(self, patch: np.ndarray, k_star: float) -> np.ndarray:
+        """Roughness of the pure-pursuit arc ``k_star`` (1/m) then of each fixed candidate, one
+        interpolation for all their samples (each sample's value is that of its own call)."""
+        from scipy.ndimage import map_coordinates
+
+        rc, n = self._rc, self._s.size
+        rc[:, :2 * n] = self._track_coords(k_star)
+        z = map_coordinates(patch, rc, order=1, mode="nearest").reshape(-1, 2, n)
+        s, h = self._s, self._half_track
         step = s[1] - s[0]
         m = self.ctx.vehicle.max_slope
-        along = np.minimum(np.abs(np.diff(np.stack([zl, zr]), axis=1)) / (step * m), 2.0)
-        cross = np.minimum(np.abs(zl - zr) / (2.0 * h * m), 2.0)
-        return float(max(along.mean(axis=1).max(), cross.mean()))
+        # ndarray.mean is add.reduce then a division by the count, np.diff the subtraction of the slices
+        along = np.minimum(np.abs(z[:, :, 1:] - z[:, :, :-1]) / (step * m), 2.0)
+        along = np.maximum.reduce(np.add.reduce(along, axis=2) / (n - 1), axis=1)
+        cross = np.add.reduce(np.minimum(np.abs(z[:, 0] - z[:, 1]) / (2.0 * h * m), 2.0), axis=1) / n
+        return np.where(cross > along, cross, along)  # max(along, cross), NaN as Python's max
 
     def act(self, observation: Mapping[str, np.ndarray]) -> tuple[float, float]:
         cfg, veh = self.cfg, self.ctx.vehicle
@@ -111,8 +132,8 @@ class ReactivePolicy:
         k_star = max(-k_max, min(k_max, 2.0 * ty / (tx * tx + ty * ty)))
         patch = np.asarray(observation["height_patch"], dtype=float)
         best = (math.inf, k_star, 0.0)
-        for k in (k_star, *np.linspace(-k_max, k_max, cfg.candidates)):
-            r = self._roughness(patch, float(k)) if cfg.roughness_weight > 0 else 0.0
+        rough = self._roughness(patch, k_star).tolist() if cfg.roughness_weight > 0 else [0.0] * (cfg.candidates + 1)
+        for k, r in zip((k_star, *self._k_fixed), rough, strict=True):
             score = ((k - k_star) * self._s[-1]) ** 2 + cfg.roughness_weight * r * r
             if score < best[0]:
                 best = (score, float(k), r)
