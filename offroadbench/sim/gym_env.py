@@ -120,8 +120,9 @@ from offroadbench.navigation.sensor import make_sensing, sheet_envelope
 from offroadbench.sim.config import ControllerConfig, SimConfig
 from offroadbench.sim.engine import TrialWorld, open_world
 from offroadbench.sim.trial.pipeline import TrialSettings, prepare_terrain, terrain_body
+from offroadbench.sim.trial.limits import plan_within_limits
 from offroadbench.sim.trial.runner import (TrialLoop, TrialRecord, body_velocity, clamp_action, control_steps,
-                                           plan_within_limits, vehicle_envelope)
+                                           vehicle_envelope)
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
 
 from offroadbench.sim.topdown import top_down_image  # noqa: E402  (the env's public name, kept)

@@ -212,11 +212,11 @@ def cleanup_planners():
 def test_a_planner_beyond_its_limits_is_a_plugin_error(terrain, cleanup_planners, monkeypatch):
     import time
 
-    from offroadbench.sim.trial import runner
+    from offroadbench.sim.trial import limits
 
     hm, classes = terrain
     a, _ = missions(hm)
-    monkeypatch.setattr(runner, "PLANNING_LIMIT_S", 0.5)
+    monkeypatch.setattr(limits, "PLANNING_LIMIT_S", 0.5)
 
     def sleepy(problem, cfg):
         time.sleep(60)
@@ -226,7 +226,7 @@ def test_a_planner_beyond_its_limits_is_a_plugin_error(terrain, cleanup_planners
         return np.array([s, *([g, s] * 30), g])
 
     def many(problem, cfg):
-        return np.linspace(problem.start_xy, problem.goal_xy, runner.MAX_WAYPOINTS + 1)
+        return np.linspace(problem.start_xy, problem.goal_xy, limits.MAX_WAYPOINTS + 1)
 
     with World(hm) as world:
         t0 = time.monotonic()
