@@ -78,23 +78,67 @@ def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.n
     azimuths and R radial samples, and flattened to the visible samples only (on the map and not
     hidden by nearer terrain): four 1-D arrays.
     """
-    from scipy.ndimage import map_coordinates
+    return _Sweep(hm, range_m).run(xy, sensor_z_m)
 
-    cell = hm.cell_size_m
-    r, ray_x, ray_y = _rays(cell, range_m)
-    n_a = ray_x.shape[0]
-    x = xy[0] + ray_x
-    y = xy[1] + ray_y
-    col, row = x / cell, y / cell
-    on = (col >= 0) & (col <= hm.cols - 1) & (row >= 0) & (row <= hm.rows - 1)
-    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
-    tan = (z - sensor_z_m) / r
-    tan = np.where(on, tan, np.inf)  # off the map: blocks the ray beyond it
-    horizon = np.maximum.accumulate(tan, axis=1)
-    before = np.concatenate([np.full((n_a, 1), -np.inf), horizon[:, :-1]], axis=1)
-    vis = on & (tan >= before - 1e-12) & np.cumprod(on, axis=1, dtype=bool)
-    rr = np.broadcast_to(r, x.shape)
-    return x[vis], y[vis], z[vis], rr[vis]
+
+class _Sweep:
+    """The viewshed of one map and range with its work arrays kept from scan to scan: each scan
+    writes its (A, R) samples into the same arrays (``out=``), so a scan allocates only its visible
+    samples (every scan allocating some ten 1.3 MB arrays cost thousands of page faults a scan).
+    One per sensor: not shared between threads."""
+
+    def __init__(self, hm: Heightmap, range_m: float) -> None:
+        self.hm = hm
+        self.r, self.ray_x, self.ray_y = _rays(hm.cell_size_m, range_m)
+        shape = self.ray_x.shape
+        self.coords = np.empty((2,) + shape)  # (row, col): map_coordinates' coordinates, written in place
+        self.x, self.y, self.z, self.tan, self.horizon = (np.empty(shape) for _ in range(5))
+        self.on, self.valid, self.flag = (np.empty(shape, dtype=bool) for _ in range(3))
+        self.rr = np.ascontiguousarray(np.broadcast_to(self.r, shape))
+        size = self.rr.size
+        self.seen = tuple(np.empty(size) for _ in range(4))  # the visible samples' x, y, z, range
+        self.cells = (np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64))
+
+    def run(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`viewshed` of the sensor at ``(xy, sensor_z_m)``: the visible samples' x, y, true
+        height (m) and range (m), four new 1-D arrays."""
+        return tuple(a.copy() for a in self.visible(xy, sensor_z_m))
+
+    def scratch(self, n: int) -> tuple[np.ndarray, ...]:
+        """Work arrays of ``n`` elements that :meth:`visible`'s results do not use (their contents
+        are the last sweep's leftovers): four float64, two int64, two bool."""
+        return (*(a.reshape(-1)[:n] for a in (self.tan, self.horizon, *self.coords)),
+                *(a[:n] for a in self.cells), *(a.reshape(-1)[:n] for a in (self.on, self.valid)))
+
+    def visible(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`run`, but views of this sweep's own arrays, overwritten by the next call."""
+        from scipy.ndimage import map_coordinates
+
+        hm, cell = self.hm, self.hm.cell_size_m
+        x, y, z, tan, on, valid, flag = self.x, self.y, self.z, self.tan, self.on, self.valid, self.flag
+        row, col = self.coords
+        np.add(xy[0], self.ray_x, out=x)
+        np.add(xy[1], self.ray_y, out=y)
+        np.divide(x, cell, out=col)
+        np.divide(y, cell, out=row)
+        np.greater_equal(col, 0, out=on)
+        on &= np.less_equal(col, hm.cols - 1, out=flag)
+        on &= np.greater_equal(row, 0, out=flag)
+        on &= np.less_equal(row, hm.rows - 1, out=flag)
+        np.logical_and.accumulate(on, axis=1, out=valid)  # on the map from the sensor out: the samples that count
+        map_coordinates(hm.z, self.coords, output=z, order=1, mode="nearest")
+        np.subtract(z, sensor_z_m, out=tan)
+        tan /= self.r
+        # a sample is seen when its tangent is at least the largest before it on its ray; the samples
+        # after a ray's first off-map one are not valid, so neither their tangents nor the off-map
+        # ones (which blocked the ray beyond) enter any valid sample's horizon: no np.where needed
+        horizon = np.maximum.accumulate(tan, axis=1, out=self.horizon)[:, :-1]
+        horizon -= 1e-12
+        flag[:, 0] = True  # nothing before the first sample: its horizon is -inf
+        np.greater_equal(tan[:, 1:], horizon, out=flag[:, 1:])
+        flag &= valid
+        idx = np.flatnonzero(flag)
+        return tuple(a.take(idx, out=b[:idx.size]) for a, b in zip((x, y, z, self.rr), self.seen, strict=True))
 
 
 @functools.lru_cache(maxsize=8)
@@ -129,26 +173,48 @@ class MastSensor:
         self.trail = []
         self.scans = 0
         self._scanned_at = self._true.copy()
+        self._sweep = _Sweep(hm, cfg.sensor_range_m)
         self._scan(self._true)
 
     def _scan(self, true_xy: np.ndarray) -> None:
         cfg, hm = self.cfg, self.hm
         ground = hm.height_at(*np.clip(true_xy, 0.0, [hm.width_m, hm.height_m]))
-        x, y, z, r = viewshed(hm, true_xy, float(ground) + cfg.mast_height_m, cfg.sensor_range_m)
-        z = z + cfg.sensor_noise_per_range * r * self.rng.standard_normal(z.shape)
+        sweep = self._sweep
+        x, y, z, r = sweep.visible(true_xy, float(ground) + cfg.mast_height_m)
+        # the arithmetic of z + k r N(0, 1), q = b + R(psi) (p - t) and the cells' indices, term by
+        # term in the order written before (tests/navigation/test_mast_floats.py), into work arrays
+        noise, dx, dy, t, col, row, ok, flag = sweep.scratch(z.size)
+        self.rng.standard_normal(z.size, out=noise)
+        np.multiply(cfg.sensor_noise_per_range, r, out=t)
+        t *= noise
+        z += t  # the seen heights: z + (k r) n
         c, s = math.cos(self.heading_error), math.sin(self.heading_error)
-        dx, dy = x - true_xy[0], y - true_xy[1]
-        qx = self._belief[0] + c * dx - s * dy
-        qy = self._belief[1] + s * dx + c * dy
-        col = np.rint(qx / hm.cell_size_m).astype(np.int64)
-        row = np.rint(qy / hm.cell_size_m).astype(np.int64)
-        ok = (col >= 0) & (col < hm.cols) & (row >= 0) & (row < hm.rows)
-        flat = row[ok] * hm.cols + col[ok]
+        np.subtract(x, true_xy[0], out=dx)
+        np.subtract(y, true_xy[1], out=dy)
+        qx, qy = x, y  # the sample positions are not needed any more
+        np.multiply(c, dx, out=qx)
+        qx += self._belief[0]
+        qx -= np.multiply(s, dy, out=t)  # b0 + c dx - s dy
+        np.multiply(s, dx, out=qy)
+        qy += self._belief[1]
+        qy += np.multiply(c, dy, out=t)  # b1 + s dx + c dy
+        qx /= hm.cell_size_m
+        qy /= hm.cell_size_m
+        np.copyto(col, np.rint(qx, out=qx), casting="unsafe")
+        np.copyto(row, np.rint(qy, out=qy), casting="unsafe")
+        np.greater_equal(col, 0, out=ok)
+        ok &= np.less(col, hm.cols, out=flag)
+        ok &= np.greater_equal(row, 0, out=flag)
+        ok &= np.less(row, hm.rows, out=flag)
+        row *= hm.cols
+        row += col
+        flat, z = (row, z) if ok.all() else (row[ok], z[ok])
         new = self.z.copy().ravel()
         if flat.size:  # the sums and counts over the cells from the first hit on, not the whole map
             lo = int(flat.min())
-            sums = np.bincount(flat - lo, weights=z[ok])
-            counts = np.bincount(flat - lo)
+            flat -= lo
+            sums = np.bincount(flat, weights=z)
+            counts = np.bincount(flat)
             hit = counts > 0
             new[lo:lo + len(counts)][hit] = sums[hit] / counts[hit]
         self.z = new.reshape(hm.shape)
