@@ -7,7 +7,8 @@ scipy filters along axis 0, then along axis 1, each pass the symmetric correlati
 and the line extended by its edge values,
 ``out[l] = x[l] w[R]``, then for ``j = R, R-1, ..., 1``: ``out[l] += (x[l-j] + x[l+j]) w[R-j]``.
 :func:`gaussian_nearest` does those operations on the same float64 numbers in the same order for
-every output element; it only runs them for a whole row of elements at a time (numba compiles
+every output element; it only runs them for a whole row of elements at a time (axis 1 as the rows
+of the transposed intermediate) (numba compiles
 without ``fastmath``, so nothing is reassociated or fused into an FMA), so each result is scipy's to
 the last bit (tests/navigation/test_smooth_compiled.py). The weights are scipy's own, read back from
 its filter of a unit impulse (:func:`kernel`). It is an accelerator only: without numba
@@ -43,7 +44,9 @@ def kernel(sigma: float, truncate: float = 4.0) -> np.ndarray:
 
 @njit(cache=True, nogil=True)
 def _along_rows(a, w, out):  # pragma: no cover - compiled
-    """The correlation along axis 0 (each column a line), edge values beyond the ends."""
+    """The correlation along axis 0 (each column a line), edge values beyond the ends; the inner
+    loop runs along a row, element by element independent (vectorised), each element's terms in
+    scipy's order."""
     n, m = a.shape
     rad = (w.shape[0] - 1) // 2
     wc = w[rad]
@@ -58,27 +61,6 @@ def _along_rows(a, w, out):  # pragma: no cover - compiled
                 out[i, c] += (a[lo, c] + a[hi, c]) * wj
 
 
-@njit(cache=True, nogil=True)
-def _along_cols(a, w, out):  # pragma: no cover - compiled
-    """The correlation along axis 1 (each row a line), edge values beyond the ends."""
-    n, m = a.shape
-    rad = (w.shape[0] - 1) // 2
-    wc = w[rad]
-    line = np.empty(m + 2 * rad)
-    for i in range(n):
-        for c in range(rad):
-            line[c] = a[i, 0]
-            line[rad + m + c] = a[i, m - 1]
-        for c in range(m):
-            line[rad + c] = a[i, c]
-        for c in range(m):
-            out[i, c] = line[rad + c] * wc
-        for j in range(rad, 0, -1):
-            wj = w[rad - j]
-            for c in range(m):
-                out[i, c] += (line[rad + c - j] + line[rad + c + j]) * wj
-
-
 def gaussian_nearest(a: np.ndarray, sigma: float, truncate: float = 4.0) -> np.ndarray:
     """``scipy.ndimage.gaussian_filter(a, sigma, mode="nearest", truncate=truncate)`` of the 2-D
     array ``a`` (float64) with one ``sigma`` (cells) on both axes, to the bit (module docstring)."""
@@ -86,6 +68,7 @@ def gaussian_nearest(a: np.ndarray, sigma: float, truncate: float = 4.0) -> np.n
     w = kernel(float(sigma), float(truncate))
     mid = np.empty_like(a)
     _along_rows(a, w, mid)
-    out = np.empty_like(a)
-    _along_cols(mid, w, out)
-    return out
+    mid = np.ascontiguousarray(mid.T)  # axis 1 as rows: the same pass, on contiguous rows
+    out = np.empty_like(mid)
+    _along_rows(mid, w, out)
+    return np.ascontiguousarray(out.T)

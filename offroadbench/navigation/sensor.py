@@ -138,7 +138,8 @@ class _Sweep:
         np.greater_equal(tan[:, 1:], horizon, out=flag[:, 1:])
         flag &= valid
         idx = np.flatnonzero(flag)
-        return tuple(a.take(idx, out=b[:idx.size]) for a, b in zip((x, y, z, self.rr), self.seen, strict=True))
+        # mode clip: the indices are in range; with the default (raise) numpy would buffer the output
+        return tuple(a.take(idx, out=b[:idx.size], mode="clip") for a, b in zip((x, y, z, self.rr), self.seen, strict=True))
 
 
 @functools.lru_cache(maxsize=8)
