@@ -81,6 +81,21 @@ def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.n
     return _Sweep(hm, range_m).run(xy, sensor_z_m)
 
 
+#: whether the viewshed may use the compiled sweep (tests switch it off to compare)
+USE_COMPILED_SWEEP = True
+
+
+def _compiled_sweep():
+    """offroadbench.navigation._sweep_c, or None (numba missing or unable to compile: the numpy sweep)."""
+    if not USE_COMPILED_SWEEP:
+        return None
+    try:
+        from offroadbench.navigation import _sweep_c
+    except (ImportError, RuntimeError):
+        return None
+    return _sweep_c
+
+
 class _Sweep:
     """The viewshed of one map and range with its work arrays kept from scan to scan: each scan
     writes its (A, R) samples into the same arrays (``out=``), so a scan allocates only its visible
@@ -112,6 +127,11 @@ class _Sweep:
 
     def visible(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """As :meth:`run`, but views of this sweep's own arrays, overwritten by the next call."""
+        compiled = _compiled_sweep()
+        if compiled is not None:  # the same numbers ray by ray (offroadbench.navigation._sweep_c)
+            n = compiled.sweep(self.hm.z, self.hm.cell_size_m, float(xy[0]), float(xy[1]), float(sensor_z_m),
+                               self.r[0], self.ray_x, self.ray_y, *self.seen)
+            return tuple(a[:n] for a in self.seen)
         from scipy.ndimage import map_coordinates
 
         hm, cell = self.hm, self.hm.cell_size_m

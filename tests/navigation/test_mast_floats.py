@@ -1,6 +1,7 @@
 """The mast sensor's scan, made cheaper (branch ``mastperf``), gives the bits of the form the
 committed rows were recorded with: the viewshed (its work arrays kept from scan to scan, no
-off-map ``np.where``, the visible samples taken once) and the scan's noise, odometry frame and
+off-map ``np.where``, the visible samples taken once; or numba's sweep ray by ray,
+offroadbench.navigation._sweep_c) and the scan's noise, odometry frame and
 cell sums (written into work arrays term by term), each against its form at commit c822f5c on
 random maps, positions, headings and drift, compared as float hex."""
 
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import map_coordinates
 
+import offroadbench.navigation.sensor as sensor
 from offroadbench.heightmap import Heightmap
 from offroadbench.navigation.perception import PerceptionConfig
 from offroadbench.navigation.sensor import MastSensor, viewshed
@@ -77,7 +79,13 @@ def _map(rng, rows, cols, cell):
     return Heightmap(z, cell)
 
 
-def test_viewshed_gives_the_bits_of_its_earlier_form():
+#: the numpy sweep, and numba's compiled one where numba is installed
+PATHS = [False] + ([True] if sensor._compiled_sweep() is not None else [])
+
+
+@pytest.mark.parametrize("compiled", PATHS)
+def test_viewshed_gives_the_bits_of_its_earlier_form(compiled, monkeypatch):
+    monkeypatch.setattr(sensor, "USE_COMPILED_SWEEP", compiled)
     rng, seen = np.random.default_rng(11), 0
     for rows, cols, cell in [(90, 110, 0.1), (121, 121, 0.05), (40, 30, 0.25)]:
         hm = _map(rng, rows, cols, cell)
@@ -94,12 +102,14 @@ def test_viewshed_gives_the_bits_of_its_earlier_form():
     assert seen > 10_000
 
 
+@pytest.mark.parametrize("compiled", PATHS)
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("shape", [(101, 81), (201, 201)])
-def test_mast_scans_build_the_bits_of_the_earlier_scan(seed, shape):
+def test_mast_scans_build_the_bits_of_the_earlier_scan(seed, shape, compiled, monkeypatch):
     """Scans along a random drive (drift on, so the believed frame turns and shifts; the drive
     reaches the map's edges, so some samples fall off the believed map) build the same maps, with
     the same draws left in the stream, as the earlier scan."""
+    monkeypatch.setattr(sensor, "USE_COMPILED_SWEEP", compiled)
     rng = np.random.default_rng(100 + seed)
     hm = _map(rng, *shape, 0.05)
     cfg = PerceptionConfig(sensor="mast", sensor_range_m=2.5, odometry_drift=0.05, scan_every_m=0.2)
