@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from numba import njit
 
-__all__ = ["sweep"]
+__all__ = ["deposit", "sweep"]
 
 
 @njit(cache=True, nogil=True)
@@ -67,3 +69,35 @@ def sweep(z, cell, xs, ys, zs, r, ray_x, ray_y, out_x, out_y, out_z, out_r):  # 
             if tan > top:
                 top = tan
     return n
+
+
+@njit(cache=True, nogil=True)
+def deposit(x, y, z, r, noise, k, tx, ty, bx, by, c, s, cell, new, rows, cols, sums, counts, touched):  # pragma: no cover - compiled
+    """The mast sensor's scan after the sweep (MastSensor._scan's numpy form, the same operations in
+    the same order): each visible sample's height ``z + (k r) n``, its believed position ``(b_x + c
+    dx) - s dy``, ``(b_y + s dx) + c dy`` with ``d = (x, y) - (t_x, t_y)``, the cell it rounds to,
+    and into every cell hit (``new``, the flat map) the mean of its samples, summed from 0 in their
+    order (as numpy's bincount). ``sums``, ``counts`` (zeros, the flat map's size) and ``touched``
+    are work arrays, left zero; returns how many cells were written."""
+    m = 0
+    for i in range(z.shape[0]):
+        h = z[i] + k * r[i] * noise[i]
+        dx = x[i] - tx
+        dy = y[i] - ty
+        qx = bx + c * dx - s * dy
+        qy = by + s * dx + c * dy
+        col = np.int64(np.rint(qx / cell))
+        row = np.int64(np.rint(qy / cell))
+        if col >= 0 and col < cols and row >= 0 and row < rows:
+            f = row * cols + col
+            if counts[f] == 0:
+                touched[m] = f
+                m += 1
+            sums[f] += h
+            counts[f] += 1
+    for j in range(m):
+        f = touched[j]
+        new[f] = sums[f] / counts[f]
+        sums[f] = 0.0
+        counts[f] = 0
+    return m

@@ -113,6 +113,7 @@ class _Sweep:
         size = self.rr.size
         self.seen = tuple(np.empty(size) for _ in range(4))  # the visible samples' x, y, z, range
         self.cells = (np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64))
+        self.sums = self.counts = self.touched = None  # the compiled scan's per-cell work arrays (map-sized)
 
     def run(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:func:`viewshed` of the sensor at ``(xy, sensor_z_m)``: the visible samples' x, y, true
@@ -202,6 +203,21 @@ class MastSensor:
         ground = hm.height_at(*np.clip(true_xy, 0.0, [hm.width_m, hm.height_m]))
         sweep = self._sweep
         x, y, z, r = sweep.visible(true_xy, float(ground) + cfg.mast_height_m)
+        compiled = _compiled_sweep()
+        if compiled is not None:  # the arithmetic below, sample by sample (offroadbench.navigation._sweep_c)
+            noise = self.rng.standard_normal(z.size, out=sweep.scratch(z.size)[0])
+            new = self.z.copy().ravel()
+            if sweep.sums is None:
+                sweep.sums, sweep.counts = np.zeros(new.size), np.zeros(new.size, dtype=np.int64)
+                sweep.touched = np.empty(new.size, dtype=np.int64)
+            compiled.deposit(x, y, z, r, noise, float(cfg.sensor_noise_per_range), float(true_xy[0]), float(true_xy[1]),
+                             float(self._belief[0]), float(self._belief[1]), math.cos(self.heading_error),
+                             math.sin(self.heading_error), hm.cell_size_m, new, hm.rows, hm.cols, sweep.sums,
+                             sweep.counts, sweep.touched)
+            self.z = new.reshape(hm.shape)
+            self.scans += 1
+            self._scanned_at = true_xy.copy()
+            return
         # the arithmetic of z + k r N(0, 1), q = b + R(psi) (p - t) and the cells' indices, term by
         # term in the order written before (tests/navigation/test_mast_floats.py), into work arrays
         noise, dx, dy, t, col, row, ok, flag = sweep.scratch(z.size)
