@@ -97,10 +97,11 @@ def _compiled_sweep():
 
 
 class _Sweep:
-    """The viewshed of one map and range with its work arrays kept from scan to scan: each scan
-    writes its (A, R) samples into the same arrays (``out=``), so a scan allocates only its visible
-    samples (every scan allocating some ten 1.3 MB arrays cost thousands of page faults a scan).
-    One per sensor: not shared between threads."""
+    """The viewshed of one map and range with its work arrays kept from scan to scan: numba's sweep
+    ray by ray (offroadbench.navigation._sweep_c) where installed, else numpy's, which writes its
+    (A, R) samples into the same arrays each scan (``out=``; allocating some ten 1.3 MB arrays a
+    scan cost thousands of page faults a scan). Both leave the visible samples in :attr:`seen`
+    (views returned). One per sensor: not shared between threads."""
 
     def __init__(self, hm: Heightmap, range_m: float) -> None:
         self.hm = hm
