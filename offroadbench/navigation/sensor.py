@@ -78,23 +78,90 @@ def viewshed(hm: Heightmap, xy, sensor_z_m: float, range_m: float) -> tuple[np.n
     azimuths and R radial samples, and flattened to the visible samples only (on the map and not
     hidden by nearer terrain): four 1-D arrays.
     """
-    from scipy.ndimage import map_coordinates
+    return _Sweep(hm, range_m).run(xy, sensor_z_m)
 
-    cell = hm.cell_size_m
-    r, ray_x, ray_y = _rays(cell, range_m)
-    n_a = ray_x.shape[0]
-    x = xy[0] + ray_x
-    y = xy[1] + ray_y
-    col, row = x / cell, y / cell
-    on = (col >= 0) & (col <= hm.cols - 1) & (row >= 0) & (row <= hm.rows - 1)
-    z = map_coordinates(hm.z, [row, col], order=1, mode="nearest")
-    tan = (z - sensor_z_m) / r
-    tan = np.where(on, tan, np.inf)  # off the map: blocks the ray beyond it
-    horizon = np.maximum.accumulate(tan, axis=1)
-    before = np.concatenate([np.full((n_a, 1), -np.inf), horizon[:, :-1]], axis=1)
-    vis = on & (tan >= before - 1e-12) & np.cumprod(on, axis=1, dtype=bool)
-    rr = np.broadcast_to(r, x.shape)
-    return x[vis], y[vis], z[vis], rr[vis]
+
+#: whether the viewshed may use the compiled sweep (tests switch it off to compare)
+USE_COMPILED_SWEEP = True
+
+
+def _compiled_sweep():
+    """offroadbench.navigation._sweep_c, or None (numba missing or unable to compile: the numpy sweep)."""
+    if not USE_COMPILED_SWEEP:
+        return None
+    try:
+        from offroadbench.navigation import _sweep_c
+    except (ImportError, RuntimeError):
+        return None
+    return _sweep_c
+
+
+class _Sweep:
+    """The viewshed of one map and range with its work arrays kept from scan to scan: numba's sweep
+    ray by ray (offroadbench.navigation._sweep_c) where installed, else numpy's, which writes its
+    (A, R) samples into the same arrays each scan (``out=``; allocating some ten 1.3 MB arrays a
+    scan cost thousands of page faults a scan). Both leave the visible samples in :attr:`seen`
+    (views returned). One per sensor: not shared between threads."""
+
+    def __init__(self, hm: Heightmap, range_m: float) -> None:
+        self.hm = hm
+        self.r, self.ray_x, self.ray_y = _rays(hm.cell_size_m, range_m)
+        shape = self.ray_x.shape
+        self.coords = np.empty((2,) + shape)  # (row, col): map_coordinates' coordinates, written in place
+        self.x, self.y, self.z, self.tan, self.horizon = (np.empty(shape) for _ in range(5))
+        self.on, self.valid, self.flag = (np.empty(shape, dtype=bool) for _ in range(3))
+        self.rr = np.ascontiguousarray(np.broadcast_to(self.r, shape))
+        size = self.rr.size
+        self.seen = tuple(np.empty(size) for _ in range(4))  # the visible samples' x, y, z, range
+        self.cells = (np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64))
+        self.sums = self.counts = self.touched = None  # the compiled scan's per-cell work arrays (map-sized)
+
+    def run(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`viewshed` of the sensor at ``(xy, sensor_z_m)``: the visible samples' x, y, true
+        height (m) and range (m), four new 1-D arrays."""
+        return tuple(a.copy() for a in self.visible(xy, sensor_z_m))
+
+    def scratch(self, n: int) -> tuple[np.ndarray, ...]:
+        """Work arrays of ``n`` elements that :meth:`visible`'s results do not use (their contents
+        are the last sweep's leftovers): four float64, two int64, two bool."""
+        return (*(a.reshape(-1)[:n] for a in (self.tan, self.horizon, *self.coords)),
+                *(a[:n] for a in self.cells), *(a.reshape(-1)[:n] for a in (self.on, self.valid)))
+
+    def visible(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`run`, but views of this sweep's own arrays, overwritten by the next call."""
+        compiled = _compiled_sweep()
+        if compiled is not None:  # the same numbers ray by ray (offroadbench.navigation._sweep_c)
+            n = compiled.sweep(self.hm.z, self.hm.cell_size_m, float(xy[0]), float(xy[1]), float(sensor_z_m),
+                               self.r[0], self.ray_x, self.ray_y, *self.seen)
+            return tuple(a[:n] for a in self.seen)
+        from scipy.ndimage import map_coordinates
+
+        hm, cell = self.hm, self.hm.cell_size_m
+        x, y, z, tan, on, valid, flag = self.x, self.y, self.z, self.tan, self.on, self.valid, self.flag
+        row, col = self.coords
+        np.add(xy[0], self.ray_x, out=x)
+        np.add(xy[1], self.ray_y, out=y)
+        np.divide(x, cell, out=col)
+        np.divide(y, cell, out=row)
+        np.greater_equal(col, 0, out=on)
+        on &= np.less_equal(col, hm.cols - 1, out=flag)
+        on &= np.greater_equal(row, 0, out=flag)
+        on &= np.less_equal(row, hm.rows - 1, out=flag)
+        np.logical_and.accumulate(on, axis=1, out=valid)  # on the map from the sensor out: the samples that count
+        map_coordinates(hm.z, self.coords, output=z, order=1, mode="nearest")
+        np.subtract(z, sensor_z_m, out=tan)
+        tan /= self.r
+        # a sample is seen when its tangent is at least the largest before it on its ray; the samples
+        # after a ray's first off-map one are not valid, so neither their tangents nor the off-map
+        # ones (which blocked the ray beyond) enter any valid sample's horizon: no np.where needed
+        horizon = np.maximum.accumulate(tan, axis=1, out=self.horizon)[:, :-1]
+        horizon -= 1e-12
+        flag[:, 0] = True  # nothing before the first sample: its horizon is -inf
+        np.greater_equal(tan[:, 1:], horizon, out=flag[:, 1:])
+        flag &= valid
+        idx = np.flatnonzero(flag)
+        # mode clip: the indices are in range; with the default (raise) numpy would buffer the output
+        return tuple(a.take(idx, out=b[:idx.size], mode="clip") for a, b in zip((x, y, z, self.rr), self.seen, strict=True))
 
 
 @functools.lru_cache(maxsize=8)
@@ -129,26 +196,63 @@ class MastSensor:
         self.trail = []
         self.scans = 0
         self._scanned_at = self._true.copy()
+        self._sweep = _Sweep(hm, cfg.sensor_range_m)
         self._scan(self._true)
 
     def _scan(self, true_xy: np.ndarray) -> None:
         cfg, hm = self.cfg, self.hm
         ground = hm.height_at(*np.clip(true_xy, 0.0, [hm.width_m, hm.height_m]))
-        x, y, z, r = viewshed(hm, true_xy, float(ground) + cfg.mast_height_m, cfg.sensor_range_m)
-        z = z + cfg.sensor_noise_per_range * r * self.rng.standard_normal(z.shape)
+        sweep = self._sweep
+        x, y, z, r = sweep.visible(true_xy, float(ground) + cfg.mast_height_m)
+        compiled = _compiled_sweep()
+        if compiled is not None:  # the arithmetic below, sample by sample (offroadbench.navigation._sweep_c)
+            noise = self.rng.standard_normal(z.size, out=sweep.scratch(z.size)[0])
+            new = self.z.copy().ravel()
+            if sweep.sums is None:
+                sweep.sums, sweep.counts = np.zeros(new.size), np.zeros(new.size, dtype=np.int64)
+                sweep.touched = np.empty(new.size, dtype=np.int64)
+            compiled.deposit(x, y, z, r, noise, float(cfg.sensor_noise_per_range), float(true_xy[0]), float(true_xy[1]),
+                             float(self._belief[0]), float(self._belief[1]), math.cos(self.heading_error),
+                             math.sin(self.heading_error), hm.cell_size_m, new, hm.rows, hm.cols, sweep.sums,
+                             sweep.counts, sweep.touched)
+            self.z = new.reshape(hm.shape)
+            self.scans += 1
+            self._scanned_at = true_xy.copy()
+            return
+        # the arithmetic of z + k r N(0, 1), q = b + R(psi) (p - t) and the cells' indices, term by
+        # term in the order written before (tests/navigation/test_mast_floats.py), into work arrays
+        noise, dx, dy, t, col, row, ok, flag = sweep.scratch(z.size)
+        self.rng.standard_normal(z.size, out=noise)
+        np.multiply(cfg.sensor_noise_per_range, r, out=t)
+        t *= noise
+        z += t  # the seen heights: z + (k r) n
         c, s = math.cos(self.heading_error), math.sin(self.heading_error)
-        dx, dy = x - true_xy[0], y - true_xy[1]
-        qx = self._belief[0] + c * dx - s * dy
-        qy = self._belief[1] + s * dx + c * dy
-        col = np.rint(qx / hm.cell_size_m).astype(np.int64)
-        row = np.rint(qy / hm.cell_size_m).astype(np.int64)
-        ok = (col >= 0) & (col < hm.cols) & (row >= 0) & (row < hm.rows)
-        flat = row[ok] * hm.cols + col[ok]
+        np.subtract(x, true_xy[0], out=dx)
+        np.subtract(y, true_xy[1], out=dy)
+        qx, qy = x, y  # the sample positions are not needed any more
+        np.multiply(c, dx, out=qx)
+        qx += self._belief[0]
+        qx -= np.multiply(s, dy, out=t)  # b0 + c dx - s dy
+        np.multiply(s, dx, out=qy)
+        qy += self._belief[1]
+        qy += np.multiply(c, dy, out=t)  # b1 + s dx + c dy
+        qx /= hm.cell_size_m
+        qy /= hm.cell_size_m
+        np.copyto(col, np.rint(qx, out=qx), casting="unsafe")
+        np.copyto(row, np.rint(qy, out=qy), casting="unsafe")
+        np.greater_equal(col, 0, out=ok)
+        ok &= np.less(col, hm.cols, out=flag)
+        ok &= np.greater_equal(row, 0, out=flag)
+        ok &= np.less(row, hm.rows, out=flag)
+        row *= hm.cols
+        row += col
+        flat, z = (row, z) if ok.all() else (row[ok], z[ok])
         new = self.z.copy().ravel()
         if flat.size:  # the sums and counts over the cells from the first hit on, not the whole map
             lo = int(flat.min())
-            sums = np.bincount(flat - lo, weights=z[ok])
-            counts = np.bincount(flat - lo)
+            flat -= lo
+            sums = np.bincount(flat, weights=z)
+            counts = np.bincount(flat)
             hit = counts > 0
             new[lo:lo + len(counts)][hit] = sums[hit] / counts[hit]
         self.z = new.reshape(hm.shape)
