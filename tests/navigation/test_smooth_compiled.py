@@ -41,3 +41,45 @@ def test_seen_map_is_the_same_with_and_without_the_compiled_filter(monkeypatch):
         out.append(perception.seen_map(hm, seen).z)
     assert _hex(out[0]) == _hex(out[1])
     assert not np.array_equal(out[0], hm.z)
+
+
+def test_the_compiled_sweep_and_filter_give_the_numpy_bits_when_compiled_for_the_x86_64_baseline(tmp_path):
+    """numba compiles for the host CPU; compiled for the x86-64 baseline instead (no AVX, no FMA:
+    ``NUMBA_CPU_NAME=x86-64``, a fresh cache) the mast sensor's sweep (navigation._sweep_c) and seen_map's
+    filter (navigation._smooth_c) give the numpy/scipy path's bits: a mast drive's maps do not depend on the
+    CPU's SIMD nor on whether numba is installed."""
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import hashlib, math\n"
+        "import numpy as np\n"
+        "import offroadbench.navigation.perception as perception\n"
+        "import offroadbench.navigation.sensor as sensor\n"
+        "from offroadbench.heightmap import Heightmap\n"
+        "from offroadbench.navigation.perception import PerceptionConfig\n"
+        "sensor.USE_COMPILED_SWEEP = perception.USE_COMPILED_SMOOTHING = USE\n"
+        "assert not USE or sensor._compiled_sweep() is not None  # numba is there: the compiled path runs\n"
+        "y, x = np.mgrid[0:101, 0:121] * 0.05\n"
+        "hm = Heightmap(0.3 * np.sin(x / 1.3) + 0.2 * np.sin((x + y) / 0.9) + 0.05 * np.cos(3.1 * x * y), 0.05)\n"
+        "cfg = PerceptionConfig(sensor='mast', sensor_range_m=2.5, odometry_drift=0.05, scan_every_m=0.2)\n"
+        "m = sensor.MastSensor(hm, cfg, np.random.default_rng(3), (1.0, 1.2), 0.3)\n"
+        "h = hashlib.sha256()\n"
+        "pos, heading = np.array((1.0, 1.2)), 0.3\n"
+        "for k in range(60):\n"
+        "    heading += 0.05 * math.sin(k)\n"
+        "    pos = pos + 0.07 * np.array([math.cos(heading), math.sin(heading)])\n"
+        "    m.update(pos, heading)\n"
+        "    h.update(m.z.tobytes())\n"
+        "h.update(perception.seen_map(hm, ~np.isnan(m.z)).z.tobytes())\n"
+        "print(m.scans, h.hexdigest())\n"
+    )
+    env = dict(os.environ, NUMBA_CPU_NAME="x86-64", NUMBA_CPU_FEATURES="", NUMBA_CACHE_DIR=str(tmp_path))
+    compiled = subprocess.run([sys.executable, "-c", code.replace("USE", "True")], capture_output=True,
+                              text=True, check=True, env=env).stdout
+    plain = subprocess.run([sys.executable, "-c", code.replace("USE", "False")], capture_output=True,
+                           text=True, check=True).stdout
+    assert compiled == plain and int(plain.split()[0]) > 10
+    assert hashlib.sha256().hexdigest() not in plain
