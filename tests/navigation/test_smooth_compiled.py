@@ -49,9 +49,10 @@ def test_the_compiled_sweep_and_filter_give_the_numpy_bits_when_compiled_for_the
     filter (navigation._smooth_c) give the numpy/scipy path's bits: a mast drive's maps do not depend on the
     CPU's SIMD nor on whether numba is installed."""
     import hashlib
-    import os
     import subprocess
     import sys
+
+    from tests.compiled_baseline import run_compiled_for_x86_64_baseline
 
     code = (
         "import hashlib, math\n"
@@ -76,9 +77,7 @@ def test_the_compiled_sweep_and_filter_give_the_numpy_bits_when_compiled_for_the
         "h.update(perception.seen_map(hm, ~np.isnan(m.z)).z.tobytes())\n"
         "print(m.scans, h.hexdigest())\n"
     )
-    env = dict(os.environ, NUMBA_CPU_NAME="x86-64", NUMBA_CPU_FEATURES="", NUMBA_CACHE_DIR=str(tmp_path))
-    compiled = subprocess.run([sys.executable, "-c", code.replace("USE", "True")], capture_output=True,
-                              text=True, check=True, env=env).stdout
+    compiled = run_compiled_for_x86_64_baseline(code.replace("USE", "True"), tmp_path)
     plain = subprocess.run([sys.executable, "-c", code.replace("USE", "False")], capture_output=True,
                            text=True, check=True).stdout
     assert compiled == plain and int(plain.split()[0]) > 10

@@ -146,9 +146,7 @@ def test_the_compiled_soil_loop_gives_the_python_row_when_compiled_for_the_x86_6
     """Compiled for the x86-64 baseline (no AVX, no FMA: ``NUMBA_CPU_NAME=x86-64``, a fresh cache)
     the soil loop gives the Python loop's row to the last bit, as on the host CPU: the result does
     not depend on the CPU's SIMD."""
-    import os
-    import subprocess
-    import sys
+    from tests.compiled_baseline import run_compiled_for_x86_64_baseline
 
     code = (
         "import numpy as np\n"
@@ -164,9 +162,7 @@ def test_the_compiled_soil_loop_gives_the_python_row_when_compiled_for_the_x86_6
         "    r, _ = run_mission(w, Mission.between(0, (2, 2), (6, 2.5)))\n"
         "print(repr(r))\n"
     )
-    env = dict(os.environ, NUMBA_CPU_NAME="x86-64", NUMBA_CPU_FEATURES="", NUMBA_CACHE_DIR=str(tmp_path))
-    baseline = subprocess.run([sys.executable, "-c", code.replace("LOOP", "'compiled'")], capture_output=True,
-                              text=True, check=True, env=env).stdout
+    baseline = run_compiled_for_x86_64_baseline(code.replace("LOOP", "'compiled'"), tmp_path)
     ns = {}
     exec(code.replace("LOOP", "'python'").replace("print(repr(r))\n", ""), ns)
     assert baseline == repr(ns["r"]) + "\n" and "success=True" in baseline
