@@ -1,5 +1,5 @@
 """Memory around PyBullet's heightfield: an 'empty' heightfield that costs nothing to create, and
-glibc's allocator held lean while its heights are replaced (see offroadbench.sim.engines.pybullet.world)."""
+glibc's allocator held lean while its heights are replaced (see offroadbench.sim.engines.pybullet.terrain)."""
 
 from __future__ import annotations
 

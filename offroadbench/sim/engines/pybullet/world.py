@@ -13,54 +13,18 @@ what ran before it, to the last bit. Facts this relies on (measured, shared/DESI
   (about 4 ms, against a second or more per mission) gave every mission the bits of a fresh World,
   in any order (``tests/test_portable.py``).
 
-- Bullet centres a heightfield on the middle of its x/y grid and at (min + max) / 2 in z, so
-  a heightfield of samples (r0..r1, c0..c1) is placed at ((c0 + c1)/2 * cell, (r0 + r1)/2 * cell,
-  (z_min + z_max)/2) to put sample (r, c) at (c * cell, r * cell, z[r, c]). ``numHeightfieldRows`` is the number of x samples (cols) and
-  the data is ``z.ravel()`` (index c + r * cols).
-- ``createMultiBody`` gets a tiny dummy visual shape; without one PyBullet builds a render mesh
-  (seconds and hundreds of MB per 1009^2 terrain).
-- Heightfields are never removed and recreated (that leaks ~600 MB per terrain): one World, one
-  terrain; closing the World disconnects the client, which frees everything.
-- Building a heightfield from data walks every triangle into a render mesh that the shape keeps
-  (about 2-3 s and 600 MB for 1009^2, even in DIRECT mode). The walk skips triangles outside the
-  shape's height range, so the shape is first created empty with the map's height range
-  (:func:`empty_heights`: almost no walk), and the heights are then written in place with
-  ``replaceHeightfieldIndex``, whose walk is freed at once (about 1 s, nothing kept). Replacing
-  never updates a shape's height range, so the range is set at creation. The shape, and so
-  every result, is bit for bit the one built from the data directly.
-- The replace's transient is ~700 MiB for one 1009^2 heightfield whatever the arguments
-  (pybullet 3.2.7, PhysicsServerCommandProcessor.cpp): its walk visits every triangle
-  overlapping the shape's own AABB (identity transform, fixed height range and scale, margin 0
-  that ``changeDynamics`` can only raise), and the heights are written before the walk, so the
-  final write visits all 2.03 M triangles. Per triangle it appends 3 ``GLInstanceVertex`` (36 B)
-  and 3 int indices to arrays that double in capacity, and Bullet's allocator zero-fills every
-  allocation (capacity, not size, is resident); then one position and one normal ``btVector3``
-  (32 B, double precision) per vertex: 288 + 32 + 186 + 186 MiB, plus an 8 MiB copy of the
-  heights. :func:`lean_heap` keeps glibc's heap from adding its freed blocks to that peak.
-- So the map is built as tiles (``SimConfig.heightfield_tile_cells``, :func:`tile_spans`), one
-  heightfield body each, written one after the other: the transient is one tile's (~45 MiB for
-  the default 256-cell tiles of a 1009^2 map: peak RSS of a build 0.24 GB instead of 0.88 GB, in
-  the same time). Neighbouring tiles share their edge samples and all tiles share the map's height
-  range, so every vertex is where the single heightfield puts it (to the last bit in z, to
-  rounding of the tile centre in x and y) and vertical rays hit the same heights. What changes is
-  the contact bookkeeping on a seam: a wheel there touches two shapes, so Bullet keeps two
-  contact manifolds (up to 4 points each) where one heightfield gives one. The forces are those
-  of the same triangles, but the solver sees other point sets, so trajectories differ in the
-  last digits and then, on rough ground, chaotically (like any other change of rounding);
-  ``heightfield_tile_cells = 0`` rebuilds the single heightfield and its results bit for bit.
-- Reusing one World for another terrain (replacing its heights) was measured and rejected: the
-  results then differ in the last digits from a fresh World (solver and contact state carried
-  over), and it would save only ~0.2 s per terrain once the build above is cheap.
+- The terrain (its heightfield tiles, built empty and then filled in place, and the facts that
+  build relies on) is ``terrain.py``'s.
 - URDFs load with URDF_USE_INERTIA_FROM_FILE, else PyBullet recomputes the inertias.
 - Under the ``coulomb`` tyre model Bullet's friction cone is off (``enableConeFriction = 0``,
   SimConfig.cone_friction): the wheels' Bullet friction is 0 there, so the cone's solver rows for
   their contacts were wasted work (1.08-1.12x per trial on the paper missions, no outcome changed;
   benchmarks/RESULTS.md, 'Issue 25').
 
-This package (this module, ``tyres.py`` and the terramechanics adapter ``soil.py``) is the only
-code that calls pybullet for a trial: :class:`World` implements offroadbench.sim.engine.TrialWorld,
-the engine boundary, for PyBullet; the vehicle's geometry is measured once, at load
-(:meth:`World._measure_geometry`).
+This package (this module, ``terrain.py``, ``measure.py``, ``drivetrain.py``, ``tyres.py`` and the
+terramechanics adapter ``soil.py``) is the only code that calls pybullet for a trial: :class:`World`
+implements offroadbench.sim.engine.TrialWorld, the engine boundary, for PyBullet; the vehicle's
+geometry is measured once, at load (``measure.py``).
 """
 
 from __future__ import annotations
@@ -69,19 +33,19 @@ import logging
 import math
 import time
 
-import numpy as np
 from offroadbench.sim.engines.pybullet._pb import pb
 
 from offroadbench.errors import InputError
 from offroadbench.heightmap import Heightmap
-from offroadbench.sim.config import SimConfig, tile_spans
+from offroadbench.sim.config import SimConfig
 from offroadbench.sim.engines.pybullet.drivetrain import apply_springs, attach_flywheels, belt_motor_forces, couple_belts
 from offroadbench.sim.engines.pybullet.tyres import CoulombTyres
 from offroadbench.sim.tyre_laws.coulomb import bristle_constants
 from offroadbench.sim.engine import VehicleGeometry
 from offroadbench.sim.engines.base import max_height_near, settle, spawn_height_m, suspension_rest_m
 from offroadbench.sim.trial.vehicle import VehicleSpec, load_vehicle
-from offroadbench.sim.engines.pybullet.heap import empty_heights, lean_heap
+from offroadbench.sim.engines.pybullet.measure import bottom_offset_m, centre_of_mass_m, measure_geometry
+from offroadbench.sim.engines.pybullet.terrain import build_terrain, heightfield_ray_height
 
 __all__ = ["World"]
 
@@ -159,43 +123,8 @@ class World:
         return self.sim.tyre_model != "coulomb"
 
     def _build_terrain(self) -> tuple[int, ...]:
-        """One static body per heightfield tile (:func:`tile_spans`), all with the map's height range."""
-        hm = self.hm
-        cid = self._cid
-        tile = self.sim.heightfield_tile_cells
-        rows, cols = tile_spans(hm.rows - 1, tile), tile_spans(hm.cols - 1, tile)
-        dummy_visual = pb.createVisualShape(pb.GEOM_SPHERE, radius=1e-3, physicsClientId=cid)
-        z_centre = (hm.z_min_m + hm.z_max_m) / 2.0
-        bodies = []
-        for r0, r1 in rows:
-            for c0, c1 in cols:
-                z = hm.z[r0 : r1 + 1, c0 : c1 + 1]
-                shape = self._heightfield(empty_heights(z.size, hm.z_min_m, hm.z_max_m), z.shape)
-                with lean_heap():
-                    self._heightfield(z.ravel(), z.shape, replace=shape)
-                centre = [(c0 + c1) / 2.0 * hm.cell_size_m, (r0 + r1) / 2.0 * hm.cell_size_m, z_centre]
-                body = pb.createMultiBody(0, shape, dummy_visual, basePosition=centre, physicsClientId=cid)
-                pb.changeDynamics(body, -1, lateralFriction=self.sim.terrain_friction, physicsClientId=cid)
-                lo, hi = pb.getAABB(body, physicsClientId=cid)
-                # Bullet keeps the range in float32: a few ulps of the heights (2e-5 m at a DEM's 320 m)
-                tol_m = max(1e-5, 8 * float(np.finfo(np.float32).eps) * max(abs(hm.z_min_m), abs(hm.z_max_m)))
-                if abs(lo[2] - hm.z_min_m) > tol_m or abs(hi[2] - hm.z_max_m) > tol_m:  # pragma: no cover - a pybullet change
-                    raise RuntimeError(f"heightfield height range {lo[2]:.6g}..{hi[2]:.6g} m is not the map's "
-                                       f"{hm.z_min_m:.6g}..{hm.z_max_m:.6g} m (pybullet {pb.getAPIVersion()})")
-                bodies.append(body)
-        return tuple(bodies)
-
-    def _heightfield(self, data: np.ndarray, shape: tuple[int, int], replace: int = -1) -> int:
-        """A heightfield collision shape of ``shape`` = (rows, cols) samples from row-major ``data``."""
-        return pb.createCollisionShape(
-            pb.GEOM_HEIGHTFIELD,
-            meshScale=[self.hm.cell_size_m, self.hm.cell_size_m, 1.0],
-            heightfieldData=data,
-            numHeightfieldRows=shape[1],
-            numHeightfieldColumns=shape[0],
-            replaceHeightfieldIndex=replace,
-            physicsClientId=self._cid,
-        )
+        """One static body per heightfield tile, all with the map's height range (terrain.build_terrain)."""
+        return build_terrain(self._cid, self.hm, self.sim)
 
     def _load_vehicle(self) -> int:
         spec = self.spec
@@ -301,38 +230,11 @@ class World:
 
     def _measure_geometry(self) -> VehicleGeometry:
         """The vehicle as loaded (offroadbench.sim.engine.VehicleGeometry): in the air at
-        (0, 0, z_max + 10 m), heading 0, wheels at joint angle 0, from the links' bounding boxes."""
-        cid, body = self._cid, self.vehicle_id
-        base = [0.0, 0.0, self.hm.z_max_m + 10.0]
-        pb.resetBasePositionAndOrientation(body, base, [0, 0, 0, 1], physicsClientId=cid)
-        for j in self.wheel_joints:
-            pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=cid)
-        n_links = pb.getNumJoints(body, physicsClientId=cid)
-        boxes = [pb.getAABB(body, link, physicsClientId=cid) for link in range(-1, n_links)]
-        lo = np.min([b[0] for b in boxes], axis=0)
-        hi = np.max([b[1] for b in boxes], axis=0)
-        wheels = [pb.getAABB(body, j, physicsClientId=cid) for j in self.wheel_joints]
-        centres = [pb.getLinkState(body, j, physicsClientId=cid)[0] for j in self.wheel_joints]
-        return VehicleGeometry(
-            mass_kg=self._mass_kg,
-            wheel_spin_inertia_kg_m2=tuple(pb.getDynamicsInfo(body, j, physicsClientId=cid)[2][1] + x
-                                           for j, x in zip(self.wheel_joints, self._excess_kg_m2, strict=True)),
-            wheel_centres_m=tuple((c[0] - base[0], c[1] - base[1], c[2] - base[2]) for c in centres),
-            length_m=float(hi[0] - lo[0]),
-            width_m=float(hi[1] - lo[1]),
-            belly_m=float(boxes[0][0][2] - min(w[0][2] for w in wheels)),
-            overhang=bool(boxes[0][1][0] > max(w[1][0] for w in wheels) + 1e-3),
-        )
+        (0, 0, z_max + 10 m), heading 0, wheels at joint angle 0 (measure.measure_geometry)."""
+        return measure_geometry(self._cid, self.vehicle_id, self.wheel_joints, self._excess_kg_m2, self._mass_kg,
+                                self.hm.z_max_m + 10.0)
 
     # ------------------------------------------------------------------ vehicle state
-    def _bottom_offset(self) -> float:
-        """Height of the base origin above the lowest point of the vehicle in its current pose."""
-        body = self.vehicle_id
-        z_base = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)[0][2]
-        lows = [pb.getAABB(body, link, physicsClientId=self._cid)[0][2]
-                for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid))]
-        return z_base - min(lows)
-
     def spawn(self, x_m: float, y_m: float, heading_rad: float, roll_rad: float = 0.0) -> None:
         """Put the vehicle at rest above (x, y) facing ``heading_rad``, clear of the terrain, then
         let it settle for ``sim.settle_time_s`` with its wheels braked.
@@ -356,7 +258,7 @@ class World:
             pb.resetJointState(body, j, self._spring_rest_m, 0.0, physicsClientId=cid)
         aabb_lo, aabb_hi = pb.getAABB(body, -1, physicsClientId=cid)
         reach = 0.5 * math.hypot(aabb_hi[0] - aabb_lo[0], aabb_hi[1] - aabb_lo[1])
-        z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, self._bottom_offset(),
+        z = spawn_height_m(self.hm, x_m, y_m, reach, self.spec.wheel_radius_m, bottom_offset_m(cid, body),
                            self.sim.spawn_clearance_m)
         pb.resetBasePositionAndOrientation(body, [x_m, y_m, z], orn, physicsClientId=cid)
         if self._tyres is not None:
@@ -437,16 +339,7 @@ class World:
 
     def centre_of_mass_m(self) -> tuple[float, float, float]:
         """The whole vehicle's centre of mass in the world, m (mass-weighted link centres)."""
-        cid, body = self._cid, self.vehicle_id
-        total = pb.getDynamicsInfo(body, -1, physicsClientId=cid)[0]
-        base = pb.getBasePositionAndOrientation(body, physicsClientId=cid)[0]
-        acc = [total * base[0], total * base[1], total * base[2]]
-        for link in range(pb.getNumJoints(body, physicsClientId=cid)):
-            m = pb.getDynamicsInfo(body, link, physicsClientId=cid)[0]
-            p = pb.getLinkState(body, link, physicsClientId=cid)[0]
-            acc = [acc[0] + m * p[0], acc[1] + m * p[1], acc[2] + m * p[2]]
-            total += m
-        return acc[0] / total, acc[1] / total, acc[2] / total
+        return centre_of_mass_m(self._cid, self.vehicle_id)
 
     def push_base(self, fx: float, fy: float, fz: float) -> None:
         """An external force on the chassis at its centre of mass during the next step, N (world frame)."""
@@ -486,15 +379,6 @@ class World:
         return sum(slips) / len(slips)
 
     def ray_height(self, x_m: float, y_m: float) -> float:
-        """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN off the map).
-
-        Bullet's heightfield ray test leaves out a shape's outer edge, so a ray exactly on a tile
-        seam misses both tiles; such a ray is cast again 1 nm towards the map's centre."""
-        hm = self.hm
-        for nudge_m in (0.0, 1e-9):
-            x = x_m + math.copysign(nudge_m, hm.width_m / 2.0 - x_m)
-            y = y_m + math.copysign(nudge_m, hm.height_m / 2.0 - y_m)
-            hit = pb.rayTest([x, y, hm.z_max_m + 1.0], [x, y, hm.z_min_m - 1.0], physicsClientId=self._cid)[0]
-            if hit[0] in self._terrain_set:
-                return float(hit[3][2])
-        return float("nan")
+        """Height of the terrain collision surface at (x, y) by a vertical ray, metres (NaN off the map;
+        terrain.heightfield_ray_height)."""
+        return heightfield_ray_height(self._cid, self.hm, self._terrain_set, x_m, y_m)
