@@ -20,7 +20,7 @@ from offroadbench.lazy import lazy_exports
 _EXPORTS = {
     "StudyConfig": "spec.config",
     "GridAxis": "spec.config",
-    "CellPlan": "spec.config",
+    "CellPlan": "spec.cells",
     "load_study": "spec.config",
     "study_from_dict": "spec.config",
     "run_study": "runner",

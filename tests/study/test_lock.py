@@ -18,7 +18,7 @@ import pytest
 
 from offroadbench.errors import InputError
 from offroadbench.study import load, load_meta, run_study, study_from_dict
-from offroadbench.study.store import store as store_mod
+from offroadbench.study.store import writes as store_writes
 from offroadbench.study.spec.config import plan_cells
 from offroadbench.study.store.store import STORE_NAME, RunDirLocked, RunLock, Store
 from tests.study.test_run import STUDY, fake_trials
@@ -114,7 +114,7 @@ def _die_at_link(run_dir) -> None:
     def link(a, b):
         os._exit(9)
 
-    store_mod.os.link = link
+    store_writes.os.link = link
     study, cells = study_and_cells()
     run_study(study, cells, run_dir, executor="inline", trial_fn=fake_trials)
 
@@ -139,7 +139,7 @@ def test_a_full_disk_at_creation_is_one_line_and_leaves_nothing(tmp_path, monkey
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(store_mod.tempfile, "mkstemp", full)
+    monkeypatch.setattr(store_writes.tempfile, "mkstemp", full)
     study, cells = study_and_cells()
     out = tmp_path / "new" / "run"
     with pytest.raises(InputError, match=rf"{out / STORE_NAME}: cannot create the study store \(no space left"):

@@ -37,29 +37,29 @@ few commits. A trial that was in flight when the process died has no row, so the
 does it again.
 
 The lock is :mod:`offroadbench.study.store.lock`; the file (schema, checks, removal) is
-:mod:`offroadbench.study.store.file`.
+:mod:`offroadbench.study.store.file`; its creation, migration and rollback are
+:mod:`offroadbench.study.store.writes`.
 """
 
 from __future__ import annotations
 
 import contextlib
-import errno
 import json
 import logging
 import os
 import platform
 import sqlite3
-import tempfile
 import time
 from pathlib import Path
 from typing import Any, Mapping
 
-from offroadbench.errors import InputError, StudyError
+from offroadbench.errors import InputError
 from offroadbench.study.store.integrity import TRUSTED_SCHEMA_OFF, check_store
-from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, lock_holder_alive, error_reason
-from offroadbench.study.store.file import (APPLICATION_ID, SCHEMA_VERSION, STORE_NAME, FAULTS_SQL, SCHEMA_SQL,
-                                           SCHEMA2_COLUMNS, check_existing, make_reserve, nearly_full,
-                                           release_reserve, remove_stale_temp_files, remove_store, store_path)
+from offroadbench.study.store.lock import LOCK_NAME, RunDirLocked, RunLock, lock_holder_alive
+from offroadbench.study.store.file import (SCHEMA_VERSION, STORE_NAME, FAULTS_SQL, check_existing, make_reserve,
+                                           nearly_full, release_reserve, remove_stale_temp_files, remove_store,
+                                           store_path)
+from offroadbench.study.store.writes import create_store, migrate, rollback
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +94,7 @@ class Store:
             if self.run_dir.exists() and not self.run_dir.is_dir():
                 raise InputError(f"--out {self.run_dir} is a file; give a directory")
             self.run_dir.mkdir(parents=True, exist_ok=True)
-            self.created = _create_store(path)
+            self.created = create_store(path)
             if not self.created:  # another process linked its store in first
                 check_existing(path)
         else:
@@ -105,7 +105,7 @@ class Store:
             self.con.execute(TRUSTED_SCHEMA_OFF)
             self.con.execute("PRAGMA synchronous=NORMAL")
             if create:
-                self._migrate()
+                migrate(self.con, self.path)
             self.columns = {t: {r[1] for r in self.con.execute(f"PRAGMA table_info({t})")} for t in ("trials", "runs")}
         except sqlite3.DatabaseError as exc:
             if self.created:  # ours and empty: a failure here is the device's (a full disk), not the file's
@@ -117,24 +117,6 @@ class Store:
                 why = "no space left on the device" if nearly_full(self.run_dir) else str(exc)
                 raise InputError(f"{path}: cannot create the study store ({why})") from None
             raise InputError(f"{path}: cannot be opened as a study store ({exc})") from None
-
-    def _migrate(self) -> None:
-        """Bring a schema-1 store to schema 2 (new nullable columns), in one transaction."""
-        (version,) = self.con.execute("PRAGMA user_version").fetchone()
-        if version >= SCHEMA_VERSION:
-            return
-        self.con.execute("BEGIN IMMEDIATE")
-        try:
-            for table, columns in SCHEMA2_COLUMNS.items():
-                have = {r[1] for r in self.con.execute(f"PRAGMA table_info({table})")}
-                for name, kind in columns:
-                    if name not in have:
-                        self.con.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
-            self.con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
-            self.con.execute("COMMIT")
-        except BaseException as exc:
-            _rollback(self.con, exc, self.path)
-        log.info("%s: store schema %d migrated to %d", self.path, version, SCHEMA_VERSION)
 
     def __enter__(self) -> "Store":
         return self
@@ -215,7 +197,7 @@ class Store:
                                  [(k, json.dumps(v, sort_keys=True)) for k, v in values.items()])
             self.con.execute("COMMIT")
         except BaseException as exc:
-            _rollback(self.con, exc, self.path)
+            rollback(self.con, exc, self.path)
 
     # ------------------------------------------------------------------ results
     def add_terrain(self, cell: int, terrain: int, terrain_seed: int, stats: Mapping[str, Any]) -> None:
@@ -231,15 +213,15 @@ class Store:
             yield self.con
             self.con.execute("COMMIT")
         except BaseException as exc:
-            _rollback(self.con, exc, self.path)
+            rollback(self.con, exc, self.path)
 
     def _write(self, sql: str, params: tuple = ()) -> sqlite3.Cursor:
         """One statement in its own transaction; a full disk is an OSError naming the store."""
         try:
             return self.con.execute(sql, params)
         except sqlite3.DatabaseError as exc:
-            _rollback(self.con, exc, self.path)
-            raise  # pragma: no cover - _rollback always raises
+            rollback(self.con, exc, self.path)
+            raise  # pragma: no cover - rollback always raises
 
     def add_trial(self, cell: int, terrain: int, mission: int, terrain_seed: int, mission_seed: int, row: Mapping,
                   run_id: int | None = None, telemetry: list[str] | None = None) -> bool:
@@ -263,7 +245,7 @@ class Store:
                 self.con.execute("UPDATE runs SET finished=?, trials_run=trials_run+1 WHERE id=?", (time.time(), run_id))
             self.con.execute("COMMIT")
         except BaseException as exc:
-            _rollback(self.con, exc, self.path)
+            rollback(self.con, exc, self.path)
         if cur.rowcount == 0:
             (old,) = self.con.execute(
                 "SELECT row FROM trials WHERE cell=? AND terrain=? AND mission=?", (cell, terrain, mission)
@@ -306,7 +288,7 @@ class Store:
                     self.con.execute("UPDATE runs SET trials_run=MAX(trials_run-1, 0) WHERE id=?", (run_id,))
             self.con.execute("COMMIT")
         except BaseException as exc:
-            _rollback(self.con, exc, self.path)
+            rollback(self.con, exc, self.path)
 
     def done_trials(self) -> set[tuple[int, int, int]]:
         return {tuple(r) for r in self.con.execute("SELECT cell, terrain, mission FROM trials")}
@@ -416,68 +398,6 @@ class Store:
         if not self.has_faults_table():
             return 0
         return self._write("DELETE FROM faults").rowcount
-
-
-def _rollback(con: sqlite3.Connection, exc: BaseException, path: Path) -> None:
-    """Roll back after ``exc`` and raise it, never masking it: SQLite may have rolled the
-    transaction back itself (on SQLITE_FULL), and a ROLLBACK's own "cannot rollback - no
-    transaction is active" must not replace "database or disk is full". A full disk becomes an
-    OSError(ENOSPC) naming the store (the CLI's one line); other errors are re-raised."""
-    try:
-        if con.in_transaction:
-            con.execute("ROLLBACK")
-    except sqlite3.Error as rexc:
-        log.info("%s: rollback after %s failed: %s", path, exc, rexc)
-    if isinstance(exc, sqlite3.DatabaseError):
-        text = str(exc).lower()
-        if "full" in text:
-            raise OSError(errno.ENOSPC, "No space left on device", str(path)) from None
-        if "disk i/o" in text:  # e.g. a file-size limit, or a failing device
-            raise StudyError(f"{path}: the study store could not be written (disk I/O error: a full disk, a "
-                             "file-size limit or a failing device); what was committed before is kept") from None
-    raise exc
-
-
-def _create_store(path: Path) -> bool:
-    """Build an empty store of the current schema under a temporary name beside ``path`` and link
-    it into place. Returns False if ``path`` appeared meanwhile (it is left alone). A failure (a
-    full disk) raises an InputError naming the path and leaves no file behind."""
-    tmp = None
-    try:
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        os.close(fd)
-        tmp = Path(name)
-        con = sqlite3.connect(tmp, isolation_level=None)
-        try:
-            con.execute(f"PRAGMA application_id={APPLICATION_ID}")
-            con.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
-            con.execute("PRAGMA journal_mode=WAL")  # kept in the file header
-            con.executescript(SCHEMA_SQL)
-        finally:
-            con.close()  # checkpoints and removes the temporary -wal/-shm
-        os.chmod(tmp, 0o666 & ~_umask())
-        try:
-            os.link(tmp, path)  # never replaces: a store made meanwhile by someone else wins
-        except FileExistsError:
-            return False
-        return True
-    except OSError as exc:
-        raise InputError(f"{path}: cannot create the study store ({error_reason(exc)})") from None
-    except sqlite3.DatabaseError as exc:
-        if "full" in str(exc).lower():
-            raise InputError(f"{path}: cannot create the study store (no space left on the device)") from None
-        raise InputError(f"{path}: cannot create the study store ({exc})") from None
-    finally:
-        if tmp is not None:
-            for q in (tmp, tmp.with_name(tmp.name + "-wal"), tmp.with_name(tmp.name + "-shm"),
-                      tmp.with_name(tmp.name + "-journal")):
-                q.unlink(missing_ok=True)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def machine_description() -> str:
