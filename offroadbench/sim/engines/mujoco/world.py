@@ -45,7 +45,8 @@ PyBullet, from the same inputs, so a trial, its telemetry and its failure rules 
 - **Reset**: ``mj_resetData`` before every spawn clears every piece of state, so results do not
   depend on the missions run before (bit-identical in any mission order).
 
-Only this module (and offroadbench.sim.engines.pybullet.world / contact for PyBullet) imports a physics engine.
+Only the engine packages under offroadbench.sim.engines (this one, ``pybullet``, ``mujoco_warp``) import a
+physics engine.
 The model is built in ``mjcf.py`` (URDF -> MJCF), the tyre forces applied in ``tyres.py``, and the
 vehicle indexed, measured and placed at a spawn in ``body.py``: the parts of :class:`MuJoCoWorld`.
 """
