@@ -144,7 +144,7 @@ def _patch_planes(z: np.ndarray, cell_m: float, radius_m: float, f: int, shape: 
     b = np.einsum("rcij,ij->rc", win, w * yy) / float((w * yy * yy).sum())
     c = np.einsum("rcij,ij->rc", win, w) / float(w.sum())
     compiled = _compiled_planes()
-    if compiled is not None:  # the same numbers, 10-20x faster (offroadbench.navigation._planes_c)
+    if compiled is not None:  # the same numbers, 10-20x faster (offroadbench.navigation.compiled.planes)
         return np.hypot(a, b), compiled.plane_residuals(zp, k, xx, yy, a, b, c, f, c0)
     residual = np.empty(shape)
     rows = max(1, 2**22 // max(1, shape[1] * k.size))  # row blocks of ~32 MB of residuals
@@ -160,14 +160,14 @@ USE_COMPILED_PLANES = True
 
 
 def _compiled_planes():
-    """offroadbench.navigation._planes_c, or None (numba missing or unable to compile: the numpy pass)."""
+    """offroadbench.navigation.compiled.planes, or None (numba missing or unable to compile: the numpy pass)."""
     if not USE_COMPILED_PLANES:
         return None
     try:
-        from offroadbench.navigation import _planes_c
+        from offroadbench.navigation.compiled import planes
     except (ImportError, RuntimeError):
         return None
-    return _planes_c
+    return planes
 
 
 #: footprint hazards per terrain: a study plans every mission of a terrain on the same map, and the

@@ -207,14 +207,14 @@ USE_COMPILED_SMOOTHING = True
 
 def _gaussian_nearest(a: np.ndarray, sigma: float) -> np.ndarray:
     """``scipy.ndimage.gaussian_filter(a, sigma, mode="nearest")``: numba's compiled pass when
-    installed (offroadbench.navigation._smooth_c, the same bits, ~10x faster), else scipy's."""
+    installed (offroadbench.navigation.compiled.smooth, the same bits, ~10x faster), else scipy's."""
     if USE_COMPILED_SMOOTHING:
         try:
-            from offroadbench.navigation import _smooth_c
+            from offroadbench.navigation.compiled import smooth
         except (ImportError, RuntimeError):
             pass
         else:
-            return _smooth_c.gaussian_nearest(a, sigma)
+            return smooth.gaussian_nearest(a, sigma)
     from scipy.ndimage import gaussian_filter
 
     return gaussian_filter(a, sigma, mode="nearest")

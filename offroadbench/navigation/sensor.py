@@ -86,19 +86,19 @@ USE_COMPILED_SWEEP = True
 
 
 def _compiled_sweep():
-    """offroadbench.navigation._sweep_c, or None (numba missing or unable to compile: the numpy sweep)."""
+    """offroadbench.navigation.compiled.sweep, or None (numba missing or unable to compile: the numpy sweep)."""
     if not USE_COMPILED_SWEEP:
         return None
     try:
-        from offroadbench.navigation import _sweep_c
+        from offroadbench.navigation.compiled import sweep
     except (ImportError, RuntimeError):
         return None
-    return _sweep_c
+    return sweep
 
 
 class _Sweep:
     """The viewshed of one map and range with its work arrays kept from scan to scan: numba's sweep
-    ray by ray (offroadbench.navigation._sweep_c) where installed, else numpy's, which writes its
+    ray by ray (offroadbench.navigation.compiled.sweep) where installed, else numpy's, which writes its
     (A, R) samples into the same arrays each scan (``out=``; allocating some ten 1.3 MB arrays a
     scan cost thousands of page faults a scan). Both leave the visible samples in :attr:`seen`
     (views returned). One per sensor: not shared between threads."""
@@ -130,7 +130,7 @@ class _Sweep:
     def visible(self, xy, sensor_z_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """As :meth:`run`, but views of this sweep's own arrays, overwritten by the next call."""
         compiled = _compiled_sweep()
-        if compiled is not None:  # the same numbers ray by ray (offroadbench.navigation._sweep_c)
+        if compiled is not None:  # the same numbers ray by ray (offroadbench.navigation.compiled.sweep)
             n = compiled.sweep(self.hm.z, self.hm.cell_size_m, float(xy[0]), float(xy[1]), float(sensor_z_m),
                                self.r[0], self.ray_x, self.ray_y, *self.seen)
             return tuple(a[:n] for a in self.seen)
@@ -205,7 +205,7 @@ class MastSensor:
         sweep = self._sweep
         x, y, z, r = sweep.visible(true_xy, float(ground) + cfg.mast_height_m)
         compiled = _compiled_sweep()
-        if compiled is not None:  # the arithmetic below, sample by sample (offroadbench.navigation._sweep_c)
+        if compiled is not None:  # the arithmetic below, sample by sample (offroadbench.navigation.compiled.sweep)
             noise = self.rng.standard_normal(z.size, out=sweep.scratch(z.size)[0])
             new = self.z.copy().ravel()
             if sweep.sums is None:

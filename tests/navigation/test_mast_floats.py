@@ -1,7 +1,7 @@
 """The mast sensor's scan, made cheaper (branch ``mastperf``), gives the bits of the form the
 committed rows were recorded with: the viewshed (its work arrays kept from scan to scan, no
 off-map ``np.where``, the visible samples taken once; or numba's sweep ray by ray,
-offroadbench.navigation._sweep_c) and the scan's noise, odometry frame and
+offroadbench.navigation.compiled.sweep) and the scan's noise, odometry frame and
 cell sums (written into work arrays term by term), each against its form at commit c822f5c on
 random maps, positions, headings and drift, compared as float hex."""
 

@@ -1,4 +1,4 @@
-"""The compiled residual pass of the footprint hazard (offroadbench.navigation._planes_c) gives the
+"""The compiled residual pass of the footprint hazard (offroadbench.navigation.compiled.planes) gives the
 numpy pass's numbers to the last bit, so the planners' paths do not depend on whether numba is
 installed."""
 

@@ -1,4 +1,4 @@
-"""The compiled Gaussian filter of seen_map (offroadbench.navigation._smooth_c) gives scipy's
+"""The compiled Gaussian filter of seen_map (offroadbench.navigation.compiled.smooth) gives scipy's
 numbers to the last bit, so the mast sensor's plans do not depend on whether numba is installed."""
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ def _hex(a) -> list[str]:
 
 @pytest.mark.parametrize(("shape", "sigma"), [((121, 137), 20.0), ((40, 9), 6.5), ((5, 300), 3.0), ((64, 64), 0.7)])
 def test_gaussian_nearest_is_scipys_to_the_bit(shape, sigma):
-    from offroadbench.navigation._smooth_c import gaussian_nearest
+    from offroadbench.navigation.compiled.smooth import gaussian_nearest
 
     rng = np.random.default_rng(len(shape) + int(10 * sigma))
     seen = rng.random(shape) < 0.5
@@ -45,8 +45,8 @@ def test_seen_map_is_the_same_with_and_without_the_compiled_filter(monkeypatch):
 
 def test_the_compiled_sweep_and_filter_give_the_numpy_bits_when_compiled_for_the_x86_64_baseline(tmp_path):
     """numba compiles for the host CPU; compiled for the x86-64 baseline instead (no AVX, no FMA:
-    ``NUMBA_CPU_NAME=x86-64``, a fresh cache) the mast sensor's sweep (navigation._sweep_c) and seen_map's
-    filter (navigation._smooth_c) give the numpy/scipy path's bits: a mast drive's maps do not depend on the
+    ``NUMBA_CPU_NAME=x86-64``, a fresh cache) the mast sensor's sweep (navigation.compiled.sweep) and seen_map's
+    filter (navigation.compiled.smooth) give the numpy/scipy path's bits: a mast drive's maps do not depend on the
     CPU's SIMD nor on whether numba is installed."""
     import hashlib
     import subprocess

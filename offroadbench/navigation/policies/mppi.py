@@ -109,21 +109,21 @@ USE_COMPILED_TRIG = True
 
 
 def _compiled_trig():
-    """offroadbench.navigation.policies._mppi_c, or None (numba missing, with SVML, or unable to compile)."""
+    """offroadbench.navigation.compiled.mppi, or None (numba missing, with SVML, or unable to compile)."""
     if not USE_COMPILED_TRIG:
         return None
     try:
-        from offroadbench.navigation.policies import _mppi_c
+        from offroadbench.navigation.compiled import mppi
     except (ImportError, RuntimeError):
         return None
-    return _mppi_c
+    return mppi
 
 
 def cos_sin(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``cos`` and ``sin`` of the float32 angles ``th`` (rad) as float32 arrays of its shape: the C
     library's scalar double functions (``math.cos``, ``math.sin``), each rounded to float32, so the
     same bits on every CPU (module docstring, "Portability"); numba's compiled pass when installed
-    (offroadbench.navigation.policies._mppi_c, the same bits)."""
+    (offroadbench.navigation.compiled.mppi, the same bits)."""
     compiled = _compiled_trig()
     if compiled is not None:
         return compiled.cos_sin(th)
